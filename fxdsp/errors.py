@@ -1,0 +1,8 @@
+"""Errors that the command line turns into one line on stderr and exit status 2."""
+
+
+class InputError(ValueError):
+    """Bad input from a user: a config, a log file, a command-line value.
+
+    A ValueError subclass, so library callers can catch ValueError as documented.
+    """
