@@ -70,14 +70,18 @@ def first_order_lag(time_s, temp_c, tau_s: float, initial: float | None = None) 
     a = np.exp(-dt / tau_s)
     # for a ramp u(t) = u0 + s (t - t0): Te1 = u1 - s*tau + (Te0 - u0 + s*tau) * a
     slope = np.divide(np.diff(u), dt, out=np.zeros_like(dt), where=dt > 0)
-    return _lag_recursion(out, u, a, slope * tau_s)
+    # start of each interval; over a zero-length interval (a repeated time stamp, which the contract
+    # allows) Te cannot move, which the formula gives when the interval starts at its end value
+    u_start = np.where(dt > 0, u[:-1], u[1:])
+    return _lag_recursion(out, u, u_start, a, slope * tau_s)
 
 
-def _lag_recursion(out: np.ndarray, u: np.ndarray, a: np.ndarray, s_tau: np.ndarray) -> np.ndarray:
+def _lag_recursion(out: np.ndarray, u: np.ndarray, u_start: np.ndarray, a: np.ndarray,
+                   s_tau: np.ndarray) -> np.ndarray:
     # a plain loop is fine for logs of ~1e4..1e6 rows; scipy.signal.lfilter cannot take varying a
     te = out[0]
     for i in range(1, u.size):
-        te = u[i] - s_tau[i - 1] + (te - u[i - 1] + s_tau[i - 1]) * a[i - 1]
+        te = u[i] - s_tau[i - 1] + (te - u_start[i - 1] + s_tau[i - 1]) * a[i - 1]
         out[i] = te
     return out
 

@@ -1,0 +1,177 @@
+"""`fxdsp bench [--config F] [--json F]`: throughput of the bit-exact models, measured in one run
+against the same biquad written with fxpmath and with apytypes.
+
+* fxdsp biquad: the ``[iir]`` filter of the config (one biquad by default), int64 in/out, on
+  ``--samples`` samples (>= 200k), best of ``--repeat`` runs after a warm-up (numba compiled).
+* fxdsp chain: the whole paper 002 chain on the same number of samples.
+* fxpmath and apytypes: the *same* DF-I algorithm (exact products and sums, one rounding and one
+  fit per section output, error feedback) written with each library's scalar types, one sample
+  at a time (a recursive filter cannot be vectorised), timed on a prefix and extrapolated; the
+  outputs are compared with fxdsp's on that prefix and the agreement is reported.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..chains import build
+from ..fixed import Format
+
+
+APY_QUANT = {"floor": "TO_NEG", "half_up": "TIES_POS", "half_even": "TIES_EVEN", "toward_zero": "TO_ZERO"}
+
+
+def configure(parser) -> None:
+    parser.add_argument("--config", help="TOML config (default: the built-in one)")
+    parser.add_argument("--json", help="also write the results as JSON to this file")
+    parser.add_argument("--samples", type=int, default=1_000_000, help="samples for fxdsp (default 1e6, >= 200k)")
+    parser.add_argument("--repeat", type=int, default=5, help="timed runs, best kept (default 5)")
+    parser.add_argument("--prefix-apytypes", type=int, default=20_000, help="samples run through apytypes")
+    parser.add_argument("--prefix-fxpmath", type=int, default=2_000, help="samples run through fxpmath")
+
+
+def _best(fn, repeat: int) -> float:
+    best = float("inf")
+    for _ in range(repeat):
+        t = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t)
+    return best
+
+
+def _apy(value: int, fmt: Format):
+    import apytypes as apy
+
+    return apy.APyFixed.from_float(value * 2.0**-fmt.fl, int_bits=fmt.wl - fmt.fl, frac_bits=fmt.fl) \
+        if fmt.wl <= 52 else apy.APyFixed(value & ((1 << fmt.wl) - 1), int_bits=fmt.wl - fmt.fl, frac_bits=fmt.fl)
+
+
+def biquad_apytypes(iir, x: np.ndarray) -> np.ndarray:
+    """The [iir] biquad cascade, one sample at a time with apytypes scalars (exact arithmetic)."""
+    import apytypes as apy
+
+    d, nf, df = iir.data_format, iir.num_format, iir.den_format
+    q = getattr(apy.QuantizationMode, APY_QUANT[iir.rules.rounding])
+    sat = iir.rules.overflow == "saturate"
+    ib, fb = d.wl - d.fl, d.fl
+    lo = apy.APyFixed(1 << (d.wl - 1), int_bits=ib, frac_bits=fb)  # bit pattern of the minimum
+    hi = apy.APyFixed((1 << (d.wl - 1)) - 1, int_bits=ib, frac_bits=fb)
+    v = [_apy(int(s), d) for s in x]
+    for s in range(iir.b.shape[0]):
+        b = [_apy(int(c), nf) for c in iir.b[s]]
+        a = [_apy(int(c), df) for c in iir.a[s]]
+        c1, c2 = (int(c) for c in iir.c[s])
+        zero = _apy(0, d)
+        x1 = x2 = y1 = y2 = zero
+        e1 = e2 = None
+        out = []
+        for xn in v:
+            acc = b[0] * xn + b[1] * x1 + b[2] * x2 - a[0] * y1 - a[1] * y2
+            if e1 is not None:
+                acc = acc + e1 * c1 + e2 * c2 if (c1 or c2) else acc
+            r = acc.cast(int_bits=acc.int_bits + 1, frac_bits=fb, quantization=q)  # rounded, range kept
+            if r > hi or r < lo:
+                y = (hi if r > hi else lo) if sat else r.cast(int_bits=ib, frac_bits=fb,
+                                                              overflow=apy.OverflowMode.WRAP)
+                e = acc - acc  # a saturated sample feeds back no error
+            else:
+                y = r.cast(int_bits=ib, frac_bits=fb)
+                e = acc - r
+            y = y.cast(int_bits=ib, frac_bits=fb)
+            e1, e2 = e, (e1 if e1 is not None else acc - acc)
+            x2, x1, y2, y1 = x1, xn, y1, y
+            out.append(y)
+        v = out
+    return np.array([y.to_bits() for y in v], dtype=object).astype(np.int64) if d.wl < 63 else None
+
+
+def biquad_fxpmath(iir, x: np.ndarray) -> np.ndarray:
+    """The same algorithm with fxpmath Fxp scalars (its own rounding and saturation on the cast)."""
+    from fxpmath import Fxp
+
+    d, nf, df = iir.data_format, iir.num_format, iir.den_format
+    rounding = {"floor": "floor", "half_up": "around", "half_even": "around", "toward_zero": "fix"}[iir.rules.rounding]
+
+    def fx(value, fmt):
+        return Fxp(value, signed=fmt.signed, n_word=fmt.wl, n_frac=fmt.fl, raw=True)
+
+    v = [fx(int(s), d) for s in x]
+    for s in range(iir.b.shape[0]):
+        b = [fx(int(c), nf) for c in iir.b[s]]
+        a = [fx(int(c), df) for c in iir.a[s]]
+        c1, c2 = (int(c) for c in iir.c[s])
+        x1 = x2 = y1 = y2 = fx(0, d)
+        e1 = e2 = 0.0
+        out = []
+        for xn in v:
+            acc = b[0] * xn + b[1] * x1 + b[2] * x2 - a[0] * y1 - a[1] * y2
+            acc_val = acc.get_val() + c1 * e1 + c2 * e2
+            y = Fxp(acc_val, signed=True, n_word=d.wl, n_frac=d.fl, rounding=rounding, overflow=iir.rules.overflow)
+            e1, e2 = acc_val - y.get_val(), e1
+            x2, x1, y2, y1 = x1, xn, y1, y
+            out.append(y)
+        v = out
+    return np.array([int(y.val) for y in v], dtype=np.int64)
+
+
+def run(args) -> int:
+    if args.samples < 200_000:
+        raise ValueError(f"--samples: the benchmark needs >= 200000 samples, got {args.samples}")
+    design = build(args.config)
+    iir = design.blocks["iir"]
+    chain = design.chains["chain_paper002"]
+    rng = np.random.default_rng(design.seed)
+    fmt = iir.data_format
+    x = (0.25 * fmt.max_int * np.sin(2 * np.pi * np.arange(args.samples) / 997)
+         + rng.normal(0, 0.1 * fmt.max_int, args.samples)).astype(np.int64)
+
+    iir.filter(x[:1000])  # compile
+    t_biquad = _best(lambda: iir.filter(x), args.repeat)
+    y_ref = iir.filter(x)
+
+    stim = chain.nominal_stimulus(rng, args.samples)
+    chain.reset()
+    chain.run(**{k: v[:1000] for k, v in stim.items()})
+
+    def run_chain():
+        chain.reset()
+        chain.run(**stim)
+    t_chain = _best(run_chain, max(2, args.repeat // 2))
+
+    results = {"machine": platform.machine(), "python": platform.python_version(), "samples": args.samples,
+               "biquad": {"sections": int(iir.b.shape[0]), "rules": str(iir.rules),
+                          "samples_per_s": args.samples / t_biquad},
+               "chain_paper002": {"samples_per_s": args.samples / t_chain}}
+
+    for name, fn, n in (("apytypes", biquad_apytypes, args.prefix_apytypes),
+                        ("fxpmath", biquad_fxpmath, args.prefix_fxpmath)):
+        n = min(n, args.samples)
+        t = time.perf_counter()
+        y = fn(iir, x[:n])
+        dt = time.perf_counter() - t
+        same = int(np.count_nonzero(y == y_ref[:n])) if y is not None else 0
+        rate = n / dt
+        results[name] = {"prefix_samples": n, "samples_per_s": rate, "extrapolated_s_for_all": args.samples / rate,
+                         "bit_identical_samples": same, "ratio_fxdsp_over_lib": results["biquad"]["samples_per_s"] / rate}
+
+    b, c = results["biquad"]["samples_per_s"], results["chain_paper002"]["samples_per_s"]
+    print(f"fxdsp bench  ({args.samples} samples, int64 in/out, best of {args.repeat}; {platform.machine()})")
+    print(f"  biquad [iir] ({results['biquad']['sections']} section, {iir.rules}):  {b / 1e6:8.1f} MS/s   target >= 150")
+    print(f"  paper 002 chain:                                {c / 1e6:8.1f} MS/s   target >= 20")
+    for name in ("apytypes", "fxpmath"):
+        r = results[name]
+        print(f"  same biquad in {name:8s}: {r['samples_per_s'] / 1e3:8.2f} kS/s on a {r['prefix_samples']}-sample "
+              f"prefix (extrapolated: {r['extrapolated_s_for_all']:.0f} s for all);  fxdsp is "
+              f"{r['ratio_fxdsp_over_lib']:,.0f}x faster;  bit-identical on {r['bit_identical_samples']}/"
+              f"{r['prefix_samples']}")
+    if args.json:
+        Path(args.json).write_text(json.dumps(results, indent=1) + "\n")
+    return 0
+
+
+

@@ -1,0 +1,195 @@
+"""The one TOML config: formats, arithmetic rules, coefficients, segments and stimulus.
+
+Every block reads its own table through a :class:`Section`, which validates each value on the way
+in and, once the block is built, rejects any key it did not read (a typo in a config is an error
+naming the field, with the nearest valid key suggested). The built-in default lives in
+``fxdsp/configs/default.toml``.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from .fixed import Format, Rules
+from .fixed.rules import check_overflow, check_rounding
+
+DEFAULT_CONFIG_NAME = "default.toml"
+
+
+def default_config_text() -> str:
+    return resources.files("fxdsp.configs").joinpath(DEFAULT_CONFIG_NAME).read_text(encoding="utf-8")
+
+
+def load_config(path: str | Path | None = None) -> "Config":
+    """Parse a TOML config (the built-in default when ``path`` is None)."""
+    if path is None:
+        return Config(tomllib.loads(default_config_text()), source="<default>")
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise FileNotFoundError(2, "config file not found", str(p)) from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{p}: not valid TOML: {exc}") from None
+    return Config(data, source=str(p))
+
+
+class Section:
+    """A config table read field by field; every error names ``path.key``."""
+
+    def __init__(self, data: dict[str, Any], path: str):
+        if not isinstance(data, dict):
+            raise ValueError(f"{path}: expected a table, got {type(data).__name__}")
+        self.data = data
+        self.path = path
+        self._read: set[str] = set()
+
+    def field(self, key: str) -> str:
+        return f"{self.path}.{key}" if self.path else key
+
+    def has(self, key: str) -> bool:
+        return key in self.data
+
+    def _get(self, key: str, default: Any):
+        self._read.add(key)
+        if key in self.data:
+            return self.data[key]
+        if default is _REQUIRED:
+            raise ValueError(f"{self.field(key)}: missing")
+        return default
+
+    def format(self, key: str, default: Any = None) -> Format:
+        value = self._get(key, _REQUIRED if default is None else default)
+        return Format.parse(value, self.field(key))
+
+    def formats(self, key: str) -> Format | list[Format]:
+        """One format, or a list of formats (one per element, e.g. per polynomial power)."""
+        value = self._get(key, _REQUIRED)
+        if isinstance(value, list):
+            return [Format.parse(v, f"{self.field(key)}[{i}]") for i, v in enumerate(value)]
+        return Format.parse(value, self.field(key))
+
+    def rules(self, prefix: str = "", default: Rules = Rules()) -> Rules:
+        rounding = self._get(prefix + "rounding", default.rounding)
+        overflow = self._get(prefix + "overflow", default.overflow)
+        if not isinstance(rounding, str):
+            raise TypeError(f"{self.field(prefix + 'rounding')}: expected a string")
+        if not isinstance(overflow, str):
+            raise TypeError(f"{self.field(prefix + 'overflow')}: expected a string")
+        check_rounding(rounding, self.field(prefix + "rounding"))
+        check_overflow(overflow, self.field(prefix + "overflow"))
+        return Rules(rounding, overflow)
+
+    def choice(self, key: str, choices: tuple[str, ...], default: Any = None) -> str:
+        value = self._get(key, _REQUIRED if default is None else default)
+        if value not in choices:
+            raise ValueError(f"{self.field(key)}: {value!r} is not one of {', '.join(choices)}")
+        return value
+
+    def number(self, key: str, default: Any = None, *, low: float | None = None, high: float | None = None,
+               low_open: bool = False) -> float:
+        value = self._get(key, _REQUIRED if default is None else default)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise TypeError(f"{self.field(key)}: expected a number, got {value!r}")
+        value = float(value)
+        if not math.isfinite(value):
+            raise ValueError(f"{self.field(key)}: must be finite, got {value}")
+        if low is not None and (value <= low if low_open else value < low):
+            raise ValueError(f"{self.field(key)}: must be {'>' if low_open else '>='} {low}, got {value}")
+        if high is not None and value > high:
+            raise ValueError(f"{self.field(key)}: must be <= {high}, got {value}")
+        return value
+
+    def integer(self, key: str, default: Any = None, *, low: int | None = None, high: int | None = None) -> int:
+        value = self._get(key, _REQUIRED if default is None else default)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise TypeError(f"{self.field(key)}: expected an integer, got {value!r}")
+        if low is not None and value < low:
+            raise ValueError(f"{self.field(key)}: must be >= {low}, got {value}")
+        if high is not None and value > high:
+            raise ValueError(f"{self.field(key)}: must be <= {high}, got {value}")
+        return value
+
+    def numbers(self, key: str, default: Any = None) -> list[float]:
+        value = self._get(key, _REQUIRED if default is None else default)
+        if not isinstance(value, list):
+            raise TypeError(f"{self.field(key)}: expected a list of numbers, got {value!r}")
+        out = []
+        for i, v in enumerate(value):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
+                raise TypeError(f"{self.field(key)}[{i}]: expected a finite number, got {v!r}")
+            out.append(float(v))
+        return out
+
+    def matrix(self, key: str) -> list[list[float]]:
+        value = self._get(key, _REQUIRED)
+        if not isinstance(value, list) or not value or not all(isinstance(r, list) for r in value):
+            raise TypeError(f"{self.field(key)}: expected a list of lists of numbers")
+        rows = []
+        for i, row in enumerate(value):
+            if not row:
+                raise ValueError(f"{self.field(key)}[{i}]: empty row")
+            for j, v in enumerate(row):
+                if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
+                    raise TypeError(f"{self.field(key)}[{i}][{j}]: expected a finite number, got {v!r}")
+            rows.append([float(v) for v in row])
+        return rows
+
+    def sub(self, key: str) -> "Section":
+        self._read.add(key)
+        if key not in self.data:
+            raise ValueError(f"{self.field(key)}: missing table")
+        return Section(self.data[key], self.field(key))
+
+    def done(self) -> None:
+        """Reject keys nobody read: they are typos or options that do not exist."""
+        unknown = [k for k in self.data if k not in self._read]
+        if unknown:
+            key = unknown[0]
+            near = difflib.get_close_matches(key, sorted(self._read), n=1)
+            hint = f" (did you mean {near[0]!r}?)" if near else ""
+            raise ValueError(f"{self.field(key)}: unknown key{hint}")
+
+
+_REQUIRED = object()
+
+
+class Config:
+    """The parsed TOML. ``section('rtd')`` hands a block its table; ``check_all_read`` after all
+    blocks are built rejects unknown top-level tables and keys."""
+
+    def __init__(self, data: dict[str, Any], source: str = "<dict>"):
+        self.data = data
+        self.source = source
+        self.root = Section(data, "")
+        self._sections: dict[str, Section] = {}
+
+    def section(self, dotted: str) -> Section:
+        node, prefix = self.root, ""
+        for part in dotted.split("."):
+            prefix = f"{prefix}.{part}" if prefix else part
+            if prefix not in self._sections:
+                self._sections[prefix] = node.sub(part)
+            node = self._sections[prefix]
+        return node
+
+    def optional_section(self, dotted: str) -> Section | None:
+        node = self.data
+        for part in dotted.split("."):
+            if not isinstance(node, dict) or part not in node:
+                return None
+            node = node[part]
+        return self.section(dotted)
+
+    def check_all_read(self) -> None:
+        """Every key of every table a block read, and every top-level table, must have been used."""
+        for sec in self._sections.values():
+            sec.done()
+        self.root.done()

@@ -1,0 +1,160 @@
+"""Least squares with time-blocked cross-validation, done on per-segment normal equations.
+
+The log is cut into contiguous segments; fold f holds out the segments s with s % n_folds == f, so
+each held-out fold is a set of contiguous stretches spread over the whole chamber programme (the
+polynomials in temperature then interpolate rather than extrapolate, and slow effects such as
+warm-up are seen in both the training and the held-out data). Keeping X^T X, X^T y and y^T y per
+segment makes every fold fit, every held-out error and every delete-a-segment jackknife a p x p
+solve, so a nonlinear parameter can be searched on a grid with the fold fits nested inside.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Blocks:
+    """Segment boundaries (row indices) and the fold of each segment."""
+
+    edges: np.ndarray  # n_segments + 1 row indices
+    fold: np.ndarray  # fold of each segment
+    n_folds: int
+
+    n_groups: int = 20  # jackknife groups: runs of consecutive segments
+
+    @classmethod
+    def contiguous(cls, n_rows: int, n_segments: int = 200, n_folds: int = 5, n_groups: int = 20) -> "Blocks":
+        # short segments spread every chamber phase (a 16-minute rate table, a dwell) over all
+        # folds, so a held-out stretch is always bracketed by training data at its temperature
+        n_segments = int(max(n_folds, min(n_segments, n_rows // 20)))
+        edges = np.linspace(0, n_rows, n_segments + 1).round().astype(int)
+        return cls(edges=edges, fold=np.arange(n_segments) % n_folds, n_folds=n_folds,
+                   n_groups=int(min(n_groups, n_segments)))
+
+    def group(self) -> np.ndarray:
+        """Jackknife group of each segment: n_groups runs of consecutive segments. The groups are
+        long (1/20 of the log) so that correlated noise stays inside a group."""
+        return (np.arange(self.n_segments) * self.n_groups) // self.n_segments
+
+    @property
+    def n_segments(self) -> int:
+        return self.fold.size
+
+    def row_fold(self) -> np.ndarray:
+        return np.repeat(self.fold, np.diff(self.edges))
+
+
+class SegmentNormals:
+    """Per-segment X^T X, X^T y, y^T y of a design (columns scaled to unit rms for conditioning)."""
+
+    def __init__(self, design: np.ndarray, target: np.ndarray, blocks: Blocks, weight: float = 1.0):
+        design = np.asarray(design, dtype=float)
+        rms = np.sqrt(np.mean(design * design, axis=0))
+        self.alive = rms > 0  # an all-zero column (e.g. no ramp yet) carries no information
+        self.scale = np.where(self.alive, rms, 1.0)
+        xs = design[:, self.alive] / self.scale[self.alive]
+        self.p = xs.shape[1]
+        self.weight = float(weight)  # 1/noise variance: makes channels comparable
+        # per-segment sums in one pass: outer products per row would be n*p*p memory, so
+        # accumulate X^T X per segment by a matmul on each segment's rows
+        s = blocks.n_segments
+        self.xtx = np.empty((s, self.p, self.p))
+        for k in range(s):
+            xk = xs[blocks.edges[k]:blocks.edges[k + 1]]
+            self.xtx[k] = xk.T @ xk
+        starts = blocks.edges[:-1]
+        self.xty = np.add.reduceat(xs * target[:, None], starts, axis=0)
+        self.yty = np.add.reduceat(target * target, starts)
+        self.counts = np.diff(blocks.edges)
+        self.blocks = blocks
+        self.tot = (self.xtx.sum(0), self.xty.sum(0), self.yty.sum())
+
+    # -- solving -----------------------------------------------------------------------------
+    def _solve(self, xtx: np.ndarray, xty: np.ndarray) -> np.ndarray:
+        ridge = 1e-10 * max(np.trace(xtx) / max(self.p, 1), 1e-300)
+        try:
+            return np.linalg.solve(xtx + ridge * np.eye(self.p), xty)
+        except np.linalg.LinAlgError:
+            return np.linalg.lstsq(xtx, xty, rcond=None)[0]
+
+    @staticmethod
+    def _sse(beta, xtx, xty, yty) -> float:
+        return float(max(yty - 2.0 * beta @ xty + beta @ xtx @ beta, 0.0))
+
+    def coefficients(self, beta_scaled: np.ndarray) -> np.ndarray:
+        """Coefficients of the unscaled design columns (dead columns get 0)."""
+        out = np.zeros(self.alive.size)
+        out[self.alive] = beta_scaled / self.scale[self.alive]
+        return out
+
+    def fit_all(self) -> tuple[np.ndarray, float]:
+        beta = self._solve(self.tot[0], self.tot[1])
+        return self.coefficients(beta), self._sse(beta, *self.tot)
+
+    def folds(self) -> tuple[np.ndarray, np.ndarray]:
+        """(training SSE, held-out SSE) per fold, both weighted."""
+        nf = self.blocks.n_folds
+        train, held = np.empty(nf), np.empty(nf)
+        for f in range(nf):
+            mask = self.blocks.fold == f
+            h = (self.xtx[mask].sum(0), self.xty[mask].sum(0), self.yty[mask].sum())
+            t = (self.tot[0] - h[0], self.tot[1] - h[1], self.tot[2] - h[2])
+            beta = self._solve(t[0], t[1])
+            train[f] = self._sse(beta, *t)
+            held[f] = self._sse(beta, *h)
+        return train * self.weight, held * self.weight
+
+    def jackknife(self) -> tuple[np.ndarray, np.ndarray]:
+        """Delete-one-group fits: (coefficients [n_groups, p_all], training SSE [n_groups])."""
+        group = self.blocks.group()
+        s = self.blocks.n_groups
+        coefs, sse = np.empty((s, self.alive.size)), np.empty(s)
+        for k in range(s):
+            m = group == k
+            t = (self.tot[0] - self.xtx[m].sum(0), self.tot[1] - self.xty[m].sum(0), self.tot[2] - self.yty[m].sum())
+            beta = self._solve(t[0], t[1])
+            coefs[k] = self.coefficients(beta)
+            sse[k] = self._sse(beta, *t)
+        return coefs, sse * self.weight
+
+    def heldout_rows(self, design: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """Held-out residual of every row (each row predicted by the fit without its fold)."""
+        resid = np.empty(target.size)
+        row_fold = self.blocks.row_fold()
+        xs = design[:, self.alive] / self.scale[self.alive]
+        for f in range(self.blocks.n_folds):
+            mask = self.blocks.fold == f
+            t0 = self.tot[0] - self.xtx[mask].sum(0)
+            t1 = self.tot[1] - self.xty[mask].sum(0)
+            beta = self._solve(t0, t1)
+            rows = row_fold == f
+            resid[rows] = target[rows] - xs[rows] @ beta
+        return resid
+
+
+def jackknife_sd(values: np.ndarray) -> float:
+    """Delete-one-group jackknife standard deviation of an estimate."""
+    values = np.asarray(values, dtype=float)
+    values = values[np.isfinite(values)]
+    g = values.size
+    if g < 2:
+        return float("nan")
+    return float(np.sqrt((g - 1) / g * np.sum((values - values.mean()) ** 2)))
+
+
+def parabolic_argmin(grid: np.ndarray, values: np.ndarray) -> float:
+    """Minimum of a sampled curve: the grid minimum refined by a parabola through its neighbours."""
+    i = int(np.argmin(values))
+    if i == 0 or i == grid.size - 1:
+        return float(grid[i])
+    x0, x1, x2 = grid[i - 1:i + 2]
+    y0, y1, y2 = values[i - 1:i + 2]
+    denom = (x0 - x1) * (x0 - x2) * (x1 - x2)
+    a = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / denom
+    b = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / denom
+    if a <= 0:
+        return float(x1)
+    return float(np.clip(-b / (2 * a), x0, x2))

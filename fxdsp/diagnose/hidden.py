@@ -1,0 +1,235 @@
+"""Hidden-effect cases: simulated logs with one randomly chosen cause, and the confusion matrix.
+
+Each case draws (from its seed) a scenario, the optional columns (always including the ones its
+cause needs to be observable at all, and rate_dps when the programme applies a rate), the cause's
+parameters and its size. Sizes are multiples (SNR) of the effective white noise of the channel
+where the cause shows: the simulator's default channel noise (output 0.05 % of S0, temp_c 0.01 C,
+ref_temp_c 0.005 C, freq_hz 0.001 Hz) combined with the thermometer's noise times the channel's
+temperature slope (a 0.01 C RTD noise on a 1 mV/C bias is 0.01 mV of output noise against the
+baseline), so "detectable" has one meaning across sensors and units:
+
+==========================  ==================================================================
+cause                       drawn parameter, and how its size is set
+==========================  ==================================================================
+thermal_lag                 tau_s log-uniform 300..4000 s; output and freq noise set so the
+                            lag's rms effect is SNR x noise
+ramp_rate                   k such that rms(k dT/dt) = SNR x output noise, random sign
+hysteresis                  |h| = SNR x output noise, random sign
+warmup                      tau_s log-uniform 900..7200 s; a such that rms over the first
+                            3 tau_s = SNR x output noise, random sign
+aging_drift                 r such that rms(r t/3600 - mean) = SNR x output noise, random sign
+quadrature_leak             c such that rms(c (quad - mean)) = SNR x output noise, random sign
+sf_nonlinearity             k3 such that rms(S k3 rate^3) = SNR x output noise, random sign
+rtd_nonlinearity            b such that rms(b (Tref - 25)^2 - mean) = SNR x temp_c noise
+frequency_nonlinearity      k2 such that rms(k2 (Te - 25)^2 - mean) = SNR x freq noise
+none                        nothing; a third of the cases add flicker (bias instability, a
+                            tenth of the white level), a third a bias random walk whose
+                            standard deviation at the end of the run is WANDER x noise
+==========================  ==================================================================
+
+SNR is drawn uniformly in SNR_RANGE. Run ``python -m fxdsp.diagnose.hidden --per-cause 20`` for
+the confusion matrix.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from fxdsp import mechanisms as mech
+
+SNR_RANGE = (5.0, 20.0)
+WANDER_RANGE = (2.0, 10.0)
+TAU_LAG_RANGE = (300.0, 4000.0)
+TAU_WARMUP_RANGE = (900.0, 7200.0)
+ALL_CAUSES = tuple(mech.CAUSES)
+# columns without which a cause cannot be seen at all
+NEEDS = {"quadrature_leak": ("quad",), "sf_nonlinearity": ("rate_dps",),
+         "rtd_nonlinearity": ("ref_temp_c",), "frequency_nonlinearity": ("freq_hz",)}
+OPTIONAL = ("ref_temp_c", "rate_dps", "freq_hz", "quad")
+SCENARIOS_FOR = {
+    # paper000's tumble applies a = cos(theta) in {1, 0, -1}: a^3 = a, k3 cannot be told from S
+    "sf_nonlinearity": ("paper002", "random"),
+}
+DEFAULT_SCENARIOS = ("paper002", "paper001", "paper000", "ramp", "random")
+DURATION_SCALE = 0.5  # halves every dwell: ~3..4k rows per log, still one chamber run
+
+
+@dataclass
+class Case:
+    cause: str
+    seed: int
+    scenario: str
+    columns: tuple[str, ...]
+    effects: dict
+    noise: dict
+    snr: float
+    log: dict
+    truth: dict
+
+
+def _rms(x: np.ndarray) -> float:
+    x = np.asarray(x, float)
+    return float(np.sqrt(np.mean((x - x.mean()) ** 2)))
+
+
+def _effective_noise(truth: dict, levels: dict, columns) -> dict[str, float]:
+    """White noise each channel shows against the baseline fitted on the logged thermometer: its
+    own noise plus the thermometer's noise times the channel's temperature slope."""
+    base = truth["baseline"]
+    te, rate = truth["Te"] - base["t_ref_c"], truth["rate_dps"]
+    der = np.polynomial.polynomial.polyder
+    slope = (np.polynomial.polynomial.polyval(te, der(base["bias_poly"]))
+             + np.polynomial.polynomial.polyval(te, der(base["sf_poly"])) * rate)
+    thermometer = levels["ref_temp_c"] if "ref_temp_c" in columns else levels["temp_c"]
+    return {"output": float(np.sqrt(levels["output"] ** 2 + levels["temp_c"] ** 2 * np.mean(slope ** 2))),
+            "temp_c": float(np.hypot(levels["temp_c"], levels["ref_temp_c"])),
+            "freq_hz": float(np.hypot(levels["freq_hz"], base["k_hz_per_c"] * thermometer))}
+
+
+def make_case(cause: str, seed: int, scenario: str | None = None) -> Case:
+    from fxdsp.sim import generate_log  # the colleague's simulator: the ground truth of these tests
+
+    rng = np.random.default_rng([seed, ALL_CAUSES.index(cause)])
+    scenario = scenario or str(rng.choice(SCENARIOS_FOR.get(cause, DEFAULT_SCENARIOS)))
+    if cause == "sf_nonlinearity" and scenario == "random":
+        # a random programme may draw no rate table: move to the next seed that has one
+        sub = 0
+        while True:
+            probe = generate_log(scenario, {}, seed=seed * 1000 + sub, columns=("rate_dps",),
+                                 duration_scale=DURATION_SCALE, noise="off")
+            if np.ptp(probe["rate_dps"]) > 0:
+                break
+            sub += 1
+        sim_seed = seed * 1000 + sub
+    else:
+        sim_seed = seed
+    extra = [c for c in OPTIONAL if rng.random() < 0.5]
+    needed = NEEDS.get(cause, ())
+    probe = generate_log(scenario, {}, seed=sim_seed, columns=("rate_dps",), duration_scale=DURATION_SCALE,
+                         noise="off")
+    if np.ptp(probe["rate_dps"]) > 0:
+        needed = needed + ("rate_dps",)  # without it the rate table is an unexplained output
+    columns = tuple(c for c in OPTIONAL if c in extra or c in needed)
+    snr = float(rng.uniform(*SNR_RANGE))
+    sign = 1.0 if rng.random() < 0.5 else -1.0
+    kw = dict(seed=sim_seed, duration_scale=DURATION_SCALE)
+    clean, truth0 = generate_log(scenario, {}, columns=OPTIONAL, noise="off", return_truth=True, **kw)
+    from fxdsp.sim.noise import default_noise
+    levels = default_noise(truth0["baseline"]["sf_poly"][0])
+    noise: dict = {}
+    t = clean["time_s"]
+    sigma = _effective_noise(truth0, levels, columns)
+    effects: dict = {}
+    if cause == "thermal_lag":
+        tau = float(np.exp(rng.uniform(*np.log(TAU_LAG_RANGE))))
+        effects = {"thermal_lag": {"tau_s": tau}}
+        lagged, _ = generate_log(scenario, effects, columns=OPTIONAL, noise="off", return_truth=True, **kw)
+        # scale the output and RTD noise together so the effective output noise is rms / SNR
+        lam = _rms(lagged["output"] - clean["output"]) / snr / sigma["output"]
+        noise["output"], noise["temp_c"] = lam * levels["output"], lam * levels["temp_c"]
+        noise["freq_hz"] = max(_rms(lagged["freq_hz"] - clean["freq_hz"]) / snr, 1e-12)
+    elif cause == "ramp_rate":
+        d = mech.rate_of_change(t, truth0["temp_c"])
+        effects = {cause: {"k_per_c_per_s": sign * snr * sigma["output"] / _rms(d)}}
+    elif cause == "hysteresis":
+        effects = {cause: {"h": sign * snr * sigma["output"]}}
+    elif cause == "warmup":
+        tau = float(np.exp(rng.uniform(*np.log(TAU_WARMUP_RANGE))))
+        shape = np.exp(-t / tau)
+        head = t < 3 * tau
+        effects = {cause: {"a": sign * snr * sigma["output"] / float(np.sqrt(np.mean(shape[head] ** 2))),
+                           "tau_s": tau}}
+    elif cause == "aging_drift":
+        effects = {cause: {"r_per_h": sign * snr * sigma["output"] / _rms(t / 3600.0)}}
+    elif cause == "quadrature_leak":
+        effects = {cause: {"c": sign * snr * sigma["output"] / _rms(truth0["quad"])}}
+    elif cause == "sf_nonlinearity":
+        r = truth0["rate_dps"]
+        s = np.polynomial.polynomial.polyval(truth0["Te"] - 25.0, truth0["baseline"]["sf_poly"])
+        effects = {cause: {"k3": sign * snr * sigma["output"] / _rms(s * r ** 3)}}
+    elif cause == "rtd_nonlinearity":
+        effects = {cause: {"b_per_c": sign * snr * sigma["temp_c"] / _rms((truth0["ref_temp_c"] - 25.0) ** 2)}}
+    elif cause == "frequency_nonlinearity":
+        effects = {cause: {"k2_hz_per_c2": sign * snr * sigma["freq_hz"] / _rms((truth0["Te"] - 25.0) ** 2)}}
+    elif cause == "none":
+        kind = rng.integers(3)
+        if kind == 1:
+            # flicker at a tenth of the white level per sample: a wandering bias, not a cause
+            noise["bias_instability"] = 0.1 * levels["output"]
+        elif kind == 2:
+            # bias random walk that wanders WANDER_RANGE x the effective noise over the run: the
+            # look-alike of aging, warm-up and hysteresis
+            wander = float(rng.uniform(*WANDER_RANGE))
+            noise["rate_random_walk"] = wander * sigma["output"] / np.sqrt(t[-1] - t[0])
+    log, truth = generate_log(scenario, effects, columns=columns, noise=noise or None,
+                              return_truth=True, **kw)
+    return Case(cause, seed, scenario, columns, effects, noise, snr, log, truth)
+
+
+def diagnose_case(case: Case):
+    from fxdsp.diagnose.api import diagnose_log
+    from fxdsp.diagnose.logio import Log
+
+    return diagnose_log(Log(columns={k: np.asarray(v, float) for k, v in case.log.items()}, source="sim"))
+
+
+def parameters_within(case: Case, found: dict, tolerance: float = 0.25) -> bool:
+    if case.cause == "none":
+        return True
+    truth = case.effects[case.cause]
+    return all(abs(found.get(k, np.nan) - v) <= tolerance * abs(v) for k, v in truth.items())
+
+
+def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, out=sys.stdout):
+    """Run ``per_cause`` cases per cause; print the confusion matrix (rows: truth, cols: first cause)."""
+    index = {c: i for i, c in enumerate(ALL_CAUSES)}
+    matrix = np.zeros((len(ALL_CAUSES), len(ALL_CAUSES)), dtype=int)
+    params_ok = {c: 0 for c in causes}
+    extra = {c: 0 for c in causes}
+    gain_ok = {c: 0 for c in causes}
+    failures = []
+    start = time.perf_counter()
+    for cause in causes:
+        for k in range(per_cause):
+            case = make_case(cause, first_seed + k)
+            diag = diagnose_case(case)
+            got = diag.causes[0] if diag.causes else "none"
+            matrix[index[cause], index[got]] += 1
+            ok_p = got == cause and parameters_within(case, diag.parameters.get(cause, {}))
+            ok_g = cause == "none" or diag.gain["ratio"] > 1.3
+            params_ok[cause] += ok_p
+            extra[cause] += len(diag.causes) > 1
+            gain_ok[cause] += ok_g
+            if got != cause or not ok_p or not ok_g or len(diag.causes) > 1:
+                failures.append((cause, case.seed, case.scenario, case.columns, round(case.snr, 1),
+                                 diag.causes, diag.parameters.get(cause), case.effects.get(cause),
+                                 round(diag.gain["ratio"], 2)))
+    abbrev = [c[:6] for c in ALL_CAUSES]
+    print(f"{'truth / found':24s}" + "".join(f"{a:>7s}" for a in abbrev) + "   params<=25%  gain>1.3  extra causes", file=out)
+    for c in causes:
+        i = index[c]
+        print(f"{c:24s}" + "".join(f"{v:7d}" for v in matrix[i]) +
+              f"   {params_ok[c]:5d}/{per_cause:<5d} {gain_ok[c]:5d}/{per_cause:<5d} {extra[c]:5d}", file=out)
+    print(f"{len(causes) * per_cause} cases in {time.perf_counter() - start:.0f} s", file=out)
+    for f in failures:
+        print("miss:", *f, file=out)
+    return matrix, failures
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--per-cause", type=int, default=20)
+    parser.add_argument("--first-seed", type=int, default=1000)
+    parser.add_argument("--causes", default=",".join(ALL_CAUSES))
+    args = parser.parse_args(argv)
+    confusion(args.per_cause, args.first_seed, tuple(c for c in args.causes.split(",") if c))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

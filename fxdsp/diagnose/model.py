@@ -1,0 +1,250 @@
+"""The baseline of the contract (section 2) and its extensions (section 3) as linear designs.
+
+Every channel model is linear in its coefficients once the nonlinear parameters of the causes in
+play (a lag time constant, a warm-up time constant, a cubic rate coefficient) are fixed, so a
+cause is tested by adding a column (ramp rate, hysteresis state, warm-up, aging, quadrature,
+curvature) or by transforming a column (lagged temperature, cubic rate), and the fit is one least
+squares solve. The mechanisms themselves come from fxdsp.mechanisms, shared with the simulator.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fxdsp import mechanisms as mech
+
+T_REF_C = mech.T_CURVE_C
+
+# causes whose mechanism has one nonlinear parameter searched on a grid (the others are linear)
+NONLINEAR = {"thermal_lag": "tau_s", "warmup": "tau_s"}
+# the extra column each linear-in-output cause adds to the output design
+OUTPUT_COLUMN = {"ramp_rate": "k_per_c_per_s", "hysteresis": "h", "warmup": "a",
+                 "aging_drift": "r_per_h", "quadrature_leak": "c", "sf_nonlinearity": "k3"}
+
+
+@dataclass
+class Series:
+    """The usable rows of a log, with the derived signals every candidate needs."""
+
+    t: np.ndarray
+    temp: np.ndarray
+    out: np.ndarray
+    ref: np.ndarray | None = None
+    rate: np.ndarray | None = None
+    freq: np.ndarray | None = None
+    quad: np.ndarray | None = None
+    dtdt: np.ndarray = field(init=False)
+    hyst: np.ndarray = field(init=False)
+
+    def __post_init__(self):
+        # the derivative of a noisy reading is mostly noise at a 1..10 s log interval; the physics
+        # (and the simulator) respond to the true temperature change, so differentiate a reading
+        # smoothed over about a minute (short against any ramp, long against the ADC noise)
+        smooth, spread_s, k = smoothed(self.t, self.temp, 60.0)
+        self.dtdt = mech.rate_of_change(self.t, smooth)
+        # smoothing starts a ramp half a window early and stretches it by a window: ask for that
+        # much more duration (a ramp just too short to flip the state still does not flip it),
+        # then move the flips back by half a window to where the unsmoothed ramp puts them
+        hyst = mech.ramp_direction(self.t, smooth, min_duration_s=600.0 + spread_s)
+        self.hyst = np.concatenate([hyst[k:], np.full(k, hyst[-1])]) if 0 < k < hyst.size else hyst
+        self._freq_thermometer = None
+        # S(Te) of the calibrated baseline (output unit per rate unit), set by the engine: with it
+        # the cubic rate term S k3 rate^3 is one linear column whose coefficient is k3 itself
+        self.sf_estimate: np.ndarray | None = None
+
+    def decimated(self, step: int) -> "Series":
+        """Every ``step``-th row, derived signals included (computed on the full log first, so the
+        smoothing and the ramp states are those of the full log)."""
+        new = copy.copy(self)
+        for name in ("t", "temp", "out", "ref", "rate", "freq", "quad", "dtdt", "hyst", "sf_estimate"):
+            value = getattr(self, name)
+            if value is not None:
+                setattr(new, name, np.ascontiguousarray(value[::step]))
+        new._freq_thermometer = None
+        return new
+
+    @property
+    def n(self) -> int:
+        return self.t.size
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0])
+
+    @property
+    def freq_thermometer(self) -> np.ndarray:
+        """What the resonator frequency is compared with: the calibrated reference when logged
+        (so an RTD curvature is not mistaken for a frequency turnover), mapped onto temp_c's linear
+        scale by a straight-line fit (Te lives on that scale); temp_c itself without a reference."""
+        if self.ref is None:
+            return self.temp
+        if self._freq_thermometer is None:
+            gain, offset = np.polyfit(self.ref - T_REF_C, self.temp, 1)
+            self._freq_thermometer = offset + gain * (self.ref - T_REF_C)
+        return self._freq_thermometer
+
+    def target(self, channel: str) -> np.ndarray:
+        return {"output": self.out, "freq_hz": self.freq, "temp_c": self.temp}[channel]
+
+    def channels(self) -> list[str]:
+        out = ["output"]
+        if self.freq is not None:
+            out.append("freq_hz")
+        if self.ref is not None:
+            out.append("temp_c")
+        return out
+
+
+def smoothed(t: np.ndarray, values: np.ndarray, window_s: float) -> tuple[np.ndarray, float]:
+    """Centred moving average over about ``window_s`` (2 k + 1 samples, edges shrink), the time by
+    which it widens a ramp (2 k dt) and k."""
+    dt = float(np.median(np.diff(t))) if t.size > 1 else window_s
+    k = int(window_s / dt) // 2 if dt > 0 else 0
+    if k < 1 or values.size < 2 * k + 1:
+        return np.asarray(values, dtype=float), 0.0, 0
+    c = np.concatenate([[0.0], np.cumsum(values - values[0])])
+    i = np.arange(values.size)
+    lo, hi = np.maximum(i - k, 0), np.minimum(i + k + 1, values.size)
+    return values[0] + (c[hi] - c[lo]) / (hi - lo), 2.0 * k * dt, k
+
+
+def strictly_increasing(t: np.ndarray) -> np.ndarray:
+    """Equal time stamps (allowed by the contract) get microsecond offsets so derivatives exist."""
+    t = np.asarray(t, dtype=float).copy()
+    if t.size > 1 and np.any(np.diff(t) <= 0):
+        t += np.arange(t.size) * 1e-6
+        t = np.maximum.accumulate(t)
+    return t
+
+
+def spike_rows(values: np.ndarray, threshold: float = 25.0) -> np.ndarray:
+    """Isolated one-sample spikes: a reading far from the line through its two neighbours while
+    the neighbours agree with each other.
+
+    Not sentinels but non-physical readings (a meter's first reading after a range change, a
+    dropped bit: the tckit log starts with 4.67 V in a 1.00002 V channel). A step (rate table) or
+    a steep ramp moves the neighbours apart too, so neither is flagged; one spike in a log of 1e-5
+    relative variations would otherwise dominate every least-squares fit.
+    """
+    y = np.asarray(values, dtype=float)
+    n = y.size
+    flags = np.zeros(n, dtype=bool)
+    if n < 7:
+        return flags
+    dev = np.empty(n)
+    gap = np.empty(n)
+    dev[1:-1] = y[1:-1] - 0.5 * (y[:-2] + y[2:])
+    gap[1:-1] = np.abs(y[2:] - y[:-2])
+    dev[0], gap[0] = y[0] - (2 * y[1] - y[2]), np.abs(y[1] - y[2])  # end rows: extrapolate
+    dev[-1], gap[-1] = y[-1] - (2 * y[-2] - y[-3]), np.abs(y[-2] - y[-3])
+    spread = 1.4826 * np.median(np.abs(dev[1:-1] - np.median(dev[1:-1])))
+    if not spread > 0:
+        spread = float(np.std(dev[1:-1]))
+    if not spread > 0:
+        return flags
+    return (np.abs(dev) > threshold * spread) & (np.abs(dev) > 4.0 * gap)
+
+
+@dataclass(frozen=True)
+class Scaling:
+    """Affine map of a temperature onto about [-1, 1], for well-conditioned polynomial columns."""
+
+    mid: float
+    half: float
+
+    @classmethod
+    def of(cls, values: np.ndarray) -> "Scaling":
+        lo, hi = float(np.min(values)), float(np.max(values))
+        return cls(mid=0.5 * (lo + hi), half=max(0.5 * (hi - lo), 1.0))
+
+    def __call__(self, values: np.ndarray) -> np.ndarray:
+        return (values - self.mid) / self.half
+
+
+def lagged(series: Series, values: np.ndarray, tau_s: float) -> np.ndarray:
+    """Te through the contract's lag, started from a de-noised first reading: a noisy start value
+    would decay like exp(-t/tau) and look like a warm-up of the same time constant."""
+    t = series.t
+    head = t <= t[0] + min(0.1 * tau_s, 600.0)
+    if head.sum() >= 3:
+        slope, intercept = np.polyfit(t[head] - t[0], values[head], 1)
+        start = float(intercept)
+    else:
+        start = float(values[0])
+    return mech.first_order_lag(t, values, tau_s, initial=start)
+
+
+def output_design(series: Series, state: dict, orders: tuple[int, int | None], scale: Scaling
+                  ) -> tuple[np.ndarray, list[str]]:
+    """output = B(Te) + S(Te) * rate_eff [+ cause columns]."""
+    pb, ps = orders
+    te = series.temp
+    if "thermal_lag" in state:
+        te = lagged(series, te, state["thermal_lag"]["tau_s"])
+    x = scale(te)
+    cols, names = [], []
+    power = np.ones_like(x)
+    powers = []
+    for j in range(max(pb, ps if ps is not None else -1) + 1):
+        powers.append(power)
+        power = power * x
+    for j in range(pb + 1):
+        cols.append(powers[j])
+        names.append(f"b{j}")
+    if ps is not None and series.rate is not None:
+        rate = series.rate
+        for j in range(ps + 1):
+            cols.append(rate * powers[j])
+            names.append(f"s{j}")
+    extra = {
+        "ramp_rate": lambda: series.dtdt,
+        "hysteresis": lambda: series.hyst,
+        "warmup": lambda: np.exp(-series.t / state["warmup"]["tau_s"]),
+        "aging_drift": lambda: series.t / 3600.0,
+        "quadrature_leak": lambda: series.quad,
+        "sf_nonlinearity": lambda: series.sf_estimate * series.rate ** 3,
+    }
+    for cause, make in extra.items():
+        if cause in state:
+            cols.append(make())
+            names.append(cause)
+    if "thermal_lag" in state:
+        cols.append(lag_start(series, state["thermal_lag"]["tau_s"]))
+        names.append("lag_start")
+    return np.column_stack(cols), names
+
+
+def lag_start(series: Series, tau_s: float) -> np.ndarray:
+    """How an error in the lag's start value shows: the lag is linear, so a start error d adds
+    d exp(-(t - t0)/tau) to Te. A nuisance column (not a cause): without it, the noise of the first
+    readings would leave a transient that other causes try to explain."""
+    return np.exp(-(series.t - series.t[0]) / tau_s)
+
+
+def freq_design(series: Series, state: dict, scale: Scaling) -> tuple[np.ndarray, list[str]]:
+    """freq_hz = f0 + k Te [+ k2 (Te - 25)^2]."""
+    te = series.freq_thermometer
+    if "thermal_lag" in state:
+        te = lagged(series, te, state["thermal_lag"]["tau_s"])
+    x = scale(te)
+    cols, names = [np.ones_like(x), x], ["f0", "k"]
+    if "frequency_nonlinearity" in state:
+        cols.append(x * x)
+        names.append("frequency_nonlinearity")
+    if "thermal_lag" in state:
+        cols.append(lag_start(series, state["thermal_lag"]["tau_s"]))
+        names.append("lag_start")
+    return np.column_stack(cols), names
+
+
+def temp_design(series: Series, state: dict, scale: Scaling) -> tuple[np.ndarray, list[str]]:
+    """temp_c = offset + gain * ref_temp_c [+ curvature]."""
+    x = scale(series.ref)
+    cols, names = [np.ones_like(x), x], ["t0", "t1"]
+    if "rtd_nonlinearity" in state:
+        cols.append(x * x)
+        names.append("rtd_nonlinearity")
+    return np.column_stack(cols), names

@@ -1,0 +1,177 @@
+"""The diagnosis as the contract's JSON report, a replay model, and a human report with plots."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from fxdsp import mechanisms as mech
+from fxdsp.diagnose.engine import Diagnosis, heldout_residuals
+
+_EXPLAIN = {
+    "thermal_lag": ("The sensing element lags the logged temperature through a first-order lag of "
+                    "tau = {tau_s:.0f} s: heating and cooling give different outputs at the same temp_c "
+                    "and the difference decays through the dwells after each ramp."),
+    "ramp_rate": ("The output carries a term proportional to d(temp_c)/dt (k = {k_per_c_per_s:.4g} per C/s): "
+                  "a thermal-gradient effect that vanishes as soon as the temperature stops moving."),
+    "hysteresis": ("The output differs by {h:.4g} (2h between the two branches) after heating and after "
+                   "cooling ramps and keeps that offset through the dwells: hysteresis, not a lag."),
+    "warmup": ("A settling transient after power-on: output += {a:.4g} exp(-t / {tau_s:.0f} s)."),
+    "aging_drift": ("The output drifts linearly with time at {r_per_h:.4g} per hour, independent of "
+                    "temperature."),
+    "quadrature_leak": ("The quadrature channel leaks into the rate channel with coefficient c = {c:.4g} "
+                        "(a demodulation phase error of about {phase_mrad:.3g} mrad)."),
+    "sf_nonlinearity": ("The scale factor depends on the rate: output = B + S (rate + k3 rate^3) with "
+                        "k3 = {k3:.4g} per (rate unit)^2."),
+    "rtd_nonlinearity": ("temp_c is curved against the reference thermometer: b = {b_per_c:.4g} /C, i.e. "
+                         "a linear RTD law misreads by b (T - 25)^2 (Callendar-Van Dusen curvature)."),
+    "frequency_nonlinearity": ("The resonant frequency is curved in temperature: k2 = {k2_hz_per_c2:.4g} Hz/C^2 "
+                               "on top of f0 + k Te (a turnover)."),
+}
+
+
+def explanation(diag: Diagnosis) -> str:
+    if not diag.causes:
+        g = diag.gain
+        return ("Nothing beyond the baseline (B and S polynomials in temp_c, linear thermometers) and the "
+                f"noise: no candidate cause lowers the held-out rms of any channel by {5:d} % or more "
+                f"(output held-out rms {g['rms_before']:.4g}).")
+    parts = []
+    for cause in diag.causes:
+        params = dict(diag.parameters[cause])
+        if cause == "quadrature_leak":
+            params["phase_mrad"] = 1e3 * float(np.arctan(abs(params["c"])))
+        parts.append(_EXPLAIN[cause].format(**params))
+    g = diag.gain
+    parts.append(f"Held-out rms of {g['channel']}: {g['rms_before']:.4g} -> {g['rms_after']:.4g} "
+                 f"({g['ratio']:.2f}x).")
+    return " ".join(parts)
+
+
+def report_dict(diag: Diagnosis) -> dict:
+    cause = diag.causes[0] if diag.causes else "none"
+    candidates = [{"cause": c.cause, "score": round(float(c.evidence), 3), "rms_after": float(c.rms_after),
+                   "rms_before": float(c.rms_before), "ratio": float(c.ratio), "channel": c.channel,
+                   "accepted": c.cause in diag.causes, **({"nonlinear": c.nonlinear} if c.nonlinear else {})}
+                  for c in diag.candidates]
+    return {
+        "cause": cause,
+        "causes": list(diag.causes),
+        "explanation": explanation(diag),
+        "parameters": dict(diag.parameters.get(cause, {})),
+        "uncertainty": dict(diag.uncertainty.get(cause, {})),
+        "gain": dict(diag.gain),
+        "candidates": candidates,
+        "rows": dict(getattr(diag, "rows", {"used": diag.context.series.n, "dropped": 0})),
+        "all_parameters": diag.parameters,
+        "all_uncertainty": diag.uncertainty,
+        "baseline": {"bias_order": diag.orders[0], "sf_order": diag.orders[1], **diag.baseline},
+        "method": ("blocked cross-validation: 5 folds of interleaved contiguous segments; score = held-out "
+                   "SSE drop in units of the channel's white-noise variance; a cause needs a held-out rms "
+                   "ratio >= 1.05 and a score >= 30; uncertainties: delete-one-group jackknife (20 groups)"),
+    }
+
+
+def replay_model(diag: Diagnosis) -> dict:
+    """The fitted extended model in the simulator's replay format (see fxdsp.sim.model)."""
+    base = {k: v for k, v in diag.baseline.items()}
+    return {"baseline": base, "effects": {c: dict(diag.parameters[c]) for c in diag.causes}}
+
+
+def write_json(path, data: dict) -> None:
+    Path(path).write_text(json.dumps(data, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+
+
+# -- human report --------------------------------------------------------------------------------
+def _phase(dtdt: np.ndarray, threshold: float = 2e-4) -> np.ndarray:
+    return np.where(dtdt > threshold, 1, np.where(dtdt < -threshold, -1, 0))
+
+
+def write_report(diag: Diagnosis, directory) -> Path:
+    """Markdown report plus PNG plots (residual vs temperature / dT/dt / time) in ``directory``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = Path(directory)
+    out.mkdir(parents=True, exist_ok=True)
+    ctx = diag.context
+    s = ctx.series
+    base_res = heldout_residuals(ctx, {}, "output")
+    ext_state = {c: diag.state[c] for c in diag.state if c in _OUTPUT_CAUSES}
+    ext_res = heldout_residuals(ctx, ext_state, "output") if ext_state else None
+    phase = _phase(s.dtdt)
+    styles = {1: ("heating", "tab:red"), -1: ("cooling", "tab:blue"), 0: ("dwell", "0.6")}
+    step = max(1, s.n // 20000)  # a million points make an unreadable, slow scatter
+    idx = np.arange(0, s.n, step)
+
+    fig, axes = plt.subplots(3, 1, figsize=(9, 11))
+    for code, (label, color) in styles.items():
+        m = idx[phase[idx] == code]
+        axes[0].plot(s.temp[m], base_res[m], ".", ms=2, color=color, label=label)
+        axes[1].plot(s.dtdt[m] * 60.0, base_res[m], ".", ms=2, color=color, label=label)
+    axes[0].set_xlabel("temp_c [C]")
+    axes[1].set_xlabel("d(temp_c)/dt [C/min]")
+    axes[2].plot(s.t[idx] / 3600.0, base_res[idx], ".", ms=2, color="0.4", label="baseline")
+    if ext_res is not None:
+        axes[2].plot(s.t[idx] / 3600.0, ext_res[idx], ".", ms=2, color="tab:green", label="extended model")
+    axes[2].set_xlabel("time [h]")
+    for ax in axes:
+        ax.set_ylabel("held-out residual of output")
+        ax.grid(alpha=0.3)
+        ax.legend(markerscale=5, fontsize=8)
+    axes[0].set_title("Baseline residual (held-out folds), heating vs cooling")
+    fig.tight_layout()
+    fig.savefig(out / "residuals.png", dpi=110)
+    plt.close(fig)
+    images = ["residuals.png"]
+
+    for channel, label in (("freq_hz", "resonant frequency"), ("temp_c", "temp_c against ref_temp_c")):
+        if channel not in s.channels():
+            continue
+        res = heldout_residuals(ctx, {}, channel)
+        fig, ax = plt.subplots(figsize=(9, 4))
+        x = s.ref if channel == "temp_c" else s.temp
+        for code, (lab, color) in styles.items():
+            m = idx[phase[idx] == code]
+            ax.plot(x[m], res[m], ".", ms=2, color=color, label=lab)
+        ax.set_xlabel("ref_temp_c [C]" if channel == "temp_c" else "temp_c [C]")
+        ax.set_ylabel(f"held-out residual of {channel}")
+        ax.set_title(f"Baseline residual of the {label}")
+        ax.grid(alpha=0.3)
+        ax.legend(markerscale=5, fontsize=8)
+        fig.tight_layout()
+        fig.savefig(out / f"residual_{channel}.png", dpi=110)
+        plt.close(fig)
+        images.append(f"residual_{channel}.png")
+
+    data = report_dict(diag)
+    lines = [f"# fxdsp diagnose: {data['cause']}", "", data["explanation"], "",
+             f"Rows used: {data['rows']['used']}, dropped: {data['rows']['dropped']}. "
+             f"Baseline orders: B {diag.orders[0]}, S {diag.orders[1]}.", ""]
+    if diag.causes:
+        lines += ["## Parameters", "", "| cause | parameter | value | uncertainty (1 sd) |", "|---|---|---|---|"]
+        for cause in diag.causes:
+            for name, value in diag.parameters[cause].items():
+                sd = diag.uncertainty.get(cause, {}).get(name, float("nan"))
+                lines.append(f"| {cause} | {name} | {value:.6g} | {sd:.3g} |")
+        lines.append("")
+    g = data["gain"]
+    lines += ["## Held-out gain", "", f"{g['channel']}: rms {g['rms_before']:.6g} -> {g['rms_after']:.6g}, "
+              f"ratio {g['ratio']:.3f}", "", "## Candidates (first round, against the baseline)", "",
+              "| cause | channel | score (noise variances) | held-out rms before | after | ratio | accepted |",
+              "|---|---|---|---|---|---|---|"]
+    for c in data["candidates"]:
+        lines.append(f"| {c['cause']} | {c['channel']} | {c['score']:.1f} | {c['rms_before']:.4g} | "
+                     f"{c['rms_after']:.4g} | {c['ratio']:.3f} | {'yes' if c['accepted'] else ''} |")
+    lines += ["", "## Plots", ""] + [f"![{name}]({name})" for name in images] + ["", "## Method", "",
+                                                                               data["method"], ""]
+    path = out / "report.md"
+    path.write_text("\n".join(lines), encoding="utf-8")
+    return path
+
+
+_OUTPUT_CAUSES = tuple(c for c, ch in mech.CHANNEL.items() if ch == "output" and c != "none")

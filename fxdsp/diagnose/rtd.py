@@ -1,0 +1,145 @@
+"""Platinum RTD: why a linear law R = R0 (1 + beta T) misreads, and the Callendar-Van Dusen fix.
+
+Paper 002 reads its RTD with R = R0 (1 + beta T). A real platinum element follows Callendar-Van
+Dusen (IEC 60751): R = R0 [1 + A T + B T^2 + C (T - 100) T^3], the C term only below 0 C. The
+difference is a curvature, which is the `rtd_nonlinearity` cause of the measured-data contract:
+a linear readout reports T + b (T - 25)^2 (+ offset and gain), b close to B/A.
+
+``rtd_study`` runs the whole argument on a resistance table: linear least-squares law and its
+temperature error, the cause named by the diagnosis engine from a log built from the table, a
+Callendar-Van Dusen least-squares fit and the IEC 60751 constants, with their temperature errors.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+IEC60751 = {"R0": 100.0, "A": 3.9083e-3, "B": -5.775e-7, "C": -4.183e-12}
+
+
+@dataclass
+class ErrorStats:
+    max_abs_c: float
+    rms_c: float
+
+    @classmethod
+    def of(cls, error_c: np.ndarray) -> "ErrorStats":
+        e = np.asarray(error_c, dtype=float)
+        return cls(float(np.max(np.abs(e))), float(np.sqrt(np.mean(e * e))))
+
+
+def load_table(path) -> tuple[np.ndarray, np.ndarray]:
+    """(temperature_c, resistance_ohm) from a two-column CSV with a header row."""
+    data = np.loadtxt(Path(path), delimiter=",", skiprows=1, ndmin=2)
+    if data.shape[1] < 2 or data.shape[0] < 4:
+        raise ValueError(f"{path}: expected columns temperature_c,resistance_ohm and at least 4 rows")
+    return data[:, 0].copy(), data[:, 1].copy()
+
+
+def fit_linear(temp_c, resistance) -> tuple[float, float]:
+    """R0 and beta of R = R0 (1 + beta T), least squares in R."""
+    slope, intercept = np.polyfit(np.asarray(temp_c, float), np.asarray(resistance, float), 1)
+    return float(intercept), float(slope / intercept)
+
+
+def linear_temperature(resistance, r0: float, beta: float) -> np.ndarray:
+    return (np.asarray(resistance, float) / r0 - 1.0) / beta
+
+
+def cvd_resistance(temp_c, r0: float, a: float, b: float, c: float) -> np.ndarray:
+    t = np.asarray(temp_c, float)
+    return r0 * (1.0 + a * t + b * t * t + np.where(t < 0, c * (t - 100.0) * t ** 3, 0.0))
+
+
+def fit_cvd(temp_c, resistance) -> dict[str, float]:
+    """R0, A, B, C of Callendar-Van Dusen by linear least squares in (R0, R0 A, R0 B, R0 C)."""
+    t = np.asarray(temp_c, float)
+    r = np.asarray(resistance, float)
+    cols = [np.ones_like(t), t, t * t]
+    has_cold = bool(np.any(t < 0))
+    if has_cold:
+        cols.append(np.where(t < 0, (t - 100.0) * t ** 3, 0.0))
+    x = np.column_stack(cols)
+    scale = np.sqrt(np.mean(x * x, axis=0))
+    coef = np.linalg.lstsq(x / scale, r, rcond=None)[0] / scale
+    r0 = float(coef[0])
+    return {"R0": r0, "A": float(coef[1] / r0), "B": float(coef[2] / r0),
+            "C": float(coef[3] / r0) if has_cold else 0.0}
+
+
+def cvd_temperature(resistance, r0: float, a: float, b: float, c: float) -> np.ndarray:
+    """Invert Callendar-Van Dusen: the quadratic root, then Newton steps for the C term below 0 C."""
+    r = np.asarray(resistance, float)
+    t = (-a + np.sqrt(a * a - 4.0 * b * (1.0 - r / r0))) / (2.0 * b) if b != 0 else (r / r0 - 1.0) / a
+    for _ in range(20):
+        cold = t < 0
+        f = cvd_resistance(t, r0, a, b, c) - r
+        df = r0 * (a + 2 * b * t + np.where(cold, c * (4 * t ** 3 - 300.0 * t * t), 0.0))
+        t = t - f / df
+    return t
+
+
+def rtd_study(temp_c, resistance) -> dict:
+    """Errors (in C) of the linear law, the fitted CVD law and the IEC 60751 law on a table, and the
+    cause the diagnosis engine names for a linear readout of it."""
+    t = np.asarray(temp_c, float)
+    r = np.asarray(resistance, float)
+    r0, beta = fit_linear(t, r)
+    linear_error = linear_temperature(r, r0, beta) - t
+    cvd = fit_cvd(t, r)
+    cvd_error = cvd_temperature(r, cvd["R0"], cvd["A"], cvd["B"], cvd["C"]) - t
+    iec_error = cvd_temperature(r, *IEC60751.values()) - t
+    return {
+        "range_c": [float(t.min()), float(t.max())],
+        "linear": {"R0": r0, "beta": beta, "error": ErrorStats.of(linear_error)},
+        "cvd_fit": {**cvd, "error": ErrorStats.of(cvd_error)},
+        "cvd_iec60751": {**IEC60751, "error": ErrorStats.of(iec_error)},
+        "diagnosis": diagnose_linear_readout(t, r, r0, beta),
+    }
+
+
+def diagnose_linear_readout(temp_c, resistance, r0: float, beta: float, seed: int = 0) -> dict:
+    """Run `fxdsp diagnose` on a log whose temp_c is the linear-law reading of the table and whose
+    ref_temp_c is the table's temperature: the engine must name the curvature.
+
+    The table has no sensor output; a flat output with white noise stands in for it, so that the
+    output channel has nothing to explain and only the thermometers can disagree.
+    """
+    from fxdsp.diagnose.api import diagnose_log
+    from fxdsp.diagnose.logio import Log
+
+    t = np.asarray(temp_c, float)
+    rng = np.random.default_rng(seed)
+    cols = {"time_s": np.arange(t.size, dtype=float) * 60.0,
+            "temp_c": linear_temperature(resistance, r0, beta),
+            "ref_temp_c": t,
+            "output": 1.0 + 1e-3 * rng.standard_normal(t.size)}
+    diag = diagnose_log(Log(columns=cols, source="pt100 table"))
+    return {"causes": diag.causes, "parameters": diag.parameters, "gain": diag.gain}
+
+
+def main(argv=None) -> int:
+    import argparse
+
+    parser = argparse.ArgumentParser(description="linear RTD law vs Callendar-Van Dusen on a table")
+    parser.add_argument("table", nargs="?", default="/work/shared/data/pt100_table/pt100_table.csv")
+    parser.add_argument("--range", nargs=2, type=float, default=None, metavar=("LO", "HI"))
+    args = parser.parse_args(argv)
+    t, r = load_table(args.table)
+    if args.range:
+        keep = (t >= args.range[0]) & (t <= args.range[1])
+        t, r = t[keep], r[keep]
+    study = rtd_study(t, r)
+    for key in ("linear", "cvd_fit", "cvd_iec60751"):
+        e = study[key]["error"]
+        coefs = {k: v for k, v in study[key].items() if k != "error"}
+        print(f"{key:13s} max |error| {e.max_abs_c:9.4f} C  rms {e.rms_c:9.4f} C  {coefs}")
+    print("diagnosis of the linear readout:", study["diagnosis"])
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

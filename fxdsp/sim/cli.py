@@ -1,0 +1,113 @@
+"""``fxdsp simulate``: write a simulated chamber run as a canonical log.
+
+    fxdsp simulate --scenario paper002 --effect thermal_lag.tau_s=3000 --effect hysteresis=0.05 \\
+                   --seed 1 --columns ref_temp_c,freq_hz --out run.csv
+    fxdsp simulate --scenario ramp --model diagnosed.json --out replay.csv
+
+``--effect CAUSE=VALUE`` is shorthand for a cause with one parameter; causes with several
+parameters (warmup) take one ``--effect CAUSE.PARAM=VALUE`` per parameter.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+
+from fxdsp.mechanisms import CAUSES
+from fxdsp.sim.generate import DEFAULT_TIME_STEP_S, OPTIONAL_COLUMNS, SCENARIOS, generate_log
+from fxdsp.sim.logio import write_log
+from fxdsp.sim.thermal import NODES, ThermalChain
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--scenario", required=True, metavar="NAME",
+                        help=f"chamber programme and sensor: {', '.join(SCENARIOS)}")
+    parser.add_argument("--effect", action="append", default=[], metavar="CAUSE.PARAM=VALUE",
+                        help="inject a contract cause (repeatable); CAUSE=VALUE for one-parameter causes")
+    parser.add_argument("--seed", default="0", metavar="N", help="random seed (default 0)")
+    parser.add_argument("--columns", default=",".join(OPTIONAL_COLUMNS), metavar="A,B",
+                        help=f"optional columns to write (default all: {','.join(OPTIONAL_COLUMNS)}; '' for none)")
+    parser.add_argument("--model", metavar="M.json", help="replay a model written by fxdsp diagnose")
+    parser.add_argument("--time-step", default=str(DEFAULT_TIME_STEP_S), metavar="S",
+                        help=f"sample interval in seconds (default {DEFAULT_TIME_STEP_S:g})")
+    parser.add_argument("--duration-scale", default="1", metavar="X",
+                        help="multiply dwell/hold durations (ramps keep their rate)")
+    parser.add_argument("--noise", action="append", default=[], metavar="KEY=VALUE",
+                        help="override a noise level (output, temp_c, ref_temp_c, freq_hz, quad, "
+                             "bias_instability, rate_random_walk), or 'off'")
+    parser.add_argument("--rtd-node", choices=NODES, metavar="NODE",
+                        help="enable the air->package->die heat path with the RTD at NODE "
+                             f"({', '.join(NODES)}); default: isothermal contract baseline")
+    parser.add_argument("--out", required=True, metavar="LOG.csv", help="output canonical CSV")
+
+
+def _number(option: str, text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError(f"{option}: {text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise ValueError(f"{option}: {text!r} is not a finite number")
+    return value
+
+
+def parse_effects(specs: list[str]) -> dict[str, dict[str, float]]:
+    """``["thermal_lag.tau_s=3000", "hysteresis=0.1"]`` -> ``{cause: {param: value}}``."""
+    effects: dict[str, dict[str, float]] = {}
+    for spec in specs:
+        key, sep, text = spec.partition("=")
+        key = key.strip()
+        if key == "none" and not sep:
+            effects.setdefault("none", {})
+            continue
+        if not sep:
+            raise ValueError(f"--effect {spec!r}: expected CAUSE.PARAM=VALUE or CAUSE=VALUE")
+        cause, dot, param = key.partition(".")
+        if cause not in CAUSES:
+            raise ValueError(f"--effect {spec!r}: unknown cause {cause!r}; expected one of {', '.join(CAUSES)}")
+        if not dot:
+            if len(CAUSES[cause]) != 1:
+                names = ", ".join(f"{cause}.{p}" for p in CAUSES[cause]) or "no parameters"
+                raise ValueError(f"--effect {spec!r}: {cause} takes {names}; give each as CAUSE.PARAM=VALUE")
+            param = CAUSES[cause][0]
+        if param not in CAUSES[cause]:
+            raise ValueError(f"--effect {spec!r}: unknown parameter {param!r} of {cause}; "
+                             f"expected {', '.join(CAUSES[cause]) or 'none'}")
+        effects.setdefault(cause, {})[param] = _number(f"--effect {cause}.{param}", text)
+    return effects
+
+
+def _noise(specs: list[str]):
+    if specs == ["off"]:
+        return "off"
+    out = {}
+    for spec in specs:
+        key, sep, text = spec.partition("=")
+        if not sep:
+            raise ValueError(f"--noise {spec!r}: expected KEY=VALUE or 'off'")
+        out[key.strip()] = _number(f"--noise {key.strip()}", text)
+    return out
+
+
+def run(args) -> int:
+    if args.scenario not in SCENARIOS:
+        raise ValueError(f"--scenario: unknown name {args.scenario!r}; expected one of {', '.join(SCENARIOS)}")
+    try:
+        seed = int(args.seed)
+    except ValueError:
+        raise ValueError(f"--seed: {args.seed!r} is not an integer") from None
+    effects = parse_effects(args.effect)
+    thermal = ThermalChain(rtd_node=args.rtd_node) if args.rtd_node else None
+    log = generate_log(args.scenario, effects=effects, seed=seed, columns=args.columns,
+                       time_step_s=_number("--time-step", args.time_step),
+                       duration_scale=_number("--duration-scale", args.duration_scale),
+                       noise=_noise(args.noise), model=args.model, thermal=thermal)
+    comments = {"generator": "fxdsp simulate", "scenario": args.scenario, "seed": seed,
+                "effects": json.dumps(effects, sort_keys=True)}
+    if args.model:
+        comments["model"] = args.model
+    if args.rtd_node:
+        comments["thermal"] = f"air->package->die, RTD on {args.rtd_node}"
+    write_log(args.out, log, header_comments=comments)
+    return 0

@@ -1,0 +1,179 @@
+"""Synthetic chamber logs in the canonical format: the baseline of the contract plus chosen causes.
+
+The log is built in the order the physics happens:
+
+1. the chamber programme gives the air temperature, the rate-table rate and the tumble angle;
+2. the heat path (isothermal by default, see :mod:`fxdsp.sim.thermal`) gives the RTD node and die
+   temperatures; the RTD readout is linear (offset, gain) unless ``rtd_nonlinearity`` bends it;
+3. Te, the temperature of the sensing element on the RTD's linear scale, equals the noise-free
+   ``temp_c`` in the baseline; ``thermal_lag`` delays it by the contract's first-order lag;
+4. output = B(Te) + S(Te) * rate, then the output causes; freq_hz = f0 + k Te (+ turnover);
+5. independent noise per channel, each from its own random stream so that requesting one more
+   column never changes the noise of the others.
+
+Causes are injected with :mod:`fxdsp.mechanisms` (the same functions the diagnosis fits). Derivative
+and ramp-state causes are driven by the noise-free temp_c: the physics responds to the true
+temperature change, not to the ADC noise on its reading.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fxdsp import mechanisms as mech
+from fxdsp.sim import noise as noise_mod
+from fxdsp.sim.model import Baseline, as_model, scenario_baseline, validate_effects
+from fxdsp.sim.programmes import PROGRAMMES, programme, sample
+from fxdsp.sim.thermal import ThermalChain
+
+SCENARIOS: tuple[str, ...] = tuple(PROGRAMMES)
+REQUIRED_COLUMNS = ("time_s", "temp_c", "output")
+OPTIONAL_COLUMNS = ("ref_temp_c", "rate_dps", "freq_hz", "quad")
+DEFAULT_TIME_STEP_S = 10.0
+
+# quadrature: a level of 2 S0 (i.e. 2 deg/s-equivalent, typical of an untrimmed MEMS gyro) wandering
+# by +-0.5 S0 on periods of 1..6 h, drawn from its own stream: independent of the temperature programme
+QUAD_MEAN_PER_SF = 2.0
+QUAD_SWING_PER_SF = 0.5
+
+_STREAMS = ("programme", "quad", "output", "temp_c", "ref_temp_c", "freq_hz", "quad_noise")
+
+
+def _parse_columns(columns) -> tuple[str, ...]:
+    if isinstance(columns, str):
+        columns = [c.strip() for c in columns.split(",") if c.strip()]
+    out = []
+    for name in columns:
+        if name in REQUIRED_COLUMNS:
+            continue  # always present; asking for them is harmless
+        if name not in OPTIONAL_COLUMNS:
+            raise ValueError(f"columns: unknown column {name!r}; optional columns are "
+                             f"{', '.join(OPTIONAL_COLUMNS)}")
+        if name not in out:
+            out.append(name)
+    return tuple(out)
+
+
+def _quadrature(rng: np.random.Generator, time_s: np.ndarray, sf0: float) -> np.ndarray:
+    periods = rng.uniform(3600.0, 6 * 3600.0, size=3)
+    phases = rng.uniform(0, 2 * np.pi, size=3)
+    weights = rng.uniform(0.5, 1.0, size=3)
+    swing = sum(w * np.sin(2 * np.pi * time_s / p + ph) for w, p, ph in zip(weights, periods, phases))
+    swing /= weights.sum()
+    return abs(sf0) * (QUAD_MEAN_PER_SF + QUAD_SWING_PER_SF * swing)
+
+
+def _applied_input(scenario: str, sampled) -> np.ndarray:
+    if scenario == "paper000":
+        # accelerometer: the input column carries a = g cos(theta), in g (what the operator applies)
+        return np.round(np.cos(np.deg2rad(sampled.angle_deg)), 12)
+    return sampled.rate_dps
+
+
+def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: int = 0,
+                 columns=OPTIONAL_COLUMNS, *, return_truth: bool = False,
+                 time_step_s: float = DEFAULT_TIME_STEP_S, duration_scale: float = 1.0,
+                 noise: dict | str | None = None, model=None, thermal: ThermalChain | None = None):
+    """Simulate one chamber run and return its canonical log.
+
+    Parameters
+    ----------
+    scenario : one of :data:`SCENARIOS` (the chamber programme and, unless ``model`` is given, the
+        sensor's baseline; see :mod:`fxdsp.sim.programmes` and :mod:`fxdsp.sim.model`).
+    effects : ``{cause: {parameter: value}}`` with the contract's names (``{}``: baseline only).
+        They are added to the effects of ``model`` (same cause: these win).
+    seed : integer seed; the same arguments give identical arrays.
+    columns : optional contract columns to include (iterable or "a,b" string); ``time_s``,
+        ``temp_c`` and ``output`` are always present.
+    return_truth : also return a dict of the noise-free signals and the model used.
+    time_step_s : sample interval (default 10 s: a paper002 run is about 6000 rows).
+    duration_scale : multiplies every hold (dwell, log, rate step, tumble position); ramps keep
+        the chamber's physical ramp rate.
+    noise : overrides of :func:`fxdsp.sim.noise.default_noise` keys (``output``, ``temp_c``,
+        ``ref_temp_c``, ``freq_hz``, ``quad``, ``bias_instability``, ``rate_random_walk``), or
+        ``"off"`` for a noise-free log.
+    model : a replay model (path, dict or :class:`fxdsp.sim.model.Model`) replacing the scenario's
+        baseline; its effects are applied too.
+    thermal : an optional :class:`fxdsp.sim.thermal.ThermalChain` (air -> package -> die); ``None``
+        keeps the contract's isothermal baseline.
+
+    Returns
+    -------
+    ``log`` (dict column -> float array), or ``(log, truth)`` with ``return_truth=True``.
+    """
+    if scenario not in SCENARIOS:
+        raise ValueError(f"scenario: unknown name {scenario!r}; expected one of {', '.join(SCENARIOS)}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed: must be a non-negative integer, got {seed!r}")
+    wanted = _parse_columns(columns)
+    replay = as_model(model)
+    baseline: Baseline = replay.baseline if replay else scenario_baseline(scenario)
+    causes = dict(replay.effects) if replay else {}
+    causes.update(validate_effects(effects))
+    streams = dict(zip(_STREAMS, (np.random.default_rng(s)
+                                  for s in np.random.SeedSequence(int(seed)).spawn(len(_STREAMS)))))
+
+    segments, start_c = programme(scenario, float(duration_scale), streams["programme"])
+    run = sample(segments, start_c, float(time_step_s))
+    t, n = run.time_s, run.time_s.size
+
+    # --- temperatures -------------------------------------------------------------------------
+    nodes = (thermal.temperatures(t, run.air_c) if thermal
+             else {"air": run.air_c, "package": run.air_c, "die": run.air_c})
+    rtd_true = nodes[thermal.rtd_node] if thermal else run.air_c
+    rtd_c = rtd_true
+    if "rtd_nonlinearity" in causes:
+        rtd_c = rtd_true + mech.rtd_curvature(rtd_true, causes["rtd_nonlinearity"]["b_per_c"])
+    temp_clean = baseline.rtd_offset_c + baseline.rtd_gain * rtd_c
+    te = baseline.rtd_offset_c + baseline.rtd_gain * nodes["die"]  # the die on the RTD's linear scale
+    if "thermal_lag" in causes:
+        te = mech.first_order_lag(t, te, causes["thermal_lag"]["tau_s"])
+
+    # --- output and resonator ------------------------------------------------------------------
+    rate = _applied_input(scenario, run)
+    effective_rate = rate
+    if "sf_nonlinearity" in causes:
+        effective_rate = rate + causes["sf_nonlinearity"]["k3"] * rate ** 3
+    output = baseline.bias(te) + baseline.sf(te) * effective_rate
+    quad = _quadrature(streams["quad"], t, baseline.sf_poly[0])
+    if "ramp_rate" in causes:
+        output = output + causes["ramp_rate"]["k_per_c_per_s"] * mech.rate_of_change(t, temp_clean)
+    if "hysteresis" in causes:
+        output = output + causes["hysteresis"]["h"] * mech.ramp_direction(t, temp_clean)
+    if "warmup" in causes:
+        output = output + mech.warmup(t, **causes["warmup"])
+    if "aging_drift" in causes:
+        output = output + mech.aging_drift(t, causes["aging_drift"]["r_per_h"])
+    if "quadrature_leak" in causes:
+        # the demodulator leaks the true quadrature; the logged quad channel adds its own noise
+        output = output + causes["quadrature_leak"]["c"] * quad
+    freq = baseline.freq(te)
+    if "frequency_nonlinearity" in causes:
+        freq = freq + mech.frequency_curvature(te, causes["frequency_nonlinearity"]["k2_hz_per_c2"])
+
+    # --- noise ----------------------------------------------------------------------------------
+    levels = noise_mod.resolve_noise(noise, baseline.sf_poly[0])
+    dt = float(time_step_s)
+    log = {"time_s": t.copy(),
+           "temp_c": temp_clean + noise_mod.white(streams["temp_c"], n, levels["temp_c"]),
+           "output": output + noise_mod.output_noise(streams["output"], n, dt, levels)}
+    optional = {
+        "ref_temp_c": lambda: run.air_c + noise_mod.white(streams["ref_temp_c"], n, levels["ref_temp_c"]),
+        "rate_dps": lambda: np.asarray(rate, float).copy(),
+        "freq_hz": lambda: freq + noise_mod.white(streams["freq_hz"], n, levels["freq_hz"]),
+        "quad": lambda: quad + noise_mod.white(streams["quad_noise"], n, levels["quad"]),
+    }
+    for name in wanted:
+        log[name] = optional[name]()
+    if not return_truth:
+        return log
+    truth = {
+        "scenario": scenario, "seed": int(seed), "time_step_s": dt,
+        "Te": te, "air_temp_c": run.air_c, "package_temp_c": nodes["package"], "die_temp_c": nodes["die"],
+        "temp_c": temp_clean, "ref_temp_c": run.air_c, "output": output, "freq_hz": freq, "quad": quad,
+        "rate_dps": np.asarray(rate, float), "angle_deg": run.angle_deg, "setpoint_c": run.setpoint_c,
+        "phase": run.phase, "segment": run.segment,
+        "baseline": baseline.as_dict(), "effects": {k: dict(v) for k, v in causes.items()},
+        "noise": levels, "thermal": thermal,
+    }
+    return log, truth

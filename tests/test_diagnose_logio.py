@@ -1,0 +1,171 @@
+"""Log reading and bad input of `fxdsp diagnose` (shared/spec/measured-data.md, sections 1 and 4)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from fxdsp.cli import main
+from fxdsp.diagnose.logio import parse_mapping, read_log
+from fxdsp.errors import InputError
+
+
+def _canonical_rows(n=400, seed=0):
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * 10.0
+    temp = 25.0 + 10.0 * np.sin(t / 2000.0)
+    out = 1.0 + 0.02 * temp + 0.001 * rng.standard_normal(n)
+    return t, temp, out
+
+
+def _write(path, header, rows, comments=()):
+    lines = [f"# {c}" for c in comments] + [",".join(header)]
+    lines += [",".join(str(v) for v in row) for row in rows]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def _run(capsys, *argv):
+    code = main(["diagnose", *map(str, argv)])
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def _assert_one_line_error(code, err, *words):
+    assert code == 2
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    for word in words:
+        assert word in lines[0].lower(), lines[0]
+
+
+# -- reading -------------------------------------------------------------------------------------
+def test_canonical_columns_in_any_order_with_comments(tmp_path):
+    t, temp, out = _canonical_rows(50)
+    path = _write(tmp_path / "log.csv", ["output", "time_s", "temp_c"], zip(out, t, temp),
+                  comments=["written by a test", "scenario: none"])
+    log = read_log(path)
+    assert len(log) == 50 and log.dropped == 0
+    np.testing.assert_allclose(log.columns["time_s"], t)
+    np.testing.assert_allclose(log.columns["temp_c"], temp)
+    np.testing.assert_allclose(log.columns["output"], out)
+
+
+def test_foreign_log_with_mapping_dates_and_sentinels(tmp_path):
+    stamps = ["30/12/2024-23:59:50", "30/12/2024-23:59:59", "31/12/2024-00:00:10",
+              "31/12/2024-23:59:59", "01/01/2025-00:00:09"]
+    box = ["22.5", "-1e+38", "22.7", "22.8", "9.9e37"]
+    dut = ["1.00001", "1.00002", "nan", "1.00004", "1.00005"]
+    text = "date;box;dut;\n" + "".join(f"{d};{b};{v};\n" for d, b, v in zip(stamps, box, dut))
+    path = tmp_path / "foreign.dsv"
+    path.write_text(text)
+    log = read_log(path, parse_mapping(["time_s=date", "temp_c=box", "output=dut"]), ";", "%d/%m/%Y-%H:%M:%S")
+    # rows 2 (-1e38), 3 (nan) and 5 (9.9e37) are dropped; seconds count from the first kept row,
+    # across midnight and new year: 23:59:50 -> next day 23:59:59 is 86409 s
+    assert log.dropped == 3
+    np.testing.assert_allclose(log.columns["time_s"], [0.0, 86409.0])
+    np.testing.assert_allclose(log.columns["temp_c"], [22.5, 22.8])
+
+
+def test_strptime_fallback_for_formats_the_fast_path_does_not_know(tmp_path):
+    path = tmp_path / "iso.csv"
+    path.write_text("when,T,y\n2024-Oct-20 01:00:00,20,1\n2024-Oct-20 01:01:30,21,2\n")
+    log = read_log(path, parse_mapping(["time_s=when", "temp_c=T", "output=y"]), ",", "%Y-%b-%d %H:%M:%S")
+    np.testing.assert_allclose(log.columns["time_s"], [0.0, 90.0])
+
+
+def test_sentinel_and_nan_rows_are_dropped_and_counted_in_the_report(tmp_path, capsys):
+    t, temp, out = _canonical_rows(400)
+    rows = [list(r) for r in zip(t, temp, out)]
+    rows[10][1] = "9.9e37"
+    rows[20][2] = "-1e38"
+    rows[30][2] = "nan"
+    rows[40][1] = ""
+    path = _write(tmp_path / "log.csv", ["time_s", "temp_c", "output"], rows)
+    code, out_text, err = _run(capsys, path, "--json", tmp_path / "r.json")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["rows"] == {**report["rows"], "used": 396, "dropped": 4}
+
+
+# -- bad input: one line on stderr, exit 2 ------------------------------------------------------
+def test_missing_column(tmp_path, capsys):
+    t, temp, out = _canonical_rows(20)
+    path = _write(tmp_path / "log.csv", ["time_s", "temp_c"], zip(t, temp))
+    _assert_one_line_error(*_run(capsys, path, "--json", tmp_path / "r.json")[::2], "missing column", "output")
+    assert not (tmp_path / "r.json").exists()
+
+
+def test_missing_mapped_source_column(tmp_path, capsys):
+    t, temp, out = _canonical_rows(20)
+    path = _write(tmp_path / "log.csv", ["time_s", "temp_c", "output"], zip(t, temp, out))
+    code, _, err = _run(capsys, path, "--map", "temp_c=box_temp", "--json", tmp_path / "r.json")
+    _assert_one_line_error(code, err, "missing column", "box_temp")
+
+
+def test_empty_file(tmp_path, capsys):
+    path = tmp_path / "empty.csv"
+    path.write_text("")
+    code, _, err = _run(capsys, path, "--json", tmp_path / "r.json")
+    _assert_one_line_error(code, err, "empty")
+
+
+def test_header_without_rows(tmp_path, capsys):
+    path = tmp_path / "header.csv"
+    path.write_text("# nothing logged\ntime_s,temp_c,output\n")
+    code, _, err = _run(capsys, path, "--json", tmp_path / "r.json")
+    _assert_one_line_error(code, err, "no data rows")
+
+
+def test_no_usable_rows(tmp_path, capsys):
+    path = _write(tmp_path / "log.csv", ["time_s", "temp_c", "output"],
+                  [(0, 25, "9.9e37"), (10, "-1e38", 1.0), (20, "nan", "inf")])
+    code, _, err = _run(capsys, path, "--json", tmp_path / "r.json")
+    _assert_one_line_error(code, err, "no usable rows")
+
+
+def test_non_monotonic_time(tmp_path, capsys):
+    t, temp, out = _canonical_rows(200)
+    t = t.copy()
+    t[100] = t[98]  # equal stamps are allowed by the contract (non-decreasing) ...
+    t[150] = t[140]  # ... going back is not
+    path = _write(tmp_path / "log.csv", ["time_s", "temp_c", "output"], zip(t, temp, out))
+    code, _, err = _run(capsys, path, "--json", tmp_path / "r.json")
+    _assert_one_line_error(code, err, "non-monotonic")
+
+
+def test_unparseable_date(tmp_path, capsys):
+    path = tmp_path / "log.dsv"
+    path.write_text("date;T;y\n20/10/2024-01:18:45;23;1\n20/10/2024 01:19:08;23;1\n")
+    code, _, err = _run(capsys, path, "--map", "time_s=date", "--map", "temp_c=T", "--map", "output=y",
+                        "--delimiter", ";", "--time-format", "%d/%m/%Y-%H:%M:%S", "--json", tmp_path / "r.json")
+    _assert_one_line_error(code, err, "cannot parse date", "row 2")
+
+
+def test_impossible_date(tmp_path, capsys):
+    path = tmp_path / "log.dsv"
+    path.write_text("date;T;y\n28/02/2024-01:18:45;23;1\n31/02/2024-01:19:08;23;1\n")
+    code, _, err = _run(capsys, path, "--map", "time_s=date", "--map", "temp_c=T", "--map", "output=y",
+                        "--delimiter", ";", "--time-format", "%d/%m/%Y-%H:%M:%S", "--json", tmp_path / "r.json")
+    _assert_one_line_error(code, err, "impossible date")
+
+
+def test_unknown_map_target(tmp_path, capsys):
+    t, temp, out = _canonical_rows(20)
+    path = _write(tmp_path / "log.csv", ["time_s", "temp_c", "output"], zip(t, temp, out))
+    code, _, err = _run(capsys, path, "--map", "temperature=temp_c", "--json", tmp_path / "r.json")
+    _assert_one_line_error(code, err, "unknown target", "temperature")
+
+
+def test_missing_file(tmp_path, capsys):
+    code, _, err = _run(capsys, tmp_path / "nope.csv", "--json", tmp_path / "r.json")
+    _assert_one_line_error(code, err, "nope.csv")
+
+
+def test_parse_mapping_rejects_malformed_items():
+    with pytest.raises(InputError):
+        parse_mapping(["temp_c"])
+    assert parse_mapping([" temp_c = box_temp "]) == {"temp_c": "box_temp"}
