@@ -65,15 +65,17 @@ def biquad_apytypes(iir, x: np.ndarray) -> np.ndarray:
     for s in range(iir.b.shape[0]):
         b = [_apy(int(c), nf) for c in iir.b[s]]
         a = [_apy(int(c), df) for c in iir.a[s]]
-        c1, c2 = (int(c) for c in iir.c[s])
+        # error-feedback weights as 4-bit integers (an APyFixed times a Python int would double its width)
+        c1, c2 = (apy.APyFixed.from_float(float(c), int_bits=4, frac_bits=0) for c in iir.c[s])
+        use_ef = bool(iir.c[s].any())
         zero = _apy(0, d)
         x1 = x2 = y1 = y2 = zero
         e1 = e2 = None
         out = []
         for xn in v:
             acc = b[0] * xn + b[1] * x1 + b[2] * x2 - a[0] * y1 - a[1] * y2
-            if e1 is not None:
-                acc = acc + e1 * c1 + e2 * c2 if (c1 or c2) else acc
+            if e1 is not None and use_ef:
+                acc = acc + e1 * c1 + e2 * c2
             r = acc.cast(int_bits=acc.int_bits + 1, frac_bits=fb, quantization=q)  # rounded, range kept
             if r > hi or r < lo:
                 y = (hi if r > hi else lo) if sat else r.cast(int_bits=ib, frac_bits=fb,
@@ -83,11 +85,14 @@ def biquad_apytypes(iir, x: np.ndarray) -> np.ndarray:
                 y = r.cast(int_bits=ib, frac_bits=fb)
                 e = acc - r
             y = y.cast(int_bits=ib, frac_bits=fb)
-            e1, e2 = e, (e1 if e1 is not None else acc - acc)
+            # |e| < 1 output LSB: a fixed, exact format keeps the fed-back error from growing the accumulator
+            e = e.cast(int_bits=2, frac_bits=e.frac_bits)
+            e1, e2 = e, (e1 if e1 is not None else e - e)
             x2, x1, y2, y1 = x1, xn, y1, y
             out.append(y)
         v = out
-    return np.array([y.to_bits() for y in v], dtype=object).astype(np.int64) if d.wl < 63 else None
+    bits = np.array([int(y.to_bits()) for y in v], dtype=np.int64)
+    return np.where(bits >= 1 << (d.wl - 1), bits - (1 << d.wl), bits)  # to_bits() is the unsigned pattern
 
 
 def biquad_fxpmath(iir, x: np.ndarray) -> np.ndarray:

@@ -26,18 +26,29 @@ class Blocks:
     n_groups: int = 20  # jackknife groups: runs of consecutive segments
 
     @classmethod
-    def contiguous(cls, n_rows: int, n_segments: int = 200, n_folds: int = 5, n_groups: int = 20) -> "Blocks":
-        # short segments spread every chamber phase (a 16-minute rate table, a dwell) over all
-        # folds, so a held-out stretch is always bracketed by training data at its temperature
+    def contiguous(cls, n_rows: int, n_segments: int = 200, n_folds: int = 5, n_groups: int = 20,
+                   breaks=None) -> "Blocks":
+        """Segments of about n_rows / n_segments rows, also cut at ``breaks`` (row indices).
+
+        Short segments spread every chamber phase (a dwell, a ramp) over all folds, so a held-out
+        stretch is always bracketed by training data at its temperature. Cutting at every rate
+        step puts the steps of one rate table into different folds: a held-out +200 deg/s step is
+        predicted from the -200 and +100 deg/s steps at the same temperature, not from S(T)
+        interpolated between tables, whose error a spurious cubic term would then absorb.
+        """
         n_segments = int(max(n_folds, min(n_segments, n_rows // 20)))
         edges = np.linspace(0, n_rows, n_segments + 1).round().astype(int)
+        if breaks is not None and len(breaks):
+            edges = np.union1d(edges, np.asarray(breaks, dtype=int))
+            edges = edges[(edges >= 0) & (edges <= n_rows)]
+        n_segments = edges.size - 1
         return cls(edges=edges, fold=np.arange(n_segments) % n_folds, n_folds=n_folds,
                    n_groups=int(min(n_groups, n_segments)))
 
     def group(self) -> np.ndarray:
-        """Jackknife group of each segment: n_groups runs of consecutive segments. The groups are
-        long (1/20 of the log) so that correlated noise stays inside a group."""
-        return (np.arange(self.n_segments) * self.n_groups) // self.n_segments
+        """Jackknife group of each segment: n_groups runs of consecutive rows. The groups are long
+        (1/20 of the log) so that correlated noise stays inside a group."""
+        return np.minimum((self.edges[:-1] * self.n_groups) // max(self.edges[-1], 1), self.n_groups - 1)
 
     @property
     def n_segments(self) -> int:

@@ -91,7 +91,7 @@ def _effective_noise(truth: dict, levels: dict, columns) -> dict[str, float]:
             "freq_hz": float(np.hypot(levels["freq_hz"], base["k_hz_per_c"] * thermometer))}
 
 
-def make_case(cause: str, seed: int, scenario: str | None = None) -> Case:
+def make_case(cause: str, seed: int, scenario: str | None = None, snr_range=SNR_RANGE) -> Case:
     from fxdsp.sim import generate_log  # the colleague's simulator: the ground truth of these tests
 
     rng = np.random.default_rng([seed, ALL_CAUSES.index(cause)])
@@ -115,7 +115,7 @@ def make_case(cause: str, seed: int, scenario: str | None = None) -> Case:
     if np.ptp(probe["rate_dps"]) > 0:
         needed = needed + ("rate_dps",)  # without it the rate table is an unexplained output
     columns = tuple(c for c in OPTIONAL if c in extra or c in needed)
-    snr = float(rng.uniform(*SNR_RANGE))
+    snr = float(rng.uniform(*snr_range))
     sign = 1.0 if rng.random() < 0.5 else -1.0
     kw = dict(seed=sim_seed, duration_scale=DURATION_SCALE)
     clean, truth0 = generate_log(scenario, {}, columns=OPTIONAL, noise="off", return_truth=True, **kw)
@@ -185,7 +185,7 @@ def parameters_within(case: Case, found: dict, tolerance: float = 0.25) -> bool:
     return all(abs(found.get(k, np.nan) - v) <= tolerance * abs(v) for k, v in truth.items())
 
 
-def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, out=sys.stdout):
+def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, out=sys.stdout, snr_range=SNR_RANGE):
     """Run ``per_cause`` cases per cause; print the confusion matrix (rows: truth, cols: first cause)."""
     index = {c: i for i, c in enumerate(ALL_CAUSES)}
     matrix = np.zeros((len(ALL_CAUSES), len(ALL_CAUSES)), dtype=int)
@@ -196,7 +196,7 @@ def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, out=sys
     start = time.perf_counter()
     for cause in causes:
         for k in range(per_cause):
-            case = make_case(cause, first_seed + k)
+            case = make_case(cause, first_seed + k, snr_range=snr_range)
             diag = diagnose_case(case)
             got = diag.causes[0] if diag.causes else "none"
             matrix[index[cause], index[got]] += 1
@@ -226,8 +226,11 @@ def main(argv=None) -> int:
     parser.add_argument("--per-cause", type=int, default=20)
     parser.add_argument("--first-seed", type=int, default=1000)
     parser.add_argument("--causes", default=",".join(ALL_CAUSES))
+    parser.add_argument("--snr", type=float, nargs=2, default=SNR_RANGE, metavar=("LO", "HI"),
+                        help="effect size range in noise units (default %(default)s)")
     args = parser.parse_args(argv)
-    confusion(args.per_cause, args.first_seed, tuple(c for c in args.causes.split(",") if c))
+    confusion(args.per_cause, args.first_seed, tuple(c for c in args.causes.split(",") if c),
+              snr_range=tuple(args.snr))
     return 0
 
 

@@ -57,9 +57,8 @@ def parse_mapping(items: list[str] | None) -> dict[str, str]:
 
 def _to_float(name: str, cells: list[str]) -> np.ndarray:
     """Vectorised string -> float; unparseable cells become NaN (they are then dropped and counted)."""
-    arr = np.asarray(cells, dtype=object)
     try:
-        return np.asarray(arr.astype(str), dtype=float)
+        return np.asarray(cells, dtype=float)
     except ValueError:
         pass
     out = np.empty(len(cells))
@@ -150,7 +149,7 @@ def _fast_numeric(body: list[str], delimiter: str, usecols: list[int]) -> np.nda
         return np.empty((len(body), 0))
     try:
         data = np.loadtxt(io.StringIO("\n".join(body)), delimiter=delimiter, usecols=usecols,
-                          ndmin=2, comments=None, dtype=float)
+                          ndmin=2, comments=None, dtype=float, quotechar='"')
     except (ValueError, IndexError):
         return None
     return data if data.shape == (len(body), len(usecols)) else None
@@ -164,7 +163,7 @@ def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
         lines = [ln.rstrip("\r\n") for ln in handle if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         raise InputError(f"{path}: empty file (no header row)")
-    header = [h.strip() for h in lines[0].split(delimiter)]
+    header = [h.strip().strip('"') for h in lines[0].split(delimiter)]
     body = lines[1:]
     if not body:
         raise InputError(f"{path}: no data rows after the header")
@@ -193,7 +192,7 @@ def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
                 # a truncated last line (logger stopped mid-write): pad it so that its row is dropped
                 rows[i] = r + [""] * (width - len(r))
         for target, source in sources.items():
-            cells = [r[index[source]].strip() for r in rows]
+            cells = [r[index[source]].strip().strip('"') for r in rows]
             if target == "time_s" and time_format:
                 time_cells = cells
             elif fast is not None:

@@ -1,10 +1,10 @@
 """The baseline of the contract (section 2) and its extensions (section 3) as linear designs.
 
 Every channel model is linear in its coefficients once the nonlinear parameters of the causes in
-play (a lag time constant, a warm-up time constant, a cubic rate coefficient) are fixed, so a
-cause is tested by adding a column (ramp rate, hysteresis state, warm-up, aging, quadrature,
-curvature) or by transforming a column (lagged temperature, cubic rate), and the fit is one least
-squares solve. The mechanisms themselves come from fxdsp.mechanisms, shared with the simulator.
+play (a lag time constant, a warm-up time constant) are fixed, so a cause is tested by adding a
+column (ramp rate, hysteresis state, warm-up, aging, quadrature, S rate^3, curvature) or by
+transforming the temperature (lag), and the fit is one least-squares solve. The mechanisms
+themselves come from fxdsp.mechanisms, shared with the simulator.
 """
 
 from __future__ import annotations
@@ -98,7 +98,7 @@ class Series:
         return out
 
 
-def smoothed(t: np.ndarray, values: np.ndarray, window_s: float) -> tuple[np.ndarray, float]:
+def smoothed(t: np.ndarray, values: np.ndarray, window_s: float) -> tuple[np.ndarray, float, int]:
     """Centred moving average over about ``window_s`` (2 k + 1 samples, edges shrink), the time by
     which it widens a ramp (2 k dt) and k."""
     dt = float(np.median(np.diff(t))) if t.size > 1 else window_s
@@ -116,7 +116,6 @@ def strictly_increasing(t: np.ndarray) -> np.ndarray:
     t = np.asarray(t, dtype=float).copy()
     if t.size > 1 and np.any(np.diff(t) <= 0):
         t += np.arange(t.size) * 1e-6
-        t = np.maximum.accumulate(t)
     return t
 
 

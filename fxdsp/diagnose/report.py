@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from fxdsp import mechanisms as mech
-from fxdsp.diagnose.engine import Diagnosis, heldout_residuals
+from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, Diagnosis
+from fxdsp.diagnose.results import heldout_residuals
 
 _EXPLAIN = {
     "thermal_lag": ("The sensing element lags the logged temperature through a first-order lag of "
@@ -36,8 +37,8 @@ def explanation(diag: Diagnosis) -> str:
     if not diag.causes:
         g = diag.gain
         return ("Nothing beyond the baseline (B and S polynomials in temp_c, linear thermometers) and the "
-                f"noise: no candidate cause lowers the held-out rms of any channel by {5:d} % or more "
-                f"(output held-out rms {g['rms_before']:.4g}).")
+                f"noise: no candidate cause lowers the held-out rms of its channel by {100 * (MIN_GAIN - 1):.0f} % "
+                f"or more (output held-out rms {g['rms_before']:.4g}).")
     parts = []
     for cause in diag.causes:
         params = dict(diag.parameters[cause])
@@ -64,13 +65,15 @@ def report_dict(diag: Diagnosis) -> dict:
         "uncertainty": dict(diag.uncertainty.get(cause, {})),
         "gain": dict(diag.gain),
         "candidates": candidates,
-        "rows": dict(getattr(diag, "rows", {"used": diag.context.series.n, "dropped": 0})),
+        "rows": dict(diag.rows or {"used": diag.context.series.n, "dropped": 0}),
+        "notes": list(diag.notes),
         "all_parameters": diag.parameters,
         "all_uncertainty": diag.uncertainty,
         "baseline": {"bias_order": diag.orders[0], "sf_order": diag.orders[1], **diag.baseline},
         "method": ("blocked cross-validation: 5 folds of interleaved contiguous segments; score = held-out "
                    "SSE drop in units of the channel's white-noise variance; a cause needs a held-out rms "
-                   "ratio >= 1.05 and a score >= 30; uncertainties: delete-one-group jackknife (20 groups)"),
+                   f"ratio >= {MIN_GAIN} and a score >= {MIN_EVIDENCE:g}; time-like causes re-tested against a "
+                   "random-walk bias; uncertainties: delete-one-group jackknife (20 contiguous groups)"),
     }
 
 

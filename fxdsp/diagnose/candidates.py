@@ -1,0 +1,174 @@
+"""The candidate causes: which channels each one touches, when it can be tested at all, the grid
+of its nonlinear parameter, and its fit and held-out score on top of the current model."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from fxdsp.diagnose import model as M
+from fxdsp.diagnose.blockfit import jackknife_sd, parabolic_argmin
+from fxdsp.diagnose.context import MIN_GAIN, Candidate, Context
+
+
+def affected_channels(ctx: Context, cause: str) -> list[str]:
+    """Channels whose fit a cause changes (and where its held-out evidence is counted)."""
+    if cause == "thermal_lag":
+        return ["output"] + (["freq_hz"] if ctx.series.freq is not None else [])
+    if cause == "frequency_nonlinearity":
+        return ["freq_hz"]
+    if cause == "rtd_nonlinearity":
+        return ["temp_c"]
+    return ["output"]
+
+
+def available(ctx: Context, cause: str) -> bool:
+    """Whether the log can show the cause at all (the column it needs, a ramp, a rate table)."""
+    s = ctx.series
+    if cause == "none":
+        return False
+    if cause == "quadrature_leak":
+        return s.quad is not None and float(np.ptp(s.quad)) > 0
+    if cause == "sf_nonlinearity":
+        # rate^3 must not be a multiple of rate (a tumble's cos(theta) in {1, 0, -1} is)
+        if not (ctx.has_rate and ctx.orders[1] is not None and s.sf_estimate is not None):
+            return False
+        u = s.rate / np.max(np.abs(s.rate))
+        return np.linalg.matrix_rank(np.column_stack([u, u ** 3]), tol=1e-6) == 2
+    if cause == "rtd_nonlinearity":
+        return s.ref is not None
+    if cause == "frequency_nonlinearity":
+        return s.freq is not None
+    if cause == "hysteresis":
+        return bool(np.any(s.hyst != 0))
+    if cause in ("thermal_lag", "ramp_rate"):
+        return float(np.ptp(s.temp)) > 0
+    return True
+
+
+def grid(ctx: Context, cause: str) -> np.ndarray:
+    """Search grid of a nonlinear parameter: time constants from two samples to the log's length."""
+    s = ctx.series
+    dt = float(np.median(np.diff(s.t))) if s.n > 1 else 1.0
+    lo = max(2.0 * dt, 5.0)
+    if cause == "thermal_lag":
+        return np.geomspace(lo, max(s.duration, 4 * lo), 36)
+    if cause == "warmup":
+        return np.geomspace(lo, max(0.5 * s.duration, 4 * lo), 30)
+    raise KeyError(cause)
+
+
+def _log_axis(cause: str) -> bool:
+    return cause in ("thermal_lag", "warmup")
+
+
+def _evaluate_state(ctx: Context, state: dict, channels: list[str]):
+    """Per channel: (train SSE per fold, held SSE per fold, full SSE, jackknife SSE per group)."""
+    out = {}
+    for ch in channels:
+        normals, _ = ctx.normals(ch, state)
+        train, held = normals.folds()
+        _, full = normals.fit_all()
+        out[ch] = (train, held, full * normals.weight, normals.jackknife()[1])
+    return out
+
+
+def evaluate(ctx: Context, state: dict, cause: str, base_held: dict) -> Candidate:
+    """Fit one candidate on top of ``state``; score it on held-out folds against ``state``."""
+    channels = affected_channels(ctx, cause)
+    if cause not in M.NONLINEAR:
+        res = _evaluate_state(ctx, {**state, cause: {}}, channels)
+        held = {ch: res[ch][1] for ch in channels}
+        nonlinear, nonlinear_sd = {}, {}
+    else:
+        pname = M.NONLINEAR[cause]
+        values = grid(ctx, cause)
+        train = np.zeros((values.size, ctx.blocks.n_folds))
+        full = np.zeros(values.size)
+        jk = np.zeros((values.size, ctx.blocks.n_groups))
+        held_g = {ch: np.zeros((values.size, ctx.blocks.n_folds)) for ch in channels}
+        for i, v in enumerate(values):
+            res = _evaluate_state(ctx, {**state, cause: {pname: float(v)}}, channels)
+            for ch in channels:
+                train[i] += res[ch][0]
+                held_g[ch][i] = res[ch][1]
+                full[i] += res[ch][2]
+                jk[i] += res[ch][3]
+        # nested: each fold's parameter is the one its own training data prefer
+        pick = np.argmin(train, axis=0)
+        held = {ch: held_g[ch][pick, np.arange(pick.size)] for ch in channels}
+        axis = np.log(values) if _log_axis(cause) else values
+        best = _refine(ctx, state, cause, channels, values, full, axis)
+        per_group = np.array([parabolic_argmin(axis, jk[:, k]) for k in range(jk.shape[1])])
+        if _log_axis(cause):
+            per_group = np.exp(per_group)
+        nonlinear = {pname: best}
+        nonlinear_sd = {pname: jackknife_sd(per_group)}
+    evidence = 0.0
+    ratios, before_after = {}, {}
+    for ch in channels:
+        w = ctx.weights[ch]
+        b, a = float(base_held[ch].sum()), float(held[ch].sum())
+        evidence += b - a
+        sd = ctx.norm[ch][1]
+        rms_b = np.sqrt(b / w / ctx.series.n) * sd
+        rms_a = np.sqrt(a / w / ctx.series.n) * sd
+        ratios[ch] = rms_b / rms_a if rms_a > 0 else np.inf
+        before_after[ch] = (rms_b, rms_a)
+    main = max(channels, key=lambda ch: ratios[ch])
+    if cause == "thermal_lag" and ratios["output"] >= MIN_GAIN:
+        main = "output"  # the contract's channel for a lag, whenever it shows there
+    return Candidate(cause=cause, channel=main, evidence=float(evidence), ratio=float(ratios[main]),
+                     rms_before=float(before_after[main][0]), rms_after=float(before_after[main][1]),
+                     nonlinear=nonlinear, nonlinear_sd=nonlinear_sd, ratios=ratios)
+
+
+def _refine(ctx, state, cause, channels, values, full, axis) -> float:
+    """Full-data minimum of the weighted SSE between the grid neighbours of the grid minimum."""
+    pname = M.NONLINEAR[cause]
+    i = int(np.argmin(full))
+    lo, hi = axis[max(i - 1, 0)], axis[min(i + 1, values.size - 1)]
+    if lo == hi:
+        return float(values[i])
+
+    def sse(a):
+        v = float(np.exp(a)) if _log_axis(cause) else float(a)
+        total = 0.0
+        for ch in channels:
+            normals, _ = ctx.normals(ch, {**state, cause: {pname: v}})
+            total += normals.fit_all()[1] * normals.weight
+        return total
+
+    # a lag 1000 x above the noise needs tau to 1e-4 or its misfit looks like another cause
+    res = minimize_scalar(sse, bounds=(lo, hi), method="bounded", options={"xatol": 1e-7, "maxiter": 200})
+    a = res.x if res.fun <= full[i] else axis[i]
+    return float(np.exp(a)) if _log_axis(cause) else float(a)
+
+
+def refit_nonlinear(ctx: Context, state: dict, accepted: list[Candidate]) -> None:
+    """Re-estimate the nonlinear parameters of earlier causes with the later ones in the model:
+    a lag time constant fitted while a quadrature leak was still unexplained is biased."""
+    for cand in accepted:
+        if cand.cause not in M.NONLINEAR:
+            continue
+        pname = M.NONLINEAR[cand.cause]
+        channels = affected_channels(ctx, cand.cause)
+        others = {k: v for k, v in state.items() if k != cand.cause}
+
+        def sse(a, cause=cand.cause, pname=pname, channels=channels, others=others):
+            total = 0.0
+            for ch in channels:
+                normals, _ = ctx.normals(ch, {**others, cause: {pname: float(np.exp(a))}})
+                total += normals.fit_all()[1] * normals.weight
+            return total
+
+        # a local grid first (real logs can have shallow secondary minima), then Brent
+        a0 = np.log(state[cand.cause][pname])
+        local = a0 + np.linspace(-0.4, 0.4, 17)
+        values = [sse(a) for a in local]
+        i = int(np.argmin(values))
+        lo, hi = local[max(i - 1, 0)], local[min(i + 1, local.size - 1)]
+        res = minimize_scalar(sse, bounds=(lo, hi), method="bounded", options={"xatol": 1e-7, "maxiter": 200})
+        if res.fun <= min(values[i], sse(a0)):
+            state[cand.cause][pname] = float(np.exp(res.x))
+            cand.nonlinear = dict(state[cand.cause])

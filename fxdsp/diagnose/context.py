@@ -1,0 +1,166 @@
+"""The state of one diagnosis: data, blocks, channel scalings and noise weights, and the
+acceptance rule's records (Candidate, Diagnosis)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.signal import lfilter
+
+from fxdsp.diagnose import model as M
+from fxdsp.diagnose.blockfit import Blocks, SegmentNormals
+
+MIN_GAIN = 1.05  # held-out rms ratio below which a cause is not worth naming
+MIN_EVIDENCE = 30.0  # held-out SSE drop, in noise variances, that noise alone does not produce
+MAX_CAUSES = 3
+ORDER_CHOICES = (0, 1, 2, 3)
+
+
+@dataclass
+class Candidate:
+    cause: str
+    channel: str
+    evidence: float
+    ratio: float
+    rms_before: float
+    rms_after: float
+    nonlinear: dict = field(default_factory=dict)  # the state entry (e.g. {"tau_s": 3000.0})
+    nonlinear_sd: dict = field(default_factory=dict)
+    ratios: dict = field(default_factory=dict)  # per affected channel
+
+    @property
+    def accepted_by_rule(self) -> bool:
+        return self.ratio >= MIN_GAIN and self.evidence >= MIN_EVIDENCE
+
+
+@dataclass
+class Diagnosis:
+    causes: list[str]
+    parameters: dict[str, dict[str, float]]
+    uncertainty: dict[str, dict[str, float]]
+    gain: dict
+    candidates: list[Candidate]
+    orders: tuple
+    baseline: dict
+    context: "Context"
+    state: dict
+    rows: dict = field(default_factory=dict)  # used / dropped, filled in by the caller that read the log
+    notes: list = field(default_factory=list)  # what the reader set aside, in words
+
+
+class Context:
+    """Everything fixed during a diagnosis: data, blocks, scalings, channel standardisation."""
+
+    def __init__(self, series: M.Series, n_segments: int = 200, n_folds: int = 5):
+        self.series = series
+        breaks = None
+        if series.rate is not None:
+            breaks = np.flatnonzero(np.diff(series.rate) != 0) + 1  # every rate-table step
+        self.blocks = Blocks.contiguous(series.n, n_segments, n_folds, breaks=breaks)
+        self.scales = {"output": M.Scaling.of(series.temp)}
+        if series.freq is not None:
+            self.scales["freq_hz"] = M.Scaling.of(series.freq_thermometer)
+        if series.ref is not None:
+            self.scales["temp_c"] = M.Scaling.of(series.ref)
+        self.norm = {}
+        for ch in series.channels():
+            y = series.target(ch)
+            sd = float(np.std(y)) or 1.0
+            self.norm[ch] = (float(np.mean(y)), sd)
+        self.orders: tuple[int, int | None] = (3, 3 if self.has_rate else None)
+        self.weights = {ch: 1.0 for ch in series.channels()}
+        # > 0 when the channel's noise wanders (random walk): fits then use one-step innovations
+        self.innovation_gain: dict[str, float] = {}
+
+    @property
+    def has_rate(self) -> bool:
+        r = self.series.rate
+        return r is not None and float(np.ptp(r)) > 0
+
+    def target(self, channel: str) -> np.ndarray:
+        mu, sd = self.norm[channel]
+        return (self.series.target(channel) - mu) / sd
+
+    def design(self, channel: str, state: dict, orders=None):
+        if channel == "output":
+            return M.output_design(self.series, state, orders or self.orders, self.scales["output"])
+        if channel == "freq_hz":
+            return M.freq_design(self.series, state, self.scales["freq_hz"])
+        return M.temp_design(self.series, state, self.scales["temp_c"])
+
+    def normals(self, channel: str, state: dict, orders=None) -> tuple[SegmentNormals, list[str]]:
+        x, names = self.design(channel, state, orders)
+        y = self.target(channel)
+        gain = self.innovation_gain.get(channel, 0.0)
+        if gain > 0:
+            x, y = innovations(x, gain), innovations(y, gain)
+        return SegmentNormals(x, y, self.blocks, self.weights[channel]), names
+
+
+# -- calibration of the baseline -----------------------------------------------------------------
+def choose_orders(ctx: Context, state: dict) -> tuple[int, int | None]:
+    """Orders of B and S with the least held-out error, with the causes of ``state`` in place
+    (calibration, not discovery: an unexplained drift can make a cubic look useless)."""
+    best, best_sse = None, np.inf
+    s_choices = ORDER_CHOICES if ctx.has_rate else (None,)
+    for pb in ORDER_CHOICES:
+        for ps in s_choices:
+            normals, _ = ctx.normals("output", state, (pb, ps))
+            held = normals.folds()[1].sum()
+            if held < best_sse * (1 - 1e-3):  # a higher order must earn its keep
+                best, best_sse = (pb, ps), held
+    return best
+
+
+def sf_estimate(ctx: Context) -> np.ndarray | None:
+    """S(Te) of the baseline fit, in output units per rate unit (None without a rate column)."""
+    pb, ps = ctx.orders
+    if ps is None or not ctx.has_rate:
+        return None
+    normals, names = ctx.normals("output", {})
+    coef, _ = normals.fit_all()
+    x = ctx.scales["output"](ctx.series.temp)
+    sd = ctx.norm["output"][1]
+    return sd * np.polynomial.polynomial.polyval(x, [coef[names.index(f"s{j}")] for j in range(ps + 1)])
+
+
+def white_noise_variance(residual: np.ndarray) -> float:
+    """Variance of the white part of a residual, from first differences (robust to slow effects)."""
+    d = np.diff(residual)
+    if d.size < 2:
+        return float(np.var(residual)) or 1.0
+    mad = 1.4826 * np.median(np.abs(d - np.median(d)))
+    var = 0.5 * mad * mad
+    if not var > 0:
+        var = 0.5 * float(np.var(d))
+    return var if var > 0 else 1e-30
+
+
+def set_noise_weights(ctx: Context, state: dict | None = None) -> dict[str, float]:
+    """1/white-noise variance per channel, from the residual of ``state``: a large unexplained
+    effect changes fast during ramps and would inflate a first-difference estimate."""
+    sigma2 = {}
+    for ch in ctx.series.channels():
+        x, _ = ctx.design(ch, state or {})
+        y = ctx.target(ch)
+        beta = np.linalg.lstsq(x, y, rcond=None)[0]
+        sigma2[ch] = white_noise_variance(y - x @ beta)
+        ctx.weights[ch] = 1.0 / sigma2[ch]
+    return sigma2
+
+
+def innovations(values: np.ndarray, gain: float) -> np.ndarray:
+    """One-step prediction errors of the steady-state Kalman filter of a local-level model (white
+    noise plus a random walk): e_t = y_t - y_(t-1) + (1 - gain) e_(t-1). Least squares on
+    innovations is generalised least squares for that noise; gain 0 leaves the data as they are
+    (up to a constant), gain 1 differences them."""
+    return lfilter([1.0, -1.0], [1.0, -(1.0 - gain)], values, axis=0)
+
+
+def residual(ctx: Context, state: dict, channel: str) -> np.ndarray:
+    x, _ = ctx.design(channel, state)
+    y = ctx.target(channel)
+    normals = SegmentNormals(x, y, ctx.blocks)
+    coef, _ = normals.fit_all()
+    return y - x @ coef

@@ -1,0 +1,121 @@
+"""Numbers of the final model: cause parameters in contract units with jackknife uncertainties,
+held-out gains and residuals, and the baseline in the simulator's replay format."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fxdsp import mechanisms as mech
+from fxdsp.diagnose import model as M
+from fxdsp.diagnose.blockfit import SegmentNormals, jackknife_sd
+from fxdsp.diagnose.context import Context
+
+def linear_parameters(ctx: Context, state: dict):
+    """Linear parameters of every cause in ``state`` (contract units) and their jackknife sds."""
+    params, sds = {}, {}
+    for ch in ctx.series.channels():
+        normals, names = ctx.normals(ch, state)
+        coef, _ = normals.fit_all()
+        jk, _ = normals.jackknife()
+        for cause in state:
+            conv = _converter(ctx, ch, cause, names)
+            if conv is None:
+                continue
+            pname, fn = conv
+            params.setdefault(cause, {})[pname] = fn(coef)
+            sds.setdefault(cause, {})[pname] = jackknife_sd(np.array([fn(c) for c in jk]))
+    return params, sds
+
+
+def _converter(ctx: Context, channel: str, cause: str, names: list[str]):
+    """(parameter name, coefficients -> value in contract units) of a cause's linear parameter."""
+    sd_y = ctx.norm[channel][1]
+    if channel == "output" and cause in M.OUTPUT_COLUMN:
+        j = names.index(cause)
+        return M.OUTPUT_COLUMN[cause], lambda c: float(c[j] * sd_y)
+    if channel == "freq_hz" and cause == "frequency_nonlinearity":
+        j, half = names.index(cause), ctx.scales["freq_hz"].half
+        return "k2_hz_per_c2", lambda c: float(c[j] * sd_y / half ** 2)
+    if channel == "temp_c" and cause == "rtd_nonlinearity":
+        sc = ctx.scales["temp_c"]
+
+        def b_per_c(c):
+            quad = c[2] / sc.half ** 2  # coefficient of ref^2
+            slope = c[1] / sc.half + 2.0 * c[2] * (mech.T_CURVE_C - sc.mid) / sc.half ** 2
+            return float(quad / slope) if slope != 0 else float("nan")
+
+        return "b_per_c", b_per_c
+    return None
+
+
+def channel_gain(ctx: Context, state: dict, channel: str) -> dict:
+    """Held-out rms of the baseline and of the extended model in one channel."""
+    n = ctx.series.n
+    sd = ctx.norm[channel][1]
+    before = ctx.normals(channel, {})[0]
+    after = ctx.normals(channel, state)[0]
+    b = np.sqrt(before.folds()[1].sum() / before.weight / n) * sd
+    a = np.sqrt(after.folds()[1].sum() / after.weight / n) * sd
+    return {"channel": channel, "rms_before": float(b), "rms_after": float(a),
+            "ratio": float(b / a) if a > 0 else float("inf"), "heldout": True}
+
+
+def heldout_residuals(ctx: Context, state: dict, channel: str) -> np.ndarray:
+    x, _ = ctx.design(channel, state)
+    normals = SegmentNormals(x, ctx.target(channel), ctx.blocks)
+    return normals.heldout_rows(x, ctx.target(channel)) * ctx.norm[channel][1]
+
+
+def baseline_coefficients(ctx: Context, state: dict) -> dict:
+    """Fitted baseline in the replay format (polynomials ascending in T - 25 C)."""
+    out: dict = {"t_ref_c": mech.T_CURVE_C}
+    normals, names = ctx.normals("output", state)
+    coef, _ = normals.fit_all()
+    mu, sd = ctx.norm["output"]
+    sc = ctx.scales["output"]
+    pb, ps = ctx.orders
+    # x = (T - mid)/half = (u + 25 - mid)/half with u = T - 25: re-expand each polynomial in u
+    shift = np.polynomial.Polynomial([(mech.T_CURVE_C - sc.mid) / sc.half, 1.0 / sc.half])
+    def in_u(cs):
+        p = np.polynomial.Polynomial([0.0])
+        for j, cj in enumerate(cs):
+            p = p + cj * shift ** j
+        return [float(v) for v in p.coef]
+    bias = [coef[names.index(f"b{j}")] * sd for j in range(pb + 1)]
+    bias[0] += mu
+    out["bias_poly"] = in_u(bias)
+    if ps is not None and ctx.series.rate is not None:
+        out["sf_poly"] = in_u([coef[names.index(f"s{j}")] * sd for j in range(ps + 1)])
+    if ctx.series.freq is not None:
+        # fitted as a polynomial in x = (Te - mid)/half; the contract writes it as
+        # f0 + k Te + k2 (Te - 25)^2 with f0 the value at Te = 0 C
+        normals, names = ctx.normals("freq_hz", state)
+        coef, _ = normals.fit_all()
+        mu, sd = ctx.norm["freq_hz"]
+        sc = ctx.scales["freq_hz"]
+        x_of_te = np.polynomial.Polynomial([-sc.mid / sc.half, 1.0 / sc.half])
+        q = np.polynomial.Polynomial([mu])
+        powers = {"f0": 0, "k": 1, "frequency_nonlinearity": 2}
+        for name, cj in zip(names, coef):
+            if name in powers:  # not the lag's start-value column
+                q = q + sd * cj * x_of_te ** powers[name]
+        a = list(q.coef) + [0.0] * 3
+        k2 = a[2] if "frequency_nonlinearity" in state else 0.0
+        out["f0_hz"] = float(a[0] - mech.T_CURVE_C ** 2 * k2)
+        out["k_hz_per_c"] = float(a[1] + 2 * mech.T_CURVE_C * k2)
+    if ctx.series.ref is not None:
+        # temp_c = offset + gain * (ref + b (ref - 25)^2): expand and read offset and gain off
+        normals, names = ctx.normals("temp_c", state)
+        coef, _ = normals.fit_all()
+        mu, sd = ctx.norm["temp_c"]
+        sc = ctx.scales["temp_c"]
+        x_of_ref = np.polynomial.Polynomial([-sc.mid / sc.half, 1.0 / sc.half])
+        q = np.polynomial.Polynomial([mu])
+        powers = {"t0": 0, "t1": 1, "rtd_nonlinearity": 2}
+        for name, cj in zip(names, coef):
+            q = q + sd * cj * x_of_ref ** powers[name]
+        p = list(q.coef) + [0.0] * 3
+        gain = p[1] + 2 * mech.T_CURVE_C * p[2]
+        out["rtd_offset_c"] = float(p[0] - mech.T_CURVE_C ** 2 * p[2])
+        out["rtd_gain"] = float(gain)
+    return out

@@ -1,0 +1,97 @@
+"""Float vs fixed differences of every block and chain, in LSBs and in physical units.
+
+The physical unit of each port comes from the design: temperatures in C, rates in deg/h (a signal
+of the paper 002 chain is a fraction of full scale; full scale is ``[system].rate_full_scale_dps``),
+scale factors in ppm, phases in rad, QVBA K0 in Hz and K1 in Hz/g.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .chains import Design
+
+ANGLE_PORTS = {("demod", "phase")}
+
+
+def port_units(design: Design) -> dict[tuple[str, str], tuple[str, float]]:
+    """(block, port) -> (unit, value-to-unit factor)."""
+    fs_degh = design.rate_full_scale_dps * 3600.0
+    u = {("rtd", "temp"): ("C", 1.0), ("iir", "y"): ("deg/h", fs_degh),
+         ("demod", "i"): ("deg/h", fs_degh), ("demod", "q"): ("deg/h", fs_degh),
+         ("demod", "amp"): ("deg/h", fs_degh), ("demod", "phase"): ("mrad", 1e3),
+         ("piecewise_sf", "y"): ("ppm", 1e6), ("piecewise_bias", "y"): ("deg/h", fs_degh),
+         ("piecewise_bias001", "y"): ("deg/h", 1.0), ("piecewise_k0", "y"): ("Hz", 1.0),
+         ("piecewise_k1", "y"): ("Hz/g", 1.0), ("sf_divide", "y"): ("deg/h", fs_degh),
+         ("bias_subtract", "y"): ("deg/h", fs_degh), ("bias_subtract001", "y"): ("deg/h", 1.0),
+         ("freq2temp", "temp"): ("C", 1.0), ("chain_paper002", "temp"): ("C", 1.0),
+         ("chain_paper002", "rate"): ("deg/h", fs_degh), ("chain_paper001", "temp"): ("C", 1.0),
+         ("chain_paper001", "rate"): ("deg/h", 1.0)}
+    return u
+
+
+@dataclass
+class ErrorStats:
+    block: str
+    port: str
+    samples: int
+    lsb: float
+    max_abs: float
+    rms: float
+    mean: float
+    unit: str
+    scale: float
+    overflows: int
+
+    @property
+    def max_lsb(self) -> float:
+        return self.max_abs / self.lsb
+
+    @property
+    def rms_lsb(self) -> float:
+        return self.rms / self.lsb
+
+
+def block_errors(design: Design, name: str, samples: int | None = None, seed_offset: int = 1000) -> list[ErrorStats]:
+    """Run one block's nominal stimulus through the bit-exact model and the float reference."""
+    block = design.all[name]
+    rng = np.random.default_rng([design.seed, seed_offset, list(design.all).index(name)])
+    stim = block.nominal_stimulus(rng, samples or design.samples)
+    block.reset()
+    result = block.run(**stim)
+    block.reset()
+    ref = block.run_float(**stim)
+    block.reset()
+    got = block.real_outputs(result)
+    units = port_units(design)
+    out = []
+    for port, fmt in block.outputs.items():
+        e = got[port] - ref[port]
+        keep = np.isfinite(e)
+        if (name, port) in ANGLE_PORTS:
+            e = (e + np.pi) % (2 * np.pi) - np.pi
+            # a phase is only defined where there is an amplitude to measure it on
+            keep &= ref["amp"] > 0.05 * np.nanmax(ref["amp"])
+        e = e[keep]
+        unit, scale = units.get((name, port), ("", 1.0))
+        out.append(ErrorStats(name, port, int(e.size), fmt.lsb, float(np.abs(e).max()), float(np.sqrt(np.mean(e**2))),
+                              float(e.mean()), unit, scale, result.overflows.total))
+    return out
+
+
+def all_errors(design: Design, samples: int | None = None) -> list[ErrorStats]:
+    rows = []
+    for name in design.all:
+        rows.extend(block_errors(design, name, samples))
+    return rows
+
+
+def format_table(rows: list[ErrorStats]) -> str:
+    head = f"{'block.port':28s} {'n':>6s} {'max|e| LSB':>11s} {'rms LSB':>9s} {'max|e|':>11s} {'rms':>10s} {'mean':>11s} unit    ovf"
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        lines.append(f"{r.block + '.' + r.port:28s} {r.samples:6d} {r.max_lsb:11.2f} {r.rms_lsb:9.2f} "
+                     f"{r.max_abs * r.scale:11.4g} {r.rms * r.scale:10.3g} {r.mean * r.scale:11.3g} {r.unit:7s} {r.overflows:3d}")
+    return "\n".join(lines)
