@@ -163,9 +163,10 @@ class Design:
         return {**self.blocks, **self.chains}
 
 
-def build(config: Config | str | None = None) -> Design:
+def build(config: Config | str | None = None, chains: bool = True) -> Design:
     """Build every block and chain from a config (path, Config, or None for the built-in default).
-    Any unknown key or table anywhere in the config is an error naming it."""
+    Any unknown key or table anywhere in the config is an error naming it. ``chains=False`` builds
+    the blocks alone, for block-level work on formats the chains could not connect."""
     cfg = config if isinstance(config, Config) else load_config(config)
     stim = cfg.section("stimulus")
     system = cfg.section("system")
@@ -195,7 +196,8 @@ def build(config: Config | str | None = None) -> Design:
     design.blocks = {"rtd": rtd, "iir": lpf, "demod": demod, "piecewise_sf": sf, "piecewise_bias": bias,
                      "piecewise_bias001": bias001, "piecewise_k0": k0, "piecewise_k1": k1, "sf_divide": divide,
                      "bias_subtract": subtract, "bias_subtract001": subtract001, "freq2temp": f2t}
-    design.chains = {"chain_paper002": Paper002Chain(rtd, sf, divide, demod, bias, subtract, lpf),
-                     "chain_paper001": Paper001Chain(f2t, bias001, subtract001)}
+    if chains:
+        design.chains = {"chain_paper002": Paper002Chain(rtd, sf, divide, demod, bias, subtract, lpf),
+                         "chain_paper001": Paper001Chain(f2t, bias001, subtract001)}
     cfg.check_all_read()
     return design

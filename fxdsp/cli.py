@@ -22,6 +22,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "simulate": ("fxdsp.sim.cli", "simulate a chamber run and write a canonical log"),
     "calibrate": ("fxdsp.sim.calibrate_cli", "fit the compensation of a paper from a chamber log"),
     "diagnose": ("fxdsp.diagnose.cli", "explain where a measured log disagrees with the simulation"),
+    "budget": ("fxdsp.budget.cli", "float vs fixed error budget in physical units; word-length exploration"),
+    "hdl-gen": ("fxdsp.hdl.gen_cli", "write the Verilog parameter headers and ROM files from the config"),
+    "hw-report": ("fxdsp.hdl.report_cli", "synthesise every block for the iCE40UP5K and tabulate the cost"),
 }
 
 
@@ -44,10 +47,6 @@ def build_parser() -> argparse.ArgumentParser:
         module.configure(sp)
         sp.set_defaults(_module=module)
     return parser
-
-
-class _Parser(argparse.ArgumentParser):
-    pass
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -125,3 +125,17 @@ def test_confusion_matrix_over_20_cases_per_cause():
     correct = np.trace(matrix)
     assert correct >= 0.95 * matrix.sum(), failures
     assert matrix[0, 0] >= 19  # false alarms on cause-free logs
+
+
+def test_long_logs_are_searched_on_a_decimated_copy_and_fitted_on_all_rows(monkeypatch):
+    # the 1M-row path (search on every k-th row) on a log small enough for a unit test
+    from fxdsp.diagnose import engine
+    from fxdsp.sim import generate_log
+
+    monkeypatch.setattr(engine, "MAX_SEARCH_ROWS", 1500)
+    log = generate_log("paper002", {"thermal_lag": {"tau_s": 2500.0}}, seed=6, columns=("rate_dps",),
+                       duration_scale=0.5)
+    diag = _diagnose(log)
+    assert diag.causes == ["thermal_lag"]
+    assert abs(diag.parameters["thermal_lag"]["tau_s"] / 2500.0 - 1) < 0.05
+    assert diag.rows["used"] == len(log["time_s"]) and diag.context.series.n == len(log["time_s"])

@@ -169,3 +169,26 @@ def test_parse_mapping_rejects_malformed_items():
     with pytest.raises(InputError):
         parse_mapping(["temp_c"])
     assert parse_mapping([" temp_c = box_temp "]) == {"temp_c": "box_temp"}
+
+
+def test_equal_time_stamps_are_allowed(tmp_path, capsys):
+    t, temp, out = _canonical_rows(400)
+    t = t.copy()
+    t[200] = t[199]  # non-decreasing is the contract
+    path = _write(tmp_path / "log.csv", ["time_s", "temp_c", "output"], zip(t, temp, out))
+    code, _, err = _run(capsys, path, "--json", tmp_path / "r.json")
+    assert code == 0, err
+    assert json.loads((tmp_path / "r.json").read_text())["rows"]["used"] == 400
+
+
+def test_isolated_spikes_are_flagged_but_steps_and_ramps_are_not():
+    from fxdsp.diagnose.model import spike_rows
+
+    rng = np.random.default_rng(1)
+    y = 1e-3 * rng.standard_normal(600)
+    y[100:] += 5.0  # a rate-table step
+    y[300:400] += np.linspace(0, 30, 100)  # a steep ramp
+    y[0] = 40.0  # the first reading of a meter (tckit's 4.67 V in a 1 V channel)
+    y[500] -= 0.5
+    flags = spike_rows(y)
+    assert sorted(np.flatnonzero(flags)) == [0, 500]

@@ -38,7 +38,7 @@ from numba import njit
 from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, quantize
 from ..fixed.kernels import fit, shift_right_round
-from .base import Block, corner_codes, random_codes
+from .base import Block, corner_codes as _corners, random_codes
 
 DESIGNS = ("butter", "cheby1", "bessel")
 BTYPES = ("lowpass", "highpass")
@@ -204,18 +204,24 @@ class Iir(Block):
     def reference(self, x: np.ndarray) -> dict[str, np.ndarray]:
         return {"y": sps.sosfilt(self.sos, x)}
 
+    def settle_samples(self) -> int:
+        """About five time constants of the slowest pole: how long a step takes to play out."""
+        radius = max(np.abs(np.roots([1.0, a1, a2])).max() for a1, a2 in self.sos[:, 4:])
+        return int(min(20_000, max(64, 5.0 / max(1e-9, 1.0 - radius))))
+
     def stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
-        """Impulses and steps at full scale (both signs), a slow sine at 0.9 FS, random noise, and a
-        square wave at full scale that drives the sections into saturation."""
+        """Impulses at full scale (both signs), corner codes, then full-scale steps up and down, each
+        long enough for the step response to overshoot (the overshoot saturates the output), a slow
+        sine at 0.9 FS, and random noise."""
         fmt = self.data_format
         hi, lo = fmt.max_int, fmt.min_int
         seg = 256
+        step = self.settle_samples()
         parts = [np.zeros(seg, np.int64), np.r_[hi, np.zeros(seg - 1, np.int64)], np.r_[lo, np.zeros(seg - 1, np.int64)],
-                 np.full(seg * 2, hi, np.int64), np.full(seg * 2, lo, np.int64), np.tile(corner_codes(fmt), 8)]
+                 np.tile(_corners(fmt), 8), np.full(step, hi, np.int64), np.full(step, lo, np.int64),
+                 np.full(step, hi, np.int64), np.zeros(step, np.int64)]
         t = np.arange(seg * 2)
         parts.append((0.9 * hi * np.sin(2 * np.pi * t / (seg * 2))).astype(np.int64))
-        square = np.where((np.arange(seg * 4) // 97) % 2 == 0, hi, lo).astype(np.int64)
-        parts.append(square)
         parts.append(random_codes(rng, fmt, n) // 4)
         return {"x": np.concatenate(parts)}
 

@@ -1,9 +1,21 @@
 """`fxdsp diagnose`: explain where a measured log disagrees with the baseline model.
 
-See shared/spec/measured-data.md for the contract (log format, causes, report).
+See shared/spec/measured-data.md for the contract (log format, causes, report). The entry points
+are imported on first use, so that `fxdsp --help` (which loads every sub-command's cli module
+through this package) does not pay for scipy and numba.
 """
 
-from fxdsp.diagnose.api import diagnose_file, diagnose_log, series_from_log
-from fxdsp.diagnose.logio import Log, parse_mapping, read_log
+from __future__ import annotations
 
-__all__ = ["diagnose_file", "diagnose_log", "series_from_log", "Log", "parse_mapping", "read_log"]
+import importlib
+
+_EXPORTS = {"diagnose_file": "api", "diagnose_log": "api", "series_from_log": "api",
+            "Log": "logio", "parse_mapping": "logio", "read_log": "logio"}
+
+__all__ = list(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(f"fxdsp.diagnose.{_EXPORTS[name]}"), name)
+    raise AttributeError(f"module 'fxdsp.diagnose' has no attribute {name!r}")

@@ -11,8 +11,9 @@ baseline), so "detectable" has one meaning across sensors and units:
 ==========================  ==================================================================
 cause                       drawn parameter, and how its size is set
 ==========================  ==================================================================
-thermal_lag                 tau_s log-uniform 300..4000 s; output and freq noise set so the
-                            lag's rms effect is SNR x noise
+thermal_lag                 tau_s log-uniform 300..4000 s; output and RTD noise (scaled
+                            together) and freq noise set so the lag's rms effect is SNR x the
+                            effective noise of each channel
 ramp_rate                   k such that rms(k dT/dt) = SNR x output noise, random sign
 hysteresis                  |h| = SNR x output noise, random sign
 warmup                      tau_s log-uniform 900..7200 s; a such that rms over the first
@@ -27,8 +28,10 @@ none                        nothing; a third of the cases add flicker (bias inst
                             standard deviation at the end of the run is WANDER x noise
 ==========================  ==================================================================
 
-SNR is drawn uniformly in SNR_RANGE. Run ``python -m fxdsp.diagnose.hidden --per-cause 20`` for
-the confusion matrix.
+SNR is drawn uniformly in SNR_RANGE (5..20; ``--snr LO HI`` to probe the limit), WANDER in
+WANDER_RANGE (2..10). Every log is a full chamber programme with its dwells halved
+(DURATION_SCALE), 3k..6.5k rows at 10 s. Run ``python -m fxdsp.diagnose.hidden --per-cause 20``
+for the confusion matrix.
 """
 
 from __future__ import annotations

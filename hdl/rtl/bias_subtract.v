@@ -1,0 +1,55 @@
+// bias_subtract: y = fit(round(x - bias)) (fxdsp.blocks.bias_subtract).
+// The difference is exact (x << X_ALIGN, bias << B_ALIGN: aligned to the finer fraction length,
+// one carry bit), then one rounding by ROUNDING (floor / half_up / half_even / toward_zero) over
+// SHIFT bits and one fit by OVERFLOW (wrap / saturate) into OUT_W bits; ovf flags the fit.
+// Interface: in_valid / out_valid, one sample per cycle. Latency: 1 cycle.
+`default_nettype none
+
+module bias_subtract #(
+    parameter integer IN_W     = 24,
+    parameter integer BIAS_W   = 24,
+    parameter integer OUT_W    = 24,
+    parameter integer X_ALIGN  = 0,
+    parameter integer B_ALIGN  = 0,
+    parameter integer SHIFT    = 0,
+    parameter integer ROUNDING = 1,
+    parameter integer OVERFLOW = 1
+) (
+    input  wire             clk,
+    input  wire             rst,
+    input  wire             in_valid,
+    input  wire [IN_W-1:0]  x,
+    input  wire [BIAS_W-1:0] bias,
+    output reg              out_valid,
+    output reg  [OUT_W-1:0] y,
+    output reg              ovf
+);
+    localparam integer XW = IN_W + X_ALIGN;
+    localparam integer BW = BIAS_W + B_ALIGN;
+    localparam integer DW = ((XW > BW) ? XW : BW) + 1;
+
+    wire signed [DW-1:0] xe = {{(DW-IN_W){x[IN_W-1]}}, x};
+    wire signed [DW-1:0] be = {{(DW-BIAS_W){bias[BIAS_W-1]}}, bias};
+    wire signed [DW-1:0] d  = (xe <<< X_ALIGN) - (be <<< B_ALIGN);
+
+    wire [OUT_W-1:0] y_c;
+    wire             o_c;
+    fx_convert #(.IN_W(DW), .SHIFT(SHIFT), .ROUNDING(ROUNDING), .OUT_W(OUT_W), .OUT_SIGNED(1),
+                 .OVERFLOW(OVERFLOW)) u_out (.x(d), .y(y_c), .ovf(o_c));
+
+    always @(posedge clk) begin
+        if (rst) begin
+            out_valid <= 1'b0;
+            y         <= {OUT_W{1'b0}};
+            ovf       <= 1'b0;
+        end else begin
+            out_valid <= in_valid;
+            if (in_valid) begin
+                y   <= y_c;
+                ovf <= o_c;
+            end
+        end
+    end
+endmodule
+
+`default_nettype wire

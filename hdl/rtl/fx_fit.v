@@ -1,0 +1,35 @@
+// fx_fit: the ONE range-fit primitive of the fxdsp RTL (mirrors fxdsp.fixed.kernels.fit).
+// Brings a signed value into an OUT_W-bit format, signed (OUT_SIGNED = 1) or unsigned.
+// OVERFLOW codes (same words as the config): 0 wrap (keep the low OUT_W bits, two's
+// complement), 1 saturate (clamp to the format's min/max). Either way ovf = 1 when the
+// value was outside the format: overflow is never silent.
+// Latency: combinational.
+`default_nettype none
+
+module fx_fit #(
+    parameter integer IN_W       = 33,
+    parameter integer OUT_W      = 32,
+    parameter integer OUT_SIGNED = 1,
+    parameter integer OVERFLOW   = 1
+) (
+    input  wire signed [IN_W-1:0]  x,
+    output wire        [OUT_W-1:0] y,
+    output wire                    ovf
+);
+    localparam integer W = ((IN_W > OUT_W + 1) ? IN_W : OUT_W + 1) + 1;
+
+    /* verilator lint_off UNUSEDSIGNAL */
+    wire signed [W-1:0] xe  = {{(W-IN_W){x[IN_W-1]}}, x};
+    wire signed [W-1:0] one = {{(W-1){1'b0}}, 1'b1};
+    wire signed [W-1:0] hi  = (OUT_SIGNED != 0) ? (one <<< (OUT_W - 1)) - one : (one <<< OUT_W) - one;
+    wire signed [W-1:0] lo  = (OUT_SIGNED != 0) ? -(one <<< (OUT_W - 1)) : {W{1'b0}};
+    /* verilator lint_on UNUSEDSIGNAL */
+
+    wire above = xe > hi;
+    wire below = xe < lo;
+    assign ovf = above | below;
+    assign y = (OVERFLOW == 1 && above) ? hi[OUT_W-1:0] :
+               (OVERFLOW == 1 && below) ? lo[OUT_W-1:0] : xe[OUT_W-1:0];
+endmodule
+
+`default_nettype wire

@@ -1,0 +1,181 @@
+"""Independent oracles of the blocks: plain Python integers and Fractions, written from the block
+docstrings (the specification), sample by sample, sharing no code with fxdsp's kernels.
+
+Slow on purpose: clarity over speed. Used on a few hundred samples per test.
+"""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+
+
+def round_to_int(v: Fraction, rounding: str) -> int:
+    if rounding == "floor":
+        return math.floor(v)
+    if rounding == "half_up":
+        return math.floor(v + Fraction(1, 2))
+    if rounding == "half_even":
+        f = math.floor(v)
+        r = v - f
+        if r > Fraction(1, 2) or (r == Fraction(1, 2) and f % 2 == 1):
+            return f + 1
+        return f
+    if rounding == "toward_zero":
+        return math.trunc(v)
+    raise AssertionError(rounding)
+
+
+def fit(v: int, fmt, overflow: str) -> tuple[int, bool]:
+    lo, hi = fmt.min_int, fmt.max_int
+    if lo <= v <= hi:
+        return v, False
+    if overflow == "saturate":
+        return (hi if v > hi else lo), True
+    return (v - lo) % (1 << fmt.wl) + lo, True
+
+
+def requantize(stored: int, fl_from: int, fmt, rules) -> tuple[int, bool]:
+    """A stored integer with fraction length fl_from -> fmt: exact value, one rounding, one fit."""
+    value = Fraction(stored, 1) / Fraction(2) ** fl_from
+    return fit(round_to_int(value * Fraction(2) ** fmt.fl, rules.rounding), fmt, rules.overflow)
+
+
+# --- blocks ----------------------------------------------------------------------------------------
+
+def rtd(block, codes) -> list[int]:
+    """Offset-binary code: top k bits index the LUT, the rest interpolate linearly."""
+    out = []
+    wl = block.adc_format.wl
+    s = wl - block.k
+    for c in codes:
+        u = int(c) + (1 << (wl - 1))
+        i, frac = u >> s, u % (1 << s)
+        lo_t, hi_t = int(block.lut[i]), int(block.lut[i + 1])
+        # value in LUT units: L[i] + (L[i+1] - L[i]) * frac / 2**s, exactly
+        exact = Fraction(lo_t) + Fraction((hi_t - lo_t) * frac, 1 << s)
+        out.append(requantize_fraction(exact, block.lut_format.fl, block.temp_format, block.rules))
+    return out
+
+
+def requantize_fraction(v_stored: Fraction, fl_from: int, fmt, rules) -> int:
+    value = v_stored / Fraction(2) ** fl_from
+    return fit(round_to_int(value * Fraction(2) ** fmt.fl, rules.rounding), fmt, rules.overflow)[0]
+
+
+def iir(block, xs) -> list[int]:
+    """DF-I sections in cascade; per section the exact real-valued accumulator
+    b.x - a.y + c1 e1 + c2 e2 (e = exact acc minus the rounded output, 0 after an overflow)."""
+    nf, df, d = block.num_format.fl, block.den_format.fl, block.data_format
+    seq = [int(v) for v in xs]
+    for s in range(block.b.shape[0]):
+        b = [Fraction(int(v), 1 << nf) for v in block.b[s]]
+        a = [Fraction(int(v), 1 << df) for v in block.a[s]]
+        c = [int(v) for v in block.c[s]]
+        x1 = x2 = y1 = y2 = Fraction(0)
+        e1 = e2 = Fraction(0)
+        out = []
+        for v in seq:
+            xv = Fraction(v, 1 << d.fl)
+            acc = b[0] * xv + b[1] * x1 + b[2] * x2 - a[0] * y1 - a[1] * y2 + c[0] * e1 + c[1] * e2
+            r = round_to_int(acc * (1 << d.fl), block.rules.rounding)
+            y, o = fit(r, d, block.rules.overflow)
+            e = Fraction(0) if o else acc - Fraction(r, 1 << d.fl)
+            x2, x1, y2, y1, e2, e1 = x1, xv, y1, Fraction(y, 1 << d.fl), e1, e
+            out.append(y)
+        seq = out
+    return seq
+
+
+def piecewise(block, temps) -> list[int]:
+    """Count breakpoints <= T, then Horner: acc = c_N; acc = fit(round(acc * t)) + c_k, fitted."""
+    acc_f, out_f, rules = block.acc_format, block.out_format, block.rules
+    t0 = int(block.t0[0])
+    out = []
+    for T in temps:
+        T = int(T)
+        seg = sum(1 for b in block.breakpoints if int(b) <= T)
+        t = Fraction(T - t0, 1 << block.temp_format.fl)
+        coefs = [Fraction(int(block.coef[seg, k]), 1 << block.coef_formats[k].fl) for k in range(block.order + 1)]
+
+        def to_acc(v: Fraction) -> Fraction:
+            q, _ = fit(round_to_int(v * Fraction(2) ** acc_f.fl, rules.rounding), acc_f, rules.overflow)
+            return Fraction(q, 1) / Fraction(2) ** acc_f.fl
+
+        acc = to_acc(coefs[block.order])
+        for k in range(block.order - 1, -1, -1):
+            acc = to_acc(acc * t)
+            acc = to_acc(acc + coefs[k])
+        out.append(fit(round_to_int(acc * Fraction(2) ** out_f.fl, rules.rounding), out_f, rules.overflow)[0])
+    return out
+
+
+def sf_divide(block, xs, sfs) -> list[int]:
+    out = []
+    g = block.guard_bits
+    for x, d in zip(xs, sfs):
+        x, d = int(x), int(d)
+        if d == 0:
+            out.append(block.out_format.max_int if x > 0 else block.out_format.min_int if x < 0 else 0)
+            continue
+        num = x * (1 << (block.sf_format.fl + g))
+        q = abs(num) // abs(d)
+        q = -q if (num < 0) != (d < 0) else q
+        out.append(requantize(q, block.in_format.fl + g, block.out_format, block.rules)[0])
+    return out
+
+
+def bias_subtract(block, xs, biases) -> list[int]:
+    out = []
+    for x, b in zip(xs, biases):
+        v = Fraction(int(x), 1) / Fraction(2) ** block.in_format.fl - Fraction(int(b), 1) / Fraction(2) ** block.bias_format.fl
+        out.append(fit(round_to_int(v * Fraction(2) ** block.out_format.fl, block.rules.rounding),
+                       block.out_format, block.rules.overflow)[0])
+    return out
+
+
+def freq2temp(block, fs) -> list[int]:
+    out = []
+    for f in fs:
+        v = Fraction(int(f) - block.f0, 1 << block.freq_format.fl) * Fraction(block.kinv, 1 << block.kinv_format.fl)
+        out.append(fit(round_to_int(v * Fraction(2) ** block.temp_format.fl, block.rules.rounding),
+                       block.temp_format, block.rules.overflow)[0])
+    return out
+
+
+def demod_mix(block, xs) -> tuple[list[int], list[int]]:
+    """NCO phase n*ftw + phase0 modulo 2**P, LUT address = top lut_bits, products read as 2*x*lut."""
+    nco = block.nco
+    P, L = nco.phase_bits, nco.lut_bits
+    d, rules = block.data_format, block.rules
+    in_fl, lut_fl = block.in_format.fl, nco.lut_format.fl
+    i_out, q_out = [], []
+    for n, x in enumerate(xs):
+        addr = ((nco.phase0 + n * nco.ftw) % (1 << P)) >> (P - L)
+        for lut, out in ((nco.cos_lut, i_out), (nco.msin_lut, q_out)):
+            v = 2 * Fraction(int(x), 1 << in_fl) * Fraction(int(lut[addr]), 1 << lut_fl)
+            out.append(fit(round_to_int(v * (1 << d.fl), rules.rounding), d, rules.overflow)[0])
+    return i_out, q_out
+
+
+def cordic(block, i_vals, q_vals) -> tuple[list[int], list[int]]:
+    """Vectoring CORDIC with pre-rotation and floor shifts; returns (K*|v|, angle) stored."""
+    import numpy as np
+
+    ang = block.angle_format
+    half_pi = round_to_int(Fraction(np.pi / 2) * (1 << ang.fl), "half_up")
+    atans = [round_to_int(Fraction(float(np.arctan(2.0 ** -k))) * (1 << ang.fl), "half_up")
+             for k in range(block.iterations)]
+    xs, zs = [], []
+    for x, y in zip(i_vals, q_vals):
+        x, y, z = int(x), int(y), 0
+        if x < 0:
+            x, y, z = (y, -x, half_pi) if y >= 0 else (-y, x, -half_pi)
+        for k in range(block.iterations):
+            if y >= 0:
+                x, y, z = x + (y >> k), y - (x >> k), z + atans[k]
+            else:
+                x, y, z = x - (y >> k), y + (x >> k), z - atans[k]
+        xs.append(x)
+        zs.append(z)
+    return xs, zs

@@ -1,0 +1,33 @@
+"""Shared fixtures: the built-in design and config variants."""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+
+import pytest
+
+from fxdsp.chains import build
+from fxdsp.config import Config, default_config_text
+
+
+def default_data() -> dict:
+    return tomllib.loads(default_config_text())
+
+
+def design_with(chains: bool = False, **edits):
+    """Build the design from the default config with dotted-path edits, e.g.
+    ``design_with(**{"iir.rounding": "floor"})`` (blocks only unless ``chains``)."""
+    data = copy.deepcopy(default_data())
+    for dotted, value in edits.items():
+        node = data
+        *parents, key = dotted.split(".")
+        for p in parents:
+            node = node[p]
+        node[key] = value
+    return build(Config(data, source="<test>"), chains=chains)
+
+
+@pytest.fixture(scope="session")
+def design():
+    return build()

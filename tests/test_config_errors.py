@@ -1,0 +1,107 @@
+"""Bad configs: the library raises ValueError/TypeError naming the field; the CLI prints one line
+and exits 2, with no traceback."""
+
+from __future__ import annotations
+
+import copy
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from conftest import default_data
+from fxdsp.chains import build
+from fxdsp.config import Config
+
+
+def _edited(edits: dict, delete: tuple = ()) -> dict:
+    data = copy.deepcopy(default_data())
+    for dotted, value in edits.items():
+        node = data
+        *parents, key = dotted.split(".")
+        for p in parents:
+            node = node.setdefault(p, {})
+        node[key] = value
+    for dotted in delete:
+        node = data
+        *parents, key = dotted.split(".")
+        for p in parents:
+            node = node[p]
+        del node[key]
+    return data
+
+
+BAD = [
+    ({"rtd.lut_index_bitz": 5}, "rtd.lut_index_bitz", "lut_index_bits"),          # typo, with a suggestion
+    ({"rtdd": {"law": "linear"}}, "rtdd", None),                                  # unknown table
+    ({"rtd.rounding": "half-up"}, "rtd.rounding", "half_up"),                     # unknown rounding name
+    ({"iir.overflow": "clip"}, "iir.overflow", "saturate"),
+    ({"rtd.temp_format": "s0.0"}, "rtd.temp_format", "wl"),                       # zero word length
+    ({"rtd.temp_format": "s-4.2"}, "rtd.temp_format", None),                     # negative word length
+    ({"rtd.temp_format": "q16.8"}, "rtd.temp_format", "s16.15"),                 # not a format
+    ({"rtd.temp_format": "s64.8"}, "rtd.temp_format", "63"),                     # too wide for int64
+    ({"piecewise.sf.breakpoints_c": [20.0, 0.0, 40.0]}, "piecewise.sf.breakpoints_c", "increasing"),
+    ({"piecewise.sf.breakpoints_c": [0.0, 20.0, 20.0]}, "piecewise.sf.breakpoints_c", "duplicates"),
+    ({"piecewise.sf.breakpoints_c": [0.0, 0.0005, 40.0]}, "piecewise.sf.breakpoints_c", "same code"),
+    ({"piecewise.sf.coefficients": [[9.0, 1e-4]] * 4}, "piecewise.sf.coefficients", "coef_format"),
+    ({"piecewise.sf.coefficients": [[1.0, 1e-4]] * 3}, "piecewise.sf.coefficients", "segments"),
+    ({"piecewise.k0.coefficients": [[1.0, 1.0, 1.0, 1.0, 1.0]]}, "piecewise.k0.coefficients", "order"),
+    ({"iir.num_format": "s8.12"}, "iir.num_format", None),                       # coefficients do not fit
+    ({"iir.cutoff_hz": 60000.0}, "iir.cutoff_hz", "fs/2"),
+    ({"iir.order": "two"}, "iir.order", "integer"),
+    ({"sf_divide.guard_bits": 40}, "sf_divide.guard_bits", "32"),
+    ({"demod.f_hz": -5.0}, "demod.f_hz", None),
+    ({"stimulus.samples": 3}, "stimulus.samples", "16"),
+    ({"bias_subtract.out_format": "s20.22"}, "iir.data_format", "connect"),       # chain cannot connect
+]
+
+
+@pytest.mark.parametrize("edits,field,hint", BAD, ids=[b[1] + ":" + str(i) for i, b in enumerate(BAD)])
+def test_library_names_the_field(edits, field, hint):
+    with pytest.raises((ValueError, TypeError)) as info:
+        build(Config(_edited(edits), source="<test>"))
+    message = str(info.value)
+    assert message.startswith(field) or f" {field}" in message or field in message.split(":")[0], message
+    if hint:
+        assert hint in message, message
+
+
+def test_missing_required_key_is_named():
+    with pytest.raises(ValueError, match=r"^iir\.cutoff_hz: missing"):
+        build(Config(_edited({}, delete=("iir.cutoff_hz",)), source="<test>"))
+
+
+def _cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "fxdsp.cli", *args], capture_output=True, text=True, cwd=cwd,
+                          timeout=120)
+
+
+DEFAULT_TEXT = (Path(__file__).parents[1] / "fxdsp" / "configs" / "default.toml").read_text()
+
+
+@pytest.mark.parametrize("text,needle", [
+    (DEFAULT_TEXT.replace("[rtd]\n", "[rtd]\nbogus = 1\n", 1), "rtd.bogus: unknown key"),
+    ("this is not toml = = 3\n", "not valid TOML"),
+    (DEFAULT_TEXT.replace('law = "linear"', 'law = "linear"\nrounding_mode = "floor"', 1), "did you mean 'rounding'"),
+    (DEFAULT_TEXT.replace('lut_index_bits = 5', 'lut_index_bits = 5.5', 1), "rtd.lut_index_bits"),
+])
+def test_cli_bad_config_one_line_exit_2(tmp_path: Path, text, needle):
+    assert text != DEFAULT_TEXT
+    cfg = tmp_path / "bad.toml"
+    cfg.write_text(text)
+    r = _cli("vectors", "--config", str(cfg), "--out", str(tmp_path / "v"))
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and needle in lines[0] and "Traceback" not in r.stderr, r.stderr
+    assert not (tmp_path / "v").exists(), "nothing is written on bad input"
+
+
+def test_cli_missing_config_file(tmp_path: Path):
+    r = _cli("vectors", "--config", str(tmp_path / "nope.toml"))
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "nope.toml" in r.stderr
+
+
+def test_cli_unknown_flag_exits_2():
+    r = _cli("vectors", "--frobnicate")
+    assert r.returncode == 2 and "Traceback" not in r.stderr
