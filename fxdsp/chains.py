@@ -21,6 +21,7 @@ from .blocks.bias_subtract import BiasSubtract
 from .blocks.demod import Demod
 from .blocks.freq2temp import Freq2Temp
 from .blocks.iir import Iir
+from .blocks.lag import Lag
 from .blocks.piecewise import Piecewise
 from .blocks.rtd import Rtd
 from .blocks.sf_divide import SfDivide
@@ -189,13 +190,16 @@ def build(config: Config | str | None = None, chains: bool = True) -> Design:
     sub001_sec = cfg.section("bias_subtract001")
     subtract001 = BiasSubtract.from_config(sub001_sec, sub001_sec.format("in_format"), bias001.out_format)
 
+    lag = Lag.from_config(cfg.section("lag"), rtd.temp_format)
+
     qvba_temp = cfg.section("piecewise").format("qvba_temp_format", "s18.9")
     k0 = Piecewise.from_config(cfg.section("piecewise.k0"), qvba_temp)
     k1 = Piecewise.from_config(cfg.section("piecewise.k1"), qvba_temp)
 
     design.blocks = {"rtd": rtd, "iir": lpf, "demod": demod, "piecewise_sf": sf, "piecewise_bias": bias,
                      "piecewise_bias001": bias001, "piecewise_k0": k0, "piecewise_k1": k1, "sf_divide": divide,
-                     "bias_subtract": subtract, "bias_subtract001": subtract001, "freq2temp": f2t}
+                     "bias_subtract": subtract, "bias_subtract001": subtract001, "freq2temp": f2t,
+                     "lag": lag}
     if chains:
         design.chains = {"chain_paper002": Paper002Chain(rtd, sf, divide, demod, bias, subtract, lpf),
                          "chain_paper001": Paper001Chain(f2t, bias001, subtract001)}

@@ -28,7 +28,7 @@ def port_units(design: Design) -> dict[tuple[str, str], tuple[str, float]]:
          ("bias_subtract", "y"): ("deg/h", fs_degh), ("bias_subtract001", "y"): ("deg/h", 1.0),
          ("freq2temp", "temp"): ("C", 1.0), ("chain_paper002", "temp"): ("C", 1.0),
          ("chain_paper002", "rate"): ("deg/h", fs_degh), ("chain_paper001", "temp"): ("C", 1.0),
-         ("chain_paper001", "rate"): ("deg/h", 1.0)}
+         ("chain_paper001", "rate"): ("deg/h", 1.0), ("lag", "te"): ("C", 1.0)}
     return u
 
 

@@ -136,3 +136,12 @@ def test_chain_paper002_is_the_composition_of_its_blocks(design):
     r = blk["bias_subtract"].run(x=i, bias=bias).outputs["y"]
     rate = blk["iir"].filter(r)
     assert np.array_equal(out["temp"], temp) and np.array_equal(out["rate"], rate)
+
+
+@pytest.mark.parametrize("rounding,overflow", RULES)
+def test_lag(rounding, overflow):
+    d = design_with(**{"lag.rounding": rounding, "lag.overflow": overflow, "lag.tau_s": 5.0, "lag.alpha_bits": 12})
+    b = d.blocks["lag"]
+    st = b.stimulus(np.random.default_rng(11), 300)
+    b.reset()
+    assert b.run(**st).outputs["te"].tolist() == oracle.lag(b, st["temp"])

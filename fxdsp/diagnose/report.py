@@ -52,6 +52,8 @@ def explanation(diag: Diagnosis) -> str:
 
 
 def report_dict(diag: Diagnosis) -> dict:
+    from fxdsp.diagnose.extension import fpga_extensions
+
     cause = diag.causes[0] if diag.causes else "none"
     candidates = [{"cause": c.cause, "score": round(float(c.evidence), 3), "rms_after": float(c.rms_after),
                    "rms_before": float(c.rms_before), "ratio": float(c.ratio), "channel": c.channel,
@@ -67,6 +69,7 @@ def report_dict(diag: Diagnosis) -> dict:
         "candidates": candidates,
         "rows": dict(diag.rows or {"used": diag.context.series.n, "dropped": 0}),
         "notes": list(diag.notes),
+        "fpga_extension": fpga_extensions(diag),
         "all_parameters": diag.parameters,
         "all_uncertainty": diag.uncertainty,
         "baseline": {"bias_order": diag.orders[0], "sf_order": diag.orders[1], **diag.baseline},

@@ -97,37 +97,41 @@ module demod #(
 
     wire signed [WW-1:0] xi = {{(WW-DATA_W){li[DATA_W-1]}}, li};
     wire signed [WW-1:0] yi = {{(WW-DATA_W){lq[DATA_W-1]}}, lq};
-    wire signed [WW-1:0] xs [0:ITERATIONS];
-    wire signed [WW-1:0] ys [0:ITERATIONS];
-    wire signed [AW-1:0] zs [0:ITERATIONS];
-    assign xs[0] = ~xi[WW-1] ? xi : (~yi[WW-1] ? yi : -yi);
-    assign ys[0] = ~xi[WW-1] ? yi : (~yi[WW-1] ? -xi : xi);
-    assign zs[0] = ~xi[WW-1] ? {AW{1'b0}} : (~yi[WW-1] ? hpi : -hpi);
+    wire signed [WW-1:0] x0 = ~xi[WW-1] ? xi : (~yi[WW-1] ? yi : -yi);
+    wire signed [WW-1:0] y0 = ~xi[WW-1] ? yi : (~yi[WW-1] ? -xi : xi);
+    wire signed [AW-1:0] z0 = ~xi[WW-1] ? {AW{1'b0}} : (~yi[WW-1] ? hpi : -hpi);
     genvar k;
     generate
         for (k = 0; k < ITERATIONS; k = k + 1) begin : g_cordic
             wire [ANGLE_W-1:0] at_w = atan[k];
             wire signed [AW-1:0] at = {{2{at_w[ANGLE_W-1]}}, at_w};
-            wire signed [WW-1:0] xk = xs[k];
-            wire signed [WW-1:0] yk = ys[k];
+            wire signed [WW-1:0] xk, yk;
+            wire signed [AW-1:0] zk;
+            if (k == 0) begin : g_first
+                assign xk = x0; assign yk = y0; assign zk = z0;
+            end else begin : g_next
+                assign xk = g_cordic[k-1].xo; assign yk = g_cordic[k-1].yo; assign zk = g_cordic[k-1].zo;
+            end
             wire signed [WW-1:0] dx = yk >>> k;
             wire signed [WW-1:0] dy = xk >>> k;
-            assign xs[k+1] = ~yk[WW-1] ? xk + dx : xk - dx;
-            assign ys[k+1] = ~yk[WW-1] ? yk - dy : yk + dy;
-            assign zs[k+1] = ~yk[WW-1] ? zs[k] + at : zs[k] - at;
+            wire signed [WW-1:0] xo = ~yk[WW-1] ? xk + dx : xk - dx;
+            /* verilator lint_off UNUSEDSIGNAL */  // the last stage's y is not needed
+            wire signed [WW-1:0] yo = ~yk[WW-1] ? yk - dy : yk + dy;
+            /* verilator lint_on UNUSEDSIGNAL */
+            wire signed [AW-1:0] zo = ~yk[WW-1] ? zk + at : zk - at;
         end
     endgenerate
 
     localparam [INV_K_W-1:0] INV_K_C = INV_K[INV_K_W-1:0];
     wire signed [INV_K_W-1:0] invk = INV_K_C;
-    wire signed [WW-1:0] xfin = xs[ITERATIONS];
+    wire signed [WW-1:0] xfin = g_cordic[ITERATIONS-1].xo;
     wire signed [PW-1:0] ap = xfin * invk;
     wire [DATA_W-1:0] amp_c;
     wire ovf_amp;
     fx_convert #(.IN_W(PW), .SHIFT(AMP_SHIFT), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
                  .OVERFLOW(OVERFLOW)) u_amp (.x(ap), .y(amp_c), .ovf(ovf_amp));
     /* verilator lint_off UNUSEDSIGNAL */
-    wire signed [AW-1:0] zfin = zs[ITERATIONS];
+    wire signed [AW-1:0] zfin = g_cordic[ITERATIONS-1].zo;
     /* verilator lint_on UNUSEDSIGNAL */
 
     always @(posedge clk) begin

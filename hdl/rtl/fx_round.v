@@ -32,8 +32,10 @@ module fx_round #(
         if (RSH == 0) begin : g_exact
             assign s = xe <<< LSH;
         end else begin : g_round
+            /* verilator lint_off UNUSEDSIGNAL */  // not every mode needs both constants
             wire signed [W-1:0] one  = {{(W-1){1'b0}}, 1'b1};
             wire signed [W-1:0] half = one <<< (RSH - 1);
+            /* verilator lint_on UNUSEDSIGNAL */
             wire signed [W-1:0] c;
             if (ROUNDING == 0) begin : g_floor
                 assign c = {W{1'b0}};

@@ -1,0 +1,133 @@
+"""Thermal-lag compensation: a first-order low-pass on the temperature code, so that the coefficient
+engine sees an estimate of the die temperature instead of the thermometer's.
+
+When ``fxdsp diagnose`` finds ``thermal_lag`` (the sensing element follows the thermometer through
+dTe/dt = (T - Te)/tau), the FPGA should evaluate SF(Te) and bias(Te), not SF(T). This block computes::
+
+    Te[n] = Te[n-1] + alpha * (T[n] - Te[n-1]),   alpha = 1 - exp(-1 / (rate_hz * tau_s))
+
+at the temperature update rate ``rate_hz`` (a chamber-scale tau of hours at 10 Hz gives alpha of
+1e-5: far too small for a plain coefficient, so alpha is a ``alpha_bits``-bit mantissa m and a shift
+s, alpha = m * 2**-s, m in [2**(alpha_bits-1), 2**alpha_bits)).
+
+Datapath (stored integers): the state Te carries ``state_guard_bits`` more fraction bits than the
+temperature code (without them, steps smaller than 1/alpha LSB would never move the state: a dead
+band of 1/alpha codes)::
+
+    d   = (T << g) - Te                         exact
+    Te  = Te + round(d * m >> s)                rounding by ``rounding``; Te cannot leave [T range]
+    out = round(Te >> g)                        into temp_format (``rounding``), fitted by ``overflow``
+
+The float reference is the exact discrete first-order recursion with the unquantised alpha.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..config import Section
+from ..fixed import Format, OverflowLog, Rules
+from ..fixed.kernels import convert, shift_right_round
+from .base import Block, corner_codes
+
+
+@njit(cache=True)
+def _lag_kernel(x, m, s, g, rounding, lo, hi, overflow, state):
+    """state[0] = Te with g extra fraction bits, carried across calls. Returns (y, overflows)."""
+    n = x.shape[0]
+    y = np.empty(n, dtype=np.int64)
+    te = state[0]
+    count = 0
+    for i in range(n):
+        d = (x[i] << g) - te
+        te += shift_right_round(d * m, s, rounding)
+        out, o = convert(te, g, rounding, lo, hi, overflow)
+        count += o
+        y[i] = out
+    state[0] = te
+    return y, count
+
+
+class Lag(Block):
+    name = "lag"
+
+    def __init__(self, temp_format: Format, tau_s: float, rate_hz: float, alpha_bits: int, state_guard_bits: int,
+                 rules: Rules, name: str = "lag"):
+        if not tau_s > 0:
+            raise ValueError(f"{name}.tau_s: must be > 0, got {tau_s}")
+        if not rate_hz > 0:
+            raise ValueError(f"{name}.rate_hz: must be > 0, got {rate_hz}")
+        self.name = name
+        self.temp_format, self.tau_s, self.rate_hz = temp_format, tau_s, rate_hz
+        self.alpha = -math.expm1(-1.0 / (rate_hz * tau_s))
+        # alpha = m * 2**-s with m normalised to alpha_bits bits (the nearest such m: half_up)
+        self.s = alpha_bits - 1 - math.floor(math.log2(self.alpha))
+        self.m = int(math.floor(self.alpha * 2.0**self.s + 0.5))
+        if self.m >= 1 << alpha_bits:  # rounding carried into a new bit
+            self.m >>= 1
+            self.s -= 1
+        self.alpha_bits, self.g = alpha_bits, state_guard_bits
+        self.rules = rules
+        self.state_format = Format(True, temp_format.wl + state_guard_bits + 1, temp_format.fl + state_guard_bits)
+        if self.state_format.wl + 1 + alpha_bits > 63:
+            raise ValueError(f"{name}: state {self.state_format} times a {alpha_bits}-bit alpha exceeds 63 bits; "
+                             f"reduce state_guard_bits or alpha_bits")
+        self.inputs = {"temp": temp_format}
+        self.outputs = {"te": temp_format}
+        self.reset()
+
+    @classmethod
+    def from_config(cls, sec: Section, temp_format: Format) -> "Lag":
+        return cls(temp_format, sec.number("tau_s", low=0, low_open=True), sec.number("rate_hz", low=0, low_open=True),
+                   sec.integer("alpha_bits", 16, low=4, high=24), sec.integer("state_guard_bits", 24, low=0, high=40),
+                   sec.rules(), name=sec.path)
+
+    def reset(self) -> None:
+        self.state = np.zeros(1, dtype=np.int64)
+        self.primed = False
+
+    def _run(self, log: OverflowLog, temp: np.ndarray) -> dict[str, np.ndarray]:
+        if not self.primed and temp.size:
+            # start settled on the first reading (power-on: die and thermometer at the same temperature)
+            self.state[0] = int(temp[0]) << self.g
+            self.primed = True
+        y, n = _lag_kernel(temp, self.m, self.s, self.g, self.rules.rounding_code, self.temp_format.min_int,
+                           self.temp_format.max_int, self.rules.overflow_code, self.state)
+        log.add(f"{self.name}.te", n)
+        return {"te": y}
+
+    def reference(self, temp: np.ndarray) -> dict[str, np.ndarray]:
+        from scipy.signal import lfilter
+
+        x = np.asarray(temp, dtype=float)
+        if x.size == 0:
+            return {"te": x}
+        y, _ = lfilter([self.alpha], [1.0, self.alpha - 1.0], x, zi=[(1.0 - self.alpha) * x[0]])
+        return {"te": y}
+
+    def nominal_stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
+        """A chamber programme at the update rate: dwell, ramp up, dwell, ramp down (+ sensor noise)."""
+        n = max(n, 64)
+        t = np.arange(n) / self.rate_hz
+        span = n / self.rate_hz
+        temp = np.interp(t, [0, 0.1 * span, 0.4 * span, 0.6 * span, 0.9 * span, span], [20, 20, 60, 60, -10, -10])
+        temp = temp + rng.normal(0, 0.01, n)
+        f = self.temp_format
+        return {"temp": np.clip(np.floor(temp * 2.0**f.fl + 0.5), f.min_int, f.max_int).astype(np.int64)}
+
+    def stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
+        """Full-scale steps both ways (the state slews across the whole range), corners, nominal."""
+        f = self.temp_format
+        hold = int(min(4096, 3 / self.alpha))
+        parts = [np.full(8, 0, np.int64), np.full(hold, f.max_int, np.int64), np.full(hold, f.min_int, np.int64),
+                 np.repeat(corner_codes(f), 16), self.nominal_stimulus(rng, n)["temp"]]
+        return {"temp": np.concatenate(parts)}
+
+    def parameters(self) -> dict:
+        return {"temp_format": str(self.temp_format), "tau_s": self.tau_s, "rate_hz": self.rate_hz,
+                "alpha": self.alpha, "alpha_mantissa": self.m, "alpha_shift": self.s, "alpha_bits": self.alpha_bits,
+                "state_guard_bits": self.g, "state_format": str(self.state_format),
+                "rounding": self.rules.rounding, "overflow": self.rules.overflow}

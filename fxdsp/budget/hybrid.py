@@ -1,0 +1,418 @@
+"""Hybrid float/fixed models of the two chains: every quantisation source can be switched on
+(exactly as the bit-exact datapath does it), off (float), or replaced by its textbook model
+(additive white uniform noise of the same step and rounding mode: the "theory" of item 3).
+
+Built only from the blocks' public attributes (quantised coefficient arrays, LUTs, formats, rules);
+no block is modified. With every source on, the hybrid reproduces the bit-exact model (checked by
+:func:`fxdsp.budget.attribution.attribute` and by the tests); with every source off it is the
+float reference fed with the *analog* (unquantised) sensor signals.
+
+Rounding points are the hardware's: a source is only modelled where the datapath really drops
+bits (a resize to a coarser fraction length), so switching one source on in an otherwise float
+chain adds exactly that one rounding.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..chains import Paper001Chain, Paper002Chain
+from ..fixed import Format, OverflowLog, Rules, quantize
+from ..fixed.kernels import FLOOR, HALF_EVEN, HALF_UP, TOWARD_ZERO
+
+# categories of the attribution (item 2)
+ADC = "ADC quantisation"
+COEF = "coefficient quantisation"
+ROUND = "data-path rounding"
+DIVIDER = "divider truncation"
+LUTNCO = "LUT/NCO resolution"
+CATEGORIES = (ADC, COEF, ROUND, DIVIDER, LUTNCO)
+
+
+@dataclass(frozen=True)
+class Source:
+    """One quantisation source of a chain."""
+
+    name: str            # e.g. "iir.round"
+    category: str        # one of CATEGORIES
+    stage: str           # block name of the design (for the table / report)
+    node: str            # hybrid node where the source acts (its local error is measured there)
+    q: float | None = None           # step of the rounding (None: not a rounding, no q^2/12 theory)
+    rounding: str | None = None      # rounding mode of the step
+    note: str = ""
+
+    @property
+    def is_rounding(self) -> bool:
+        return self.q is not None
+
+
+class Switch:
+    """Which sources are on (bit-exact), injected (white-noise model) or off (float)."""
+
+    def __init__(self, on=(), inject=(), rng: np.random.Generator | None = None):
+        self.on = set(on)
+        self.inject = set(inject)
+        self.rng = rng if rng is not None else np.random.default_rng(12345)
+        # rounding residue r - x of every rounding point switched on, by (source, point)
+        self.residues: dict[tuple[str, str], np.ndarray] = {}
+
+    def record(self, name: str, point: str, residue: np.ndarray) -> None:
+        key = (name, point)
+        self.residues[key] = residue if key not in self.residues else np.concatenate([self.residues[key], residue])
+
+    def __contains__(self, name: str) -> bool:
+        return name in self.on
+
+    def noise(self, rounding: str, q: float, x: np.ndarray) -> np.ndarray:
+        """Textbook rounding error r - x for ``rounding`` with step q, independent of x (except the
+        sign for toward_zero)."""
+        u = self.rng.uniform(0.0, 1.0, np.shape(x))
+        if rounding == "floor":
+            return -q * u
+        if rounding == "toward_zero":
+            return -np.sign(x) * q * u
+        return q * (u - 0.5)
+
+    def round(self, name: str, x, fmt: Format, rules: Rules, point: str = "out") -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        if name in self.on:
+            y = quantize(x, fmt, rules).astype(float) * fmt.lsb
+            self.record(name, point, y - x)
+            return y
+        if name in self.inject:
+            return x + self.noise(rules.rounding, fmt.lsb, x)
+        return x
+
+
+# --------------------------------------------------------------------------------------------
+# IIR (direct form I, error feedback) in float, or the block's own integer kernel
+# --------------------------------------------------------------------------------------------
+@njit(cache=True)
+def _round_float(acc, rounding):
+    if rounding == FLOOR:
+        return np.floor(acc)
+    if rounding == HALF_UP:
+        return np.floor(acc + 0.5)
+    if rounding == HALF_EVEN:
+        r = np.floor(acc)
+        f = acc - r
+        if f > 0.5 or (f == 0.5 and (r % 2.0) != 0.0):
+            r += 1.0
+        return r
+    return np.trunc(acc)
+
+
+@njit(cache=True)
+def _df1_float(x, b, a, c, mode, rounding, lo, hi, noise, resid):
+    """DF-I cascade in units of the output LSB. mode 0: no rounding; 1: rounding by ``rounding``
+    with error feedback c (as the integer kernel); 2: the rounding replaced by its textbook model,
+    drawn from ``noise`` (uniform in [0, 1)), with the same error feedback. Saturation to [lo, hi]
+    (error taken as 0 after an overflow)."""
+    v = x.copy()
+    for s in range(b.shape[0]):
+        y = np.empty_like(v)
+        x1 = 0.0
+        x2 = 0.0
+        y1 = 0.0
+        y2 = 0.0
+        e1 = 0.0
+        e2 = 0.0
+        for i in range(v.shape[0]):
+            acc = b[s, 0] * v[i] + b[s, 1] * x1 + b[s, 2] * x2 - a[s, 0] * y1 - a[s, 1] * y2
+            if mode == 0:
+                r = acc
+                e = 0.0
+            else:
+                acc += c[s, 0] * e1 + c[s, 1] * e2
+                if mode == 1:
+                    r = _round_float(acc, rounding)
+                else:  # textbook model: independent uniform u in [0, 1) shaped by the mode
+                    u = noise[s, i]
+                    if rounding == FLOOR:
+                        r = acc - u
+                    elif rounding == TOWARD_ZERO:
+                        r = acc - np.sign(acc) * u
+                    else:
+                        r = acc + u - 0.5
+                e = acc - r
+                resid[s, i] = -e
+                if r > hi:
+                    r = hi
+                    e = 0.0
+                elif r < lo:
+                    r = lo
+                    e = 0.0
+            x2 = x1
+            x1 = v[i]
+            y2 = y1
+            y1 = r
+            e2 = e1
+            e1 = e
+            y[i] = r
+        v = y
+    return v
+
+
+def iir_hybrid(block, x: np.ndarray, coef: str, rnd: str, sw: Switch) -> np.ndarray:
+    """The IIR block with its coefficient source ``coef`` and rounding source ``rnd`` switched."""
+    lsb = block.data_format.lsb
+    xs = np.asarray(x, dtype=float) / lsb
+    coef_on = coef in sw
+    if coef_on and rnd in sw and np.all(xs == np.round(xs)):
+        # everything of this block is on and its input is on the data grid: the block's own kernel
+        block.reset()
+        y = block._run(OverflowLog(), x=np.round(xs).astype(np.int64))["y"].astype(float) * lsb
+        block.reset()
+        return y
+    if coef_on:
+        b = block.b.astype(float) * block.num_format.lsb
+        a = block.a.astype(float) * block.den_format.lsb
+    else:
+        b = block.sos[:, :3].copy()
+        a = block.sos[:, 4:].copy()
+    c = block.c.astype(float)
+    if rnd in sw:
+        mode = 1
+    elif rnd in sw.inject:
+        mode = 2
+    else:
+        mode = 0
+    noise = sw.rng.uniform(0.0, 1.0, (b.shape[0], xs.size)) if mode == 2 else np.zeros((b.shape[0], xs.size))
+    fmt = block.data_format
+    resid = np.zeros((b.shape[0], xs.size))
+    y = _df1_float(xs, b, a, c, mode, block.rules.rounding_code, float(fmt.min_int), float(fmt.max_int), noise,
+                   resid)
+    if mode == 1:
+        for s in range(b.shape[0]):
+            sw.record(rnd, f"section{s}", resid[s] * lsb)
+    return y * lsb
+
+
+# --------------------------------------------------------------------------------------------
+# blocks
+# --------------------------------------------------------------------------------------------
+def piecewise_hybrid(block, temp: np.ndarray, prefix: str, sw: Switch) -> np.ndarray:
+    """Segment select + Horner; sources ``<prefix>.coef`` (coefficients, breakpoints, t0) and
+    ``<prefix>.round`` (every rounding of the datapath: acc products and sums, output)."""
+    temp = np.asarray(temp, dtype=float)
+    tf = block.temp_format
+    if f"{prefix}.coef" in sw:
+        bp = block.breakpoints.astype(float) * tf.lsb
+        t0 = float(block.t0[0]) * tf.lsb
+        coef = np.column_stack([block.coef[:, k].astype(float) * f.lsb for k, f in enumerate(block.coef_formats)])
+    else:
+        bp = np.asarray(block.breakpoints_c, dtype=float)
+        t0 = block.t0_c
+        coef = block.coefficients_real
+    seg = np.searchsorted(bp, temp, side="right")
+    c = coef[seg]
+    t = temp - t0
+    name = f"{prefix}.round"
+    acc_f, rules = block.acc_format, block.rules
+    acc = c[:, block.order].copy()
+    if block._top_shift > 0:
+        acc = sw.round(name, acc, acc_f, rules, "acc")
+    for k in range(block.order - 1, -1, -1):
+        acc = sw.round(name, acc * t, acc_f, rules, "acc")  # the product always drops t's fraction bits
+        acc = acc + c[:, k]
+        if block._sum_shift[k] > 0:
+            acc = sw.round(name, acc, acc_f, rules, "acc")
+    if block._out_shift > 0:
+        acc = sw.round(name, acc, block.out_format, rules)
+    return acc
+
+
+def rtd_hybrid(block, frac: np.ndarray, sw: Switch) -> np.ndarray:
+    """ADC fraction -> temperature; sources rtd.lut_resolution (linear interpolation over 2**k
+    segments instead of the exact inverse), rtd.lut_coef (LUT entries quantised), rtd.round."""
+    frac = np.asarray(frac, dtype=float)
+    adc = block.adc_format
+    exact = block.physics.temperature_from_fraction(frac)
+    lut_q = block.lut.astype(float) * block.lut_format.lsb
+
+    def interp(table):
+        u = (frac - adc.min_value) / adc.lsb  # continuous offset-binary code
+        seg = float(1 << block.s)
+        idx = np.clip(np.floor(u / seg), 0, (1 << block.k) - 1).astype(np.int64)
+        fr = u - idx * seg
+        return (table[idx] * seg + (table[idx + 1] - table[idx]) * fr) / seg
+
+    if "rtd.lut_resolution" in sw:
+        temp = interp(lut_q if "rtd.lut_coef" in sw else block.lut_real)
+    elif "rtd.lut_coef" in sw:
+        temp = exact + interp(lut_q - block.lut_real)
+    else:
+        temp = exact
+    if block.shift > 0:
+        temp = sw.round("rtd.round", temp, block.temp_format, block.rules)
+    return temp
+
+
+def divide_hybrid(block, x: np.ndarray, sf: np.ndarray, sw: Switch) -> np.ndarray:
+    """x / SF; source sf_divide.trunc = quotient truncated toward zero at in.fl + guard_bits, then
+    the rescale (``rounding``, floor by default) into out_format."""
+    v = np.asarray(x, dtype=float) / np.asarray(sf, dtype=float)
+    name = "sf_divide.trunc"
+    if name in sw:
+        scale = 2.0 ** (block.in_format.fl + block.guard_bits)
+        q = np.trunc(np.asarray(x, dtype=float) * scale / sf) / scale
+        y = quantize(q, block.out_format, block.rules).astype(float) * block.out_format.lsb
+        sw.record(name, "out", y - v)
+        return y
+    if name in sw.inject:
+        return v + sw.noise(block.rules.rounding, block.out_format.lsb, v)
+    return v
+
+
+def nco_hybrid(block, n: int, sw: Switch) -> np.ndarray:
+    """2 cos of the NCO phase (the I mixer's factor); sources demod.nco_phase (FTW and LUT address
+    truncation) and demod.nco_amp (LUT amplitude quantisation)."""
+    nco = block.nco
+    if "demod.nco_phase" in sw:
+        k = np.arange(n, dtype=np.int64)
+        phase = (nco.phase0 + k * nco.ftw) & nco.phase_mask
+        addr = phase >> nco.addr_shift
+        angle = 2 * np.pi * (addr + 0.5) / 2**nco.lut_bits
+        if "demod.nco_amp" in sw:
+            return nco.cos_lut[addr].astype(float) * nco.lut_format.lsb
+        return np.cos(angle)
+    angle = nco.reference_phase(n, 0)
+    if "demod.nco_amp" in sw:
+        return quantize(np.cos(angle), nco.lut_format, Rules("half_up", "saturate")).astype(float) * nco.lut_format.lsb
+    return np.cos(angle)
+
+
+def demod_hybrid(block, x: np.ndarray, sw: Switch) -> tuple[np.ndarray, np.ndarray]:
+    """The rate (I) channel: mixer 2 x cos, rounding demod.mix_round, low-pass demod.lpf_*."""
+    mix = 2.0 * np.asarray(x, dtype=float) * nco_hybrid(block, len(x), sw)
+    if block.mix_format.fl > block.data_format.fl:
+        mix = sw.round("demod.mix_round", mix, block.data_format, block.rules)
+    i = iir_hybrid(block.lpf_i, mix, "demod.lpf_coef", "demod.lpf_round", sw)
+    return mix, i
+
+
+def subtract_hybrid(block, x, bias, name: str, sw: Switch) -> np.ndarray:
+    r = np.asarray(x, dtype=float) - np.asarray(bias, dtype=float)
+    if block.diff_format.fl > block.out_format.fl:
+        r = sw.round(name, r, block.out_format, block.rules)
+    return r
+
+
+# --------------------------------------------------------------------------------------------
+# chains: analog stimulus, sources, hybrid run
+# --------------------------------------------------------------------------------------------
+def analog_paper002(chain: Paper002Chain, rng: np.random.Generator, n: int) -> dict:
+    """The chain's nominal stimulus (same rng draws as ``nominal_stimulus``) before the ADCs.
+    Returns analog signals, the ADC codes the chain sees, and the noise-free sense signal."""
+    n = max(n, 8192)
+    t_c = np.linspace(-20.0, 60.0, n)
+    steps = np.array([0.0, 0.3, -0.3, 0.1, 0.0, -0.05, 0.2, 0.0])
+    rate = np.repeat(steps, -(-n // steps.size))[:n]
+    sf = chain.sf.reference(temp=t_c)["y"]
+    bias = chain.bias.reference(temp=t_c)["y"]
+    clean = chain.demod.carrier(sf * (rate + bias), 0.0, n) + chain.demod.carrier(sf * 0.05, np.pi / 2, n)
+    x = clean + rng.normal(0.0, 1e-3, n)
+    phys = chain.rtd.physics
+    frac = phys.adc_fraction(phys.resistance(t_c))
+    sat = Rules("half_up", "saturate")
+    return {"analog": {"vsa": x, "rtd_frac": frac}, "clean": {"vsa": clean, "rtd_frac": frac},
+            "codes": {"vsa": quantize(x, chain.divide.in_format, sat), "rtd_code": chain.rtd.adc_code(t_c)},
+            "t_c": t_c, "rate_fs": rate}
+
+
+def analog_paper001(chain: Paper001Chain, rng: np.random.Generator, n: int) -> dict:
+    t_c = np.repeat(np.arange(-10.0, 51.0, 10.0), -(-n // 7))[:n] + rng.normal(0, 0.05, n)
+    q = chain.bias.reference(temp=t_c)["y"]
+    noise = rng.normal(0.0, 1.0, n)
+    f = chain.f2t.f0_hz + chain.f2t.k_hz_per_c * t_c
+    codes = {"f": chain.f2t.freq_code(t_c),
+             "rate_in": quantize(q + noise, chain.subtract.in_format, Rules("half_up", "saturate"))}
+    return {"analog": {"f": f, "rate_in": q + noise}, "clean": {"f": f, "rate_in": q}, "codes": codes, "t_c": t_c}
+
+
+def sources_paper002(chain: Paper002Chain) -> list[Source]:
+    rtd, sf, div, dem, bias, sub, lpf = (chain.rtd, chain.sf, chain.divide, chain.demod, chain.bias,
+                                        chain.subtract, chain.lpf)
+    s = [Source("adc.sense", ADC, "sf_divide", "vsa", div.in_format.lsb, "half_up", "sense ADC"),
+         Source("adc.rtd", ADC, "rtd", "rtd_frac", rtd.adc_format.lsb, "half_up", "RTD bridge ADC"),
+         Source("rtd.lut_resolution", LUTNCO, "rtd", "temp", note=f"{2**rtd.k} linear segments"),
+         Source("rtd.lut_coef", COEF, "rtd", "temp", note=f"LUT entries in {rtd.lut_format}")]
+    if rtd.shift > 0:
+        s.append(Source("rtd.round", ROUND, "rtd", "temp", rtd.temp_format.lsb, rtd.rules.rounding))
+    s += [Source("piecewise_sf.coef", COEF, "piecewise_sf", "sf"),
+          Source("piecewise_sf.round", ROUND, "piecewise_sf", "sf", sf.out_format.lsb, sf.rules.rounding),
+          Source("sf_divide.trunc", DIVIDER, "sf_divide", "v", div.out_format.lsb, div.rules.rounding,
+                 "quotient toward zero, then the rescale"),
+          Source("demod.nco_phase", LUTNCO, "demod", "mix", note=f"{dem.nco.lut_bits}-bit LUT address"),
+          Source("demod.nco_amp", LUTNCO, "demod", "mix", note=f"LUT values in {dem.nco.lut_format}")]
+    if dem.mix_format.fl > dem.data_format.fl:
+        s.append(Source("demod.mix_round", ROUND, "demod", "mix", dem.data_format.lsb, dem.rules.rounding))
+    s += [Source("demod.lpf_coef", COEF, "demod", "i"),
+          Source("demod.lpf_round", ROUND, "demod", "i", dem.data_format.lsb, dem.lpf_i.rules.rounding),
+          Source("piecewise_bias.coef", COEF, "piecewise_bias", "bias"),
+          Source("piecewise_bias.round", ROUND, "piecewise_bias", "bias", bias.out_format.lsb, bias.rules.rounding)]
+    if sub.diff_format.fl > sub.out_format.fl:
+        s.append(Source("bias_subtract.round", ROUND, "bias_subtract", "r", sub.out_format.lsb, sub.rules.rounding))
+    s += [Source("iir.coef", COEF, "iir", "rate"),
+          Source("iir.round", ROUND, "iir", "rate", lpf.data_format.lsb, lpf.rules.rounding)]
+    return s
+
+
+def sources_paper001(chain: Paper001Chain) -> list[Source]:
+    f2t, bias, sub = chain.f2t, chain.bias, chain.subtract
+    s = [Source("adc.freq", ADC, "freq2temp", "f", f2t.freq_format.lsb, "half_up", "frequency word"),
+         Source("adc.rate", ADC, "bias_subtract001", "rate_in", sub.in_format.lsb, "half_up", "rate input word"),
+         Source("freq2temp.coef", COEF, "freq2temp", "temp", note="f0 and 1/k"),
+         Source("freq2temp.round", ROUND, "freq2temp", "temp", f2t.temp_format.lsb, f2t.rules.rounding),
+         Source("piecewise_bias001.coef", COEF, "piecewise_bias001", "bias"),
+         Source("piecewise_bias001.round", ROUND, "piecewise_bias001", "bias", bias.out_format.lsb,
+                bias.rules.rounding)]
+    if sub.diff_format.fl > sub.out_format.fl:
+        s.append(Source("bias_subtract001.round", ROUND, "bias_subtract001", "rate", sub.out_format.lsb,
+                        sub.rules.rounding))
+    return s
+
+
+def run_paper002(chain: Paper002Chain, analog: dict, sw: Switch) -> dict[str, np.ndarray]:
+    """Every node of the hybrid paper 002 chain."""
+    dem = chain.demod
+    x = analog["vsa"]
+    x = sw.round("adc.sense", x, chain.divide.in_format, Rules("half_up", "saturate"))
+    frac = analog["rtd_frac"]
+    af = chain.rtd.adc_format
+    frac = sw.round("adc.rtd", frac, af, Rules("half_up", "saturate"))
+    temp = rtd_hybrid(chain.rtd, frac, sw)
+    sf = piecewise_hybrid(chain.sf, temp, "piecewise_sf", sw)
+    v = divide_hybrid(chain.divide, x, sf, sw)
+    mix, i = demod_hybrid(dem, v, sw)
+    b = piecewise_hybrid(chain.bias, temp, "piecewise_bias", sw)
+    r = subtract_hybrid(chain.subtract, i, b, "bias_subtract.round", sw)
+    rate = iir_hybrid(chain.lpf, r, "iir.coef", "iir.round", sw)
+    return {"vsa": x, "rtd_frac": frac, "temp": temp, "sf": sf, "v": v, "mix": mix, "i": i, "bias": b, "r": r,
+            "rate": rate}
+
+
+def run_paper001(chain: Paper001Chain, analog: dict, sw: Switch) -> dict[str, np.ndarray]:
+    f2t = chain.f2t
+    f = analog["f"]
+    f = sw.round("adc.freq", f, f2t.freq_format, Rules("half_up", "saturate"))
+    rate_in = analog["rate_in"]
+    fi = chain.subtract.in_format
+    rate_in = sw.round("adc.rate", rate_in, fi, Rules("half_up", "saturate"))
+    if "freq2temp.coef" in sw:
+        temp = (f - f2t.f0 * f2t.freq_format.lsb) * (f2t.kinv * f2t.kinv_format.lsb)
+    else:
+        temp = (f - f2t.f0_hz) / f2t.k_hz_per_c
+    temp = sw.round("freq2temp.round", temp, f2t.temp_format, f2t.rules)
+    b = piecewise_hybrid(chain.bias, temp, "piecewise_bias001", sw)
+    rate = subtract_hybrid(chain.subtract, rate_in, b, "bias_subtract001.round", sw)
+    return {"f": f, "rate_in": rate_in, "temp": temp, "bias": b, "rate": rate}
+
+
+CHAIN_MODELS = {
+    "chain_paper002": (analog_paper002, sources_paper002, run_paper002),
+    "chain_paper001": (analog_paper001, sources_paper001, run_paper001),
+}

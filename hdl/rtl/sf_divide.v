@@ -1,0 +1,134 @@
+// sf_divide: scale-factor compensation y = x / SF (fxdsp.blocks.sf_divide).
+//   N = x << NUM_SHIFT (exact; NUM_SHIFT = sf.fl + guard_bits)
+//   q = sign(N) sign(d) (|N| div |d|)   sequential restoring divider on magnitudes, truncating
+//                                       toward zero, UNROLL quotient bits per cycle
+//   y = fit(round(q >> OUT_SHIFT)) into OUT_W bits: rounding by ROUNDING (floor / half_up /
+//       half_even / toward_zero), fit by OVERFLOW (wrap / saturate)
+// Division by zero: full scale with the sign of x (0 for x = 0), flagged in ovf[1] when x != 0;
+// ovf[0] flags the output fit.
+// Interface: valid/ready. A sample is taken when in_valid && in_ready; in_ready is low while
+// the divider works. Latency: ceil((IN_W + NUM_SHIFT) / UNROLL) + 1 cycles from acceptance to
+// out_valid; a new sample may be accepted in the cycle out_valid is high (one sample per
+// latency cycles).
+`default_nettype none
+
+module sf_divide #(
+    parameter integer IN_W      = 16,
+    parameter integer SF_W      = 18,
+    parameter integer SF_SIGNED = 0,
+    parameter integer OUT_W     = 24,
+    parameter integer NUM_SHIFT = 26,
+    parameter integer OUT_SHIFT = 3,
+    parameter integer ROUNDING  = 0,
+    parameter integer OVERFLOW  = 1,
+    parameter integer UNROLL    = 1
+) (
+    input  wire             clk,
+    input  wire             rst,
+    input  wire             in_valid,
+    output wire             in_ready,
+    input  wire [IN_W-1:0]  x,
+    input  wire [SF_W-1:0]  sf,
+    output reg              out_valid,
+    output reg  [OUT_W-1:0] y,
+    output reg  [1:0]       ovf
+);
+    localparam integer NW = IN_W + NUM_SHIFT;   // |N| <= 2**(IN_W-1+NUM_SHIFT) fits NW bits
+    localparam integer DW = SF_W;               // |d| fits SF_W bits, signed or unsigned
+    localparam integer CW = $clog2(NW + 1);
+
+    reg              busy;
+    reg [CW-1:0]     cnt;       // quotient bits still to compute
+    reg [NW-1:0]     nq;        // numerator bits shifted out at the top, quotient bits in at the bottom
+    reg [DW-1:0]     rem;
+    reg [DW-1:0]     dmag;
+    reg              neg, xneg, xzero, dzero;
+
+    assign in_ready = ~busy;
+
+    // ---- operand magnitudes at acceptance ----
+    wire [IN_W:0]  xext = {x[IN_W-1], x};
+    /* verilator lint_off UNUSEDSIGNAL */  // |x| and |d| fit one bit less than their extension
+    wire [IN_W:0]  xabs = x[IN_W-1] ? -xext : xext;
+    wire [NW-1:0]  nabs = {xabs[IN_W-1:0], {NUM_SHIFT{1'b0}}};
+    wire d_neg = (SF_SIGNED != 0) & sf[SF_W-1];
+    wire [DW:0] dext = {((SF_SIGNED != 0) ? sf[SF_W-1] : 1'b0), sf};
+    wire [DW:0] dabs = d_neg ? -dext : dext;
+    /* verilator lint_on UNUSEDSIGNAL */
+
+    // ---- up to UNROLL restoring steps per cycle ----
+    reg [DW-1:0] r_v;
+    reg [NW-1:0] nq_v;
+    reg [CW-1:0] c_v;
+    reg [DW:0]   sh_v;
+    reg [DW+1:0] t_v;
+    integer u;
+    always @* begin
+        r_v = rem; nq_v = nq; c_v = cnt;
+        sh_v = {(DW+1){1'b0}}; t_v = {(DW+2){1'b0}};
+        for (u = 0; u < UNROLL; u = u + 1) begin
+            if (c_v != {CW{1'b0}}) begin
+                sh_v = {r_v, nq_v[NW-1]};
+                t_v  = {1'b0, sh_v} - {2'b00, dmag};
+                if (!t_v[DW+1]) begin
+                    r_v  = t_v[DW-1:0];
+                    nq_v = {nq_v[NW-2:0], 1'b1};
+                end else begin
+                    r_v  = sh_v[DW-1:0];
+                    nq_v = {nq_v[NW-2:0], 1'b0};
+                end
+                c_v = c_v - {{(CW-1){1'b0}}, 1'b1};
+            end
+        end
+    end
+
+    // ---- sign, rounding and fit of the finished quotient ----
+    wire signed [NW:0] qs = neg ? -$signed({1'b0, nq_v}) : $signed({1'b0, nq_v});
+    wire [OUT_W-1:0] y_c;
+    wire             o_c;
+    fx_convert #(.IN_W(NW+1), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(OUT_W), .OUT_SIGNED(1),
+                 .OVERFLOW(OVERFLOW)) u_out (.x(qs), .y(y_c), .ovf(o_c));
+    wire [OUT_W-1:0] full_pos = {1'b0, {(OUT_W-1){1'b1}}};
+    wire [OUT_W-1:0] full_neg = {1'b1, {(OUT_W-1){1'b0}}};
+
+    always @(posedge clk) begin
+        if (rst) begin
+            busy <= 1'b0; cnt <= {CW{1'b0}};
+            out_valid <= 1'b0; y <= {OUT_W{1'b0}}; ovf <= 2'b00;
+            nq <= {NW{1'b0}}; rem <= {DW{1'b0}}; dmag <= {DW{1'b0}};
+            neg <= 1'b0; xneg <= 1'b0; xzero <= 1'b0; dzero <= 1'b0;
+        end else begin
+            out_valid <= 1'b0;
+            if (!busy) begin
+                if (in_valid) begin
+                    busy  <= 1'b1;
+                    cnt   <= NW[CW-1:0];
+                    nq    <= nabs[NW-1:0];
+                    rem   <= {DW{1'b0}};
+                    dmag  <= dabs[DW-1:0];
+                    neg   <= x[IN_W-1] ^ d_neg;
+                    xneg  <= x[IN_W-1];
+                    xzero <= (x == {IN_W{1'b0}});
+                    dzero <= (sf == {SF_W{1'b0}});
+                end
+            end else begin
+                rem <= r_v;
+                nq  <= nq_v;
+                cnt <= c_v;
+                if (c_v == {CW{1'b0}}) begin
+                    busy      <= 1'b0;
+                    out_valid <= 1'b1;
+                if (dzero) begin
+                        y   <= xzero ? {OUT_W{1'b0}} : (xneg ? full_neg : full_pos);
+                        ovf <= {~xzero, 1'b0};
+                    end else begin
+                        y   <= y_c;
+                        ovf <= {1'b0, o_c};
+                    end
+                end
+            end
+        end
+    end
+endmodule
+
+`default_nettype wire
