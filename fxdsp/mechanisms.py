@@ -10,6 +10,7 @@ irregular times ``time_s`` (non-decreasing seconds since power-on).
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 # cause name -> parameter names, in the contract's order and units
 CAUSES: dict[str, tuple[str, ...]] = {
@@ -86,12 +87,7 @@ def _lag_recursion(out: np.ndarray, u: np.ndarray, u_start: np.ndarray, a: np.nd
     return out
 
 
-try:  # the loop above, compiled: 1M rows in milliseconds instead of a second
-    from numba import njit
-
-    _lag_recursion = njit(cache=True)(_lag_recursion)  # noqa: F811
-except ImportError:  # pragma: no cover - numba is a runtime dependency
-    pass
+_lag_recursion = njit(cache=True)(_lag_recursion)  # compiled: 1M rows in milliseconds, not a second
 
 
 def rate_of_change(time_s, temp_c) -> np.ndarray:
@@ -100,7 +96,15 @@ def rate_of_change(time_s, temp_c) -> np.ndarray:
     u = _as_1d("temp_c", temp_c)
     if u.size < 2:
         return np.zeros_like(u)
-    return np.gradient(u, t)
+    if np.all(np.diff(t) > 0):
+        return np.gradient(u, t)
+    # repeated time stamps (the contract allows them): one derivative per distinct time, taken on
+    # the mean reading at that time, shared by all its rows (no division by a zero interval)
+    tu, inverse = np.unique(t, return_inverse=True)
+    if tu.size < 2:
+        return np.zeros_like(u)
+    uu = np.bincount(inverse, weights=u) / np.bincount(inverse)
+    return np.gradient(uu, tu)[inverse]
 
 
 def ramp_direction(time_s, temp_c, min_rate_c_per_s: float = 2e-4, min_duration_s: float = 600.0,
@@ -114,13 +118,18 @@ def ramp_direction(time_s, temp_c, min_rate_c_per_s: float = 2e-4, min_duration_
     """
     t = _as_1d("time_s", time_s)
     rate = rate_of_change(t, temp_c)
-    sign = np.where(rate > min_rate_c_per_s, 1, np.where(rate < -min_rate_c_per_s, -1, 0))
-    state = np.zeros(t.size, dtype=float)
+    sign = np.where(rate > min_rate_c_per_s, 1, np.where(rate < -min_rate_c_per_s, -1, 0)).astype(np.int64)
+    return _ramp_state(t, sign, float(min_duration_s))
+
+
+@njit(cache=True)
+def _ramp_state(t, sign, min_duration_s):
+    state = np.zeros(t.size)
     current = 0.0
     run_sign, run_start = 0, 0
     for i in range(t.size):
         if sign[i] != run_sign:
-            run_sign, run_start = int(sign[i]), i
+            run_sign, run_start = sign[i], i
         if run_sign != 0 and t[i] - t[run_start] >= min_duration_s:
             current = float(run_sign)
         state[i] = current

@@ -68,7 +68,6 @@ def _mutate(path, value):
     (_mutate(("baseline", "sf_poly"), [1.0, "x"]), r"sf_poly\[1\]"),
     (_mutate(("baseline", "f0_hz"), None), "f0_hz"),
     (_mutate(("baseline", "t_ref_c"), True), "t_ref_c"),
-    (_mutate(("baseline", "k_hz_per_c"), KeyError), "k_hz_per_c"),
     (_mutate(("baseline", "bias_polly"), [1.0]), "bias_polly"),
     (_mutate(("effects", "thermal_lag"), {"tau": 3.0}), "tau"),
     (_mutate(("effects", "thermal_lag"), {"tau_s": "3"}), "tau_s"),
@@ -80,6 +79,20 @@ def _mutate(path, value):
 def test_read_model_rejects_bad_fields_by_name(tmp_path, data, field):
     with pytest.raises(ValueError, match=field):
         read_model(_write(tmp_path, data))
+
+
+def test_partial_model_keeps_the_scenario_fields(tmp_path):
+    """A diagnosis of a log without rate or frequency columns omits sf_poly, f0 and k: replaying it
+    takes those from the scenario and the given fields from the model."""
+    from fxdsp.sim import generate_log
+    from fxdsp.sim.model import scenario_baseline
+    partial = {"baseline": {"bias_poly": [5.0, 0.5]}, "effects": {}}
+    log, truth = generate_log(scenario="paper001", model=read_model(_write(tmp_path, partial)), seed=1,
+                              columns=("rate_dps", "freq_hz"), noise="off", return_truth=True)
+    scen = scenario_baseline("paper001")
+    assert truth["baseline"]["bias_poly"] == [5.0, 0.5]
+    assert truth["baseline"]["k_hz_per_c"] == scen.k_hz_per_c and truth["baseline"]["sf_poly"] == list(scen.sf_poly)
+    assert abs(np.polyfit(log["temp_c"], log["freq_hz"], 1)[0] - scen.k_hz_per_c) < 1e-9
 
 
 def test_cli_writes_a_canonical_log(tmp_path):

@@ -213,7 +213,7 @@ def attribute(design: Design, chain_name: str, port: str = "rate", n: int | None
         errors[s.name] = e
         sr = SourceResult(s, float(np.sqrt(np.mean(e**2))) * scale, float(e.mean()) * scale, float(e.std()) * scale,
                           float(np.mean(e**2) / p_total) if p_total else 0.0, error=e if keep_signals else None)
-        if s.is_rounding:
+        if s.is_rounding and sr.rms > 0:
             draws = np.array([np.mean((run_fn(chain, stim["analog"], Switch(inject=[s.name], rng=rng))[port] - ref)**2)
                               for _ in range(MODEL_DRAWS)])
             sr.model_rms = float(np.sqrt(draws.mean())) * scale
@@ -276,14 +276,15 @@ def _theory(s: Source, sw: Switch, nodes, ref_nodes, sr: SourceResult, unit: str
         keys = sorted(k for k in sw.residues if k[0] == s.name and k[1].startswith("section"))
         residue = sw.residues[keys[-1]] if keys else nodes[s.node] - ref_nodes[s.node]
     local, reasons = check_rounding(residue, s.q, s.rounding, ref_nodes.get(s.node))
-    internal = [k for k in sw.residues if k[0] == s.name and k[1] == "acc"]
+    internal = [k for k in sw.residues if k[0] == s.name and k[1] != "out"]
     local_rms = float(np.sqrt(np.mean((nodes[s.node] - ref_nodes[s.node])**2)))
     out_db = 20 * np.log10(sr.rms / sr.model_rms) if sr.model_rms and sr.rms else 0.0
     sig = ref_nodes.get(s.node)
     r0 = residue - residue.mean()
     sgn = np.sign(sig) if sig is not None and np.size(sig) == np.size(residue) else np.zeros_like(residue)
     sign_corr = float(np.mean(r0 * sgn) / (np.std(r0) * np.std(sgn))) if np.std(r0) and np.std(sgn) else 0.0
-    lf = lf_share(residue, *band) if band else None
+    local_err = nodes[s.node] - ref_nodes[s.node]
+    lf = lf_share(local_err, *band) if band else None
     lf_white = 2 * band[0] / band[1] if band else None
     flagged = bool(reasons)
     if out_db > THEORY_DB + spread:
@@ -293,7 +294,12 @@ def _theory(s: Source, sw: Switch, nodes, ref_nodes, sr: SourceResult, unit: str
             why.append(f"the local error is not white: {lf * 100:.2g} % of its power lies below {band[0]:.0f} Hz "
                        f"(white: {lf_white * 100:.2g} %), e.g. a slow sawtooth from a smooth, noiseless input "
                        f"advancing a near-integer number of steps per sample, which the output low-pass keeps")
-        if abs(sign_corr) > 0.05:
+        into = sw.residues.get((s.name, "coef_into_acc"))
+        if into is not None and np.any(into):
+            why.append("a coefficient is rounded into the accumulator (its format has more fraction bits than "
+                       "acc_format): a constant error per segment, scaled by the temperature -- deterministic, "
+                       "not noise, so the output low-pass keeps it")
+        if abs(sign_corr) > 0.1:
             why.append(f"the local error is correlated with the sign of the signal ({sign_corr:+.2f}): a "
                        f"sign-dependent truncation that the mixer rectifies into DC")
         if not why:

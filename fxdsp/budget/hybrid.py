@@ -213,8 +213,8 @@ def piecewise_hybrid(block, temp: np.ndarray, prefix: str, sw: Switch) -> np.nda
     name = f"{prefix}.round"
     acc_f, rules = block.acc_format, block.rules
     acc = c[:, block.order].copy()
-    if block._top_shift > 0:
-        acc = sw.round(name, acc, acc_f, rules, "acc")
+    if block._top_shift > 0:  # the top coefficient enters the accumulator: a constant rounding per segment
+        acc = sw.round(name, acc, acc_f, rules, "coef_into_acc")
     for k in range(block.order - 1, -1, -1):
         acc = sw.round(name, acc * t, acc_f, rules, "acc")  # the product always drops t's fraction bits
         acc = acc + c[:, k]

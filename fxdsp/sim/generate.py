@@ -18,6 +18,8 @@ temperature change, not to the ADC noise on its reading.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from fxdsp import mechanisms as mech
@@ -107,7 +109,9 @@ def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: 
         raise ValueError(f"seed: must be a non-negative integer, got {seed!r}")
     wanted = _parse_columns(columns)
     replay = as_model(model)
-    baseline: Baseline = replay.baseline if replay else scenario_baseline(scenario)
+    baseline: Baseline = scenario_baseline(scenario)
+    if replay:  # the fields the replay model gives replace the scenario's
+        baseline = dataclasses.replace(baseline, **{k: getattr(replay.baseline, k) for k in replay.given})
     causes = dict(replay.effects) if replay else {}
     causes.update(validate_effects(effects))
     streams = dict(zip(_STREAMS, (np.random.default_rng(s)

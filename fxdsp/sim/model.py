@@ -73,9 +73,14 @@ class Baseline:
 class Model:
     baseline: Baseline
     effects: dict[str, dict[str, float]] = field(default_factory=dict)
+    # baseline fields the replay file gave; the others come from the scenario (a diagnosis omits
+    # what its log cannot determine, e.g. sf_poly without a rate column, f0/k without freq_hz)
+    given: frozenset = frozenset(("bias_poly", "sf_poly", "t_ref_c", "f0_hz", "k_hz_per_c", "rtd_offset_c",
+                                  "rtd_gain"))
 
     def as_dict(self) -> dict:
-        return {"baseline": self.baseline.as_dict(), "effects": {k: dict(v) for k, v in self.effects.items()}}
+        base = {k: v for k, v in self.baseline.as_dict().items() if k in self.given}
+        return {"baseline": base, "effects": {k: dict(v) for k, v in self.effects.items()}}
 
 
 # --- scenario baselines -------------------------------------------------------------------------
@@ -125,8 +130,8 @@ def scenario_baseline(scenario: str) -> Baseline:
 
 # --- validation ----------------------------------------------------------------------------------
 
-_REQUIRED = ("bias_poly", "sf_poly", "t_ref_c", "f0_hz", "k_hz_per_c")
-_OPTIONAL = ("rtd_offset_c", "rtd_gain")
+_REQUIRED = ("bias_poly",)
+_OPTIONAL = ("sf_poly", "t_ref_c", "f0_hz", "k_hz_per_c", "rtd_offset_c", "rtd_gain")
 
 
 def _number(name: str, value) -> float:
@@ -180,13 +185,14 @@ def model_from_dict(data) -> Model:
         if name not in base:
             raise ValueError(f"baseline.{name}: missing field")
     kwargs = {"bias_poly": _poly("baseline.bias_poly", base["bias_poly"]),
-              "sf_poly": _poly("baseline.sf_poly", base["sf_poly"])}
-    for name in ("t_ref_c", "f0_hz", "k_hz_per_c") + _OPTIONAL:
-        if name in base:
+              "sf_poly": _poly("baseline.sf_poly", base["sf_poly"]) if "sf_poly" in base else ()}
+    for name in _OPTIONAL:
+        if name in base and name != "sf_poly":
             kwargs[name] = _number(f"baseline.{name}", base[name])
     if "rtd_gain" in kwargs and kwargs["rtd_gain"] == 0:
         raise ValueError("baseline.rtd_gain: must be non-zero")
-    return Model(Baseline(**kwargs), validate_effects(data.get("effects", {})))
+    return Model(Baseline(**kwargs), validate_effects(data.get("effects", {})),
+                 given=frozenset(k for k in _REQUIRED + _OPTIONAL if k in base))
 
 
 def read_model(path) -> Model:

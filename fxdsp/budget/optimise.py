@@ -1,0 +1,435 @@
+"""Item 4: word-length exploration.
+
+Knobs are config fields: a format's word length (its integer bits are kept, so the fraction length
+moves with it), or an integer width (LUT address bits, guard bits, phase bits). Coupled fields
+(formats that must match to connect the chain) move together.
+
+Algorithm ("min + b", Cantin/Sung style, no grid):
+
+1. each knob's *reachable maximum* (default + ``HEADROOM`` bits, backed off until the design builds);
+   the target is unreachable if the all-maximum design misses it (ValueError);
+2. each knob's *minimum*: binary search of the smallest width meeting the target with every other
+   knob at its maximum;
+3. start from all minima and greedily add one bit to the knob with the best error decrease per bit
+   of cost until the target is met;
+4. greedy removal: try one bit less on every knob, most costly first, keep any step that still meets
+   the target, until no step is accepted.
+
+The error measured is exactly what ``fxdsp budget`` prints for the chain (errors_table's stimulus and
+seed), so the written config meets the target when re-run. The cost proxy counts bits: registers
+and coefficients (word length times instances) and memory (LUT words times word length).
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..chains import build
+from ..config import Config
+from ..errors_table import block_errors
+from ..fixed import Format
+from .units import Target
+
+HEADROOM = 4
+
+
+@dataclass(frozen=True)
+class Knob:
+    name: str
+    fields: tuple[tuple, ...]      # (section path, key) or (section path, key, index)
+    kind: str = "fmt"              # "fmt" (word length) | "int"
+    lo: int | None = None
+    hi: int | None = None
+    instances: str | int = 1       # multiplicity of the cost: an int or the name of a rule in _instances
+
+
+def _get(data: dict, f: tuple):
+    node = data
+    for part in f[0].split("."):
+        node = node[part]
+    v = node[f[1]]
+    return v[f[2]] if len(f) == 3 else v
+
+
+def _set(data: dict, f: tuple, value) -> None:
+    node = data
+    for part in f[0].split("."):
+        node = node[part]
+    if len(f) == 3:
+        node[f[1]][f[2]] = value
+    else:
+        node[f[1]] = value
+
+
+KNOBS = {
+    "chain_paper002": [
+        Knob("rtd.temp_format", (("rtd", "temp_format"),)),
+        Knob("rtd.lut_format", (("rtd", "lut_format"),), instances="rtd_lut"),
+        Knob("rtd.lut_index_bits", (("rtd", "lut_index_bits"),), "int", 2, 10, instances="rtd_index"),
+        Knob("piecewise.sf.c0", (("piecewise.sf", "coef_format", 0),), instances="segments_sf"),
+        Knob("piecewise.sf.c1", (("piecewise.sf", "coef_format", 1),), instances="segments_sf"),
+        Knob("piecewise.sf.acc_format", (("piecewise.sf", "acc_format"),)),
+        Knob("piecewise.sf.out_format", (("piecewise.sf", "out_format"),)),
+        Knob("sf_divide.guard_bits", (("sf_divide", "guard_bits"),), "int", 0, 16),
+        Knob("sf_divide.out_format", (("sf_divide", "out_format"),)),
+        Knob("demod.phase_bits", (("demod", "phase_bits"),), "int", 8, 48),
+        Knob("demod.lut_bits", (("demod", "lut_bits"),), "int", 6, 16, instances="nco_index"),
+        Knob("demod.lut_format", (("demod", "lut_format"),), instances="nco_lut"),
+        Knob("demod.data_format", (("demod", "data_format"), ("demod.lpf", "data_format")), instances=2),
+        Knob("demod.lpf.num_format", (("demod.lpf", "num_format"),), instances=6),
+        Knob("demod.lpf.den_format", (("demod.lpf", "den_format"),), instances=4),
+        Knob("piecewise.bias.c0", (("piecewise.bias", "coef_format", 0),), instances="segments_bias"),
+        Knob("piecewise.bias.c1", (("piecewise.bias", "coef_format", 1),), instances="segments_bias"),
+        Knob("piecewise.bias.acc_format", (("piecewise.bias", "acc_format"),)),
+        Knob("piecewise.bias.out_format", (("piecewise.bias", "out_format"),)),
+        Knob("iir.data_format", (("bias_subtract", "out_format"), ("iir", "data_format"))),
+        Knob("iir.num_format", (("iir", "num_format"),), instances=3),
+        Knob("iir.den_format", (("iir", "den_format"),), instances=2),
+    ],
+    "chain_paper001": [
+        Knob("freq2temp.freq_format", (("freq2temp", "freq_format"),)),
+        Knob("freq2temp.kinv_format", (("freq2temp", "kinv_format"),)),
+        Knob("freq2temp.temp_format", (("freq2temp", "temp_format"),)),
+        Knob("piecewise.bias001.c0", (("piecewise.bias001", "coef_format", 0),)),
+        Knob("piecewise.bias001.c1", (("piecewise.bias001", "coef_format", 1),)),
+        Knob("piecewise.bias001.c2", (("piecewise.bias001", "coef_format", 2),)),
+        Knob("piecewise.bias001.acc_format", (("piecewise.bias001", "acc_format"),)),
+        Knob("piecewise.bias001.out_format", (("piecewise.bias001", "out_format"), ("bias_subtract001", "in_format"),
+                                              ("bias_subtract001", "out_format"))),
+    ],
+}
+
+
+def _instances(knob: Knob, data: dict) -> tuple[int, bool]:
+    """(multiplicity, is_memory) of a knob's bits in the design described by ``data``."""
+    rule = knob.instances
+    if isinstance(rule, int):
+        return rule, False
+    if rule == "rtd_lut":
+        return 2 ** int(_get(data, ("rtd", "lut_index_bits"))) + 1, True
+    if rule == "nco_lut":
+        return 2 * 2 ** int(_get(data, ("demod", "lut_bits"))), True
+    if rule.startswith("segments_"):
+        sec = "piecewise." + rule.split("_", 1)[1]
+        return len(_get(data, (sec, "coefficients"))), True
+    return 0, False  # index widths: their cost is carried by the table they address
+
+
+def cost(data: dict, chain: str) -> dict[str, int]:
+    """Bits of the chain's knobs: registers/coefficients, memory (LUT and coefficient ROM words)."""
+    reg = mem = 0
+    for knob in KNOBS[chain]:
+        v = _get(data, knob.fields[0])
+        wl = Format.parse(v).wl if knob.kind == "fmt" else int(v)
+        n, is_mem = _instances(knob, data)
+        if knob.kind == "int" and knob.instances == 1:
+            n = 1
+        if is_mem:
+            mem += n * wl
+        else:
+            reg += n * wl
+    return {"register_bits": reg, "memory_bits": mem, "total_bits": reg + mem}
+
+
+def knob_value(data: dict, knob: Knob) -> int:
+    v = _get(data, knob.fields[0])
+    return Format.parse(v).wl if knob.kind == "fmt" else int(v)
+
+
+def set_knob(data: dict, knob: Knob, value: int, defaults: dict) -> None:
+    for f in knob.fields:
+        if knob.kind == "fmt":
+            d = Format.parse(defaults[f])
+            delta = value - d.wl
+            _set(data, f, str(Format(d.signed, value, d.fl + delta)))
+        else:
+            _set(data, f, int(value))
+
+
+def _field_defaults(data: dict, chain: str) -> dict:
+    return {f: _get(data, f) for k in KNOBS[chain] for f in k.fields}
+
+
+@dataclass
+class Evaluator:
+    base: dict
+    chain: str
+    port: str
+    metric: str = "rms"
+    samples: int | None = None
+    evaluations: int = 0
+    cache: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        self.defaults = _field_defaults(self.base, self.chain)
+
+    def data(self, values: dict[str, int]) -> dict:
+        d = copy.deepcopy(self.base)
+        for knob in KNOBS[self.chain]:
+            if knob.name in values:
+                set_knob(d, knob, values[knob.name], self.defaults)
+        return d
+
+    def error(self, values: dict[str, int], seed_offset: int = 1000) -> float:
+        """The chain port's error in physical units (inf if the config does not build)."""
+        key = (tuple(sorted(values.items())), seed_offset)
+        if key in self.cache:
+            return self.cache[key]
+        self.evaluations += 1
+        try:
+            design = build(Config(self.data(values), source="<optimise>"))
+        except (ValueError, TypeError, AssertionError):
+            self.cache[key] = math.inf
+            return math.inf
+        stats = {s.port: s for s in block_errors(design, self.chain, self.samples, seed_offset=seed_offset)}
+        s = stats[self.port]
+        err = (s.rms if self.metric == "rms" else s.max_abs) * s.scale
+        if s.overflows:  # saturating on the nominal stimulus: not an acceptable word length
+            err = math.inf
+        self.cache[key] = float(err)
+        return float(err)
+
+
+@dataclass
+class OptResult:
+    target: Target
+    metric: str
+    default_values: dict[str, int]
+    values: dict[str, int]
+    default_error: float
+    error: float
+    independent_error: float
+    default_cost: dict[str, int]
+    cost: dict[str, int]
+    evaluations: int
+    data: dict
+    sweeps: dict[str, list[tuple[int, float]]] = field(default_factory=dict)
+    log: list[str] = field(default_factory=list)
+
+
+def optimise(config: Config, target: Target, metric: str = "rms", margin: float = 0.02, samples: int | None = None,
+             progress=None) -> OptResult:
+    chain = target.chain
+    if chain not in KNOBS:
+        raise ValueError(f"--chain: no word-length knobs for {chain}")
+    ev = Evaluator(copy.deepcopy(config.data), chain, target.port, metric, samples)
+    knobs = KNOBS[chain]
+    goal = target.value * (1.0 - margin)
+    default = {k.name: knob_value(ev.base, k) for k in knobs}
+    e_default = ev.error(default)
+    log = [f"default: {target.port} {metric} error {e_default:.4g} {target.unit}; goal {goal:.4g} {target.unit} "
+           f"(target {target.value:.4g} less a {margin * 100:.0f} % margin)"]
+    bar = progress(total=len(knobs) * 3, desc="word-length search", unit="knob") if progress else None
+
+    def lo_of(k: Knob) -> int:
+        if k.kind == "int":
+            return k.lo
+        return max(2, Format.parse(ev.defaults[k.fields[0]]).wl - 24)
+
+    # 1. reachable maxima
+    hi = {}
+    for k in knobs:
+        top = min(k.hi, default[k.name] + HEADROOM + (8 if k.kind == "int" else 0)) if k.kind == "int" \
+            else default[k.name] + HEADROOM
+        v = top
+        while v > default[k.name] and math.isinf(ev.error({**default, k.name: v})):
+            v -= 1
+        hi[k.name] = v
+        bar and bar.update(1)
+    values_hi = dict(hi)
+    while math.isinf(ev.error(values_hi)) and any(values_hi[n] > default[n] for n in values_hi):
+        values_hi = {n: max(default[n], v - 1) for n, v in values_hi.items()}
+    e_hi = ev.error(values_hi)
+    log.append(f"every knob at its maximum: {e_hi:.4g} {target.unit}")
+    if not e_hi <= goal:
+        if bar:
+            bar.close()
+        raise ValueError(f"--target: {target.text} is unreachable on {chain}.{target.port}: even with every word "
+                         f"length at its maximum the {metric} error is {e_hi:.4g} {target.unit}")
+
+    # 2. per-knob minimum with the others at their maximum (binary search, error ~ monotone in width)
+    minimum, sweeps = {}, {}
+    for k in knobs:
+        lo, up = lo_of(k), values_hi[k.name]
+        if ev.error({**values_hi, k.name: lo}) <= goal:
+            up = lo
+        while up - lo > 1:
+            mid = (lo + up) // 2
+            if ev.error({**values_hi, k.name: mid}) <= goal:
+                up = mid
+            else:
+                lo = mid
+        minimum[k.name] = up
+        bar and bar.update(1)
+
+    # 3. greedy addition from the minima
+    values = dict(minimum)
+    e = ev.error(values)
+    c_now = cost(ev.data(values), chain)["total_bits"]
+    steps = 0
+    while not e <= goal:
+        best = None
+        for k in knobs:
+            if values[k.name] >= values_hi[k.name]:
+                continue
+            trial = {**values, k.name: values[k.name] + 1}
+            et = ev.error(trial)
+            if math.isinf(et):
+                continue
+            dc = max(cost(ev.data(trial), chain)["total_bits"] - c_now, 1)
+            gain = ((e if math.isfinite(e) else 1e300) ** 2 - et**2) / dc
+            if best is None or gain > best[0]:
+                best = (gain, k.name, et)
+        if best is None:
+            values, e = dict(values_hi), e_hi
+            log.append("greedy addition stalled: fell back to the maxima")
+            break
+        values[best[1]] += 1
+        e = best[2]
+        c_now = cost(ev.data(values), chain)["total_bits"]
+        steps += 1
+        log.append(f"+1 bit {best[1]} -> {values[best[1]]}: error {e:.4g}")
+    for _ in knobs:
+        bar and bar.update(1)
+
+    # 4. greedy removal, most costly knob first, until no step is accepted
+    changed = True
+    while changed:
+        changed = False
+        order = sorted(knobs, key=lambda k: -(_instances(k, ev.data(values))[0] or 1))
+        for k in order:
+            if values[k.name] <= lo_of(k):
+                continue
+            trial = {**values, k.name: values[k.name] - 1}
+            et = ev.error(trial)
+            if et <= goal:
+                values, e, changed = trial, et, True
+                log.append(f"-1 bit {k.name} -> {values[k.name]}: error {e:.4g}")
+    if bar:
+        bar.close()
+    data = ev.data(values)
+    independent = ev.error(values, seed_offset=4242)
+    return OptResult(target, metric, default, values, e_default, e, independent, cost(ev.base, chain), cost(data, chain),
+                     ev.evaluations, data, sweeps, log)
+
+
+def sweep(config: Config, chain: str, port: str, metric: str = "rms", span: int = 8, step: int = 2,
+          knobs: list[str] | None = None, progress=None) -> dict[str, list[tuple[int, float]]]:
+    """Error vs word length, one knob at a time around the default (others at default)."""
+    ev = Evaluator(copy.deepcopy(config.data), chain, port, metric)
+    default = {k.name: knob_value(ev.base, k) for k in KNOBS[chain]}
+    chosen = [k for k in KNOBS[chain] if knobs is None or k.name in knobs]
+    out = {}
+    it = progress(chosen, desc="error vs word length", unit="knob") if progress else chosen
+    for k in it:
+        d = default[k.name]
+        widths = sorted({w for w in range(d - span, d + 3, step)} | {d})
+        if k.kind == "int":
+            widths = [w for w in widths if k.lo <= w <= k.hi]
+        pts = []
+        for w in widths:
+            if w < 1:
+                continue
+            err = ev.error({**default, k.name: w})
+            if math.isfinite(err):
+                pts.append((w, err))
+        out[k.name] = pts
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# TOML output and the synthesis report
+# --------------------------------------------------------------------------------------------
+_BARE = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            raise ValueError(f"cannot write {v} to TOML")
+        return repr(v)
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise TypeError(f"cannot write {type(v).__name__} to TOML")
+
+
+def to_toml(data: dict, header: str = "") -> str:
+    lines = [f"# {ln}" if ln else "#" for ln in header.splitlines()]
+
+    def table(node: dict, path: list[str]):
+        scalars = {k: v for k, v in node.items() if not isinstance(v, dict)}
+        subs = {k: v for k, v in node.items() if isinstance(v, dict)}
+        if path and (scalars or not subs):
+            lines.append("")
+            lines.append("[" + ".".join(k if _BARE.match(k) else json.dumps(k) for k in path) + "]")
+        for k, v in scalars.items():
+            lines.append(f"{k if _BARE.match(k) else json.dumps(k)} = {_toml_value(v)}")
+        for k, v in subs.items():
+            table(v, path + [k])
+
+    table(data, [])
+    return "\n".join(lines) + "\n"
+
+
+def hw_report(path: Path) -> dict[str, dict[str, float]] | None:
+    """Per-block LUT / MAC16 counts from a Markdown table in hdl/HW_REPORT.md (None if absent or
+    without such columns). Rows are keyed by their first cell."""
+    if not path.is_file():
+        return None
+    rows, cols = {}, None
+    for line in path.read_text(encoding="utf-8", errors="replace").splitlines():
+        if not line.strip().startswith("|"):
+            cols = None if not line.strip() else cols
+            continue
+        cells = [c.strip().strip("`*") for c in line.strip().strip("|").split("|")]
+        if cols is None:
+            low = [c.lower() for c in cells]
+            lut = next((i for i, c in enumerate(low) if "lut" in c and "lut_" not in c), None)
+            mac = next((i for i, c in enumerate(low) if "mac16" in c or "dsp" in c), None)
+            cols = (lut, mac) if lut is not None else None
+            continue
+        if set("".join(cells)) <= set("-: "):
+            continue
+        lut, mac = cols
+
+        def num(i):
+            if i is None or i >= len(cells):
+                return 0.0
+            m = re.search(r"-?\d+(\.\d+)?", cells[i])
+            return float(m.group(0)) if m else 0.0
+        rows[cells[0]] = {"lut": num(lut), "mac16": num(mac)}
+    return rows or None
+
+
+CHAIN_BLOCKS = {"chain_paper002": ("rtd", "piecewise", "sf_divide", "demod", "bias_subtract", "iir"),
+                "chain_paper001": ("freq2temp", "piecewise", "bias_subtract")}
+
+
+def synth_estimate(rows: dict | None, chain: str, bits_default: int, bits_new: int) -> dict | None:
+    """Synthesised LUT/MAC16 of the chain's blocks (default widths) and an estimate for the new
+    widths scaled by the register-bit ratio (MAC16 counts unchanged while every product still fits
+    16x16; a re-synthesis is the real answer)."""
+    if not rows:
+        return None
+    keys = [k for k in rows if any(b in k.lower() for b in CHAIN_BLOCKS[chain]) and "001" in k.lower()
+            == (chain == "chain_paper001") or k.lower().startswith(chain)]
+    if not keys:
+        keys = [k for k in rows if any(b in k.lower() for b in CHAIN_BLOCKS[chain])]
+    lut = sum(rows[k]["lut"] for k in keys)
+    mac = sum(rows[k]["mac16"] for k in keys)
+    ratio = bits_new / bits_default if bits_default else 1.0
+    return {"blocks": keys, "lut_default": lut, "mac16_default": mac, "lut_estimate": lut * ratio,
+            "mac16_estimate": mac}
