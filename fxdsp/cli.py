@@ -21,6 +21,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "bench": ("fxdsp.commands.bench", "throughput of the bit-exact models against fxpmath and apytypes"),
     "simulate": ("fxdsp.sim.cli", "simulate a chamber run and write a canonical log"),
     "calibrate": ("fxdsp.sim.calibrate_cli", "fit the compensation of a paper from a chamber log"),
+    "repro": ("fxdsp.repro.cli", "reproduce the papers' experiments on the simulated devices, bit-exact"),
     "diagnose": ("fxdsp.diagnose.cli", "explain where a measured log disagrees with the simulation"),
     "budget": ("fxdsp.budget.cli", "float vs fixed error budget in physical units; word-length exploration"),
     "hdl-gen": ("fxdsp.hdl.gen_cli", "write the Verilog parameter headers and ROM files from the config"),

@@ -16,7 +16,9 @@ Algorithm ("min + b", Cantin/Sung style, no grid):
    the target, until no step is accepted.
 
 The error measured is exactly what ``fxdsp budget`` prints for the chain (errors_table's stimulus and
-seed), so the written config meets the target when re-run. The cost proxy counts bits: registers
+seed) and, for paper 002, the larger of that and the quasi-static chamber-point error (see
+:mod:`fxdsp.budget.static`, also printed by ``fxdsp budget``), so the written config meets the
+target when re-run. The cost proxy counts bits: registers
 and coefficients (word length times instances) and memory (LUT words times word length).
 """
 
@@ -35,6 +37,7 @@ from ..chains import build
 from ..config import Config
 from ..errors_table import block_errors
 from ..fixed import Format
+from .static import static_error
 from .units import Target
 
 HEADROOM = 4
@@ -101,8 +104,8 @@ KNOBS = {
         Knob("piecewise.bias001.c1", (("piecewise.bias001", "coef_format", 1),)),
         Knob("piecewise.bias001.c2", (("piecewise.bias001", "coef_format", 2),)),
         Knob("piecewise.bias001.acc_format", (("piecewise.bias001", "acc_format"),)),
-        Knob("piecewise.bias001.out_format", (("piecewise.bias001", "out_format"), ("bias_subtract001", "in_format"),
-                                              ("bias_subtract001", "out_format"))),
+        Knob("piecewise.bias001.out_format", (("piecewise.bias001", "out_format"),)),
+        Knob("bias_subtract001.out_format", (("bias_subtract001", "out_format"),)),
     ],
 }
 
@@ -193,6 +196,11 @@ class Evaluator:
         err = (s.rms if self.metric == "rms" else s.max_abs) * s.scale
         if s.overflows:  # saturating on the nominal stimulus: not an acceptable word length
             err = math.inf
+        if self.chain == "chain_paper002":  # and the quasi-static chamber points (see static.py)
+            st = static_error(design, self.chain, self.port)
+            err = max(err, (st["rms"] if self.metric == "rms" else st["max_abs"]) * s.scale)
+            if st["overflows"]:
+                err = math.inf
         self.cache[key] = float(err)
         return float(err)
 
@@ -215,7 +223,10 @@ class OptResult:
 
 
 def optimise(config: Config, target: Target, metric: str = "rms", margin: float = 0.02, samples: int | None = None,
-             progress=None) -> OptResult:
+             progress=None, cost_model: str = "total_bits") -> OptResult:
+    """``cost_model``: "total_bits" (registers, coefficients and memory) or "register_bits" (memory free)."""
+    if cost_model not in ("total_bits", "register_bits"):
+        raise ValueError(f"--cost: unknown cost model {cost_model!r}; expected total_bits or register_bits")
     chain = target.chain
     if chain not in KNOBS:
         raise ValueError(f"--chain: no word-length knobs for {chain}")
@@ -226,7 +237,7 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
     e_default = ev.error(default)
     log = [f"default: {target.port} {metric} error {e_default:.4g} {target.unit}; goal {goal:.4g} {target.unit} "
            f"(target {target.value:.4g} less a {margin * 100:.0f} % margin)"]
-    bar = progress(total=len(knobs) * 3, desc="word-length search", unit="knob") if progress else None
+    bar = None
 
     def lo_of(k: Knob) -> int:
         if k.kind == "int":
@@ -242,18 +253,16 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
         while v > default[k.name] and math.isinf(ev.error({**default, k.name: v})):
             v -= 1
         hi[k.name] = v
-        bar and bar.update(1)
     values_hi = dict(hi)
     while math.isinf(ev.error(values_hi)) and any(values_hi[n] > default[n] for n in values_hi):
         values_hi = {n: max(default[n], v - 1) for n, v in values_hi.items()}
     e_hi = ev.error(values_hi)
     log.append(f"every knob at its maximum: {e_hi:.4g} {target.unit}")
     if not e_hi <= goal:
-        if bar:
-            bar.close()
         raise ValueError(f"--target: {target.text} is unreachable on {chain}.{target.port}: even with every word "
                          f"length at its maximum the {metric} error is {e_hi:.4g} {target.unit}")
 
+    bar = progress(total=len(knobs) * 2, desc="word-length search", unit="knob") if progress else None
     # 2. per-knob minimum with the others at their maximum (binary search, error ~ monotone in width)
     minimum, sweeps = {}, {}
     for k in knobs:
@@ -272,7 +281,7 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
     # 3. greedy addition from the minima
     values = dict(minimum)
     e = ev.error(values)
-    c_now = cost(ev.data(values), chain)["total_bits"]
+    c_now = cost(ev.data(values), chain)[cost_model]
     steps = 0
     while not e <= goal:
         best = None
@@ -283,7 +292,7 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
             et = ev.error(trial)
             if math.isinf(et):
                 continue
-            dc = max(cost(ev.data(trial), chain)["total_bits"] - c_now, 1)
+            dc = max(cost(ev.data(trial), chain)[cost_model] - c_now, 1)
             gain = ((e if math.isfinite(e) else 1e300) ** 2 - et**2) / dc
             if best is None or gain > best[0]:
                 best = (gain, k.name, et)
@@ -293,7 +302,7 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
             break
         values[best[1]] += 1
         e = best[2]
-        c_now = cost(ev.data(values), chain)["total_bits"]
+        c_now = cost(ev.data(values), chain)[cost_model]
         steps += 1
         log.append(f"+1 bit {best[1]} -> {values[best[1]]}: error {e:.4g}")
     for _ in knobs:
@@ -303,7 +312,9 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
     changed = True
     while changed:
         changed = False
-        order = sorted(knobs, key=lambda k: -(_instances(k, ev.data(values))[0] or 1))
+        order = sorted(knobs, key=lambda k: -((_instances(k, ev.data(values))[0] or 1)
+                                              if cost_model == "total_bits" or not _instances(k, ev.data(values))[1]
+                                              else 0))
         for k in order:
             if values[k.name] <= lo_of(k):
                 continue
@@ -414,20 +425,33 @@ def hw_report(path: Path) -> dict[str, dict[str, float]] | None:
     return rows or None
 
 
-CHAIN_BLOCKS = {"chain_paper002": ("rtd", "piecewise", "sf_divide", "demod", "bias_subtract", "iir"),
-                "chain_paper001": ("freq2temp", "piecewise", "bias_subtract")}
+CHAIN_BLOCKS = {"chain_paper002": ("rtd", "piecewise_sf", "piecewise.sf", "sf_divide", "demod", "piecewise_bias",
+                                   "piecewise.bias", "bias_subtract", "iir"),
+                "chain_paper001": ("freq2temp", "piecewise_bias001", "piecewise.bias001", "bias_subtract001")}
+
+
+def default_hw_report_path() -> Path:
+    """hdl/HW_REPORT.md of the repository this package lives in (else of the working directory)."""
+    repo = Path(__file__).resolve().parents[2] / "hdl" / "HW_REPORT.md"
+    return repo if repo.is_file() else Path("hdl") / "HW_REPORT.md"
 
 
 def synth_estimate(rows: dict | None, chain: str, bits_default: int, bits_new: int) -> dict | None:
-    """Synthesised LUT/MAC16 of the chain's blocks (default widths) and an estimate for the new
-    widths scaled by the register-bit ratio (MAC16 counts unchanged while every product still fits
-    16x16; a re-synthesis is the real answer)."""
+    """Synthesised LUT/MAC16 of the chain's blocks at the default widths, and an estimate for the new
+    widths scaled by the register-bit ratio (MAC16 count kept: a re-synthesis is the real answer)."""
     if not rows:
         return None
-    keys = [k for k in rows if any(b in k.lower() for b in CHAIN_BLOCKS[chain]) and "001" in k.lower()
-            == (chain == "chain_paper001") or k.lower().startswith(chain)]
+    names = CHAIN_BLOCKS[chain]
+    keys = []
+    for k in rows:
+        low = k.lower()
+        if not any(low == b or low.startswith(b) for b in names):
+            continue
+        if chain == "chain_paper002" and "001" in low:
+            continue
+        keys.append(k)
     if not keys:
-        keys = [k for k in rows if any(b in k.lower() for b in CHAIN_BLOCKS[chain])]
+        return None
     lut = sum(rows[k]["lut"] for k in keys)
     mac = sum(rows[k]["mac16"] for k in keys)
     ratio = bits_new / bits_default if bits_default else 1.0

@@ -13,7 +13,7 @@ import numpy as np
 
 
 def rate_table_points(log: dict, output=None, temp_col: str = "temp_c", log_s: float = 3600.0,
-                      temp=None) -> dict[str, np.ndarray]:
+                      temp=None, sort: bool = True) -> dict[str, np.ndarray]:
     """``{"temp_c", "sf", "bias"}`` per rate-table sequence of ``log`` (output units).
 
     ``output`` replaces ``log["output"]`` (e.g. a compensated rate); ``temp`` replaces the
@@ -44,7 +44,7 @@ def rate_table_points(log: dict, output=None, temp_col: str = "temp_c", log_s: f
         biases.append(float(np.mean(out[zero])))
     if len(temps) < 2:
         raise ValueError("log: fewer than two rate-table sequences with a zero-rate stretch before them")
-    order = np.argsort(temps)
+    order = np.argsort(temps) if sort else np.arange(len(temps))
     return {"temp_c": np.asarray(temps)[order], "sf": np.asarray(sfs)[order], "bias": np.asarray(biases)[order]}
 
 

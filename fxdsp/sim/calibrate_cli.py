@@ -1,10 +1,16 @@
-"""``fxdsp calibrate``: fit a paper's compensation from a canonical chamber log (float, no fixed point).
+"""``fxdsp calibrate``: fit a paper's compensation from a canonical chamber log.
 
     fxdsp simulate --scenario paper002 --out run.csv
     fxdsp calibrate --paper 002 run.csv --json cal.json
+    fxdsp calibrate --paper 002 run.csv --config-out cal.toml --apply run2.csv
 
 paper 002: piecewise-linear SF(T) and bias(T) on the RTD; paper 001: f(T) and quadratic bias on the
 resonator's temperature; paper 000: cubic K0(t), K1(t) from the four-position tumble.
+
+``--config-out F`` quantises the fit into a TOML config (a copy of the default with the calibrated
+tables, see :mod:`fxdsp.repro.calconfig`; paper 001's thermometer is checked bit-exactly against the
+calibration reference first). ``--apply LOG2`` runs the bit-exact compensation with that config on a
+second run's log and adds its figures to the output under ``"apply"``.
 """
 
 from __future__ import annotations
@@ -25,19 +31,45 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("log", metavar="LOG.csv", help="canonical log (e.g. from fxdsp simulate)")
     parser.add_argument("--paper", required=True, metavar="ID", help=f"which paper's fit: {', '.join(FITS)}")
     parser.add_argument("--json", metavar="OUT.json", help="write the coefficients as JSON (default: stdout)")
+    parser.add_argument("--config-out", metavar="F.toml", help="write the calibrated, quantised TOML config")
+    parser.add_argument("--apply", metavar="LOG2.csv",
+                        help="compensate a second run's log bit-exactly with the calibrated config")
+    parser.add_argument("--order", type=int, default=1, metavar="N",
+                        help="paper 002: polynomial order per segment for the config (1 = the paper's, 2)")
+
+
+def _write(path: str, text: str, option: str) -> None:
+    try:
+        Path(path).write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise ValueError(f"{option}: cannot write {path}: {exc.strerror or exc}") from None
 
 
 def run(args) -> int:
     if args.paper not in FITS:
         raise ValueError(f"--paper: unknown paper {args.paper!r}; expected one of {', '.join(FITS)}")
+    if args.order not in (1, 2, 3):
+        raise ValueError(f"--order: must be 1, 2 or 3, got {args.order}")
     log, _ = read_log(args.log)
     result = FITS[args.paper](log)
+    if args.config_out or args.apply:
+        from fxdsp.repro.apply import apply_config, calibrated_config
+
+        text, cal = calibrated_config(args.paper, log, args.order)
+        result["config"] = {"path": args.config_out, "order": args.order}
+        if "thermometer_check" in cal:
+            result["config"]["thermometer_check"] = cal["thermometer_check"]
+        if args.config_out:
+            _write(args.config_out, text, "--config-out")
+        if args.apply:
+            log2, _ = read_log(args.apply)
+            result["apply"] = {"log": args.apply, **apply_config(args.paper, text, log2)}
     text = json.dumps(result, indent=2) + "\n"
     if args.json:
-        try:
-            Path(args.json).write_text(text, encoding="utf-8")
-        except OSError as exc:
-            raise ValueError(f"--json: cannot write {args.json}: {exc.strerror or exc}") from None
+        _write(args.json, text, "--json")
+        if "apply" in result:
+            for key, value in result["apply"].items():
+                sys.stdout.write(f"{key}: {value}\n")
     else:
         sys.stdout.write(text)
     return 0

@@ -100,38 +100,49 @@ module demod #(
     wire signed [WW-1:0] x0 = ~xi[WW-1] ? xi : (~yi[WW-1] ? yi : -yi);
     wire signed [WW-1:0] y0 = ~xi[WW-1] ? yi : (~yi[WW-1] ? -xi : xi);
     wire signed [AW-1:0] z0 = ~xi[WW-1] ? {AW{1'b0}} : (~yi[WW-1] ? hpi : -hpi);
+    // the arctan table as one flat vector (a procedural loop then reads it without an array)
+    wire [ANGLE_W*ITERATIONS-1:0] atan_flat;
     genvar k;
     generate
-        for (k = 0; k < ITERATIONS; k = k + 1) begin : g_cordic
-            wire [ANGLE_W-1:0] at_w = atan[k];
-            wire signed [AW-1:0] at = {{2{at_w[ANGLE_W-1]}}, at_w};
-            wire signed [WW-1:0] xk, yk;
-            wire signed [AW-1:0] zk;
-            if (k == 0) begin : g_first
-                assign xk = x0; assign yk = y0; assign zk = z0;
-            end else begin : g_next
-                assign xk = g_cordic[k-1].xo; assign yk = g_cordic[k-1].yo; assign zk = g_cordic[k-1].zo;
-            end
-            wire signed [WW-1:0] dx = yk >>> k;
-            wire signed [WW-1:0] dy = xk >>> k;
-            wire signed [WW-1:0] xo = ~yk[WW-1] ? xk + dx : xk - dx;
-            /* verilator lint_off UNUSEDSIGNAL */  // the last stage's y is not needed
-            wire signed [WW-1:0] yo = ~yk[WW-1] ? yk - dy : yk + dy;
-            /* verilator lint_on UNUSEDSIGNAL */
-            wire signed [AW-1:0] zo = ~yk[WW-1] ? zk + at : zk - at;
+        for (k = 0; k < ITERATIONS; k = k + 1) begin : g_atan
+            assign atan_flat[ANGLE_W*k +: ANGLE_W] = atan[k];
         end
     endgenerate
 
+    // the ITERATIONS shift-and-add steps, unrolled by the loop (one evaluation per new I/Q)
+    reg signed [WW-1:0]  cx, cy, tx;
+    reg signed [AW-1:0]  cz, at;
+    reg [ANGLE_W-1:0]    atv;
+    integer j;
+    always @* begin
+        cx = x0; cy = y0; cz = z0;
+        tx = {WW{1'b0}}; at = {AW{1'b0}}; atv = {ANGLE_W{1'b0}};
+        for (j = 0; j < ITERATIONS; j = j + 1) begin
+            atv = atan_flat[ANGLE_W*j +: ANGLE_W];
+            at  = {{2{atv[ANGLE_W-1]}}, atv};
+            if (!cy[WW-1]) begin
+                tx = cx + (cy >>> j);
+                cy = cy - (cx >>> j);
+                cz = cz + at;
+            end else begin
+                tx = cx - (cy >>> j);
+                cy = cy + (cx >>> j);
+                cz = cz - at;
+            end
+            cx = tx;
+        end
+    end
+
     localparam [INV_K_W-1:0] INV_K_C = INV_K[INV_K_W-1:0];
     wire signed [INV_K_W-1:0] invk = INV_K_C;
-    wire signed [WW-1:0] xfin = g_cordic[ITERATIONS-1].xo;
+    wire signed [WW-1:0] xfin = cx;
     wire signed [PW-1:0] ap = xfin * invk;
     wire [DATA_W-1:0] amp_c;
     wire ovf_amp;
     fx_convert #(.IN_W(PW), .SHIFT(AMP_SHIFT), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
                  .OVERFLOW(OVERFLOW)) u_amp (.x(ap), .y(amp_c), .ovf(ovf_amp));
     /* verilator lint_off UNUSEDSIGNAL */
-    wire signed [AW-1:0] zfin = g_cordic[ITERATIONS-1].zo;
+    wire signed [AW-1:0] zfin = cz;
     /* verilator lint_on UNUSEDSIGNAL */
 
     always @(posedge clk) begin

@@ -1,0 +1,75 @@
+"""PNG plots (matplotlib Agg) and the Markdown report of ``fxdsp budget --report DIR``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import scipy.signal as sps  # noqa: E402
+
+from .attribution import Attribution  # noqa: E402
+from .hybrid import CATEGORIES  # noqa: E402
+
+
+def plot_spectra(att: Attribution, fs: float, path: Path) -> None:
+    fig, ax = plt.subplots(figsize=(9, 5))
+    nper = min(8192, att.total_error.size)
+    for s in att.sources:
+        if s.error is None or not np.any(s.error):
+            continue
+        f, p = sps.welch(s.error * att.scale, fs=fs, nperseg=nper)
+        ax.loglog(f[1:], p[1:], lw=0.8, label=s.source.name)
+    f, p = sps.welch(att.total_error * att.scale, fs=fs, nperseg=nper)
+    ax.loglog(f[1:], p[1:], "k", lw=1.6, label="total")
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel(f"PSD ({att.unit}^2/Hz)")
+    ax.set_title(f"{att.chain}.{att.port}: output error spectrum per source (one source quantised at a time)")
+    ax.legend(fontsize=6, ncol=2)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_attribution(att: Attribution, path: Path) -> None:
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 5), gridspec_kw={"width_ratios": [3, 1]})
+    names = [s.source.name for s in att.sources]
+    ms = [s.rms**2 for s in att.sources]
+    a1.barh(names, ms, color=[f"C{CATEGORIES.index(s.source.category)}" for s in att.sources])
+    a1.set_xscale("log")
+    a1.set_xlabel(f"mean square at the output ({att.unit}^2)")
+    a1.axvline(att.total_rms**2, color="k", ls="--", label=f"total {att.total_rms:.3g} {att.unit} rms")
+    a1.legend(fontsize=7)
+    a1.tick_params(axis="y", labelsize=7)
+    cats = att.by_category()
+    a2.bar(range(len(cats)), list(cats.values()), color=[f"C{i}" for i in range(len(cats))])
+    a2.set_xticks(range(len(cats)), [c.replace(" ", "\n") for c in cats], fontsize=6)
+    a2.set_yscale("log")
+    a2.set_title("by category", fontsize=8)
+    fig.suptitle(f"{att.chain}.{att.port}: attribution (power sum {att.power_sum_db:+.2f} dB vs total)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_sweeps(sweeps: dict, unit: str, target: float | None, path: Path, title: str) -> None:
+    fig, ax = plt.subplots(figsize=(9, 5.5))
+    for i, (name, pts) in enumerate(sweeps.items()):
+        if not pts:
+            continue
+        w, e = zip(*pts)
+        ax.semilogy(w, e, marker="o", ms=3, lw=0.8, label=name, color=f"C{i % 10}", ls="-" if i < 10 else "--")
+    if target:
+        ax.axhline(target, color="k", ls=":", label="target")
+    ax.set_xlabel("word length of the knob (bits; integer bits kept)")
+    ax.set_ylabel(f"rms error ({unit})")
+    ax.set_title(title)
+    ax.legend(fontsize=6, ncol=2)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

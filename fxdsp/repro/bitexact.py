@@ -1,0 +1,156 @@
+"""Bit-exact compensation of a chamber log with the blocks of a (calibrated) config.
+
+A chamber log is sampled every ~10 s and its ``output`` is already demodulated, so at log rate the
+paper 002 path is::
+
+    temp_c -> rtd.adc_code -> rtd (LUT) -> T code -> piecewise.sf -> sf_divide -> bias_subtract
+                                                  -> piecewise.bias ------------^
+
+i.e. the demodulator and the low-pass filters of the 96 kHz chain are skipped. That is legitimate
+because the SF division commutes with demodulation when SF(T) varies slowly: demod(x / SF) =
+demod(x) / SF as long as SF is constant over the low-pass filter's memory (tens of ms against a
+thermal time constant of minutes), and the final low-pass filter has unity DC gain. What is *not*
+modelled at log rate is the fixed-point error of the mixer and filters themselves (checked at
+96 kHz by the block tests and the paper 003 reproduction).
+
+Lag-aware variant (``compensate_lagged``): the T code goes through the ``lag`` block (a first-order
+die-temperature estimate, config table ``[lag]``) before the coefficient engines.
+
+Paper 001: ``freq_hz`` -> ``freq2temp`` -> ``piecewise.bias001`` -> ``bias_subtract001`` (the
+``chain_paper001`` of the design). Paper 000: a = (Df - K0(t)) / K1(t) with ``piecewise.k0``,
+``piecewise.k1``, a ``BiasSubtract`` and an ``SfDivide`` whose formats are the module constants
+below (the default config has no table for them).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fxdsp.blocks.bias_subtract import BiasSubtract
+from fxdsp.blocks.freq2temp import Freq2Temp
+from fxdsp.blocks.sf_divide import SfDivide
+from fxdsp.chains import build
+from fxdsp.config import Config
+from fxdsp.fixed import Format, OverflowLog, Rules, quantize, to_float
+from fxdsp.repro.calconfig import FS_MV
+
+ROUND = Rules("half_up", "saturate")
+# paper 000: difference frequency Df in Hz (LSB 1.5e-5 Hz = 0.3 ug at 52 Hz/g)
+DF_FORMAT = Format.parse("s32.16")
+ACCEL_FORMAT = Format.parse("s32.24")  # a in g, LSB 6e-8 g
+ACCEL_GUARD_BITS = 10
+# paper 002's frequency thermometer: the 8 kHz drive frequency word
+DRIVE_FREQ_FORMAT = Format.parse("s32.17")
+KINV_FORMAT = Format.parse("s24.18")
+
+
+def _finite(name: str, values) -> np.ndarray:
+    arr = np.asarray(values, float)
+    if arr.ndim != 1 or not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name}: must be a 1-D array of finite numbers")
+    return arr
+
+
+class Compensator002:
+    """Paper 002 at log rate: output (mV) and RTD temperature (C) -> rate (deg/s), bit-exact."""
+
+    def __init__(self, config: Config | str | None):
+        d = build(config)
+        self.design = d
+        self.rtd = d.blocks["rtd"]
+        self.sf, self.divide = d.blocks["piecewise_sf"], d.blocks["sf_divide"]
+        self.bias, self.subtract = d.blocks["piecewise_bias"], d.blocks["bias_subtract"]
+        if self.subtract.in_format != self.divide.out_format:
+            raise ValueError(f"bias_subtract: its input {self.subtract.in_format} must equal sf_divide.out_format "
+                             f"{self.divide.out_format} for the log-rate path")
+        self.lag = d.blocks.get("lag")
+        self.rate_fs_dps = d.rate_full_scale_dps  # 1 FS of the quotient = this many deg/s
+
+    def temperature_code(self, temp_c, log: OverflowLog | None = None) -> np.ndarray:
+        """The RTD's ADC code of the logged temperature, converted by the rtd block (LUT)."""
+        log = OverflowLog() if log is None else log
+        code = self.rtd.adc_code(_finite("temp_c", temp_c), log)
+        return self.rtd._run(log, code=code)["temp"]
+
+    def temperature_code_direct(self, temp_c) -> np.ndarray:
+        """A temperature estimate (C) quantised straight into the temperature format."""
+        return quantize(_finite("temp_c", temp_c), self.rtd.temp_format, ROUND)
+
+    def run(self, output_mv, temp_code, log: OverflowLog | None = None) -> dict[str, np.ndarray]:
+        log = OverflowLog() if log is None else log
+        x = quantize(_finite("output", output_mv) / FS_MV, self.divide.in_format, ROUND, log, "input")
+        sf = self.sf._run(log, temp=temp_code)["y"]
+        v = self.divide._run(log, x=x, sf=sf)["y"]
+        b = self.bias._run(log, temp=temp_code)["y"]
+        r = self.subtract._run(log, x=v, bias=b)["y"]
+        return {"rate_dps": to_float(r, self.subtract.out_format) * self.rate_fs_dps,
+                "temp_c": to_float(temp_code, self.rtd.temp_format), "overflows": log}
+
+    def compensate(self, log_data: dict, temp_c=None) -> dict[str, np.ndarray]:
+        """Compensate a log; ``temp_c`` (C) replaces the RTD path by a direct temperature estimate."""
+        ovf = OverflowLog()
+        code = (self.temperature_code(log_data["temp_c"], ovf) if temp_c is None
+                else self.temperature_code_direct(temp_c))
+        return self.run(log_data["output"], code, ovf)
+
+    def compensate_lagged(self, log_data: dict) -> dict[str, np.ndarray]:
+        """RTD code -> ``lag`` block (die-temperature estimate, config's [lag]) -> compensation."""
+        if self.lag is None:
+            raise ValueError("config: has no [lag] table for the lag-aware temperature estimate")
+        ovf = OverflowLog()
+        code = self.temperature_code(log_data["temp_c"], ovf)
+        self.lag.reset()
+        te = self.lag._run(ovf, temp=code)["te"]
+        return self.run(log_data["output"], te, ovf)
+
+    def frequency_thermometer(self, f0_hz: float, k_hz_per_c: float) -> Freq2Temp:
+        """A freq2temp block on the drive frequency (paper 001's idea applied to paper 002's gyro)."""
+        return Freq2Temp(DRIVE_FREQ_FORMAT, self.rtd.temp_format, KINV_FORMAT, f0_hz, k_hz_per_c,
+                         Rules("half_up", "saturate"))
+
+    def compensate_by_frequency(self, log_data: dict, f0_hz: float, k_hz_per_c: float) -> dict:
+        f2t = self.frequency_thermometer(f0_hz, k_hz_per_c)
+        ovf = OverflowLog()
+        f = quantize(_finite("freq_hz", log_data["freq_hz"]), DRIVE_FREQ_FORMAT, ROUND, ovf, "freq")
+        code = f2t._run(ovf, f=f)["temp"]
+        return self.run(log_data["output"], code, ovf)
+
+
+class Compensator001:
+    """Paper 001: freq_hz and output (deg/h) -> compensated rate (deg/h), through chain_paper001."""
+
+    def __init__(self, config: Config | str | None):
+        self.design = build(config)
+        self.chain = self.design.chains["chain_paper001"]
+
+    def compensate(self, log_data: dict) -> dict[str, np.ndarray]:
+        ovf = OverflowLog()
+        f = quantize(_finite("freq_hz", log_data["freq_hz"]), self.chain.f2t.freq_format, ROUND, ovf, "freq")
+        r = quantize(_finite("output", log_data["output"]), self.chain.subtract.in_format, ROUND, ovf, "rate")
+        res = self.chain.run(ovf, f=f, rate_in=r)
+        out = self.chain.real_outputs(res)
+        return {"rate_deg_h": out["rate"], "temp_c": out["temp"], "overflows": ovf}
+
+
+class Compensator000:
+    """Paper 000: a = (Df - K0(t)) / K1(t), t = T - 25 C, in g."""
+
+    def __init__(self, config: Config | str | None):
+        d = build(config)
+        self.design = d
+        self.k0, self.k1 = d.blocks["piecewise_k0"], d.blocks["piecewise_k1"]
+        self.temp_format = self.k0.temp_format
+        self.subtract = BiasSubtract(DF_FORMAT, self.k0.out_format, DF_FORMAT, ROUND, name="qvba_subtract")
+        self.divide = SfDivide(DF_FORMAT, self.k1.out_format, ACCEL_FORMAT, ACCEL_GUARD_BITS,
+                               Rules("floor", "saturate"))
+
+    def compensate(self, temp_c, df_hz) -> dict[str, np.ndarray]:
+        ovf = OverflowLog()
+        t = quantize(_finite("temp_c", temp_c), self.temp_format, ROUND, ovf, "temp")
+        df = quantize(_finite("output", df_hz), DF_FORMAT, ROUND, ovf, "df")
+        k0 = self.k0._run(ovf, temp=t)["y"]
+        k1 = self.k1._run(ovf, temp=t)["y"]
+        diff = self.subtract._run(ovf, x=df, bias=k0)["y"]
+        a = self.divide._run(ovf, x=diff, sf=k1)["y"]
+        return {"accel_g": to_float(a, ACCEL_FORMAT), "k0_hz": to_float(k0, self.k0.out_format),
+                "k1_hz_per_g": to_float(k1, self.k1.out_format), "overflows": ovf}

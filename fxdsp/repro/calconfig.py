@@ -1,0 +1,202 @@
+"""Calibration -> TOML config: quantise a paper's fitted compensation into a copy of the default config.
+
+The calibrated config is the default text with only the calibrated keys rewritten in place (comments
+and every other table untouched), so ``fxdsp.chains.build`` reads it like any config and a diff
+against the default shows exactly what calibration changed.
+
+Units of the log -> fixed-point mapping (documented choices):
+
+* paper 002: the log's ``output`` is the demodulated rate channel in mV. It enters the SF divider as a
+  fraction of a sense full scale of ``FS_MV = 4096 mV`` (+-2048 mV of rate channel = +-205 deg/s at
+  10 mV/(deg/s)), in ``LOG_IN_FORMAT = s24.23``: a 10-s log sample is an average, a 24-bit word
+  (LSB 4.9e-4 mV = 0.18 deg/h), not a raw 16-bit ADC sample. SF(T) is normalised to the calibrated
+  SF at 25 C (``sf_nominal``), so the quotient stays the size of the input; the bias table is in FS
+  units after the division: bias_FS = bias_dps * sf_nominal / FS_MV.
+* paper 001: temperatures from ``freq2temp`` (f0, k calibrated), bias in deg/h (the log's unit).
+* paper 000: K0 in Hz, K1 in Hz/g, cubic in t = T - 25 C.
+
+Coefficient formats are chosen per power so the largest calibrated coefficient fits with one bit of
+headroom in a ``COEF_WL``-bit word (:func:`fit_format`); output and accumulator formats likewise from
+the range the table takes over -40..85 C; the accumulator is 43 bits (the widest whose Horner
+product with the 19-bit t = T - t0 fits 63 bits), because the top coefficient is converted into it
+and every product rounded to it.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+
+import numpy as np
+
+from fxdsp.chains import build
+from fxdsp.config import Config, default_config_text
+from fxdsp.fixed import Format
+
+FS_MV = 4096.0
+LOG_IN_FORMAT = "s24.23"
+COEF_WL = 24
+T_RANGE_C = (-40.0, 85.0)
+
+
+def fit_format(values, wl: int = COEF_WL, headroom_bits: int = 1, signed: bool = True,
+               name: str = "values") -> str:
+    """The finest ``s<wl>.<fl>`` that holds max|values| with ``headroom_bits`` to spare."""
+    v = np.abs(np.asarray(values, float))
+    if v.size == 0 or not np.all(np.isfinite(v)):
+        raise ValueError(f"{name}: need finite values to choose a format")
+    peak = float(v.max())
+    if peak == 0.0:
+        int_bits = 0
+    else:
+        int_bits = max(math.floor(math.log2(peak)) + 1, -(wl - 2))
+    fl = wl - int(signed) - int_bits - headroom_bits
+    if fl > 250:
+        fl = 250
+    return f"{'s' if signed else 'u'}{wl}.{fl}"
+
+
+def _toml_value(value) -> str:
+    if isinstance(value, str):
+        return '"' + value + '"'
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    f = float(value)
+    if not math.isfinite(f):
+        raise ValueError(f"config value: {f} cannot be written to TOML")
+    return repr(f)
+
+
+def set_table_keys(text: str, table: str, updates: dict) -> str:
+    """Rewrite ``key = value`` lines of ``[table]`` in TOML text (keys must already exist there)."""
+    lines = text.splitlines(keepends=True)
+    current = None
+    done = set()
+    header = re.compile(r"^\s*\[([^\]]+)\]")
+    for i, line in enumerate(lines):
+        m = header.match(line)
+        if m:
+            current = m.group(1).strip()
+            continue
+        if current != table:
+            continue
+        km = re.match(r"^(\s*)([A-Za-z0-9_]+)(\s*=\s*)", line)
+        if km and km.group(2) in updates:
+            key = km.group(2)
+            comment = ""
+            cm = re.search(r"\s+#.*$", line.rstrip("\n"))
+            value_part = line[km.end():].rstrip("\n")
+            # keep a trailing comment when the old value had one (values never contain '#')
+            if cm and "#" in value_part:
+                comment = "   " + value_part[value_part.index("#"):]
+            lines[i] = f"{km.group(1)}{key}{km.group(3)}{_toml_value(updates[key])}{comment}\n"
+            done.add(key)
+    missing = set(updates) - done
+    if missing:
+        raise ValueError(f"[{table}].{sorted(missing)[0]}: not in the base config, cannot rewrite it")
+    return "".join(lines)
+
+
+def _range(coefficients, breakpoints, t0_c: float) -> float:
+    """max |p(T)| of a piecewise polynomial over T_RANGE_C."""
+    temps = np.linspace(*T_RANGE_C, 501)
+    seg = np.searchsorted(np.asarray(breakpoints, float), temps, side="right")
+    coef = np.asarray(coefficients, float)
+    vals = np.array([np.polynomial.polynomial.polyval(t - t0_c, coef[s]) for t, s in zip(temps, seg)])
+    return float(np.abs(vals).max())
+
+
+def piecewise_table(coefficients, breakpoints=(), t0_c: float = 0.0, out_signed: bool = True,
+                    out_wl: int = 24, acc_wl: int = 43, name: str = "piecewise") -> dict:
+    """Keys of a ``[piecewise.*]`` table with formats chosen for these coefficients."""
+    coef = np.atleast_2d(np.asarray(coefficients, float))
+    if coef.shape[1] < 2 or coef.shape[1] > 4:
+        raise ValueError(f"{name}.coefficients: need 2..4 coefficients per segment, got {coef.shape[1]}")
+    if not np.all(np.isfinite(coef)):
+        raise ValueError(f"{name}.coefficients: must be finite")
+    peak = _range(coef, breakpoints, t0_c)
+    out_fmt = fit_format([peak], out_wl, 1, out_signed, f"{name}.out")
+    # the accumulator is as wide as the Horner product allows: the top coefficient is converted into
+    # it and every product rounded to it, so its LSB times |t|^order bounds the evaluation error
+    acc_fmt = fit_format([peak, *np.abs(coef[:, 0])], acc_wl, 2, True, f"{name}.acc")
+    # Horner: acc * t must fit 63 bits with t = T - t0 in s19.9 (the temperature code plus a bit)
+    a = Format.parse(acc_fmt)
+    if a.wl + 19 > 63:
+        raise ValueError(f"{name}: accumulator {acc_fmt} too wide for the Horner product")
+    return {"breakpoints_c": [float(b) for b in breakpoints],
+            "coefficients": [[float(c) for c in row] for row in coef],
+            "t0_c": float(t0_c),
+            "coef_format": [fit_format(coef[:, k], COEF_WL, 1, True, f"{name}.c{k}") for k in range(coef.shape[1])],
+            "acc_format": acc_fmt, "out_format": out_fmt}
+
+
+# --- paper 002 --------------------------------------------------------------------------------------
+
+def lag_table(tau_s: float, rate_hz: float) -> dict:
+    """The ``[lag]`` table: the die-temperature estimate ahead of the coefficient engines."""
+    if not (math.isfinite(tau_s) and tau_s > 0):
+        raise ValueError(f"lag.tau_s: must be a finite number > 0, got {tau_s!r}")
+    if not (math.isfinite(rate_hz) and rate_hz > 0):
+        raise ValueError(f"lag.rate_hz: must be a finite number > 0, got {rate_hz!r}")
+    return {"lag": {"tau_s": float(tau_s), "rate_hz": float(rate_hz)}}
+
+
+def paper002_tables(cal: dict, order: int = 1) -> dict:
+    """SF and bias tables of a paper 002 calibration (:func:`fxdsp.repro.calibrate.calibrate002`).
+
+    ``cal`` holds ``sf`` and ``bias`` as ``{"breakpoints_c": inner, "coefficients": [[c0, c1, ...]]}``
+    in absolute T (C), SF in mV/(deg/s), bias in deg/s, and ``sf_nominal`` (SF at 25 C)."""
+    sfn = float(cal["sf_nominal"])
+    if not sfn > 0:
+        raise ValueError(f"sf_nominal: must be > 0, got {sfn!r}")
+    sf_coef = np.asarray(cal["sf"]["coefficients"], float) / sfn
+    bias_coef = np.asarray(cal["bias"]["coefficients"], float) * sfn / FS_MV
+    sf = piecewise_table(sf_coef, cal["sf"]["breakpoints_c"], 0.0, out_signed=False, out_wl=18,
+                         name="piecewise.sf")
+    # SF normalised to ~1 in u24.22 (0.24 ppm; the default's u18.16 is a 15 ppm step, i.e.
+    # 0.003 deg/s at 200 deg/s); the divider's numerator is 24 + 22 + 10 guard bits = 56 bits
+    sf["out_format"] = "u24.22"
+    bias = piecewise_table(bias_coef, cal["bias"]["breakpoints_c"], 0.0, out_wl=24, name="piecewise.bias")
+    bias["out_format"] = "s24.22"  # must equal the subtractor's bias input (chain wiring)
+    # 1 FS of the quotient = FS_MV / sf_nominal deg/s: the config's own rate scale
+    return {"piecewise.sf": sf, "piecewise.bias": bias, "sf_divide": {"in_format": LOG_IN_FORMAT},
+            "system": {"rate_full_scale_dps": FS_MV / sfn}}
+
+
+def paper001_tables(cal: dict) -> dict:
+    q = [float(c) for c in cal["bias_poly"]]
+    if len(q) == 2:
+        q.append(0.0)
+    bias = piecewise_table([q], [], 0.0, out_wl=24, name="piecewise.bias001")
+    bias["out_format"] = "s24.6"  # the subtractor's in/out format: deg/h, LSB 0.0156 deg/h
+    return {"freq2temp": {"f0_hz": float(cal["f0_hz"]), "k_hz_per_c": float(cal["k_hz_per_c"])},
+            "piecewise.bias001": bias}
+
+
+def paper000_tables(cal: dict) -> dict:
+    t0 = float(cal.get("t_ref_c", 25.0))
+    return {"piecewise.k0": piecewise_table([cal["k0_poly"]], [], t0, name="piecewise.k0"),
+            "piecewise.k1": piecewise_table([cal["k1_poly"]], [], t0, name="piecewise.k1")}
+
+
+def config_text(tables: dict, base_text: str | None = None, provenance: str = "") -> str:
+    """A copy of ``base_text`` (default config) with ``tables`` ({table: {key: value}}) rewritten.
+    Raises ValueError when the result does not build."""
+    text = default_config_text() if base_text is None else base_text
+    for table, keys in tables.items():
+        text = set_table_keys(text, table, keys)
+    if provenance:
+        text = "".join(f"# {line}\n" for line in provenance.splitlines()) + text
+    config_from_text(text)  # must build
+    return text
+
+
+def config_from_text(text: str, source: str = "<calibrated>") -> Config:
+    cfg = Config(tomllib.loads(text), source=source)
+    build(cfg)
+    return Config(tomllib.loads(text), source=source)  # build() marks keys read: hand back a fresh one

@@ -1,0 +1,63 @@
+"""``fxdsp repro``: run the papers' reproductions and optionally write the report.
+
+    fxdsp repro                          # all four, summary table on stdout
+    fxdsp repro --paper 003 --sweep-points 15
+    fxdsp repro --paper all --report docs   # docs/REPRODUCTIONS.md + docs/img/*.png
+
+Register with ``configure(subparser)`` and ``run(args) -> int`` (also runnable as
+``python -m fxdsp.repro.cli``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+CHOICES = ("002", "001", "000", "003", "all")
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--paper", default="all", metavar="ID",
+                        help=f"which reproduction: {', '.join(CHOICES)} (default all)")
+    parser.add_argument("--report", metavar="DIR", help="write DIR/REPRODUCTIONS.md and DIR/img/*.png")
+    parser.add_argument("--sweep-points", type=int, default=41, metavar="N",
+                        help="paper 003 sweep frequencies (default 41)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+
+
+def run(args) -> int:
+    from fxdsp.repro.report import PAPERS, run_all, summary_rows, write_report
+
+    if args.paper not in CHOICES:
+        raise ValueError(f"--paper: unknown paper {args.paper!r}; expected one of {', '.join(CHOICES)}")
+    if args.sweep_points < 3:
+        raise ValueError(f"--sweep-points: need at least 3, got {args.sweep_points}")
+    papers = PAPERS if args.paper == "all" else (args.paper,)
+    res = run_all(papers, n_freqs=args.sweep_points, progress=not args.quiet)
+    rows = summary_rows(res)
+    w = [max(len(r[i]) for r in rows) for i in range(4)]
+    head = ("paper", "figure", "paper's", "reproduced")
+    w = [max(a, len(b)) for a, b in zip(w, head)]
+    for r in (head, *rows):
+        sys.stdout.write("  ".join(c.ljust(n) for c, n in zip(r, w)).rstrip() + "\n")
+    if args.report:
+        cmd = "fxdsp repro --paper all --report " + args.report if args.paper == "all" else \
+            f"fxdsp repro --paper {args.paper} --report {args.report}"
+        path = write_report(res, args.report, command=cmd)
+        sys.stdout.write(f"report: {path}\n")
+    return 0
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="fxdsp repro", description=__doc__.splitlines()[0])
+    configure(parser)
+    args = parser.parse_args(argv)
+    try:
+        return run(args)
+    except ValueError as exc:
+        sys.stderr.write(f"fxdsp repro: error: {exc}\n")
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,137 @@
+"""Paper 002 reproduced: piecewise SF and bias compensation on an integrated vs an external RTD.
+
+Simulated device and test (chosen here, documented in docs/REPRODUCTIONS.md):
+
+* the paper002 scenario's gyro (fxdsp.sim: bias ~366 deg/h/C, SF ~317 ppm/C, non-linear bias);
+* heat path ``ThermalChain(tau_package_s=2700, tau_die_s=60)``: the gyro sits in a fixture on the
+  rate table inside the chamber, whose thermal mass makes the package follow the chamber air with a
+  45 min time constant; the die follows the package in 1 min. The integrated RTD is on the die
+  (``rtd_node="die"``); the external sensor is outside the package, at the air/fixture node
+  (``"air"``); the package node is reported as the intermediate case;
+* calibration run: the paper's programme (seed 1): 1.5 h dwell, 1 h zero-rate log, rate table;
+* verification run: the same programme with every hold shortened to a third (seed 2,
+  ``duration_scale=1/3``: 30 min dwell, 20 min log, 40 s rate steps), i.e. a quick check run in
+  which the package has not settled - which is where an external sensor shows the thermal path;
+* figures: at each rate-table point SF (slope over the zero-rate stretch and the steps) and bias
+  (zero-rate mean); temperature coefficient = (max - min) / (T_max - T_min), divided by the mean for
+  SF, T being the chamber reference (``ref_temp_c``) for every method, so all share one denominator (:func:`fxdsp.repro.points.tempco`); uncompensated figures from the calibration run with bias
+  referred through the SF at 25 C, compensated ones from the bit-exact path on the verification run.
+
+This project's alternatives on the same device: quadratic segments (order 2) through three
+calibration points each; the drive frequency as thermometer (``freq2temp`` on the 8 kHz drive
+frequency: the die's own temperature, no thermal path); a lag-aware estimate that runs the external
+reading through the ``lag`` block (first-order die-temperature estimate, bit-exact) whose time
+constant is identified on the calibration run (against the drive-frequency thermometer). A
+continuous ramp run (the ``ramp`` scenario, 0.5 C/min) shows what the plateau figures cannot: errors
+between calibration temperatures and during ramps.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fxdsp.blocks.lag import Lag
+from fxdsp.fixed import Rules
+from fxdsp.mechanisms import first_order_lag
+from fxdsp.repro.bitexact import Compensator002
+from fxdsp.repro.calconfig import config_from_text, config_text, lag_table, paper002_tables
+from fxdsp.repro.calibrate import calibrate002, frequency_thermometer
+from fxdsp.repro.points import rate_table_points, tempco
+from fxdsp.sim import ThermalChain, generate_log
+
+PAPER = {"sf_before_ppm": 316.66, "bias_before": 366.22, "sf_after_ppm": 69.67, "bias_after": 115.25,
+         "sf_external_ppm": 154.97, "bias_external": 172.67}
+TAU_PACKAGE_S = 2700.0
+TAU_DIE_S = 60.0
+VERIFY_SCALE = 1.0 / 3.0
+NODES = {"integrated": "die", "package": "package", "external": "air"}
+
+
+def figures(log: dict, rate_dps=None, sf25=None) -> dict:
+    """SF tempco (ppm/C) and bias tempco (deg/h/C) of a log (raw output in mV, or a rate in deg/s)."""
+    pts = rate_table_points(log, output=rate_dps, temp=log["ref_temp_c"])
+    if rate_dps is None:
+        sf25 = float(np.interp(25.0, pts["temp_c"], pts["sf"])) if sf25 is None else sf25
+        bias_deg_h = pts["bias"] / sf25 * 3600.0
+    else:
+        bias_deg_h = pts["bias"] * 3600.0
+    return {"sf_ppm": tempco(pts["temp_c"], pts["sf"], relative=True) * 1e6,
+            "bias": tempco(pts["temp_c"], bias_deg_h), "points": pts, "bias_deg_h": bias_deg_h}
+
+
+def identify_lag(time_s, temp_ext, temp_die, taus=None) -> float:
+    """Time constant that best maps the external reading onto the die temperature (grid search)."""
+    taus = np.geomspace(60.0, 4 * 3600.0, 60) if taus is None else np.asarray(taus, float)
+    errs = [np.mean((first_order_lag(time_s, temp_ext, tau) - temp_die) ** 2) for tau in taus]
+    return float(taus[int(np.argmin(errs))])
+
+
+def _ramp_error(rate_dps, time_s, window_s: float = 100.0) -> float:
+    """Worst |zero-rate output| in deg/h over windows of ``window_s`` (the true rate is zero)."""
+    dt = float(np.median(np.diff(time_s)))
+    n = max(int(round(window_s / dt)), 1)
+    m = rate_dps.size // n * n
+    return float(np.abs(rate_dps[:m].reshape(-1, n).mean(axis=1)).max() * 3600.0)
+
+
+def reproduce(seed_cal: int = 1, seed_verify: int = 2, verify_scale: float = VERIFY_SCALE,
+              ramp: bool = True) -> dict:
+    res = {"paper": PAPER, "params": {"tau_package_s": TAU_PACKAGE_S, "tau_die_s": TAU_DIE_S,
+                                      "verify_scale": verify_scale}, "methods": {}}
+    rows = res["methods"]
+    for label, node in NODES.items():
+        chain = ThermalChain(tau_package_s=TAU_PACKAGE_S, tau_die_s=TAU_DIE_S, rtd_node=node)
+        cal_log = generate_log("paper002", effects={}, seed=seed_cal, thermal=chain)
+        ver_log = generate_log("paper002", effects={}, seed=seed_verify, thermal=chain, duration_scale=verify_scale)
+        ramp_log = generate_log("ramp", effects={}, seed=seed_verify, thermal=chain) if ramp else None
+        if label == "integrated":
+            res["before"] = figures(cal_log)
+            res["before_verify"] = figures(ver_log)
+            res["cal_log"], res["verify_log"] = cal_log, ver_log
+        variants = {f"{label}, linear x4 (paper)": (1, None), f"{label}, quadratic x2": (2, None)}
+        if label == "external":
+            # frequency thermometer: the die's own drive frequency (calibrated against the sensor)
+            variants["frequency thermometer, linear x4"] = (1, "freq")
+            variants["frequency thermometer, quadratic x2"] = (2, "freq")
+            variants["external + identified lag, linear x4"] = (1, "lag")
+        for name, (order, thermo) in variants.items():
+            rows[name] = _method(cal_log, ver_log, ramp_log, order, thermo)
+        if label == "external":
+            res["external_logs"] = (cal_log, ver_log)
+    return res
+
+
+def _method(cal_log, ver_log, ramp_log, order: int, thermo) -> dict:
+    extra = {}
+    if thermo == "freq":
+        ft = frequency_thermometer(cal_log)
+        t_cal = (cal_log["freq_hz"] - ft["f0_hz"]) / ft["k_hz_per_c"]
+        cal = calibrate002(cal_log, order, temp=t_cal)
+        comp = Compensator002(config_from_text(config_text(paper002_tables(cal))))
+        run = lambda lg: comp.compensate_by_frequency(lg, ft["f0_hz"], ft["k_hz_per_c"])  # noqa: E731
+        extra = ft
+    elif thermo == "lag":
+        ft = frequency_thermometer(cal_log)
+        t_f = (cal_log["freq_hz"] - ft["f0_hz"]) / ft["k_hz_per_c"]  # identification only
+        tau = identify_lag(cal_log["time_s"], cal_log["temp_c"], t_f)
+        rate_hz = 1.0 / float(np.median(np.diff(cal_log["time_s"])))
+        # calibrate on what the lag block will compute (its float reference), compensate bit-exactly
+        lag = Lag(Compensator002(None).rtd.temp_format, tau, rate_hz, 16, 24, Rules("half_up", "saturate"))
+        cal = calibrate002(cal_log, order, temp=lag.reference(temp=cal_log["temp_c"])["te"])
+        comp = Compensator002(config_from_text(config_text({**paper002_tables(cal), **lag_table(tau, rate_hz)})))
+        run = comp.compensate_lagged
+        extra = {"tau_s": tau}
+    else:
+        cal = calibrate002(cal_log, order)
+        comp = Compensator002(config_from_text(config_text(paper002_tables(cal))))
+        run = comp.compensate
+    out = run(ver_log)
+    fig = figures(ver_log, rate_dps=out["rate_dps"])
+    row = {"sf_ppm": fig["sf_ppm"], "bias": fig["bias"], "points": fig["points"], "order": order,
+           "overflows": out["overflows"].total, **extra}
+    if ramp_log is not None:
+        r = run(ramp_log)["rate_dps"]
+        row["ramp_max_deg_h"] = _ramp_error(r, ramp_log["time_s"])
+        row["ramp_rate_dps"] = r
+        row["ramp_log"] = ramp_log
+    return row

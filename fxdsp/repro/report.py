@@ -1,0 +1,463 @@
+"""Run the reproductions and write docs/REPRODUCTIONS.md with its PNG plots (matplotlib, Agg)."""
+
+from __future__ import annotations
+
+import platform
+import time
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from tqdm import tqdm  # noqa: E402
+
+from fxdsp.repro import paper000, paper001, paper002, paper003  # noqa: E402
+
+PAPERS = ("002", "001", "000", "003")
+
+
+def run_all(papers=PAPERS, n_freqs: int = 41, progress: bool = True) -> dict:
+    for p in papers:
+        if p not in PAPERS:
+            raise ValueError(f"paper: unknown paper {p!r}; expected one of {', '.join(PAPERS)} or all")
+    out = {}
+    for p in tqdm(list(papers), desc="reproductions", disable=not progress):
+        t0 = time.perf_counter()
+        if p == "002":
+            out[p] = paper002.reproduce()
+        elif p == "001":
+            out[p] = paper001.reproduce()
+        elif p == "000":
+            out[p] = paper000.reproduce()
+            out[p]["records"] = paper000.reproduce_records()
+        else:
+            out[p] = paper003.reproduce(n_freqs=n_freqs, progress=progress)
+        out[p]["seconds"] = time.perf_counter() - t0
+    return out
+
+
+def summary_rows(res: dict) -> list[tuple[str, str, str, str]]:
+    """(paper, figure, paper's value, reproduced value [; improved]) for the stdout table."""
+    rows = []
+    if "002" in res:
+        r = res["002"]
+        m = r["methods"]
+        b = r["before"]
+        rows += [("002", "SF tempco before (ppm/C)", "316.66", f"{b['sf_ppm']:.2f}"),
+                 ("002", "bias tempco before (deg/h/C)", "366.22", f"{b['bias']:.2f}"),
+                 ("002", "SF after, integrated RTD", "69.67", f"{m['integrated, linear x4 (paper)']['sf_ppm']:.2f}"),
+                 ("002", "bias after, integrated RTD", "115.25", f"{m['integrated, linear x4 (paper)']['bias']:.2f}"),
+                 ("002", "SF after, external sensor", "154.97", f"{m['external, linear x4 (paper)']['sf_ppm']:.2f}"),
+                 ("002", "bias after, external sensor", "172.67", f"{m['external, linear x4 (paper)']['bias']:.2f}"),
+                 ("002", "SF/bias after, frequency thermometer", "-",
+                  f"{m['frequency thermometer, linear x4']['sf_ppm']:.2f} / {m['frequency thermometer, linear x4']['bias']:.2f}")]
+    if "001" in res:
+        r = res["001"]
+        c = r["cal"]
+        rows += [("001", "k (Hz/C)", "0.0536", f"{c['k_hz_per_c']:.5f}"),
+                 ("001", "f0 (Hz)", "3837.4 (3837.471)", f"{c['f0_hz']:.4f}"),
+                 ("001", "random drift before/after (deg/h)", "~3 / ~1",
+                  f"{r['drift_before']:.2f} / {r['drift_after']:.2f}"),
+                 ("001", "T error of rounded f0 (C)", "1.33", f"{r['thermometer_check_rounded']['mean_error_c']:+.2f}")]
+    if "000" in res:
+        r = res["000"]
+        rows += [("000", "K0 after (mg)", "< 1", f"{r['k0_after_mg']:.4f}"),
+                 ("000", "K1 after", "< 5e-5", f"{r['k1_after']:.2e}")]
+    if "003" in res:
+        r = res["003"]
+        rows += [("003", "kxy (N/m)", "0.103", f"{r['filtered']['kxy']:.5f}"),
+                 ("003", "cxy (N s/m)", "-6.96e-8", f"{r['filtered']['cxy']:.4g} ({100 * r['filtered']['err']['cxy']:.1f} %)"),
+                 ("003", "lambda_yx", "-0.000374", f"{r['filtered']['lambda_yx']:.4g}"),
+                 ("003", "cxy error without low-pass", "> 1000 %", f"{100 * r['raw']['err']['cxy']:.0f} %")]
+    return rows
+
+
+# --- plots ---------------------------------------------------------------------------------------
+
+def _plot002(r: dict, img: Path) -> list[str]:
+    m = r["methods"]
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    b = r["before_verify"]
+    pts = b["points"]
+    sf_ref = np.mean(pts["sf"])
+    ax[0].plot(pts["temp_c"], (pts["sf"] / sf_ref - 1) * 1e6, "k.-", label="uncompensated")
+    ax[1].plot(pts["temp_c"], b["bias_deg_h"] - np.mean(b["bias_deg_h"]), "k.-", label="uncompensated")
+    ax[0].set_yscale("symlog", linthresh=100)
+    ax[1].set_yscale("symlog", linthresh=100)
+    for name, style in (("integrated, linear x4 (paper)", "b.-"), ("external, linear x4 (paper)", "r.-"),
+                        ("frequency thermometer, linear x4", "g.--"), ("external + identified lag, linear x4", "m.:")):
+        p = m[name]["points"]
+        ax[0].plot(p["temp_c"], (p["sf"] / np.mean(p["sf"]) - 1) * 1e6, style, label=name)
+        bias = p["bias"] * 3600.0
+        ax[1].plot(p["temp_c"], bias - np.mean(bias), style, label=name)
+    ax[0].set(xlabel="chamber reference (C)", ylabel="SF deviation from mean (ppm)",
+              title="paper 002: scale factor, verification run")
+    ax[1].set(xlabel="chamber reference (C)", ylabel="bias deviation from mean (deg/h)",
+              title="paper 002: bias, verification run")
+    ax[0].legend(fontsize=7)
+    for a in ax:
+        a.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(img / "paper002_points.png", dpi=110)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(11, 4))
+    for name, style in (("integrated, linear x4 (paper)", "b-"), ("integrated, quadratic x2", "c-"),
+                        ("external, linear x4 (paper)", "r-"), ("external + identified lag, linear x4", "m-"),
+                        ("frequency thermometer, quadratic x2", "g-")):
+        row = m[name]
+        t = row["ramp_log"]["time_s"] / 3600.0
+        n = 10
+        k = row["ramp_rate_dps"].size // n * n
+        ax.plot(t[:k:n], row["ramp_rate_dps"][:k].reshape(-1, n).mean(axis=1) * 3600.0, style, lw=1,
+                label=f"{name} (max {row['ramp_max_deg_h']:.0f})")
+    ax2 = ax.twinx()
+    ramp = m["integrated, linear x4 (paper)"]["ramp_log"]
+    ax2.plot(ramp["time_s"] / 3600.0, ramp["ref_temp_c"], "k:", lw=0.8)
+    ax2.set_ylabel("chamber air (C), dotted")
+    ax.set(xlabel="time (h)", ylabel="compensated zero-rate output (deg/h, 100-s means)",
+           title="paper 002 device on a continuous ramp (0.5 C/min): bit-exact compensation residual")
+    ax.set_ylim(-3000, 3000)
+    ax.legend(fontsize=7, loc="lower left")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(img / "paper002_ramp.png", dpi=110)
+    plt.close(fig)
+    return ["paper002_points.png", "paper002_ramp.png"]
+
+
+def _plot001(r: dict, img: Path) -> list[str]:
+    fig, ax = plt.subplots(1, 3, figsize=(13, 4))
+    pts = r["cal"]["points"]
+    t = np.asarray(pts["temp_c"])
+    f = np.asarray(pts["freq_hz"])
+    c = r["cal"]
+    ax[0].plot(t, (f - (c["f0_hz"] + c["k_hz_per_c"] * t)) * 1e3, "bo")
+    ax[0].set(xlabel="chamber reference (C)", ylabel="f - (f0 + k T)  (mHz)",
+              title=f"paper 001: resonator thermometer residual\nk = {c['k_hz_per_c']:.5f} Hz/C, f0 = {c['f0_hz']:.4f} Hz")
+    lg, out, ph = r["verify_log"], r["verify_out"], r["verify_phase"]
+    sel = ph == "log"
+    ax[1].plot(out["temp_c"][sel], lg["output"][sel], "k.", ms=2, label="raw bias")
+    ax[1].plot(out["temp_c"][sel], out["rate_deg_h"][sel], "b.", ms=2, label="compensated (bit-exact)")
+    ax[1].set(xlabel="T from frequency (C)", ylabel="deg/h", title="paper 001: verification run")
+    ax[1].legend(fontsize=7)
+    st = r["static"]
+    th = st["time_s"] / 3600.0
+    ax[2].plot(th, st["output"] - st["output"].mean(), "k-", lw=0.6,
+               label=f"raw, drift {r['drift_before']:.2f} deg/h")
+    ax[2].plot(th, r["static_out"] - r["static_out"].mean(), "b-", lw=0.6,
+               label=f"compensated, drift {r['drift_after']:.2f} deg/h")
+    ax[2].set(xlabel="time (h)", ylabel="deviation (deg/h)", title="paper 001: 6 h static run (10-s samples)")
+    ax[2].legend(fontsize=7)
+    for a in ax:
+        a.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(img / "paper001.png", dpi=110)
+    plt.close(fig)
+    return ["paper001.png"]
+
+
+def _plot000(r: dict, img: Path) -> list[str]:
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    b, a = r["before"], r["after"]
+    k1_25 = np.interp(25.0, b["temp_c"], b["k1"])
+    ax[0].plot(b["temp_c"], (b["k0"] - np.interp(25.0, b["temp_c"], b["k0"])) / k1_25 * 1e3, "ko-",
+               label="uncompensated K0(T) - K0(25 C)")
+    ax[0].plot(a["temp_c"], a["k0"] * 1e3, "bo-", label="compensated K0' (bit-exact, run-1 coefficients)")
+    ax[0].axhspan(-1, 1, color="g", alpha=0.15, label="paper: within 1 mg")
+    ax[0].set(xlabel="T (C)", ylabel="mg", title="paper 000: K0 on run 2")
+    ax[1].plot(b["temp_c"], (b["k1"] / np.mean(b["k1"]) - 1) * 1e6, "ko-", label="uncompensated K1/mean - 1")
+    ax[1].plot(a["temp_c"], (a["k1"] - 1) * 1e6, "bo-", label="compensated K1' - 1")
+    ax[1].axhspan(-50, 50, color="g", alpha=0.15, label="paper: within 5e-5")
+    ax[1].set(xlabel="T (C)", ylabel="ppm", title="paper 000: K1 on run 2")
+    for x in ax:
+        x.legend(fontsize=7)
+        x.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(img / "paper000.png", dpi=110)
+    plt.close(fig)
+    return ["paper000.png"]
+
+
+def _plot003(r: dict, img: Path) -> list[str]:
+    m = r["measure"]
+    f = m["freqs_hz"]
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    for key, style in (("truth", "k-"), ("raw", "r.:"), ("filtered", "b.-"), ("averaged", "g."), ):
+        ax[0].semilogy(f, np.abs(m[key]), style, label=key)
+        ax[1].plot(f, np.degrees(np.angle(m[key])), style, label=key)
+    ax[0].set(xlabel="sweep frequency (Hz)", ylabel="|S| = |Y/X|", title="paper 003: measured sense/drive ratio")
+    ax[1].set(xlabel="sweep frequency (Hz)", ylabel="arg S (deg)", title="fixed-point demodulator, with/without low-pass")
+    for x in ax:
+        x.legend(fontsize=7)
+        x.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(img / "paper003.png", dpi=110)
+    plt.close(fig)
+    return ["paper003.png"]
+
+
+# --- markdown ------------------------------------------------------------------------------------
+
+def _md002(r: dict) -> str:
+    m = r["methods"]
+    b = r["before"]
+    bv = r["before_verify"]
+    p = r["paper"]
+    lines = [
+        "## Paper 002 - piecewise SF and bias compensation on an RTD",
+        "",
+        "**Simulated device and test.** The `paper002` scenario gyro; heat path "
+        f"`ThermalChain(tau_package_s={r['params']['tau_package_s']:.0f}, tau_die_s={r['params']['tau_die_s']:.0f})` "
+        "(the gyro in a fixture on the rate table inside the chamber: the package follows the air with "
+        "45 min, the die the package with 1 min). Integrated RTD on the die (`rtd_node=\"die\"`); external "
+        "sensor outside the package (`\"air\"`); `\"package\"` shown as the middle case. Calibration run: "
+        "the paper's programme (seed 1; 1.5 h dwell, 1 h zero-rate log, rate table +-10..200 deg/s). "
+        f"Verification run: the same programme with every hold scaled by {r['params']['verify_scale']:.3f} "
+        "(seed 2: 30 min dwell, 20 min log, 40 s rate steps), a quick check run in which the package has "
+        "not settled.",
+        "",
+        "**Definitions.** At every rate-table point: SF = least-squares slope over the zero-rate stretch "
+        "and the rate steps, bias = mean of the zero-rate stretch (`fxdsp.repro.points`). Temperature "
+        "coefficient = (max - min) / (T_max - T_min) over the five points, divided by the mean for SF "
+        "(ppm/C), T being the chamber reference at each point for every method (one denominator for all). Uncompensated bias is referred to deg/h through the SF at 25 C. Compensated figures come "
+        "from the **bit-exact** path on the verification log (RTD ADC code -> `rtd` -> `piecewise.sf` -> "
+        "`sf_divide` -> `piecewise.bias` -> `bias_subtract`, config written by calibration). Demodulation "
+        "and the low-pass filters are skipped at log rate: division by a slowly varying SF commutes with "
+        "demodulation, and the filters have unity DC gain.",
+        "",
+        "**Units.** Log output (mV) -> fraction of a 4096 mV full scale in `s24.23` (a 10-s log sample is "
+        "an average, a 24-bit word, LSB 0.18 deg/h); SF(T) normalised to the calibrated SF at 25 C "
+        "(`u24.22`); bias table in FS units after division; `[system].rate_full_scale_dps` = 4096 mV / SF(25 C).",
+        "",
+        "| figure | paper | reproduced (this sim) |",
+        "|---|---|---|",
+        f"| SF tempco before (ppm/C), calibration run | {p['sf_before_ppm']} | {b['sf_ppm']:.2f} |",
+        f"| bias tempco before (deg/h/C), calibration run | {p['bias_before']} | {b['bias']:.2f} |",
+        f"| (same, quick verification run) | | {bv['sf_ppm']:.2f} / {bv['bias']:.2f} |",
+        f"| SF tempco after, integrated RTD | {p['sf_after_ppm']} | {m['integrated, linear x4 (paper)']['sf_ppm']:.2f} |",
+        f"| bias tempco after, integrated RTD | {p['bias_after']} | {m['integrated, linear x4 (paper)']['bias']:.2f} |",
+        f"| SF tempco after, external sensor | {p['sf_external_ppm']} | {m['external, linear x4 (paper)']['sf_ppm']:.2f} |",
+        f"| bias tempco after, external sensor | {p['bias_external']} | {m['external, linear x4 (paper)']['bias']:.2f} |",
+        "",
+        "All compensation variants on the same device (bit-exact; plateau figures on the verification run, "
+        "ramp figure = worst 100-s mean of the compensated zero-rate output on a continuous "
+        "`ramp` run at 0.5 C/min, which also visits temperatures between the calibration points):",
+        "",
+        "| method | SF tempco (ppm/C) | bias tempco (deg/h/C) | ramp: worst bias (deg/h) |",
+        "|---|---|---|---|",
+    ]
+    for name, row in m.items():
+        extra = f" (tau = {row['tau_s']:.0f} s)" if "tau_s" in row else ""
+        lines.append(f"| {name}{extra} | {row['sf_ppm']:.2f} | {row['bias']:.2f} | {row['ramp_max_deg_h']:.0f} |")
+    lines += [
+        "",
+        "**Reading.** The uncompensated figures match the paper (the simulated gyro was built to). The "
+        "external sensor loses to the integrated RTD for the paper's reason, the thermal path: during the "
+        "quick run the air-side sensor is minutes ahead of the die. The bias figure of the external case "
+        "lands close to the paper's; its SF figure is lower than the paper's because in this model the SF "
+        "error of a wrong temperature is only the SF slope times the temperature error. "
+        "**The paper's integrated-RTD figures (69.67 ppm/C, 115.25 deg/h/C) cannot be reached by this "
+        "model**: with the RTD on the die and a repeatable device, the compensation at the calibration "
+        "temperatures is limited by noise and by the unsettled bias drifting during the short rate-table "
+        "sequence (which leaks into the SF slope), a few ppm/C and deg/h/C. The paper's residual is "
+        "therefore most likely run-to-run non-repeatability of its device (turn-on bias and SF, "
+        "hysteresis), which the simulator does not contain; the tests assert that the reproduction is "
+        "at least as good as the paper, not equal.",
+        "",
+        "**This project's choices.** The drive frequency as thermometer (`freq2temp` on the 8 kHz drive "
+        "frequency word) measures the die itself: with it the external-sensor device does as well as the "
+        "integrated RTD. A lag-aware estimate (the external reading through a first-order lag whose time "
+        "constant is identified on the calibration run) recovers most of the thermal-path error without "
+        "any new hardware. Quadratic segments (two, through three calibration points each) halve the "
+        "error between calibration temperatures that four linear segments leave on the ramp "
+        "(the bias is non-linear); at the calibration temperatures themselves both are exact by "
+        "construction, so the plateau figures cannot show it.",
+        "",
+        "![paper 002 points](img/paper002_points.png)",
+        "",
+        "![paper 002 ramp](img/paper002_ramp.png)",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def _md001(r: dict) -> str:
+    c = r["cal"]
+    p = r["paper"]
+    ck, ckr = r["thermometer_check"], r["thermometer_check_rounded"]
+    q = c["bias_poly"]
+    lines = [
+        "## Paper 001 - the resonator as thermometer, quadratic bias, random drift",
+        "",
+        "**Simulated device and test.** The `paper001` scenario (metal cup gyro) in "
+        f"`ThermalChain(tau_package_s={r['params']['tau_package_s']:.0f}, tau_die_s={r['params']['tau_die_s']:.0f})`; "
+        "calibration run seed 1 (chamber -10..50 C, 1.5 h per point; f(T) against the chamber probe, "
+        "quadratic bias on T = (f - f0)/k), verification run seed 2, compensated bit-exactly by "
+        "`chain_paper001` (`freq2temp` -> `piecewise.bias001` -> `bias_subtract001`) with the calibrated "
+        "config. The 6 h static run is `fxdsp.repro.paper001.static_run`: 25 C with the chamber's "
+        f"regulation wander of +-{r['params']['wander_c']} C (three oscillations, periods 20..90 min; a common "
+        f"climatic-chamber fluctuation spec), {r['params']['static_noise_deg_h']} deg/h white output noise per "
+        "10-s sample, 0.001 Hz frequency noise.",
+        "",
+        "**Random drift** = standard deviation of the 10-s samples over the 6 h static run (100-s "
+        "averages also given).",
+        "",
+        "| figure | paper | reproduced |",
+        "|---|---|---|",
+        f"| k (Hz/C) | 0.0536 | {c['k_hz_per_c']:.5f} |",
+        f"| f0 (Hz) | 3837.4 printed, 3837.471 implied | {c['f0_hz']:.4f} |",
+        f"| max fit residual (Hz) | 0.01 | {c['max_freq_residual_hz']:.4f} |",
+        f"| linearity (max residual / f) | 3.4e-6 | {c['max_freq_residual_hz'] / c['f0_hz']:.2e} |",
+        f"| bias fit q(T) (deg/h) | -0.25 T^2 - 36.92 T + 1469.5 | {q[2]:.3f} T^2 {q[1]:+.2f} T {q[0]:+.1f} |",
+        f"| max |q_fit - q_paper| over -10..50 C (deg/h) | (fit error < 1) | {r['fit_vs_paper_max_deg_h']:.1f} |",
+        f"| random drift 10 s, before -> after (deg/h) | ~3 -> ~1 (-65 %) | {r['drift_before']:.2f} -> {r['drift_after']:.2f} "
+        f"({100 * (r['drift_after'] / r['drift_before'] - 1):.0f} %) |",
+        f"| random drift 100 s, before -> after (deg/h) | | {r['drift100_before']:.2f} -> {r['drift100_after']:.2f} |",
+        f"| verification: worst compensated bias during the logs (deg/h) | | {r['verify_residual_max_deg_h']:.1f} "
+        f"(raw span {r['verify_raw_span_deg_h']:.0f}) |",
+        f"| temperature error of the printed f0 = 3837.4 Hz (C) | -1.33 (DOMAIN's sign) | "
+        f"{ckr['mean_error_c']:+.3f} (estimate - reference) |",
+        f"| same, at the printed point f(-10 C) = 3836.9354 Hz (C) | | {r['data_point_error_rounded_c']:+.3f} "
+        f"(calibrated f0: {r['data_point_error_c']:+.3f}) |",
+        f"| verification: worst bias with the rounded f0 (deg/h) | | {r['verify_residual_rounded_max_deg_h']:.1f} |",
+        "",
+        "**The rounded intercept is caught.** `fxdsp.repro.paper001.check_thermometer` runs the config's "
+        "`freq2temp` bit-exactly on the calibration points and compares with the chamber probe: the "
+        f"calibrated config passes (mean error {ck['mean_error_c']:+.4f} C), the config with the printed "
+        f"f0 = 3837.4 Hz fails (mean error {ckr['mean_error_c']:+.2f} C > {paper001.THERMO_TOL_C} C); "
+        "`fxdsp calibrate --paper 001 --config-out` runs the same check and refuses to write a config "
+        "that fails it. The sign: with f0 too low every temperature estimate is 1.33 C too warm "
+        "(DOMAIN.md quotes the shift as -1.33 C, i.e. reference minus estimate).",
+        "",
+        "**Modelling notes.** The fitted k is 0.35 % low and the fit residual 0.009 Hz because the die "
+        "still lags the chamber probe on each plateau (600 s package constant); in an isothermal "
+        "simulation both are exact. The paper's drift improvement needs the temperature to move during "
+        "the static run (the chamber holds the air exactly constant otherwise); the compensated 1 deg/h is "
+        "dominated by the frequency-word noise carried through the bias slope (0.001 Hz / 0.0536 Hz/C "
+        "x 49 deg/h/C = 0.9 deg/h), which 100-s averaging reduces.",
+        "",
+        "![paper 001](img/paper001.png)",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def _md000(r: dict) -> str:
+    cal = r["cal"]
+    rec = r.get("records", {})
+    lines = [
+        "## Paper 000 - QVBA K0(t), K1(t) from the four-position tumble",
+        "",
+        "**Simulated test.** The `paper000` scenario (-40..60 C in 20 C steps, 1 h dwell, tumble "
+        "0/90/180/270 deg for 10 min each, the sequence twice in one log), output noise 2e-5 K1 per 10-s "
+        "sample (quartz-pair level, 1 mHz). Run 1 calibrates cubic K0(t), K1(t), t = T - 25 C; run 2 is "
+        "compensated **bit-exactly**: T -> `s18.9` code, `piecewise.k0`, `piecewise.k1` (formats chosen from "
+        "the coefficients), Df in `s32.16` Hz, `BiasSubtract` Df - K0, `SfDivide` by K1 into `s32.24` g "
+        "(10 guard bits, truncation). At each tumble point of run 2: K0' = (a90 + a270)/2, "
+        "K1' = (a0 - a180)/2g.",
+        "",
+        "| figure | paper | reproduced |",
+        "|---|---|---|",
+        f"| K0 variation before (mg) | 10..35 | {r['k0_before_mg']:.1f} |",
+        f"| K1 variation before (relative) | 8e-4..1.6e-3 | {r['k1_before']:.2e} |",
+        f"| max |K0'| after, run-1 coefficients on run 2 (mg) | < 1 | {r['k0_after_mg']:.4f} |",
+        f"| max |K1' - 1| after | < 5e-5 | {r['k1_after']:.2e} |",
+    ]
+    if rec:
+        lines += [f"| same with a 0.1 mg turn-on K0 repeatability (`qvba.tumble_run`), K0 (mg) | < 1 | {rec['k0_after_mg']:.4f} |",
+                  f"| same, K1 | < 5e-5 | {rec['k1_after']:.2e} |"]
+    lines += [
+        "",
+        f"Calibrated K0 = {', '.join(f'{v:.6g}' for v in cal['k0_poly'])} (Hz, ascending in t), "
+        f"K1 = {', '.join(f'{v:.6g}' for v in cal['k1_poly'])} (Hz/g).",
+        "",
+        "**Reading.** The simulated pair is repeatable between runs, so the residual is the tumble noise "
+        "and fixed-point rounding: far inside the paper's limits. The paper's 1 mg / 5e-5 describe its "
+        "device's run-to-run repeatability, which the chamber simulation does not contain.",
+        "",
+        "![paper 000](img/paper000.png)",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def _md003(r: dict) -> str:
+    p = r["paper"]
+    pr = r["params"]
+    lines = [
+        "## Paper 003 - coupling identification from a swept sine through the fixed-point demodulator",
+        "",
+        f"**Simulated test.** {pr['n_freqs']} sweep frequencies {pr['span_hz'][0]:.0f}..{pr['span_hz'][1]:.0f} Hz "
+        "around the 8014.3 Hz drive and 8024.3 Hz sense modes of `fxdsp.sim.gyro.PAPER002_GYRO` "
+        "(paper 003's couplings, m = 1 ug). At each frequency the drive and sense pick-offs are "
+        f"synthesised at 96 kHz for {pr['dwell_s'] * 1e3:.0f} ms with {pr['phase_noise_rad']} rad white phase noise "
+        f"and {pr['noise_fs']} FS additive noise per sample, quantised to the 16-bit sense ADC and "
+        "demodulated by `fxdsp.blocks.demod.Demod` (the config's NCO retuned to the sweep frequency, "
+        "12-bit LUT mixer, 2nd-order 200 Hz low-pass; all bit-exact). S = Y/X is read as one snapshot "
+        "at the end of the dwell: after the low-pass filters, or straight from the mixers (no "
+        "filtering). `fit_coupling` solves S Dy = -alpha - j w eta + lambda_yx Dx by least squares.",
+        "",
+        "| quantity | paper | no low-pass (raw mixer) | with low-pass (snapshot) | low-pass + 25 ms mean |",
+        "|---|---|---|---|---|",
+    ]
+    for key, label, fmt in (("kxy", "kxy (N/m)", ".5f"), ("cxy", "cxy (N s/m)", ".4g"), ("lambda_yx", "lambda_yx", ".4g")):
+        vals = [f"{r[v][key]:{fmt}} ({100 * r[v]['err'][key]:.2f} %)" for v in ("raw", "filtered", "averaged")]
+        lines.append(f"| {label} | {p[key]} | " + " | ".join(vals) + " |")
+    lines.append(f"| goodness of fit R^2 | 0.99 | {r['raw']['r2']:.3f} | {r['filtered']['r2']:.5f} | {r['averaged']['r2']:.6f} |")
+    lines += [
+        "",
+        "Paper's stated accuracy: relative errors 0.542 ppm (lambda_yx), 6.09 % (cxy), 0.205 ppm (kxy) "
+        "theoretical; damping-coupling error > 1000 % on raw data, about 9 % after low-pass filtering.",
+        "",
+        "**Reading.** Without the low-pass filter the snapshot carries the 2w mixing product and the "
+        "unaveraged phase noise, and the damping coupling - 3 % of the stiffness term and in quadrature "
+        "with it, so any phase error moves the stiffness term into it - is lost (wrong sign here; the "
+        "paper's > 1000 %). Through the filter it is recovered within the paper's 6.09 %; averaging the "
+        "filtered I/Q over half the dwell brings it well below. kxy is within 0.1 % in every case. The "
+        "paper's ppm-level figures for kxy and lambda_yx are theoretical bounds we do not reach with "
+        "0.01 rad of phase noise per sample; lambda_yx, which only shows near the drive resonance, is "
+        "the most noise-sensitive of the three here.",
+        "",
+        "![paper 003](img/paper003.png)",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def write_report(res: dict, out_dir, command: str = "fxdsp repro --paper all --report docs") -> Path:
+    out = Path(out_dir)
+    img = out / "img"
+    try:
+        img.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ValueError(f"--report: cannot create {img}: {exc.strerror or exc}") from None
+    parts = [
+        "# Reproductions of the four papers",
+        "",
+        "Generated by `fxdsp.repro` - regenerate with",
+        "",
+        f"    {command}",
+        "",
+        "(or `python -m fxdsp.repro.cli --paper all --report docs`). Every compensated figure below "
+        "comes from a config written by calibration (a copy of `fxdsp/configs/default.toml` with the "
+        "calibrated tables; `fxdsp.chains.build` accepts it) and the bit-exact blocks. "
+        f"Run time: {sum(r.get('seconds', 0) for r in res.values()):.0f} s on {platform.machine()}.",
+        "",
+        "| paper | figure | paper's value | reproduced |",
+        "|---|---|---|---|",
+    ]
+    parts += [f"| {a} | {b} | {c} | {d} |" for a, b, c, d in summary_rows(res)]
+    parts.append("")
+    writers = {"002": (_md002, _plot002), "001": (_md001, _plot001), "000": (_md000, _plot000),
+               "003": (_md003, _plot003)}
+    for p in PAPERS:
+        if p in res:
+            md, plot = writers[p]
+            plot(res[p], img)
+            parts.append(md(res[p]))
+    path = out / "REPRODUCTIONS.md"
+    path.write_text("\n".join(parts) + "\n", encoding="utf-8")
+    return path

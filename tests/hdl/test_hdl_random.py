@@ -1,0 +1,88 @@
+"""(b) Randomised stimuli computed on the fly by the fxdsp model, on three parameter sets that
+change word lengths, rounding modes, overflow modes and filter orders; gapped valid."""
+
+from __future__ import annotations
+
+import zlib
+
+import numpy as np
+import pytest
+
+from hdl_util import design_of, run_cocotb, segment
+
+PARAM_SETS = {
+    # every rounding floor, every overflow wrap, default word lengths
+    "floor_wrap": {
+        sec: {"rounding": "floor", "overflow": "wrap"}
+        for sec in ("rtd", "sf_divide", "demod", "bias_subtract", "iir", "freq2temp", "bias_subtract001")
+    } | {"piecewise": {k: {"rounding": "floor", "overflow": "wrap"}
+                       for k in ("sf", "bias", "bias001", "k0", "k1")},
+         "demod": {"rounding": "floor", "overflow": "wrap", "lpf": {"rounding": "floor", "overflow": "wrap"}}},
+    # half_even, narrower words everywhere, 4th-order filters (two biquads), smaller NCO/CORDIC
+    "half_even_narrow": {
+        "rtd": {"temp_format": "s16.7", "lut_index_bits": 4, "lut_format": "s24.14", "rounding": "half_even"},
+        "piecewise": {"sf": {"acc_format": "s30.26", "rounding": "half_even"},
+                      "bias": {"out_format": "s20.18", "rounding": "half_even", "overflow": "wrap"},
+                      "bias001": {"out_format": "s20.4", "rounding": "half_even"},
+                      "k0": {"rounding": "half_even"}, "k1": {"rounding": "half_even"}},
+        "sf_divide": {"out_format": "s20.18", "guard_bits": 6, "rounding": "half_even"},
+        "demod": {"data_format": "s20.18", "lut_bits": 8, "lut_format": "s12.11", "phase_bits": 24,
+                  "cordic_iterations": 12, "angle_format": "s16.13", "rounding": "half_even",
+                  "lpf": {"data_format": "s20.18", "num_format": "s22.28", "den_format": "s26.24",
+                          "order": 4, "rounding": "half_even"}},
+        "bias_subtract": {"out_format": "s20.18", "rounding": "half_even"},
+        "iir": {"data_format": "s20.18", "num_format": "s22.30", "den_format": "s26.24", "order": 4,
+                "rounding": "half_even"},
+        "freq2temp": {"temp_format": "s16.7", "rounding": "half_even"},
+        "bias_subtract001": {"in_format": "s20.4", "out_format": "s20.4", "rounding": "half_even"},
+    },
+    # toward_zero, wider words, output fraction dropped in the subtractions (rounding ties there)
+    "toward_zero_wide": {
+        "rtd": {"adc_format": "s18.17", "temp_format": "s20.11", "lut_index_bits": 6, "rounding": "toward_zero"},
+        "piecewise": {"sf": {"rounding": "toward_zero"},
+                      "bias": {"out_format": "s26.24", "rounding": "toward_zero"},
+                      "bias001": {"rounding": "toward_zero", "out_format": "s26.8"},
+                      "k0": {"rounding": "toward_zero", "overflow": "wrap"}, "k1": {"rounding": "toward_zero"}},
+        "sf_divide": {"in_format": "s18.17", "guard_bits": 12, "out_format": "s26.24", "rounding": "toward_zero"},
+        "demod": {"data_format": "s26.24", "rounding": "toward_zero", "phase_offset_turns": 0.3,
+                  "lpf": {"data_format": "s26.24", "num_format": "s26.32", "den_format": "s30.28",
+                          "rounding": "toward_zero", "design": "bessel"}},
+        "bias_subtract": {"out_format": "s24.22", "rounding": "toward_zero"},
+        "iir": {"data_format": "s24.22", "num_format": "s26.34", "rounding": "toward_zero", "design": "cheby1"},
+        "freq2temp": {"temp_format": "s20.11", "rounding": "toward_zero", "overflow": "wrap"},
+        "bias_subtract001": {"in_format": "s24.9", "out_format": "s24.6", "rounding": "toward_zero"},
+    },
+}
+BLOCKS = ["rtd", "iir", "demod", "piecewise_sf", "piecewise_bias", "piecewise_bias001", "piecewise_k0",
+          "sf_divide", "bias_subtract", "bias_subtract001", "freq2temp", "chain_paper001", "chain_paper002"]
+MAX_SAMPLES = {"chain_paper002": 1200, "demod": 2500, "iir": 3000}
+EXTRA = {"chain_paper002": {"DIV_UNROLL": 14}, "sf_divide": {"UNROLL": 3}}
+_designs: dict = {}
+
+
+def design(pset):
+    if pset not in _designs:
+        _designs[pset] = design_of(PARAM_SETS[pset])
+    return _designs[pset]
+
+
+def stimulus(d, name, seed):
+    block = d.all[name]
+    rng = np.random.default_rng(seed)
+    stim = block.stimulus(rng, 400)
+    n = len(next(iter(stim.values())))
+    m = MAX_SAMPLES.get(name, n)
+    if n > m:  # keep the head (corners) and a random tail
+        keep = np.r_[np.arange(m // 2), np.sort(rng.choice(np.arange(m // 2, n), m - m // 2, replace=False))]
+        stim = {k: v[keep] for k, v in stim.items()}
+    return stim
+
+
+@pytest.mark.hdl
+@pytest.mark.parametrize("pset", sorted(PARAM_SETS))
+@pytest.mark.parametrize("name", BLOCKS)
+def test_random_parameter_set(pset, name):
+    d = design(pset)
+    stim = stimulus(d, name, seed=zlib.crc32(f"{pset}:{name}".encode()))
+    run_cocotb(d, name, [segment(d, name, stim)], f"random_{pset}_{name}", gap=0.25, seed=7,
+               extra_params=EXTRA.get(name))
