@@ -56,7 +56,8 @@ def test_paper001_config_is_checked_and_applied(logs, tmp_path):
     assert abs(out["config"]["thermometer_check"]["mean_error_c"]) < 0.05
     app = out["apply"]
     assert app["output_std_after"] < app["output_std_before"] / 100
-    assert app["temp_range_c"][0] == pytest.approx(-10.0, abs=0.5) and app["temp_range_c"][1] == pytest.approx(50.0, abs=0.5)
+    assert app["temp_range_c"][0] == pytest.approx(-10.0, abs=0.5)
+    assert app["temp_range_c"][1] == pytest.approx(50.0, abs=0.5)
 
 
 def test_paper000_config_applied_to_a_second_run(logs, tmp_path):

@@ -14,7 +14,8 @@ Simulated device and test (chosen here, documented in docs/REPRODUCTIONS.md):
   which the package has not settled - which is where an external sensor shows the thermal path;
 * figures: at each rate-table point SF (slope over the zero-rate stretch and the steps) and bias
   (zero-rate mean); temperature coefficient = (max - min) / (T_max - T_min), divided by the mean for
-  SF, T being the chamber reference (``ref_temp_c``) for every method, so all share one denominator (:func:`fxdsp.repro.points.tempco`); uncompensated figures from the calibration run with bias
+  SF, T being the chamber reference (``ref_temp_c``) for every method, so all share one
+  denominator (:func:`fxdsp.repro.points.tempco`); uncompensated figures from the calibration run with bias
   referred through the SF at 25 C, compensated ones from the bit-exact path on the verification run.
 
 This project's alternatives on the same device: quadratic segments (order 2) through three

@@ -5,7 +5,8 @@ y(t) = g A |S(w)| cos(w t + arg S(w) + p_y(t)) are synthesised at 96 kHz (S from
 :class:`fxdsp.sim.gyro.TwoModeGyro`, i.e. the gyro of paper 003 with m = 1 ug), with white phase noise
 p_x, p_y (``PHASE_NOISE_RAD`` per sample) and white additive noise, quantised to the sense ADC format
 (s16.15, half scale), widened exactly to the demodulator's input word and demodulated by
-``fxdsp.blocks.demod.Demod`` (config's NCO, mixer, 2nd-order 200 Hz low-pass, all bit-exact) with its NCO retuned to f. The steady state is synthesised directly (the mechanical
+``fxdsp.blocks.demod.Demod`` (config's NCO, mixer, 2nd-order 200 Hz low-pass, all bit-exact) with
+its NCO retuned to f. The steady state is synthesised directly (the mechanical
 transient of Q = 20000 at 8 kHz, 0.8 s, is assumed waited out, as a sweep does).
 
 The measured ratio is read as one snapshot of I and Q at the end of the dwell
@@ -13,7 +14,8 @@ The measured ratio is read as one snapshot of I and Q at the end of the dwell
 straight from the mixers (no filtering: the snapshot carries the 2w mixing product and the full
 phase noise). The sense gain g (chosen so the largest |S| uses half the ADC range) is divided out
 (the paper's conversion-gain ratio). This project's variant ("averaged") also averages the
-filtered I and Q over the second half of the dwell (a boxcar after the IIR, ``DWELL_S / 2``). Then :func:`fxdsp.sim.gyro.fit_coupling` solves
+filtered I and Q over the second half of the dwell (a boxcar after the IIR, ``DWELL_S / 2``).
+Then :func:`fxdsp.sim.gyro.fit_coupling` solves
 S Dy = -alpha - j w eta + lambda_yx Dx by least squares with the known modal parameters.
 """
 
