@@ -158,3 +158,21 @@ def test_heat_path_orders_air_package_die_and_settles():
     pkg_log, pkg_truth = generate_log("ramp", effects={}, seed=1, noise="off",
                                       thermal=ThermalChain(rtd_node="package"), return_truth=True)
     assert np.all(pkg_log["temp_c"][heating][10:] > pkg_truth["Te"][heating][10:])
+
+
+def test_pt_element_in_the_bridge_read_with_a_linear_law_bends_like_cvd():
+    """A real Pt element read with the paper's linear law: the readout error is the CVD curvature,
+    B/A (T - 25)^2 to first order (IEC 60751: B/A = -1.478e-4 /C), and the diagnosis names it."""
+    from fxdsp.diagnose.api import diagnose_log
+    from fxdsp.diagnose.logio import Log
+    from fxdsp.sim import generate_log
+
+    log = generate_log(scenario="paper001", seed=2, columns=("ref_temp_c",), rtd_element="pt_bridge",
+                       noise={"temp_c": 0.002, "ref_temp_c": 0.002})
+    ref, temp = log["ref_temp_c"], log["temp_c"]
+    curv = np.polyfit(ref - 25.0, temp - ref, 2)[0]
+    assert abs(curv / (-5.775e-7 / 3.9083e-3) - 1.0) < 0.1
+    ideal = generate_log(scenario="paper001", seed=2, columns=("ref_temp_c",))
+    assert abs(np.polyfit(ideal["ref_temp_c"] - 25, ideal["temp_c"] - ideal["ref_temp_c"], 2)[0]) < 0.1 * abs(curv)
+    diag = diagnose_log(Log(columns=log, source="<sim>"))
+    assert "rtd_nonlinearity" in diag.causes

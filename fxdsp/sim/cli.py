@@ -39,6 +39,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rtd-node", choices=NODES, metavar="NODE",
                         help="enable the air->package->die heat path with the RTD at NODE "
                              f"({', '.join(NODES)}); default: isothermal contract baseline")
+    parser.add_argument("--rtd-element", choices=("ideal", "pt_bridge"), default="ideal",
+                        help="thermometer: the contract's ideal linear one, or a Pt element (Callendar-Van Dusen) "
+                             "in paper 002's bridge read with the linear law")
     parser.add_argument("--out", required=True, metavar="LOG.csv", help="output canonical CSV")
 
 
@@ -99,7 +102,7 @@ def run(args) -> int:
         raise ValueError(f"--seed: {args.seed!r} is not an integer") from None
     effects = parse_effects(args.effect)
     thermal = ThermalChain(rtd_node=args.rtd_node) if args.rtd_node else None
-    log = generate_log(args.scenario, effects=effects, seed=seed, columns=args.columns,
+    log = generate_log(args.scenario, effects=effects, seed=seed, columns=args.columns, rtd_element=args.rtd_element,
                        time_step_s=_number("--time-step", args.time_step),
                        duration_scale=_number("--duration-scale", args.duration_scale),
                        noise=_noise(args.noise), model=args.model, thermal=thermal)

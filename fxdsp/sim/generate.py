@@ -72,10 +72,27 @@ def _applied_input(scenario: str, sampled) -> np.ndarray:
     return sampled.rate_dps
 
 
+RTD_ELEMENTS = ("ideal", "pt_bridge")
+
+
+def _rtd_readout(t_c: np.ndarray, element: str) -> np.ndarray:
+    """Temperature the readout reports for an element at t_c."""
+    if element not in RTD_ELEMENTS:
+        raise ValueError(f"rtd_element: unknown {element!r}; expected one of {', '.join(RTD_ELEMENTS)}")
+    if element == "ideal":
+        return t_c
+    from fxdsp.blocks.rtd import RtdPhysics
+
+    real = RtdPhysics(law="cvd")  # the bridge of paper 002 with a 500-Ohm IEC 60751 platinum element
+    assumed = RtdPhysics(law="linear", beta_per_c=real.a)  # the paper's linear law, slope = CVD A
+    return assumed.temperature_from_fraction(real.adc_fraction(real.resistance(t_c)))
+
+
 def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: int = 0,
                  columns=OPTIONAL_COLUMNS, *, return_truth: bool = False,
                  time_step_s: float = DEFAULT_TIME_STEP_S, duration_scale: float = 1.0,
-                 noise: dict | str | None = None, model=None, thermal: ThermalChain | None = None):
+                 noise: dict | str | None = None, model=None, thermal: ThermalChain | None = None,
+                 rtd_element: str = "ideal"):
     """Simulate one chamber run and return its canonical log.
 
     Parameters
@@ -98,6 +115,11 @@ def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: 
         baseline; its effects are applied too.
     thermal : an optional :class:`fxdsp.sim.thermal.ThermalChain` (air -> package -> die); ``None``
         keeps the contract's isothermal baseline.
+    rtd_element : ``"ideal"`` (the contract's linear thermometer) or ``"pt_bridge"``: a real platinum
+        element (IEC 60751 Callendar-Van Dusen) in paper 002's bridge and in-amp
+        (:class:`fxdsp.blocks.rtd.RtdPhysics`), read out with the linear law RT = R0 (1 + A T) as
+        paper 002 does: the readout then bends by about B/A (T - 25)^2, -0.5 C at 60 C, which is
+        what ``rtd_nonlinearity`` describes.
 
     Returns
     -------
@@ -125,7 +147,7 @@ def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: 
     nodes = (thermal.temperatures(t, run.air_c) if thermal
              else {"air": run.air_c, "package": run.air_c, "die": run.air_c})
     rtd_true = nodes[thermal.rtd_node] if thermal else run.air_c
-    rtd_c = rtd_true
+    rtd_c = _rtd_readout(rtd_true, rtd_element)
     if "rtd_nonlinearity" in causes:
         rtd_c = rtd_true + mech.rtd_curvature(rtd_true, causes["rtd_nonlinearity"]["b_per_c"])
     temp_clean = baseline.rtd_offset_c + baseline.rtd_gain * rtd_c
