@@ -32,3 +32,26 @@ bench: $(STAMP)
 
 clean:
 	rm -rf $(VENV) sim_build .pytest_cache .hypothesis
+
+# ---- HDL (issue 3); not part of `make test` -----------------------------------------------------
+.PHONY: hdl-gen hdl-lint hdl-mutation hw-report
+
+# regenerate the Verilog parameter headers and ROM files from the config
+hdl-gen: $(STAMP)
+	$(VENV)/bin/fxdsp hdl-gen --out hdl/gen
+
+# iverilog -Wall and verilator -Wall on every RTL module (fails on any warning)
+hdl-lint: $(STAMP) hdl-tools
+	$(PY) -m pytest -q tests/hdl/test_hdl_lint.py
+
+# single-point RTL mutations, each must be caught; prints the table
+hdl-mutation: $(STAMP) hdl-tools
+	$(PY) scripts/mutate_rtl.py
+
+# yosys synth_ice40 -dsp + nextpnr-ice40 --up5k on every block and both tops -> hdl/HW_REPORT.md
+hw-report: $(STAMP)
+	@command -v yosys >/dev/null 2>&1 && command -v nextpnr-ice40 >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq yosys nextpnr-ice40 >/dev/null) ; \
+	  else echo "yosys / nextpnr-ice40 missing: install them to run the hardware report" >&2; exit 1; fi; }
+	$(VENV)/bin/fxdsp hw-report --out hdl/HW_REPORT.md

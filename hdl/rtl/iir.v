@@ -32,7 +32,13 @@ module iir #(
     output reg  [SECTIONS-1:0] ovf
 );
     localparam integer E_W = OUT_SHIFT + 2;
-    localparam integer RW  = ACC_W - OUT_SHIFT + 1;
+    localparam integer C_W = 4;                  // |c| <= 2 (checked by the generator)
+    localparam integer PW  = COEF_W + DATA_W;    // exact coefficient x data product
+    localparam integer CE_W = C_W + E_W;
+    // accumulator: ACC_W from the model's bound, at least as wide as one product
+    localparam integer AW0 = (ACC_W > PW) ? ACC_W : PW;
+    localparam integer AW  = (AW0 > CE_W) ? AW0 : CE_W;
+    localparam integer RW  = AW - OUT_SHIFT + 1;
 
     reg [COEF_W-1:0] coef [0:7*SECTIONS-1];
     initial $readmemh(COEF_FILE, coef);
@@ -46,8 +52,13 @@ module iir #(
             wire signed [COEF_W-1:0] b2 = coef[7*s+2];
             wire signed [COEF_W-1:0] a1 = coef[7*s+3];
             wire signed [COEF_W-1:0] a2 = coef[7*s+4];
-            wire signed [COEF_W-1:0] c1 = coef[7*s+5];
-            wire signed [COEF_W-1:0] c2 = coef[7*s+6];
+            // error-feedback weights are tiny integers (-nearest(a)): C_W bits of their ROM words
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire [COEF_W-1:0] c1w = coef[7*s+5];
+            wire [COEF_W-1:0] c2w = coef[7*s+6];
+            /* verilator lint_on UNUSEDSIGNAL */
+            wire signed [C_W-1:0] c1 = c1w[C_W-1:0];
+            wire signed [C_W-1:0] c2 = c2w[C_W-1:0];
             reg signed [DATA_W-1:0] x1, x2, y1, y2;
             reg signed [E_W-1:0]    e1, e2;
             wire signed [DATA_W-1:0] v;
@@ -56,18 +67,27 @@ module iir #(
             end else begin : g_chain
                 assign v = g_sec[s-1].out;
             end
-            wire signed [ACC_W-1:0] num = b0 * v + b1 * x1 + b2 * x2;
-            wire signed [ACC_W-1:0] den = a1 * y1 + a2 * y2;
-            wire signed [ACC_W-1:0] efb = c1 * e1 + c2 * e2;
-            wire signed [ACC_W-1:0] acc = (num <<< SHIFT_B) - (den <<< SHIFT_A) + efb;
+            // exact products at their own width (COEF_W x DATA_W, not AW x AW), summed in AW
+            wire signed [PW-1:0]    pb0 = b0 * v;
+            wire signed [PW-1:0]    pb1 = b1 * x1;
+            wire signed [PW-1:0]    pb2 = b2 * x2;
+            wire signed [PW-1:0]    pa1 = a1 * y1;
+            wire signed [PW-1:0]    pa2 = a2 * y2;
+            wire signed [CE_W-1:0]  pc1 = c1 * e1;
+            wire signed [CE_W-1:0]  pc2 = c2 * e2;
+            wire signed [AW-1:0] num = {{(AW-PW){pb0[PW-1]}}, pb0} + {{(AW-PW){pb1[PW-1]}}, pb1}
+                                        + {{(AW-PW){pb2[PW-1]}}, pb2};
+            wire signed [AW-1:0] den = {{(AW-PW){pa1[PW-1]}}, pa1} + {{(AW-PW){pa2[PW-1]}}, pa2};
+            wire signed [AW-1:0] efb = {{(AW-CE_W){pc1[CE_W-1]}}, pc1} + {{(AW-CE_W){pc2[CE_W-1]}}, pc2};
+            wire signed [AW-1:0] acc = (num <<< SHIFT_B) - (den <<< SHIFT_A) + efb;
             wire signed [RW-1:0] r;
-            fx_round #(.IN_W(ACC_W), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(RW)) u_round (.x(acc), .y(r));
+            fx_round #(.IN_W(AW), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(RW)) u_round (.x(acc), .y(r));
             wire [DATA_W-1:0] out;
             fx_fit #(.IN_W(RW), .OUT_W(DATA_W), .OUT_SIGNED(1), .OVERFLOW(OVERFLOW)) u_fit
                 (.x(r), .y(out), .ovf(ovf_c[s]));
-            wire signed [ACC_W-1:0] re  = {{(ACC_W-RW){r[RW-1]}}, r};
+            wire signed [AW-1:0] re  = {{(AW-RW){r[RW-1]}}, r};
             /* verilator lint_off UNUSEDSIGNAL */
-            wire signed [ACC_W-1:0] err = acc - (re <<< OUT_SHIFT);
+            wire signed [AW-1:0] err = acc - (re <<< OUT_SHIFT);
             /* verilator lint_on UNUSEDSIGNAL */
             wire signed [E_W-1:0] e = ovf_c[s] ? {E_W{1'b0}} : err[E_W-1:0];
             always @(posedge clk) begin

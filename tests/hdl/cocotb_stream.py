@@ -5,7 +5,8 @@ words (unsigned, masked to the port width) and the model's overflow count, per *
 synchronous reset is applied before every segment, so a segment after another one is a reset in
 mid-stream. ``abort_after`` cuts a segment after that many accepted samples and resets while
 samples are still in flight: the outputs seen until then must be a prefix of the expected ones.
-``gap`` is the probability of an idle cycle between samples (gapped valid); 0 is back to back.
+``gap`` is the probability of an idle cycle between samples (gapped valid; a segment may set its
+own ``gap``); 0 is back to back.
 Outputs are sampled on out_valid at each rising edge; for valid/ready DUTs a sample counts as
 accepted only when in_ready was high at the edge.
 """
@@ -33,7 +34,8 @@ def _popcount(v: int) -> int:
 
 @cocotb.test()
 async def stream(dut):
-    spec = json.loads(open(os.environ["FXDSP_SPEC"]).read())
+    with open(os.environ["FXDSP_SPEC"]) as f:
+        spec = json.load(f)
     rng = random.Random(spec["seed"])
     ins, outs, ready, gap = spec["inputs"], spec["outputs"], spec["ready"], spec["gap"]
     ignore = int(spec.get("ovf_ignore", 0))
@@ -51,6 +53,7 @@ async def stream(dut):
         for _ in range(2):
             await RisingEdge(dut.clk)
         dut.rst.value = 0
+        seg_gap = seg.get("gap", gap)
         n = len(seg["inputs"][ins[0]])
         n_feed = min(n, seg.get("abort_after", n))
         exp = seg["outputs"]
@@ -61,7 +64,7 @@ async def stream(dut):
         idle = 0
         while True:
             # drive this cycle
-            if idx < n_feed and rng.random() >= gap:
+            if idx < n_feed and rng.random() >= seg_gap:
                 for p in ins:
                     in_h[p].value = seg["inputs"][p][idx]
                 dut.in_valid.value = 1
