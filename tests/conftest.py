@@ -7,8 +7,14 @@ import tomllib
 
 import pytest
 
+from pathlib import Path
+
 from fxdsp.chains import build
 from fxdsp.config import Config, default_config_text
+
+
+# shared/ (specs and real data) sits beside the checkout, in CI as on a developer's machine
+SHARED = Path(__file__).resolve().parents[2] / "shared"
 
 
 def default_data() -> dict:

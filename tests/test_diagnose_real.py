@@ -3,6 +3,8 @@ published Pt100 table. The assertions are physics read from the raw data, not th
 
 from __future__ import annotations
 
+from conftest import SHARED
+
 import json
 from pathlib import Path
 
@@ -15,9 +17,9 @@ from fxdsp.diagnose.logio import parse_mapping, read_log
 from fxdsp.diagnose.rtd import (IEC60751, cvd_resistance, fit_cvd, fit_linear, linear_temperature, load_table,
                                 rtd_study)
 
-TCKIT = Path("/work/shared/data/tckit/hp3458abx_hp34420a_tcsweep_1vdc_nplc100_test2_oct2024.dsv")
-PT100 = Path("/work/shared/data/pt100_table/pt100_table.csv")
-SCHEMA = json.loads(Path("/work/shared/spec/diagnose-report.schema.json").read_text())
+TCKIT = (SHARED / "data/tckit/hp3458abx_hp34420a_tcsweep_1vdc_nplc100_test2_oct2024.dsv")
+PT100 = (SHARED / "data/pt100_table/pt100_table.csv")
+SCHEMA = json.loads((SHARED / "spec/diagnose-report.schema.json").read_text())
 TCKIT_ARGS = ["--map", "time_s=date", "--map", "temp_c=box_temp", "--map", "output=vbl5",
               "--delimiter", ";", "--time-format", "%d/%m/%Y-%H:%M:%S"]
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from conftest import SHARED
+
 import json
 from pathlib import Path
 
@@ -11,7 +13,7 @@ import pytest
 
 from fxdsp.cli import main
 
-SCHEMA = json.loads(Path("/work/shared/spec/diagnose-report.schema.json").read_text())
+SCHEMA = json.loads((SHARED / "spec/diagnose-report.schema.json").read_text())
 
 
 @pytest.fixture(scope="module")

@@ -19,7 +19,7 @@ Each mutant must fail (a) a fixed, hand-picked sweep through the plain check fun
 tests/fixed_oracles.py and (b) the hypothesis property test of tests/test_fixed_properties.py
 that exercises it. Demonstration from the command line (runs the whole property file on a mutant):
 
-    cd /work/main && .venv/bin/python tests/test_fixed_mutation.py half_even_ties_up
+    .venv/bin/python tests/test_fixed_mutation.py half_even_ties_up
 """
 
 from __future__ import annotations

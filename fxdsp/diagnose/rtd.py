@@ -125,7 +125,8 @@ def main(argv=None) -> int:
     import argparse
 
     parser = argparse.ArgumentParser(description="linear RTD law vs Callendar-Van Dusen on a table")
-    parser.add_argument("table", nargs="?", default="/work/shared/data/pt100_table/pt100_table.csv")
+    parser.add_argument("table", help="table CSV (temperature_c, resistance_ohm), e.g. "
+                                      "../shared/data/pt100_table/pt100_table.csv")
     parser.add_argument("--range", nargs=2, type=float, default=None, metavar=("LO", "HI"))
     args = parser.parse_args(argv)
     t, r = load_table(args.table)
