@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -87,8 +88,9 @@ def write(files: dict[str, str], out: Path) -> None:
         path.write_text(text, encoding="ascii")
 
 
-def check(files: dict[str, str], out: Path) -> list[str]:
-    """Differences between freshly generated vectors and those on disk (empty list: identical)."""
+def check(files: dict[str, str], out: Path, patterns: tuple[str, ...] = ("**/*.hex",)) -> list[str]:
+    """Differences between freshly generated files and those on disk (empty list: identical); files
+    on disk matching ``patterns`` that the generator does not produce are reported too."""
     problems = []
     for rel, text in sorted(files.items()):
         path = out / rel
@@ -102,11 +104,29 @@ def check(files: dict[str, str], out: Path) -> list[str]:
             problems.append(f"differs: {rel} (first at line {line})")
     known = set(files)
     if out.is_dir():
-        for path in sorted(out.rglob("*.hex")):
+        for path in sorted({p for pattern in patterns for p in out.glob(pattern)}):
             rel = path.relative_to(out).as_posix()
             if rel not in known:
                 problems.append(f"unexpected: {rel}")
     return problems
+
+
+def write_or_check(files: dict[str, str], out: Path, check_only: bool, command: str,
+                   patterns: tuple[str, ...] = ("**/*.hex",)) -> int:
+    """The generate-or-``--check`` step shared by every command that writes committed files:
+    exit 1 with the differences on stderr, 0 when identical or written."""
+    if check_only:
+        problems = check(files, out, patterns)
+        if problems:
+            for p in problems[:20]:
+                print(p, file=sys.stderr)
+            print(f"fxdsp {command}: {len(problems)} difference(s) against {out}", file=sys.stderr)
+            return 1
+        print(f"{out}: {len(files)} files match the config")
+        return 0
+    write(files, out)
+    print(f"wrote {len(files)} files to {out}")
+    return 0
 
 
 def load(out: Path, name: str) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict]:

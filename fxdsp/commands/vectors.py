@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from ..chains import build
-from ..vectors import check, generate, write
+from ..vectors import generate, write_or_check
 
 
 def configure(parser) -> None:
@@ -18,18 +17,4 @@ def configure(parser) -> None:
 
 def run(args) -> int:
     design = build(args.config)
-    files = generate(design)
-    out = Path(args.out)
-    if args.check:
-        problems = check(files, out)
-        if problems:
-            for p in problems[:20]:
-                print(p, file=sys.stderr)
-            print(f"fxdsp vectors: {len(problems)} difference(s) against {out}", file=sys.stderr)
-            return 1
-        print(f"vectors in {out} match the models ({len(files)} files)")
-        return 0
-    write(files, out)
-    n_blocks = len(design.all)
-    print(f"wrote {len(files)} files for {n_blocks} blocks and chains to {out}")
-    return 0
+    return write_or_check(generate(design), Path(args.out), args.check, "vectors")
