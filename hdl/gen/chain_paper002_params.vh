@@ -2,7 +2,7 @@
     parameter integer VSA_W = 16,
     parameter integer CODE_W = 16,
     parameter integer TEMP_W = 18,
-    parameter integer SF_W = 18,
+    parameter integer SF_W = 24,
     parameter integer BIAS_W = 24,
     parameter integer DIV_W = 24,
     parameter integer DATA_W = 24,
