@@ -34,6 +34,7 @@ PORTS = {
     "sf_divide": (["x", "sf"], ["y"], True),
     "bias_subtract": (["x", "bias"], ["y"], False),
     "freq2temp": (["f"], ["temp"], False),
+    "lag": (["temp"], ["te"], False),
     "chain_paper002": (["vsa", "rtd_code"], ["temp", "rate"], True),
     "chain_paper001": (["f", "rate_in"], ["temp", "rate"], False),
 }
@@ -45,7 +46,7 @@ def ovf_width(design: Design, name: str) -> int:
     if name in CHAINS:
         return chain_params(design)[name]["N_OVF"]
     inst = instances(design)[name]
-    return {"rtd": 1, "freq2temp": 1, "bias_subtract": 1, "sf_divide": 2,
+    return {"rtd": 1, "freq2temp": 1, "bias_subtract": 1, "sf_divide": 2, "lag": 1,
             "iir": inst.params.get("SECTIONS", 0), "piecewise": 2 * inst.params.get("ORDER", 0) + 2,
             "demod": 2 * inst.params.get("LPF_SECTIONS", 0) + 3}[inst.module]
 
@@ -195,11 +196,22 @@ def freq2temp(block, name: str = "freq2temp") -> Instance:
     return Instance("freq2temp", p, consts=("F0", "KINV"))
 
 
+def lag(block, name: str = "lag") -> Instance:
+    _signed(block.temp_format, f"{name}.temp_format")
+    if block.s <= 0:
+        raise ValueError(f"hdl: {name}: alpha shift {block.s} must be > 0")
+    p = {"TEMP_W": block.temp_format.wl, "GUARD": block.g, "STATE_W": block.state_format.wl,
+         "ALPHA_W": block.alpha_bits, "ALPHA_M": block.m, "ALPHA_S": block.s}
+    _rules(p, block.rules)
+    return Instance("lag", p)
+
+
 def instances(design: Design) -> dict[str, Instance]:
     """Every block instance of the design, by its vectors name."""
     b = design.blocks
     out = {"rtd": rtd(b["rtd"]), "iir": iir(b["iir"]), "demod": demod(b["demod"]),
-           "sf_divide": sf_divide(b["sf_divide"]), "freq2temp": freq2temp(b["freq2temp"])}
+           "sf_divide": sf_divide(b["sf_divide"]), "freq2temp": freq2temp(b["freq2temp"]),
+           "lag": lag(b["lag"])}
     for n in ("piecewise_sf", "piecewise_bias", "piecewise_bias001", "piecewise_k0", "piecewise_k1"):
         out[n] = piecewise(b[n], n)
     for n in ("bias_subtract", "bias_subtract001"):

@@ -25,7 +25,7 @@ from .params import CHAINS, PORTS, generate, instances, literal, module_of, ovf_
 ROOT = Path(__file__).resolve().parents[2]
 RTL = ROOT / "hdl" / "rtl"
 TARGETS = ["rtd", "piecewise_sf", "piecewise_bias", "sf_divide", "demod", "bias_subtract", "iir",
-           "freq2temp", "piecewise_bias001", "bias_subtract001", "chain_paper001", "chain_paper002"]
+           "freq2temp", "piecewise_bias001", "bias_subtract001", "lag", "chain_paper001", "chain_paper002"]
 UP5K = {"LUT": 5280, "MAC16": 8, "FF": 5280, "BRAM": 30}
 BUDGET = {"LUT": 2640, "MAC16": 8, "MHz": 40.0}
 

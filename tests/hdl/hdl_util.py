@@ -35,7 +35,7 @@ SIM_BUILD = HERE / "sim_build"
 PORTS, CHAINS = hp.PORTS, hp.CHAINS
 # vectors name -> RTL module
 MODULE = {"rtd": "rtd", "iir": "iir", "demod": "demod", "sf_divide": "sf_divide", "freq2temp": "freq2temp",
-          "bias_subtract": "bias_subtract", "bias_subtract001": "bias_subtract",
+          "bias_subtract": "bias_subtract", "bias_subtract001": "bias_subtract", "lag": "lag",
           "piecewise_sf": "piecewise", "piecewise_bias": "piecewise", "piecewise_bias001": "piecewise",
           "piecewise_k0": "piecewise", "piecewise_k1": "piecewise",
           "chain_paper002": "chain_paper002", "chain_paper001": "chain_paper001"}
@@ -179,7 +179,7 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
         pov = f"#(.DIV_UNROLL({unroll or 1}))" if name == "chain_paper002" else ""
     else:
         inst = hp.instances(design)[name]
-        n_ovf = {"rtd": 1, "freq2temp": 1, "bias_subtract": 1, "sf_divide": 2,
+        n_ovf = {"rtd": 1, "freq2temp": 1, "bias_subtract": 1, "sf_divide": 2, "lag": 1,
                  "iir": inst.params.get("SECTIONS", 0),
                  "piecewise": 2 * inst.params.get("ORDER", 0) + 2,
                  "demod": 2 * inst.params.get("LPF_SECTIONS", 0) + 3}[module]

@@ -26,6 +26,8 @@ HALF_EVEN = {"bias_subtract": {"out_format": "s23.21", "rounding": "half_even"},
 # segment rule (a breakpoint belongs to the upper segment) is invisible in the committed vectors
 DISCONTINUOUS = {"piecewise": {"sf": {"coefficients": [[0.99, 2.1e-4], [1.0, 2.7e-4], [0.98, 3.3e-4],
                                                        [1.01, 3.9e-4]]}}}
+# lag with 2 guard bits and a fast alpha: the rounding of each state step shows in the output
+LAG_FEW_GUARD = {"lag": {"tau_s": 0.4, "alpha_bits": 8, "state_guard_bits": 2}}
 TOWARD_ZERO = {"bias_subtract": {"out_format": "s23.21", "rounding": "toward_zero"},
                "iir": {"data_format": "s23.21", "num_format": "s24.32"}}
 
@@ -76,6 +78,12 @@ MUTATIONS = [
              "restoring step takes r >= d as r > d", ((None, "sf_divide", False),)),
     Mutation("divide_by_zero_sign", "sf_divide.v", "(xneg ? full_neg : full_pos)", "full_pos",
              "x / 0 saturates positive whatever the sign of x", ((None, "sf_divide", False),)),
+    Mutation("lag_no_guard_bits", "lag.v", "st     <= st_next;", "st     <= (st_next >>> GUARD) <<< GUARD;",
+             "lag: state guard bits dropped (state kept at the code LSB: dead band)", ((None, "lag", False),)),
+    Mutation("lag_step_floor", "lag.v", ".SHIFT(ALPHA_S), .ROUNDING(ROUNDING)", ".SHIFT(ALPHA_S), .ROUNDING(0)",
+             "lag: state update not rounded (floor)", ((None, "lag", False), (LAG_FEW_GUARD, "lag", False))),
+    Mutation("lag_state_free_running", "lag.v", "end else if (in_valid) begin\n            st ",
+             "end else begin\n            st ", "lag state advances without in_valid", ((None, "lag", True),)),
     Mutation("chain001_misaligned", "chain_paper001.v", "rate_d2 <= rate_d1;", "rate_d2 <= rate_in;",
              "rate_in not delayed with the temperature", ((None, "chain_paper001", False),)),
 ]

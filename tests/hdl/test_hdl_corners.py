@@ -19,6 +19,7 @@ _NARROW = {
     "iir": {"data_format": "s23.21", "num_format": "s24.32"},
     "bias_subtract001": {"out_format": "s24.5"},
     "sf_divide": {"out_format": "s22.20"},
+    "lag": {"tau_s": 0.4, "alpha_bits": 8, "state_guard_bits": 2},   # alpha 0.22, ties every few steps
 }
 DESIGNS = {
     "narrow_half_up_saturate": _NARROW,
@@ -34,7 +35,7 @@ DESIGNS = {
     },
 }
 BLOCKS = ["rtd", "iir", "demod", "piecewise_sf", "piecewise_bias", "piecewise_bias001", "piecewise_k0",
-          "piecewise_k1", "sf_divide", "bias_subtract", "bias_subtract001", "freq2temp", "chain_paper001",
+          "piecewise_k1", "sf_divide", "bias_subtract", "bias_subtract001", "freq2temp", "lag", "chain_paper001",
           "chain_paper002"]
 EXTRA = {"chain_paper002": {"DIV_UNROLL": 14}, "sf_divide": {"UNROLL": 2}}
 _designs: dict = {}
@@ -85,6 +86,15 @@ def corners(d, name, rng) -> dict[str, np.ndarray]:
     elif name == "freq2temp":
         f0 = block.f0
         extra = {"f": np.array([f0 - 2, f0 - 1, f0, f0 + 1, f0 + 2], np.int64)}
+    elif name == "lag":
+        # starts away from 0 and from where the aborted first stream leaves the state, so the
+        # state must be primed again on the first sample after the reset; full-scale alternation
+        # and steps (slew over the whole range), then +-1 code steps (rounding of tiny d)
+        fmt = block.temp_format
+        alt = np.where(np.arange(200) % 2 == 0, fmt.max_int, fmt.min_int)
+        small = np.repeat(np.array([1, 0, -1, 0, 2, -2, 0]), 12)
+        extra = {"temp": np.r_[np.full(20, 3 * fmt.max_int // 4), alt, np.full(60, fmt.max_int),
+                               np.full(60, fmt.min_int), np.full(30, 0), small].astype(np.int64)}
     elif name in ("iir", "demod"):
         fmt = block.inputs["x"]
         alt = np.where(np.arange(600) % 2 == 0, fmt.max_int, fmt.min_int)

@@ -23,6 +23,10 @@ VARIANTS = [
     ("demod", {"LPF_SECTIONS": 2, "ITERATIONS": 8, "ROUNDING": 0}),
     ("fx_convert", {"SHIFT": -3, "OUT_SIGNED": 0, "OVERFLOW": 0}),
     ("fx_round", {"SHIFT": 40, "ROUNDING": 3}),
+    ("lag", {"GUARD": 0, "STATE_W": 19, "ROUNDING": 3, "OVERFLOW": 0}),
+    ("lag", {"TEMP_W": 14, "GUARD": 2, "STATE_W": 17, "ALPHA_W": 24, "ALPHA_M": 16777215, "ALPHA_S": 24,
+             "ROUNDING": 2}),
+    ("lag", {"ALPHA_W": 4, "ALPHA_M": 8, "ALPHA_S": 70, "ROUNDING": 0}),
 ]
 
 
@@ -73,7 +77,7 @@ def test_headers_rom_files_match_config():
 
 def test_every_block_has_a_module_and_shared_primitives():
     names = {p.stem for p in RTL.glob("*.v")}
-    assert {"rtd", "iir", "nco", "demod", "piecewise", "sf_divide", "bias_subtract", "freq2temp",
+    assert {"rtd", "iir", "nco", "demod", "piecewise", "sf_divide", "bias_subtract", "freq2temp", "lag",
             "chain_paper002", "chain_paper001", "fx_round", "fx_fit"} <= names
     # one rounding implementation, one fit: no block computes its own rounding constant or clamp
     for p in RTL.glob("*.v"):

@@ -1,4 +1,4 @@
-"""(d) Long file-driven streams, >= 100k samples, for the stateless blocks and the divider."""
+"""(d) Long file-driven streams, >= 100k samples, for the blocks (the lag filter among them) and the divider."""
 
 import pytest
 
@@ -6,7 +6,7 @@ from long_common import long_stream
 
 
 @pytest.mark.hdl
-@pytest.mark.parametrize("name", ["rtd", "iir", "piecewise_sf", "piecewise_k1", "bias_subtract", "freq2temp"])
+@pytest.mark.parametrize("name", ["rtd", "iir", "piecewise_sf", "piecewise_k1", "bias_subtract", "freq2temp", "lag"])
 def test_long_stream(name):
     long_stream(name)
 

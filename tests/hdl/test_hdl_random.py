@@ -14,7 +14,7 @@ PARAM_SETS = {
     # every rounding floor, every overflow wrap, default word lengths
     "floor_wrap": {
         sec: {"rounding": "floor", "overflow": "wrap"}
-        for sec in ("rtd", "sf_divide", "demod", "bias_subtract", "iir", "freq2temp", "bias_subtract001")
+        for sec in ("rtd", "sf_divide", "demod", "bias_subtract", "iir", "freq2temp", "bias_subtract001", "lag")
     } | {"piecewise": {k: {"rounding": "floor", "overflow": "wrap"}
                        for k in ("sf", "bias", "bias001", "k0", "k1")},
          "demod": {"rounding": "floor", "overflow": "wrap", "lpf": {"rounding": "floor", "overflow": "wrap"}}},
@@ -35,6 +35,8 @@ PARAM_SETS = {
                 "rounding": "half_even"},
         "freq2temp": {"temp_format": "s16.7", "rounding": "half_even"},
         "bias_subtract001": {"in_format": "s20.4", "out_format": "s20.4", "rounding": "half_even"},
+        # lag on the s16.7 code: a short time constant, a 12-bit alpha, 8 guard bits
+        "lag": {"tau_s": 2.0, "alpha_bits": 12, "state_guard_bits": 8, "rounding": "half_even"},
     },
     # toward_zero, wider words, output fraction dropped in the subtractions (rounding ties there)
     "toward_zero_wide": {
@@ -51,11 +53,14 @@ PARAM_SETS = {
         "iir": {"data_format": "s24.22", "num_format": "s26.34", "rounding": "toward_zero", "design": "cheby1"},
         "freq2temp": {"temp_format": "s20.11", "rounding": "toward_zero", "overflow": "wrap"},
         "bias_subtract001": {"in_format": "s24.9", "out_format": "s24.6", "rounding": "toward_zero"},
+        # lag on the s20.11 code: an hour's time constant (alpha 2.8e-5), 20-bit alpha, 20 guard bits
+        "lag": {"tau_s": 3600.0, "alpha_bits": 20, "state_guard_bits": 20, "rounding": "toward_zero",
+                "overflow": "wrap"},
     },
 }
 BLOCKS = ["rtd", "iir", "demod", "piecewise_sf", "piecewise_bias", "piecewise_bias001", "piecewise_k0",
-          "sf_divide", "bias_subtract", "bias_subtract001", "freq2temp", "chain_paper001", "chain_paper002"]
-MAX_SAMPLES = {"chain_paper002": 1200, "demod": 2500, "iir": 3000}
+          "sf_divide", "bias_subtract", "bias_subtract001", "freq2temp", "lag", "chain_paper001", "chain_paper002"]
+MAX_SAMPLES = {"chain_paper002": 1200, "demod": 2500, "iir": 3000, "lag": 4000}
 EXTRA = {"chain_paper002": {"DIV_UNROLL": 14}, "sf_divide": {"UNROLL": 3}}
 _designs: dict = {}
 
