@@ -44,6 +44,7 @@ class ErrorStats:
     unit: str
     scale: float
     overflows: int
+    signal_rms: float = 0.0  # rms of the float reference on the same stimulus (for SNR)
 
     @property
     def max_lsb(self) -> float:
@@ -68,6 +69,9 @@ def block_errors(design: Design, name: str, samples: int | None = None, seed_off
     units = port_units(design)
     out = []
     for port, fmt in block.outputs.items():
+        r = np.asarray(ref[port], dtype=float)
+        r = r[np.isfinite(r)]
+        signal_rms = float(np.sqrt(np.mean(r**2))) if r.size else 0.0
         e = got[port] - ref[port]
         keep = np.isfinite(e)
         if (name, port) in ANGLE_PORTS:
@@ -77,7 +81,7 @@ def block_errors(design: Design, name: str, samples: int | None = None, seed_off
         e = e[keep]
         unit, scale = units.get((name, port), ("", 1.0))
         out.append(ErrorStats(name, port, int(e.size), fmt.lsb, float(np.abs(e).max()), float(np.sqrt(np.mean(e**2))),
-                              float(e.mean()), unit, scale, result.overflows.total))
+                              float(e.mean()), unit, scale, result.overflows.total, signal_rms))
     return out
 
 

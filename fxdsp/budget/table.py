@@ -18,7 +18,10 @@ from ..errors_table import ErrorStats, block_errors
 @dataclass
 class BudgetRow:
     stats: ErrorStats
-    signal_rms: float
+
+    @property
+    def signal_rms(self) -> float:
+        return self.stats.signal_rms
 
     @property
     def snr_db(self) -> float:
@@ -38,28 +41,10 @@ class BudgetRow:
                 "snr_db": self.snr_db, "enob": self.enob, "overflows": s.overflows}
 
 
-def _signal_rms(design: Design, name: str, samples: int | None, seed_offset: int = 1000) -> dict[str, float]:
-    """RMS of the float reference of each output port, on exactly errors_table's stimulus."""
-    block = design.all[name]
-    rng = np.random.default_rng([design.seed, seed_offset, list(design.all).index(name)])
-    stim = block.nominal_stimulus(rng, samples or design.samples)
-    block.reset()
-    ref = block.run_float(**stim)
-    block.reset()
-    out = {}
-    for port in block.outputs:
-        r = np.asarray(ref[port], dtype=float)
-        r = r[np.isfinite(r)]
-        out[port] = float(np.sqrt(np.mean(r**2))) if r.size else 0.0
-    return out
-
-
 def budget_rows(design: Design, samples: int | None = None, names: list[str] | None = None) -> list[BudgetRow]:
     rows = []
     for name in names or list(design.all):
-        sig = _signal_rms(design, name, samples)
-        for stats in block_errors(design, name, samples):
-            rows.append(BudgetRow(stats, sig[stats.port]))
+        rows.extend(BudgetRow(stats) for stats in block_errors(design, name, samples))
     return rows
 
 
