@@ -66,6 +66,22 @@ def heldout_residuals(ctx: Context, state: dict, channel: str) -> np.ndarray:
     return normals.heldout_rows(x, ctx.target(channel)) * ctx.norm[channel][1]
 
 
+def _physical_poly(ctx: Context, channel: str, state: dict, powers: dict[str, int]) -> list[float]:
+    """A channel fitted as a polynomial in the scaled thermometer x = (T - mid)/half, re-expressed
+    in powers of T itself (coefficients ascending, padded to cubic). ``powers`` maps the fitted
+    column names to their power of x; other columns (e.g. a lag's start value) are left out."""
+    normals, names = ctx.normals(channel, state)
+    coef, _ = normals.fit_all()
+    mu, sd = ctx.norm[channel]
+    sc = ctx.scales[channel]
+    x_of_t = np.polynomial.Polynomial([-sc.mid / sc.half, 1.0 / sc.half])
+    q = np.polynomial.Polynomial([mu])
+    for name, cj in zip(names, coef):
+        if name in powers:
+            q = q + sd * cj * x_of_t ** powers[name]
+    return list(q.coef) + [0.0] * 3
+
+
 def baseline_coefficients(ctx: Context, state: dict) -> dict:
     """Fitted baseline in the replay format (polynomials ascending in T - 25 C)."""
     out: dict = {"t_ref_c": mech.T_CURVE_C}
@@ -89,32 +105,13 @@ def baseline_coefficients(ctx: Context, state: dict) -> dict:
     if ctx.series.freq is not None:
         # fitted as a polynomial in x = (Te - mid)/half; the contract writes it as
         # f0 + k Te + k2 (Te - 25)^2 with f0 the value at Te = 0 C
-        normals, names = ctx.normals("freq_hz", state)
-        coef, _ = normals.fit_all()
-        mu, sd = ctx.norm["freq_hz"]
-        sc = ctx.scales["freq_hz"]
-        x_of_te = np.polynomial.Polynomial([-sc.mid / sc.half, 1.0 / sc.half])
-        q = np.polynomial.Polynomial([mu])
-        powers = {"f0": 0, "k": 1, "frequency_nonlinearity": 2}
-        for name, cj in zip(names, coef):
-            if name in powers:  # not the lag's start-value column
-                q = q + sd * cj * x_of_te ** powers[name]
-        a = list(q.coef) + [0.0] * 3
+        a = _physical_poly(ctx, "freq_hz", state, {"f0": 0, "k": 1, "frequency_nonlinearity": 2})
         k2 = a[2] if "frequency_nonlinearity" in state else 0.0
         out["f0_hz"] = float(a[0] - mech.T_CURVE_C ** 2 * k2)
         out["k_hz_per_c"] = float(a[1] + 2 * mech.T_CURVE_C * k2)
     if ctx.series.ref is not None:
         # temp_c = offset + gain * (ref + b (ref - 25)^2): expand and read offset and gain off
-        normals, names = ctx.normals("temp_c", state)
-        coef, _ = normals.fit_all()
-        mu, sd = ctx.norm["temp_c"]
-        sc = ctx.scales["temp_c"]
-        x_of_ref = np.polynomial.Polynomial([-sc.mid / sc.half, 1.0 / sc.half])
-        q = np.polynomial.Polynomial([mu])
-        powers = {"t0": 0, "t1": 1, "rtd_nonlinearity": 2}
-        for name, cj in zip(names, coef):
-            q = q + sd * cj * x_of_ref ** powers[name]
-        p = list(q.coef) + [0.0] * 3
+        p = _physical_poly(ctx, "temp_c", state, {"t0": 0, "t1": 1, "rtd_nonlinearity": 2})
         gain = p[1] + 2 * mech.T_CURVE_C * p[2]
         out["rtd_offset_c"] = float(p[0] - mech.T_CURVE_C ** 2 * p[2])
         out["rtd_gain"] = float(gain)
