@@ -20,9 +20,9 @@ module bias_subtract #(
     input  wire             in_valid,
     input  wire [IN_W-1:0]  x,
     input  wire [BIAS_W-1:0] bias,
-    output reg              out_valid,
-    output reg  [OUT_W-1:0] y,
-    output reg              ovf
+    output wire             out_valid,
+    output wire [OUT_W-1:0] y,
+    output wire             ovf
 );
     localparam integer XW = IN_W + X_ALIGN;
     localparam integer BW = BIAS_W + B_ALIGN;
@@ -32,24 +32,9 @@ module bias_subtract #(
     wire signed [DW-1:0] be = {{(DW-BIAS_W){bias[BIAS_W-1]}}, bias};
     wire signed [DW-1:0] d  = (xe <<< X_ALIGN) - (be <<< B_ALIGN);
 
-    wire [OUT_W-1:0] y_c;
-    wire             o_c;
-    fx_convert #(.IN_W(DW), .SHIFT(SHIFT), .ROUNDING(ROUNDING), .OUT_W(OUT_W), .OUT_SIGNED(1),
-                 .OVERFLOW(OVERFLOW)) u_out (.x(d), .y(y_c), .ovf(o_c));
-
-    always @(posedge clk) begin
-        if (rst) begin
-            out_valid <= 1'b0;
-            y         <= {OUT_W{1'b0}};
-            ovf       <= 1'b0;
-        end else begin
-            out_valid <= in_valid;
-            if (in_valid) begin
-                y   <= y_c;
-                ovf <= o_c;
-            end
-        end
-    end
+    fx_convert_reg #(.IN_W(DW), .SHIFT(SHIFT), .ROUNDING(ROUNDING), .OUT_W(OUT_W), .OUT_SIGNED(1),
+                     .OVERFLOW(OVERFLOW)) u_out (.clk(clk), .rst(rst), .in_valid(in_valid), .x(d),
+                                                 .out_valid(out_valid), .y(y), .ovf(ovf));
 endmodule
 
 `default_nettype wire

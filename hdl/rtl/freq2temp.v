@@ -20,9 +20,9 @@ module freq2temp #(
     input  wire              rst,
     input  wire              in_valid,
     input  wire [FREQ_W-1:0] f,
-    output reg               out_valid,
-    output reg  [TEMP_W-1:0] temp,
-    output reg               ovf
+    output wire              out_valid,
+    output wire [TEMP_W-1:0] temp,
+    output wire              ovf
 );
     localparam integer DW = FREQ_W + 1;
     localparam integer PW = DW + KINV_W;
@@ -35,24 +35,9 @@ module freq2temp #(
     wire signed [KINV_W-1:0] kinv = KINV_C;
     wire signed [PW-1:0]     p  = d * kinv;
 
-    wire [TEMP_W-1:0] t_c;
-    wire              o_c;
-    fx_convert #(.IN_W(PW), .SHIFT(SHIFT), .ROUNDING(ROUNDING), .OUT_W(TEMP_W), .OUT_SIGNED(1),
-                 .OVERFLOW(OVERFLOW)) u_out (.x(p), .y(t_c), .ovf(o_c));
-
-    always @(posedge clk) begin
-        if (rst) begin
-            out_valid <= 1'b0;
-            temp      <= {TEMP_W{1'b0}};
-            ovf       <= 1'b0;
-        end else begin
-            out_valid <= in_valid;
-            if (in_valid) begin
-                temp <= t_c;
-                ovf  <= o_c;
-            end
-        end
-    end
+    fx_convert_reg #(.IN_W(PW), .SHIFT(SHIFT), .ROUNDING(ROUNDING), .OUT_W(TEMP_W), .OUT_SIGNED(1),
+                     .OVERFLOW(OVERFLOW)) u_out (.clk(clk), .rst(rst), .in_valid(in_valid), .x(p),
+                                                 .out_valid(out_valid), .y(temp), .ovf(ovf));
 endmodule
 
 `default_nettype wire

@@ -21,9 +21,9 @@ module rtd #(
     input  wire              rst,
     input  wire              in_valid,
     input  wire [ADC_W-1:0]  code,
-    output reg               out_valid,
-    output reg  [TEMP_W-1:0] temp,
-    output reg               ovf
+    output wire              out_valid,
+    output wire [TEMP_W-1:0] temp,
+    output wire              ovf
 );
     localparam integer K  = LUT_INDEX_BITS;
     localparam integer S  = ADC_W - LUT_INDEX_BITS;
@@ -44,24 +44,9 @@ module rtd #(
     wire signed [EW-1:0]    be   = {{(EW-LUT_W){base[LUT_W-1]}}, base};
     wire signed [EW-1:0]    exact = (be <<< S) + prod;
 
-    wire [TEMP_W-1:0] t_c;
-    wire              o_c;
-    fx_convert #(.IN_W(EW), .SHIFT(SHIFT), .ROUNDING(ROUNDING), .OUT_W(TEMP_W), .OUT_SIGNED(1),
-                 .OVERFLOW(OVERFLOW)) u_out (.x(exact), .y(t_c), .ovf(o_c));
-
-    always @(posedge clk) begin
-        if (rst) begin
-            out_valid <= 1'b0;
-            temp      <= {TEMP_W{1'b0}};
-            ovf       <= 1'b0;
-        end else begin
-            out_valid <= in_valid;
-            if (in_valid) begin
-                temp <= t_c;
-                ovf  <= o_c;
-            end
-        end
-    end
+    fx_convert_reg #(.IN_W(EW), .SHIFT(SHIFT), .ROUNDING(ROUNDING), .OUT_W(TEMP_W), .OUT_SIGNED(1),
+                     .OVERFLOW(OVERFLOW)) u_out (.clk(clk), .rst(rst), .in_valid(in_valid), .x(exact),
+                                                 .out_valid(out_valid), .y(temp), .ovf(ovf));
 endmodule
 
 `default_nettype wire
