@@ -21,7 +21,7 @@ from numba import njit
 
 from ..chains import Paper001Chain, Paper002Chain
 from ..fixed import Format, OverflowLog, Rules, quantize
-from ..fixed.kernels import FLOOR, HALF_EVEN, HALF_UP, TOWARD_ZERO
+from ..fixed.kernels import FLOOR, TOWARD_ZERO, round_float
 
 # categories of the attribution (item 2)
 ADC = "ADC quantisation"
@@ -91,21 +91,6 @@ class Switch:
 # IIR (direct form I, error feedback) in float, or the block's own integer kernel
 # --------------------------------------------------------------------------------------------
 @njit(cache=True)
-def _round_float(acc, rounding):
-    if rounding == FLOOR:
-        return np.floor(acc)
-    if rounding == HALF_UP:
-        return np.floor(acc + 0.5)
-    if rounding == HALF_EVEN:
-        r = np.floor(acc)
-        f = acc - r
-        if f > 0.5 or (f == 0.5 and (r % 2.0) != 0.0):
-            r += 1.0
-        return r
-    return np.trunc(acc)
-
-
-@njit(cache=True)
 def _df1_float(x, b, a, c, mode, rounding, lo, hi, noise, resid):
     """DF-I cascade in units of the output LSB. mode 0: no rounding; 1: rounding by ``rounding``
     with error feedback c (as the integer kernel); 2: the rounding replaced by its textbook model,
@@ -128,7 +113,7 @@ def _df1_float(x, b, a, c, mode, rounding, lo, hi, noise, resid):
             else:
                 acc += c[s, 0] * e1 + c[s, 1] * e2
                 if mode == 1:
-                    r = _round_float(acc, rounding)
+                    r = round_float(acc, rounding)
                 else:  # textbook model: independent uniform u in [0, 1) shaped by the mode
                     u = noise[s, i]
                     if rounding == FLOOR:

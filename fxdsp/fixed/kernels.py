@@ -40,6 +40,30 @@ def shift_right_round(x, n, rounding):
 
 
 @njit(cache=True, inline="always")
+def round_float(v, rounding):
+    """A float to the integer chosen by ``rounding`` (returned as a float): the decision is made
+    on the exact fraction v - floor(v), never by np.round. Used to quantise real values (configs,
+    ADC models) and by the budget's hybrid models whose accumulators are not integers."""
+    f = np.floor(v)
+    if rounding == FLOOR:
+        return f
+    frac = v - f  # exact, in [0, 1)
+    if rounding == HALF_UP:
+        return f + 1.0 if frac >= 0.5 else f
+    if rounding == HALF_EVEN:
+        return f + 1.0 if (frac > 0.5 or (frac == 0.5 and np.fmod(f, 2.0) != 0.0)) else f
+    return np.trunc(v)
+
+
+@njit(cache=True)
+def round_float_array(v, rounding):
+    out = np.empty_like(v)
+    for i in range(v.shape[0]):
+        out[i] = round_float(v[i], rounding)
+    return out
+
+
+@njit(cache=True, inline="always")
 def fit(x, lo, hi, overflow):
     """Bring x into [lo, hi] (a format of hi - lo + 1 = 2**wl codes). Returns (value, overflowed)."""
     if lo <= x <= hi:

@@ -84,17 +84,7 @@ def quantize(x, fmt: Format, rules: Rules = Rules(), log: OverflowLog | None = N
     # ... and a nonzero x scaled below float64's range keeps its sign (floor(-tiny) is -1, not 0);
     # every mode's decision for |v| < 1/2 depends on the sign alone
     v = np.where((v == 0) & (xs != 0), np.copysign(5e-324, xs), v)
-    f = np.floor(v)
-    frac = v - f  # exact, in [0, 1)
-    if rules.rounding == "floor":
-        r = f
-    elif rules.rounding == "half_up":
-        r = f + (frac >= 0.5)
-    elif rules.rounding == "half_even":
-        odd = np.fmod(f, 2.0) != 0
-        r = f + ((frac > 0.5) | ((frac == 0.5) & odd))
-    else:  # toward_zero
-        r = np.trunc(v)
+    r = kernels.round_float_array(v, rules.rounding_code)
     big = np.abs(r) >= _TWO62
     if big.any():
         if rules.overflow == "wrap":
