@@ -304,9 +304,6 @@ def test_overflow_log():
     log.add("b", 2)
     log.add("b", 3)
     assert log == {"a": 0, "b": 5} and log.total == 5
-    other = OverflowLog(c=1)
-    log.merged(other, prefix="blk.")
-    assert log == {"a": 0, "b": 5, "blk.c": 1} and log.total == 6
 
 
 # --- fxpmath interop -----------------------------------------------------------------------------

@@ -191,24 +191,3 @@ def test_binary_ops_near_budget(op, case):
     """Formats up to the 63-bit budget: either exact or a ValueError naming both formats."""
     fa, qa, fb, qb = case
     check_binary(op, qa, fa, qb, fb)
-
-
-@rules_params
-@fast(40)
-@given(src=formats(2, 63), dst_signed=st.booleans(), dst_wl=st.integers(2, 62), data=st.data())
-def test_kernel_varshift_matches_oracle(rounding, overflow, src, dst_signed, dst_wl, data):
-    """kernels.convert_array_varshift (one shift per sample, e.g. a normalising divider) against
-    the exact oracle: sample i is resized from src to src with fraction length fl - shift[i]."""
-    lo, hi = int_range(*src[:2])
-    dlo, dhi = int_range(dst_signed, dst_wl)
-    n = data.draw(st.integers(1, 12))
-    qs = data.draw(st.lists(st.one_of(st.integers(lo, hi), st.sampled_from([lo, hi, 0, 1, -1 if lo else 1])),
-                            min_size=n, max_size=n))
-    shifts = data.draw(st.lists(st.one_of(st.integers(-4, 4), st.integers(-140, 140)), min_size=n, max_size=n))
-    r = Rules(rounding, overflow)
-    got, count = kernels.convert_array_varshift(np.asarray(qs, dtype=np.int64), np.asarray(shifts, dtype=np.int64),
-                                                r.rounding_code, dlo, dhi, r.overflow_code)
-    want = [exact_requantize(exact_value(q, src), (dst_signed, dst_wl, src[2] - s), rounding, overflow)
-            for q, s in zip(qs, shifts)]
-    assert [int(v) for v in got] == [w for w, _ in want], (src, dst_signed, dst_wl, qs, shifts)
-    assert count == sum(o for _, o in want)

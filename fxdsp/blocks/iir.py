@@ -38,7 +38,7 @@ from numba import njit
 from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, quantize
 from ..fixed.kernels import fit, shift_right_round
-from .base import Block, corner_codes as _corners, random_codes
+from .base import Block, corner_codes, random_codes
 
 DESIGNS = ("butter", "cheby1", "bessel")
 BTYPES = ("lowpass", "highpass")
@@ -218,7 +218,7 @@ class Iir(Block):
         seg = 256
         step = self.settle_samples()
         parts = [np.zeros(seg, np.int64), np.r_[hi, np.zeros(seg - 1, np.int64)], np.r_[lo, np.zeros(seg - 1, np.int64)],
-                 np.tile(_corners(fmt), 8), np.full(step, hi, np.int64), np.full(step, lo, np.int64),
+                 np.tile(corner_codes(fmt), 8), np.full(step, hi, np.int64), np.full(step, lo, np.int64),
                  np.full(step, hi, np.int64), np.zeros(step, np.int64)]
         t = np.arange(seg * 2)
         parts.append((0.9 * hi * np.sin(2 * np.pi * t / (seg * 2))).astype(np.int64))

@@ -111,16 +111,3 @@ def convert_array(x, shift, rounding, lo, hi, overflow):
         if o:
             count += 1
     return out, count
-
-
-@njit(cache=True)
-def convert_array_varshift(x, shift, rounding, lo, hi, overflow):
-    """Like convert_array with one shift per sample (e.g. a normalised divider)."""
-    out = np.empty(x.shape[0], dtype=np.int64)
-    count = 0
-    for i in range(x.shape[0]):
-        v, o = convert(x[i], shift[i], rounding, lo, hi, overflow)
-        out[i] = v
-        if o:
-            count += 1
-    return out, count

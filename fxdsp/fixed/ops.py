@@ -9,8 +9,6 @@ fits by ``rules.overflow`` and counts overflowing samples in an :class:`Overflow
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-
 import numpy as np
 
 from . import kernels
@@ -32,11 +30,6 @@ class OverflowLog(dict):
     @property
     def total(self) -> int:
         return int(sum(self.values()))
-
-    def merged(self, other: Mapping[str, int], prefix: str = "") -> "OverflowLog":
-        for key, value in other.items():
-            self.add(prefix + key, value)
-        return self
 
 
 def stored(x, name: str = "x") -> np.ndarray:
