@@ -181,6 +181,24 @@ def test_equal_time_stamps_are_allowed(tmp_path, capsys):
     assert json.loads((tmp_path / "r.json").read_text())["rows"]["used"] == 400
 
 
+def test_two_readings_per_stamp_give_the_same_diagnosis():
+    """Two different readings per time stamp (two loggers merged, or channels written on separate
+    lines): derivatives see zero-length intervals, which the shared mechanisms must handle; a
+    ramp-rate term, which lives on d(temp_c)/dt, must still be found with its coefficient."""
+    from fxdsp.diagnose.api import diagnose_log
+    from fxdsp.diagnose.logio import Log
+    from fxdsp.sim import generate_log
+
+    effects = {"ramp_rate": {"k_per_c_per_s": 400.0}}
+    a = generate_log(scenario="paper002", effects=effects, seed=4, columns=("rate_dps", "freq_hz"))
+    b = generate_log(scenario="paper002", effects=effects, seed=5, columns=("rate_dps", "freq_hz"))
+    assert np.array_equal(a["time_s"], b["time_s"])  # same programme, independent noise
+    merged = {k: np.column_stack([a[k], b[k]]).ravel() for k in a}
+    diag = diagnose_log(Log(columns=merged, source="<two readings per stamp>"))
+    assert diag.causes == ["ramp_rate"]
+    assert abs(diag.parameters["ramp_rate"]["k_per_c_per_s"] / 400.0 - 1.0) < 0.25
+
+
 def test_isolated_spikes_are_flagged_but_steps_and_ramps_are_not():
     from fxdsp.diagnose.model import spike_rows
 

@@ -25,7 +25,7 @@ def series_from_log(log: Log) -> tuple[M.Series, int]:
     if keep.sum() < MIN_ROWS:
         raise InputError(f"{log.source}: too few usable rows ({int(keep.sum())}); need at least {MIN_ROWS}")
     take = lambda name: (np.ascontiguousarray(cols[name][keep]) if name in cols else None)  # noqa: E731
-    t = M.strictly_increasing(take("time_s"))
+    t = take("time_s")  # repeated stamps are fine: fxdsp.mechanisms handles zero-length intervals
     if t[-1] - t[0] <= 0:
         raise InputError(f"{log.source}: time_s does not advance; a diagnosis needs a time span")
     series = M.Series(t=t, temp=take("temp_c"), out=take("output"), ref=take("ref_temp_c"),

@@ -111,14 +111,6 @@ def smoothed(t: np.ndarray, values: np.ndarray, window_s: float) -> tuple[np.nda
     return values[0] + (c[hi] - c[lo]) / (hi - lo), 2.0 * k * dt, k
 
 
-def strictly_increasing(t: np.ndarray) -> np.ndarray:
-    """Equal time stamps (allowed by the contract) get microsecond offsets so derivatives exist."""
-    t = np.asarray(t, dtype=float).copy()
-    if t.size > 1 and np.any(np.diff(t) <= 0):
-        t += np.arange(t.size) * 1e-6
-    return t
-
-
 def spike_rows(values: np.ndarray, threshold: float = 25.0) -> np.ndarray:
     """Isolated one-sample spikes: a reading far from the line through its two neighbours while
     the neighbours agree with each other.
