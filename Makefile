@@ -48,7 +48,7 @@ hdl-lint: $(STAMP) hdl-tools
 hdl-mutation: $(STAMP) hdl-tools
 	$(PY) scripts/mutate_rtl.py
 
-# yosys synth_ice40 -dsp + nextpnr-ice40 --up5k on every block and both tops -> hdl/HW_REPORT.md
+# yosys synth_ice40 -dsp + nextpnr-ice40 --up5k on every block and both tops -> hdl/HW_REPORT.md (+ .json)
 hw-report: $(STAMP)
 	@command -v yosys >/dev/null 2>&1 && command -v nextpnr-ice40 >/dev/null 2>&1 || { \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \

@@ -29,23 +29,16 @@ from .config import Config, load_config
 from .fixed import Format, OverflowLog, Rules, quantize
 
 
-def _same(fmt_a: Format, fmt_b: Format, field_a: str, field_b: str) -> None:
-    """Blocks connect wire to wire: a format mismatch is a config error, not a silent resize."""
-    if fmt_a != fmt_b:
-        raise ValueError(f"{field_a}: {fmt_a} must equal {field_b} ({fmt_b}) to connect the chain")
-
-
 class Paper002Chain(Block):
     name = "chain_paper002"
 
+    # members in the order of the chain's ovf vector (bit 0 first), by instance name
+    MEMBERS = ("rtd", "piecewise_sf", "piecewise_bias", "sf_divide", "demod", "bias_subtract", "iir")
+
     def __init__(self, rtd: Rtd, sf: Piecewise, divide: SfDivide, demod: Demod, bias: Piecewise,
                  subtract: BiasSubtract, lpf: Iir):
-        _same(sf.temp_format, rtd.temp_format, "piecewise.sf temperature", "rtd.temp_format")
-        _same(divide.sf_format, sf.out_format, "sf_divide sf input", "piecewise.sf.out_format")
-        _same(demod.in_format, divide.out_format, "demod input", "sf_divide.out_format")
-        _same(subtract.in_format, demod.data_format, "bias_subtract input", "demod.data_format")
-        _same(subtract.bias_format, bias.out_format, "bias_subtract bias input", "piecewise.bias.out_format")
-        _same(lpf.data_format, subtract.out_format, "iir.data_format", "bias_subtract.out_format")
+        """The blocks must already be connected wire to wire (``build`` derives each input format from
+        the output it is wired to)."""
         self.rtd, self.sf, self.divide, self.demod = rtd, sf, divide, demod
         self.bias, self.subtract, self.lpf = bias, subtract, lpf
         self.inputs = {"vsa": divide.in_format, "rtd_code": rtd.adc_format}
@@ -55,14 +48,23 @@ class Paper002Chain(Block):
         self.demod.reset()
         self.lpf.reset()
 
-    def _run(self, log: OverflowLog, vsa: np.ndarray, rtd_code: np.ndarray) -> dict[str, np.ndarray]:
-        temp = self.rtd._run(log, code=rtd_code)["temp"]
-        sf = self.sf._run(log, temp=temp)["y"]
-        v = self.divide._run(log, x=vsa, sf=sf)["y"]
+    def get_state(self) -> dict:
+        return {"demod": self.demod.get_state(), "iir": self.lpf.get_state()}
+
+    def set_state(self, state) -> None:
+        if not isinstance(state, dict) or set(state) != {"demod", "iir"}:
+            raise ValueError(f"{self.name}: state: expected a previous result's state {{'demod', 'iir'}}")
+        self.demod.set_state(state["demod"])
+        self.lpf.set_state(state["iir"])
+
+    def stream(self, log: OverflowLog, vsa: np.ndarray, rtd_code: np.ndarray) -> dict[str, np.ndarray]:
+        temp = self.rtd.stream(log, code=rtd_code)["temp"]
+        sf = self.sf.stream(log, temp=temp)["y"]
+        v = self.divide.stream(log, x=vsa, sf=sf)["y"]
         i, _ = self.demod.iq(log, v)
-        b = self.bias._run(log, temp=temp)["y"]
-        r = self.subtract._run(log, x=i, bias=b)["y"]
-        rate = self.lpf._run(log, x=r)["y"]
+        b = self.bias.stream(log, temp=temp)["y"]
+        r = self.subtract.stream(log, x=i, bias=b)["y"]
+        rate = self.lpf.stream(log, x=r)["y"]
         return {"temp": temp, "rate": rate}
 
     def reference(self, vsa: np.ndarray, rtd_code: np.ndarray) -> dict[str, np.ndarray]:
@@ -74,26 +76,42 @@ class Paper002Chain(Block):
         r = self.subtract.reference(x=i, bias=b)["y"]
         return {"temp": temp, "rate": self.lpf.reference(x=r)["y"]}
 
-    def sensor_inputs(self, t_c: np.ndarray, rate_fs: np.ndarray, quad_fs: float = 0.0,
-                      rng: np.random.Generator | None = None, noise_fs: float = 0.0) -> dict[str, np.ndarray]:
-        """Inputs of a device whose SF and bias follow this config's own calibration exactly:
-        sense = SF(T) * (rate + bias(T)) on the in-phase carrier (+ quadrature), RTD code of T."""
+    def sensor_analog(self, t_c: np.ndarray, rate_fs: np.ndarray, quad_fs: float = 0.0,
+                      rng: np.random.Generator | None = None, noise_fs: float = 0.0) -> dict:
+        """A device whose SF and bias follow this config's own calibration exactly, before its ADCs:
+        sense = SF(T) * (rate + bias(T)) on the in-phase carrier (+ quadrature, + white noise), and
+        the RTD bridge's ADC input. ``analog`` with the noise, ``clean`` without it."""
         n = len(t_c)
         sf = self.sf.reference(temp=t_c)["y"]
         bias = self.bias.reference(temp=t_c)["y"]
-        x = self.demod.carrier(sf * (rate_fs + bias), 0.0, n) + self.demod.carrier(sf * quad_fs, np.pi / 2, n)
-        if rng is not None and noise_fs:
-            x = x + rng.normal(0.0, noise_fs, n)
-        sat = Rules("half_up", "saturate")
-        return {"vsa": quantize(x, self.divide.in_format, sat), "rtd_code": self.rtd.adc_code(t_c)}
+        clean = self.demod.carrier(sf * (rate_fs + bias), 0.0, n) + self.demod.carrier(sf * quad_fs, np.pi / 2, n)
+        x = clean + rng.normal(0.0, noise_fs, n) if rng is not None and noise_fs else clean
+        frac = self.rtd.adc_fraction(t_c)
+        return {"analog": {"vsa": x, "rtd_frac": frac}, "clean": {"vsa": clean, "rtd_frac": frac}}
 
-    def nominal_stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
-        """Temperature swept -20..60 C, rate stepping through +-0.3 FS and zero, a quadrature term."""
+    def digitise(self, analog: dict) -> dict[str, np.ndarray]:
+        """The chain's ADCs: sense ADC (nearest, saturating) and the RTD bridge ADC."""
+        return {"vsa": quantize(analog["vsa"], self.divide.in_format, Rules("half_up", "saturate")),
+                "rtd_code": self.rtd.adc_quantize(analog["rtd_frac"])}
+
+    def sensor_inputs(self, t_c: np.ndarray, rate_fs: np.ndarray, quad_fs: float = 0.0,
+                      rng: np.random.Generator | None = None, noise_fs: float = 0.0) -> dict[str, np.ndarray]:
+        """The ADC codes of :meth:`sensor_analog`."""
+        return self.digitise(self.sensor_analog(t_c, rate_fs, quad_fs, rng, noise_fs)["analog"])
+
+    def nominal_analog(self, rng: np.random.Generator, n: int) -> dict:
+        """Temperature swept -20..60 C, rate stepping through +-0.3 FS and zero, a quadrature term,
+        white noise: the analog signals, the programme (``t_c``, ``rate_fs``) and the ADC codes."""
         n = max(n, 8192)
         t_c = np.linspace(-20.0, 60.0, n)
         steps = np.array([0.0, 0.3, -0.3, 0.1, 0.0, -0.05, 0.2, 0.0])
         rate = np.repeat(steps, -(-n // steps.size))[:n]
-        return self.sensor_inputs(t_c, rate, quad_fs=0.05, rng=rng, noise_fs=1e-3)
+        out = self.sensor_analog(t_c, rate, quad_fs=0.05, rng=rng, noise_fs=1e-3)
+        out.update(t_c=t_c, rate_fs=rate, codes=self.digitise(out["analog"]))
+        return out
+
+    def nominal_stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
+        return self.nominal_analog(rng, n)["codes"]
 
     def stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
         nom = self.nominal_stimulus(rng, n)
@@ -105,36 +123,43 @@ class Paper002Chain(Block):
         return {"vsa": np.concatenate([nom["vsa"], full]), "rtd_code": np.concatenate([nom["rtd_code"], hot])}
 
     def parameters(self) -> dict:
-        return {"blocks": ["rtd", "piecewise.sf", "sf_divide", "demod", "piecewise.bias", "bias_subtract", "iir"]}
+        return {"blocks": [b.name for b in (self.rtd, self.sf, self.divide, self.demod, self.bias, self.subtract,
+                                            self.lpf)]}
 
 
 class Paper001Chain(Block):
     name = "chain_paper001"
 
+    MEMBERS = ("freq2temp", "piecewise_bias001", "bias_subtract001")
+
     def __init__(self, f2t: Freq2Temp, bias: Piecewise, subtract: BiasSubtract):
-        _same(bias.temp_format, f2t.temp_format, "piecewise.bias001 temperature", "freq2temp temperature")
-        _same(subtract.bias_format, bias.out_format, "bias_subtract001 bias input", "piecewise.bias001.out_format")
         self.f2t, self.bias, self.subtract = f2t, bias, subtract
         self.inputs = {"f": f2t.freq_format, "rate_in": subtract.in_format}
         self.outputs = {"temp": f2t.temp_format, "rate": subtract.out_format}
 
-    def _run(self, log: OverflowLog, f: np.ndarray, rate_in: np.ndarray) -> dict[str, np.ndarray]:
-        temp = self.f2t._run(log, f=f)["temp"]
-        b = self.bias._run(log, temp=temp)["y"]
-        return {"temp": temp, "rate": self.subtract._run(log, x=rate_in, bias=b)["y"]}
+    def stream(self, log: OverflowLog, f: np.ndarray, rate_in: np.ndarray) -> dict[str, np.ndarray]:
+        temp = self.f2t.stream(log, f=f)["temp"]
+        b = self.bias.stream(log, temp=temp)["y"]
+        return {"temp": temp, "rate": self.subtract.stream(log, x=rate_in, bias=b)["y"]}
 
     def reference(self, f: np.ndarray, rate_in: np.ndarray) -> dict[str, np.ndarray]:
         temp = self.f2t.reference(f=f)["temp"]
         b = self.bias.reference(temp=temp)["y"]
         return {"temp": temp, "rate": self.subtract.reference(x=rate_in, bias=b)["y"]}
 
-    def nominal_stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
-        """Chamber points -10..50 C; zero-rate output = the quadratic bias of the same config + noise."""
+    def nominal_analog(self, rng: np.random.Generator, n: int) -> dict:
+        """Chamber points -10..50 C; zero-rate output = the quadratic bias of the same config + noise:
+        the analog frequency and rate (``clean`` without the noise) and their words."""
         t_c = np.repeat(np.arange(-10.0, 51.0, 10.0), -(-n // 7))[:n] + rng.normal(0, 0.05, n)
         q = self.bias.reference(temp=t_c)["y"]
         noise = rng.normal(0.0, 1.0, n)
-        rate = quantize(q + noise, self.subtract.in_format, Rules("half_up", "saturate"))
-        return {"f": self.f2t.freq_code(t_c), "rate_in": rate}
+        f = self.f2t.f0_hz + self.f2t.k_hz_per_c * t_c
+        sat = Rules("half_up", "saturate")
+        codes = {"f": quantize(f, self.f2t.freq_format, sat), "rate_in": quantize(q + noise, self.subtract.in_format, sat)}
+        return {"analog": {"f": f, "rate_in": q + noise}, "clean": {"f": f, "rate_in": q}, "codes": codes, "t_c": t_c}
+
+    def nominal_stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
+        return self.nominal_analog(rng, n)["codes"]
 
     def stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
         nom = self.nominal_stimulus(rng, n)
@@ -144,45 +169,140 @@ class Paper001Chain(Block):
         return {"f": np.concatenate([nom["f"], extra]), "rate_in": np.concatenate([nom["rate_in"], rate_extra])}
 
     def parameters(self) -> dict:
-        return {"blocks": ["freq2temp", "piecewise.bias001", "bias_subtract001"]}
+        return {"blocks": [b.name for b in (self.f2t, self.bias, self.subtract)]}
+
+
+@dataclass(frozen=True)
+class Port:
+    """One port of an instance: its format and the physical unit its real value is read in."""
+
+    name: str
+    format: Format
+    unit: str = ""        # physical unit of the table rows ("C", "deg/h", "ppm", ...)
+    scale: float = 1.0    # real value x scale = value in ``unit``
+
+
+@dataclass(frozen=True)
+class Instance:
+    """One row of the design's instance table: everything outside a block needs to know about it.
+
+    ``name`` is the one name of the instance (vectors directory, RTL instance and parameter header,
+    budget rows, hardware report); it is its config table with the dots spelled as underscores
+    (``piecewise.sf`` -> ``piecewise_sf``), and the model's overflow counters are named after the
+    table (``piecewise.sf.acc``). A chain's ovf vector is its members' vectors, bit 0 first."""
+
+    name: str
+    config_path: str
+    block: Block
+    module: str                       # RTL module
+    inputs: tuple[Port, ...]
+    outputs: tuple[Port, ...]
+    members: tuple[str, ...] = ()     # a chain's member instances, in ovf bit order
+    has_ready: bool = False           # the RTL module has an in_ready output (multi-cycle)
+
+    @property
+    def ports(self) -> dict[str, Port]:
+        return {p.name: p for p in (*self.inputs, *self.outputs)}
 
 
 @dataclass
 class Design:
-    """Every block and chain of one config, by the names used for vectors and RTL."""
+    """Every block and chain of one config, and the instance table that names them."""
 
     config: Config
+    seed: int
+    samples: int
+    fs_hz: float
+    rate_full_scale_dps: float
     blocks: dict[str, Block] = field(default_factory=dict)
     chains: dict[str, Block] = field(default_factory=dict)
-    seed: int = 1
-    samples: int = 1024
-    fs_hz: float = 96000.0
-    rate_full_scale_dps: float = 200.0
+    instances: dict[str, Instance] = field(default_factory=dict)
 
     @property
     def all(self) -> dict[str, Block]:
         return {**self.blocks, **self.chains}
 
+    def ovf_fields(self, name: str) -> list[tuple[str, str, int]]:
+        """The RTL ovf vector of an instance, bit 0 first: (member instance, counter, width) per field.
+        A block's counters are its config path + field counter (``demod.lpf_i.section0``)."""
+        inst = self.instances[name]
+        out = []
+        for member in inst.members or (name,):
+            m = self.instances[member]
+            out += [(member, f"{m.config_path}.{f.counter}", f.width) for f in m.block.datapath.ovf_fields()]
+        return out
+
+    def ovf_width(self, name: str) -> int:
+        return sum(w for _, _, w in self.ovf_fields(name))
+
+    def ovf_bit(self, name: str, counter: str) -> int:
+        """Bit position of the first flag of ``counter`` in the ovf vector of instance ``name``."""
+        bit = 0
+        for _, c, w in self.ovf_fields(name):
+            if c == counter:
+                return bit
+            bit += w
+        raise ValueError(f"{name}: no ovf field counts {counter!r}")
+
+
+# RTL modules that take several cycles per sample and so have an in_ready output
+HAS_READY = {"sf_divide", "chain_paper002"}
+
+
+def _units(design: "Design") -> dict[str, dict[str, tuple[str, float]]]:
+    """Physical unit of every instance port: the paper 002 signal path is in fractions of the
+    sense full scale (rate FS = [system].rate_full_scale_dps), paper 001's rate in deg/h."""
+    fs = ("deg/h", design.rate_full_scale_dps * 3600.0)
+    temp, degh = ("C", 1.0), ("deg/h", 1.0)
+    return {"rtd": {"temp": temp}, "lag": {"temp": temp, "te": temp}, "freq2temp": {"temp": temp},
+            "piecewise_sf": {"temp": temp, "y": ("ppm", 1e6)}, "piecewise_bias": {"temp": temp, "y": fs},
+            "piecewise_bias001": {"temp": temp, "y": degh}, "piecewise_k0": {"temp": temp, "y": ("Hz", 1.0)},
+            "piecewise_k1": {"temp": temp, "y": ("Hz/g", 1.0)}, "sf_divide": {"x": fs, "y": fs},
+            "demod": {"x": fs, "i": fs, "q": fs, "amp": fs, "phase": ("mrad", 1e3)},
+            "bias_subtract": {"x": fs, "bias": fs, "y": fs}, "bias_subtract001": {"x": degh, "bias": degh, "y": degh},
+            "iir": {"x": fs, "y": fs}, "chain_paper002": {"vsa": fs, "temp": temp, "rate": fs},
+            "chain_paper001": {"f": ("Hz", 1.0), "rate_in": degh, "temp": temp, "rate": degh}}
+
+
+def _instance_table(design: "Design") -> dict[str, Instance]:
+    units = _units(design)
+    table = {}
+    for name, block in design.all.items():
+        u = units.get(name, {})
+        ports = [tuple(Port(p, f, *u.get(p, ("", 1.0))) for p, f in ports.items())
+                 for ports in (block.inputs, block.outputs)]
+        members = getattr(block, "MEMBERS", ())
+        module = name if members else block.datapath.MODULE
+        if name != block.name.replace(".", "_"):
+            raise AssertionError(f"instance {name} is not named after its config table {block.name}")
+        table[name] = Instance(name, block.name, block, module, ports[0], ports[1], members, module in HAS_READY)
+    return table
+
 
 def build(config: Config | str | None = None, chains: bool = True) -> Design:
     """Build every block and chain from a config (path, Config, or None for the built-in default).
-    Any unknown key or table anywhere in the config is an error naming it. ``chains=False`` builds
-    the blocks alone, for block-level work on formats the chains could not connect."""
+    Any unknown key or table anywhere in the config is an error naming it. Every format an input
+    is wired to is derived from the output that drives it. ``chains=False`` builds the blocks
+    alone, for block-level work on formats the chains could not connect."""
     cfg = config if isinstance(config, Config) else load_config(config)
     stim = cfg.section("stimulus")
     system = cfg.section("system")
     fs = system.number("fs_hz", low=0, low_open=True)
-    design = Design(cfg, seed=stim.integer("seed", 1, low=0), samples=stim.integer("samples", 1024, low=16, high=10**7),
-                    fs_hz=fs, rate_full_scale_dps=system.number("rate_full_scale_dps", 200.0, low=0, low_open=True))
+    design = Design(cfg, seed=stim.integer("seed", low=0), samples=stim.integer("samples", low=16, high=10**7),
+                    fs_hz=fs, rate_full_scale_dps=system.number("rate_full_scale_dps", low=0, low_open=True))
 
     rtd = Rtd.from_config(cfg.section("rtd"))
     sf = Piecewise.from_config(cfg.section("piecewise.sf"), rtd.temp_format)
     div_sec = cfg.section("sf_divide")
     divide = SfDivide.from_config(div_sec, div_sec.format("in_format"), sf.out_format)
-    demod = Demod.from_config(cfg.section("demod"), fs, divide.out_format)
+    demod_sec = cfg.section("demod")
+    demod = Demod.from_config(demod_sec, fs, divide.out_format, chains)
     bias = Piecewise.from_config(cfg.section("piecewise.bias"), rtd.temp_format)
-    subtract = BiasSubtract.from_config(cfg.section("bias_subtract"), demod.data_format, bias.out_format)
-    lpf = Iir.from_config(cfg.section("iir"), fs, "iir")
+    sub_sec = cfg.section("bias_subtract")
+    subtract = BiasSubtract.from_config(sub_sec, demod.data_format, bias.out_format)
+    iir_sec = cfg.section("iir")
+    lpf = Iir.from_config(iir_sec, fs, iir_sec.wired_format("data_format", subtract.out_format,
+                                                             "bias_subtract.out_format", chains), "iir")
 
     f2t_sec = cfg.section("freq2temp")
     f2t = Freq2Temp.from_config(f2t_sec, f2t_sec.format("temp_format"))
@@ -192,7 +312,7 @@ def build(config: Config | str | None = None, chains: bool = True) -> Design:
 
     lag = Lag.from_config(cfg.section("lag"), rtd.temp_format)
 
-    qvba_temp = cfg.section("piecewise").format("qvba_temp_format", "s18.9")
+    qvba_temp = cfg.section("piecewise").format("qvba_temp_format")
     k0 = Piecewise.from_config(cfg.section("piecewise.k0"), qvba_temp)
     k1 = Piecewise.from_config(cfg.section("piecewise.k1"), qvba_temp)
 
@@ -203,5 +323,6 @@ def build(config: Config | str | None = None, chains: bool = True) -> Design:
     if chains:
         design.chains = {"chain_paper002": Paper002Chain(rtd, sf, divide, demod, bias, subtract, lpf),
                          "chain_paper001": Paper001Chain(f2t, bias001, subtract001)}
+    design.instances = _instance_table(design)
     cfg.check_all_read()
     return design

@@ -1,7 +1,9 @@
 """`fxdsp` command line: one sub-command per job, each in its own module.
 
-Every sub-command module exposes ``configure(parser)`` and ``run(args) -> int``. They are imported
-lazily so that a quick command does not pay for numba compilation of the others.
+Every sub-command module exposes ``configure(parser)`` and ``run(args) -> int``. Only the module of
+the command being run is imported, so that a quick command does not pay for the imports of the
+others (numba and the blocks); ``fxdsp --help`` lists every command from COMMANDS without importing
+any. A module that fails to import is an error (its traceback), never a silently missing command.
 
 Bad input (ValueError, TypeError, a missing file, a malformed TOML) becomes one line on stderr and
 exit status 2; nothing else is caught, so a real bug still shows its traceback.
@@ -13,6 +15,7 @@ import argparse
 import importlib
 import sys
 import tomllib
+from collections.abc import Iterable
 
 # name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -26,32 +29,32 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "budget": ("fxdsp.budget.cli", "float vs fixed error budget in physical units; word-length exploration"),
     "hdl-gen": ("fxdsp.hdl.gen_cli", "write the Verilog parameter headers and ROM files from the config"),
     "hw-report": ("fxdsp.hdl.report_cli", "synthesise every block for the iCE40UP5K and tabulate the cost"),
+    "diagnose-bench": ("fxdsp.commands.diagnose_bench", "seconds to diagnose simulated logs of given sizes"),
+    "diagnose-hidden": ("fxdsp.commands.diagnose_hidden",
+                        "confusion matrix of the diagnosis on simulated logs with a random hidden cause"),
+    "diagnose-rtd": ("fxdsp.commands.diagnose_rtd",
+                     "linear RTD law vs Callendar-Van Dusen on a resistance table, and its diagnosis"),
 }
 
 
-def _load(name: str):
-    module_name, _ = COMMANDS[name]
-    return importlib.import_module(module_name)
-
-
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(load: Iterable[str] | None = None) -> argparse.ArgumentParser:
+    """The parser with every command. The modules of the commands in ``load`` (default: all) are
+    imported and configure their options; the others are listed only. Import errors propagate."""
     parser = argparse.ArgumentParser(prog="fxdsp", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (module_name, help_text) in COMMANDS.items():
-        try:
-            module = importlib.import_module(module_name)
-        except ModuleNotFoundError as exc:  # a sub-command still being built is simply not offered
-            if exc.name and module_name.startswith(exc.name):
-                continue
-            raise
         sp = sub.add_parser(name, help=help_text, description=help_text)
-        module.configure(sp)
-        sp.set_defaults(_module=module)
+        if load is None or name in load:
+            module = importlib.import_module(module_name)
+            module.configure(sp)
+            sp.set_defaults(_module=module)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    # the command is the first argument (fxdsp has no options of its own but --help): load only it
+    parser = build_parser(load=argv[:1] if argv and argv[0] in COMMANDS else ())
     args = parser.parse_args(argv)  # argparse itself exits 2 with one usage line on bad flags
     if not getattr(args, "command", None):
         parser.print_help()

@@ -10,10 +10,13 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
 import tomllib
 from importlib import resources
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from .fixed import Format, Rules
 from .fixed.rules import check_overflow, check_rounding
@@ -68,6 +71,19 @@ class Section:
     def format(self, key: str, default: Any = None) -> Format:
         value = self._get(key, _REQUIRED if default is None else default)
         return Format.parse(value, self.field(key))
+
+    def wired_format(self, key: str, wired: Format, source_field: str, enforce: bool = True) -> Format:
+        """The format of an input wired to ``source_field``: derived from it, not restated. A config
+        that states it anyway must agree (the error names both fields); for block-level work
+        (``enforce`` False) a stated format is taken as given."""
+        if key not in self.data:
+            self._read.add(key)
+            return wired
+        stated = self.format(key)
+        if enforce and stated != wired:
+            raise ValueError(f"{self.field(key)}: {stated} must equal {source_field} ({wired}) to connect "
+                             f"the chain; leave it out, it is derived")
+        return stated
 
     def formats(self, key: str) -> Format | list[Format]:
         """One format, or a list of formats (one per element, e.g. per polynomial power)."""
@@ -193,3 +209,79 @@ class Config:
         for sec in self._sections.values():
             sec.done()
         self.root.done()
+
+
+# --- writing ------------------------------------------------------------------------------------
+# The package's one TOML writer: `fxdsp budget --config-out` writes whole configs with dumps(), the
+# calibration rewrites single values of a commented copy of the default with dumps_value().
+
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+# a TOML basic string must escape '"', '\' and the control characters (tab may stay, but is
+# clearer escaped); every other character is written as is (the file is UTF-8)
+_ESCAPES = {'"': '\\"', "\\": "\\\\", "\b": "\\b", "\t": "\\t", "\n": "\\n", "\f": "\\f", "\r": "\\r"}
+
+
+def _string(s: str) -> str:
+    out = []
+    for ch in s:
+        if ch in _ESCAPES:
+            out.append(_ESCAPES[ch])
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append(f"\\u{ord(ch):04x}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
+def _key(key: str) -> str:
+    if not isinstance(key, str):
+        raise TypeError(f"{key!r}: TOML keys are strings, got {type(key).__name__}")
+    return key if _BARE_KEY.fullmatch(key) else _string(key)
+
+
+def dumps_value(value: Any, path: str = "value") -> str:
+    """One TOML value on one line: bool, int, finite float (shortest repr, so it reads back exactly),
+    str, arrays (lists, tuples, numpy arrays; nested) and inline tables (dicts). ``path`` names the
+    value in errors."""
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        f = float(value)
+        if not math.isfinite(f):  # TOML could say inf/nan, but no config field accepts them
+            raise ValueError(f"{path}: {f} cannot be written to a config")
+        return repr(f)
+    if isinstance(value, str):
+        return _string(value)
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(dumps_value(v, f"{path}[{i}]") for i, v in enumerate(value)) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{_key(k)} = {dumps_value(v, f'{path}.{k}')}" for k, v in value.items()) + "}"
+    raise TypeError(f"{path}: cannot write {type(value).__name__} to TOML")
+
+
+def dumps(data: dict[str, Any], header: str = "") -> str:
+    """TOML text that ``tomllib.loads`` reads back to ``data``: nested dicts become ``[a.b]`` tables,
+    everything else one ``key = value`` line (:func:`dumps_value`). ``header`` lines become comments."""
+    if not isinstance(data, dict):
+        raise TypeError(f"data: expected a dict, got {type(data).__name__}")
+    lines = [f"# {ln}" if ln else "#" for ln in header.splitlines()]
+
+    def table(node: dict, path: list[str]) -> None:
+        values = {k: v for k, v in node.items() if not isinstance(v, dict)}
+        tables = {k: v for k, v in node.items() if isinstance(v, dict)}
+        # a table holding only tables needs no header of its own; an empty one does, or it is lost
+        if path and (values or not tables):
+            if lines:
+                lines.append("")
+            lines.append("[" + ".".join(_key(k) for k in path) + "]")
+        for k, v in values.items():
+            lines.append(f"{_key(k)} = {dumps_value(v, '.'.join([*path, k]))}")
+        for k, v in tables.items():  # after this table's values: they would belong to the sub-table
+            table(v, [*path, k])
+
+    table(data, [])
+    return "\n".join(lines) + "\n"

@@ -17,19 +17,9 @@ ANGLE_PORTS = {("demod", "phase")}
 
 
 def port_units(design: Design) -> dict[tuple[str, str], tuple[str, float]]:
-    """(block, port) -> (unit, value-to-unit factor)."""
-    fs_degh = design.rate_full_scale_dps * 3600.0
-    u = {("rtd", "temp"): ("C", 1.0), ("iir", "y"): ("deg/h", fs_degh),
-         ("demod", "i"): ("deg/h", fs_degh), ("demod", "q"): ("deg/h", fs_degh),
-         ("demod", "amp"): ("deg/h", fs_degh), ("demod", "phase"): ("mrad", 1e3),
-         ("piecewise_sf", "y"): ("ppm", 1e6), ("piecewise_bias", "y"): ("deg/h", fs_degh),
-         ("piecewise_bias001", "y"): ("deg/h", 1.0), ("piecewise_k0", "y"): ("Hz", 1.0),
-         ("piecewise_k1", "y"): ("Hz/g", 1.0), ("sf_divide", "y"): ("deg/h", fs_degh),
-         ("bias_subtract", "y"): ("deg/h", fs_degh), ("bias_subtract001", "y"): ("deg/h", 1.0),
-         ("freq2temp", "temp"): ("C", 1.0), ("chain_paper002", "temp"): ("C", 1.0),
-         ("chain_paper002", "rate"): ("deg/h", fs_degh), ("chain_paper001", "temp"): ("C", 1.0),
-         ("chain_paper001", "rate"): ("deg/h", 1.0), ("lag", "te"): ("C", 1.0)}
-    return u
+    """(instance, port) -> (unit, value-to-unit factor), from the design's instance table."""
+    return {(name, p.name): (p.unit, p.scale) for name, inst in design.instances.items()
+            for p in (*inst.inputs, *inst.outputs) if p.unit}
 
 
 @dataclass
@@ -60,11 +50,8 @@ def block_errors(design: Design, name: str, samples: int | None = None, seed_off
     block = design.all[name]
     rng = np.random.default_rng([design.seed, seed_offset, list(design.all).index(name)])
     stim = block.nominal_stimulus(rng, samples or design.samples)
-    block.reset()
     result = block.run(**stim)
-    block.reset()
     ref = block.run_float(**stim)
-    block.reset()
     got = block.real_outputs(result)
     units = port_units(design)
     out = []

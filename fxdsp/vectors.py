@@ -10,43 +10,25 @@ from __future__ import annotations
 
 import hashlib
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 
 from .chains import Design
 from .fixed import Format
+from .fixed.hexfile import hex_words, read_hex_words
 
 MANIFEST = "manifest.json"
 
 
 def to_hex_lines(q: np.ndarray, fmt: Format) -> str:
-    """Stored integers -> $readmemh text (two's complement, ceil(wl/4) digits per word)."""
-    digits = -(-fmt.wl // 4)
-    mask = (1 << fmt.wl) - 1
-    words = (np.asarray(q, dtype=np.int64).astype(object) & mask) if fmt.wl > 62 else \
-        (np.asarray(q, dtype=np.int64) & np.int64(mask))
-    return "".join(f"{int(w):0{digits}x}\n" for w in words)
+    """Stored integers of ``fmt`` -> $readmemh text (the one encoder, :func:`fxdsp.fixed.hexfile.hex_words`)."""
+    return hex_words(q, fmt.wl)
 
 
 def from_hex_lines(text: str, fmt: Format) -> np.ndarray:
     """$readmemh text -> stored integers of ``fmt`` (sign-extended when signed)."""
-    vals = []
-    for ln, line in enumerate(text.splitlines(), 1):
-        line = line.split("//")[0].strip()
-        if not line:
-            continue
-        try:
-            w = int(line, 16)
-        except ValueError:
-            raise ValueError(f"line {ln}: {line!r} is not a hex word") from None
-        if w >> fmt.wl:
-            raise ValueError(f"line {ln}: {line!r} does not fit {fmt.wl} bits")
-        if fmt.signed and w >> (fmt.wl - 1):
-            w -= 1 << fmt.wl
-        vals.append(w)
-    return np.array(vals, dtype=np.int64)
+    return read_hex_words(text, fmt.wl, fmt.signed)
 
 
 def _sha256(text: str) -> str:
@@ -63,9 +45,7 @@ def generate(design: Design) -> dict[str, str]:
         # each block its own stream, derived from (seed, index): adding a block never changes another's vectors
         rng = np.random.default_rng([design.seed, index])
         stim = block.stimulus(rng, design.samples)
-        block.reset()
         result = block.run(**stim)
-        block.reset()
         n = len(next(iter(stim.values())))
         entry = {"samples": n, "inputs": {}, "outputs": {}, "overflows": dict(result.overflows),
                  "parameters": block.parameters()}
@@ -111,22 +91,15 @@ def check(files: dict[str, str], out: Path, patterns: tuple[str, ...] = ("**/*.h
     return problems
 
 
-def write_or_check(files: dict[str, str], out: Path, check_only: bool, command: str,
-                   patterns: tuple[str, ...] = ("**/*.hex",)) -> int:
-    """The generate-or-``--check`` step shared by every command that writes committed files:
-    exit 1 with the differences on stderr, 0 when identical or written."""
+def write_or_check(files: dict[str, str], out: Path, check_only: bool,
+                   patterns: tuple[str, ...] = ("**/*.hex",)) -> list[str]:
+    """The generate-or-``--check`` step shared by every command that writes committed files: with
+    ``check_only`` the differences against ``out`` (see :func:`check`; empty when identical),
+    otherwise write the files and return no differences. Reporting is the command's job."""
     if check_only:
-        problems = check(files, out, patterns)
-        if problems:
-            for p in problems[:20]:
-                print(p, file=sys.stderr)
-            print(f"fxdsp {command}: {len(problems)} difference(s) against {out}", file=sys.stderr)
-            return 1
-        print(f"{out}: {len(files)} files match the config")
-        return 0
+        return check(files, out, patterns)
     write(files, out)
-    print(f"wrote {len(files)} files to {out}")
-    return 0
+    return []
 
 
 def load(out: Path, name: str) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict]:

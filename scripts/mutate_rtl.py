@@ -1,18 +1,24 @@
 #!/usr/bin/env python3
 """Mutation proof of the HDL regressions: apply each single-point RTL mutation to a copy of
 hdl/rtl, run the file-driven check that should notice it, print a Markdown table.
-Exit status 1 if any mutation survives or the unmutated RTL fails. Usage: python scripts/mutate_rtl.py"""
+Exit status 1 if any mutation survives or the unmutated RTL fails; 2 if a mutant (or the unmutated
+copy) does not compile: a broken mutant is an error of the mutation list, never a kill.
+Usage: python scripts/mutate_rtl.py"""
 
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "hdl"))
 
-from mutation import run, table  # noqa: E402
+from mutation import MutantBroken, run, table  # noqa: E402
 
 
 def main() -> int:
-    rows = run()
+    try:
+        rows = run()
+    except MutantBroken as exc:
+        print(f"mutation harness error: {exc}", file=sys.stderr)
+        return 2
     print(table(rows))
     base, muts = rows[0], rows[1:]
     ok = not base["caught"] and all(r["caught"] for r in muts)

@@ -13,8 +13,17 @@ from fxdsp.chains import build
 from fxdsp.config import Config, default_config_text
 
 
-# shared/ (specs and real data) sits beside the checkout, in CI as on a developer's machine
+# shared/ (specs and real data) sits beside the checkout, in CI as on a developer's machine; a bare
+# clone has none, so every test that reads it is marked with needs_shared()
 SHARED = Path(__file__).resolve().parents[2] / "shared"
+
+
+def needs_shared(*rel: str):
+    """Skip marker for a test that reads these files of ../shared, with a reason naming the first
+    one that is absent."""
+    missing = [r for r in rel if not (SHARED / r).exists()]
+    return pytest.mark.skipif(bool(missing), reason=f"../shared/{missing[0]} absent (no shared/ checkout "
+                              "beside this one)" if missing else "")
 
 
 def default_data() -> dict:

@@ -102,40 +102,68 @@ def test_demod_mixer_and_cordic(rounding, overflow):
     vals = np.array([f.min_int, -12345, -1, 0, 1, 777, f.max_int], dtype=np.int64)
     ii, qq = np.repeat(vals, vals.size), np.tile(vals, vals.size)
     from fxdsp.blocks.demod import cordic_vector
-    xk, z = cordic_vector(ii, qq, b.work_format, b.angle_format, b.iterations)
+    xk, z = cordic_vector(ii, qq, b.datapath)
     ox, oz = oracle.cordic(b, ii, qq)
     assert xk.tolist() == ox and z.tolist() == oz
 
 
 def test_demod_streams_in_chunks_like_one_run(design):
-    """State (NCO phase, filters) carries across calls: two halves equal one whole."""
+    """State (NCO phase, filters) carries across calls as scipy's zi/zf: two halves equal one whole."""
     b = design.blocks["demod"]
     x = b.nominal_stimulus(np.random.default_rng(9), 5000)["x"]
-    b.reset()
     whole = b.run(x=x).outputs
-    b.reset()
-    first = b.run(x=x[:2345]).outputs
-    second = b.run(x=x[2345:]).outputs
-    b.reset()
+    head = b.run(x=x[:2345])
+    first, second = head.outputs, b.run(x=x[2345:], state=head.state).outputs
     for port in ("i", "q", "amp", "phase"):
         assert np.array_equal(np.concatenate([first[port], second[port]]), whole[port])
 
 
-def test_chain_paper002_is_the_composition_of_its_blocks(design):
+def _chain_rows(stim: dict, step: int, tail: int, n_nominal: int = 8192) -> dict:
+    """Every ``step``-th sample of the nominal part plus the first ``tail`` samples after it (the
+    full-scale corner): a short stream with the same coverage, fast enough for the oracles."""
+    rows = np.r_[0:n_nominal:step, n_nominal:n_nominal + tail]
+    return {k: v[rows] for k, v in stim.items()}
+
+
+def test_chain_paper002_equals_the_oracles_composed_from_the_config(design):
+    """The chain against the independent integer oracles (tests/block_oracles.py) wired as paper 002's
+    figure 4: RTD -> SF(T) -> divide -> demod (I) -> - bias(T) -> low-pass. The oracles read only the
+    blocks' parameters (built here from the config, blocks only), so a block computing wrongly in
+    the chain is caught, unlike a recomposition of the chain's own block objects."""
     c = design.chains["chain_paper002"]
-    st = c.nominal_stimulus(np.random.default_rng(10), 8192)
+    st = _chain_rows(c.stimulus(np.random.default_rng(10), 8192), step=8, tail=256)
     c.reset()
-    out = c.run(**st).outputs
-    blk = design.blocks
-    temp = blk["rtd"].run(code=st["rtd_code"]).outputs["temp"]
-    sf = blk["piecewise_sf"].run(temp=temp).outputs["y"]
-    v = blk["sf_divide"].run(x=st["vsa"], sf=sf).outputs["y"]
-    blk["demod"].reset()
-    i = blk["demod"].run(x=v).outputs["i"]
-    bias = blk["piecewise_bias"].run(temp=temp).outputs["y"]
-    r = blk["bias_subtract"].run(x=i, bias=bias).outputs["y"]
-    rate = blk["iir"].filter(r)
-    assert np.array_equal(out["temp"], temp) and np.array_equal(out["rate"], rate)
+    res = c.run(**st)
+    c.reset()
+    p = design_with()  # the same config, blocks only: parameters for the oracles
+    temp = oracle.rtd(p.blocks["rtd"], st["rtd_code"])
+    sf = oracle.piecewise(p.blocks["piecewise_sf"], temp)
+    v = oracle.sf_divide(p.blocks["sf_divide"], st["vsa"], sf)
+    demod = p.blocks["demod"]
+    i = oracle.iir(demod.lpf_i, oracle.demod_mix(demod, v)[0])
+    bias = oracle.piecewise(p.blocks["piecewise_bias"], temp)
+    r = oracle.bias_subtract(p.blocks["bias_subtract"], i, bias)
+    rate = oracle.iir(p.blocks["iir"], r)
+    assert res.outputs["temp"].tolist() == temp
+    assert res.outputs["rate"].tolist() == rate
+    # the stream is worth checking: every SF segment is used and the sense input reaches full scale
+    bps = p.blocks["piecewise_sf"].breakpoints
+    assert min(temp) < int(bps[0]) and max(temp) > int(bps[-1])
+    fmt = c.inputs["vsa"]
+    assert st["vsa"].max() == fmt.max_int and st["vsa"].min() == fmt.min_int
+
+
+def test_chain_paper001_equals_the_oracles_composed_from_the_config(design):
+    """Paper 001's chain (f -> T -> quadratic bias -> subtract) against the oracles, likewise."""
+    c = design.chains["chain_paper001"]
+    st = c.stimulus(np.random.default_rng(12), 600)
+    res = c.run(**st)
+    p = design_with()
+    temp = oracle.freq2temp(p.blocks["freq2temp"], st["f"])
+    bias = oracle.piecewise(p.blocks["piecewise_bias001"], temp)
+    rate = oracle.bias_subtract(p.blocks["bias_subtract001"], st["rate_in"], bias)
+    assert res.outputs["temp"].tolist() == temp
+    assert res.outputs["rate"].tolist() == rate
 
 
 @pytest.mark.parametrize("rounding,overflow", RULES)

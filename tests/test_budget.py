@@ -124,13 +124,10 @@ def test_bad_input_exits_2_with_one_line(argv, word, capsys):
     assert len(err) == 1 and word in err[0]
 
 
-def test_hw_report_table_is_read(tmp_path):
-    from fxdsp.budget.optimise import hw_report, synth_estimate
+def test_synth_estimate_sums_the_chain_members():
+    from fxdsp.budget.optimise import synth_estimate
 
-    md = tmp_path / "HW_REPORT.md"
-    md.write_text("# HW\n\n| block | LUT4 | DFF | MAC16 |\n|---|---:|---:|---:|\n| rtd | 120 | 40 | 1 |\n"
-                  "| iir | 300 | 90 | 4 |\n| freq2temp | 50 | 20 | 1 |\n")
-    rows = hw_report(md)
-    assert rows["iir"] == {"lut": 300.0, "mac16": 4.0}
-    est = synth_estimate(rows, "chain_paper002", 100, 50)
+    rows = {"rtd": {"lut": 120.0, "mac16": 1.0}, "iir": {"lut": 300.0, "mac16": 4.0},
+            "freq2temp": {"lut": 50.0, "mac16": 1.0}}
+    est = synth_estimate(rows, build().instances["chain_paper002"].members, 100, 50)
     assert est["lut_default"] == 420 and est["mac16_default"] == 5 and est["lut_estimate"] == 210

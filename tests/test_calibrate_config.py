@@ -1,4 +1,4 @@
-"""``fxdsp calibrate --config-out F --apply LOG2`` and ``fxdsp.repro.cli`` (the ``fxdsp repro`` command)."""
+"""``fxdsp calibrate --config-out F --apply LOG2`` and ``fxdsp repro``."""
 
 from __future__ import annotations
 
@@ -8,7 +8,6 @@ import pytest
 
 from fxdsp.chains import build
 from fxdsp.cli import main
-from fxdsp.repro import cli as repro_cli
 from fxdsp.sim import generate_log, write_log
 
 
@@ -82,11 +81,11 @@ def test_calibrate_bad_arguments_are_one_line_errors(logs, tmp_path, capsys):
 
 
 def test_repro_command_writes_the_report(tmp_path, capsys):
-    assert repro_cli.main(["--paper", "003", "--sweep-points", "7", "--quiet", "--report", str(tmp_path)]) == 0
+    assert main(["repro", "--paper", "003", "--sweep-points", "7", "--quiet", "--report", str(tmp_path)]) == 0
     text = (tmp_path / "REPRODUCTIONS.md").read_text()
     assert "Paper 003" in text and "img/paper003.png" in text
     assert (tmp_path / "img" / "paper003.png").stat().st_size > 10_000
     assert "cxy" in capsys.readouterr().out
-    assert repro_cli.main(["--paper", "004", "--quiet"]) == 2
+    assert main(["repro", "--paper", "004", "--quiet"]) == 2
     assert "--paper" in capsys.readouterr().err
-    assert repro_cli.main(["--paper", "003", "--sweep-points", "2", "--quiet"]) == 2
+    assert main(["repro", "--paper", "003", "--sweep-points", "2", "--quiet"]) == 2

@@ -1,11 +1,22 @@
-"""The demo and bench commands run end to end (functional checks; speed is not asserted)."""
+"""The command line: every runnable entry point is a registered `fxdsp` command that loads, only
+the command being run is imported, and the commands run end to end (functional checks; speed is
+not asserted)."""
 
 from __future__ import annotations
 
+import importlib
 import json
+import re
+import subprocess
+import sys
 from pathlib import Path
 
-from fxdsp.cli import main
+import numpy as np
+import pytest
+
+import fxdsp
+from fxdsp import cli
+from fxdsp.cli import COMMANDS, build_parser, main
 from fxdsp.chains import build
 
 
@@ -32,3 +43,68 @@ def test_bench_reports_ratios_and_agreement(tmp_path: Path, capsys):
 def test_bench_rejects_small_sample_counts(capsys):
     assert main(["bench", "--samples", "1000"]) == 2
     assert "200000" in capsys.readouterr().err
+
+
+def test_every_registered_command_loads():
+    build_parser()  # imports and configures every command module; any import error propagates
+    for name, (module_name, _) in COMMANDS.items():
+        module = importlib.import_module(module_name)
+        assert callable(module.configure) and callable(module.run), name
+
+
+def test_a_command_whose_module_fails_to_import_is_an_error(monkeypatch):
+    monkeypatch.setitem(cli.COMMANDS, "broken", ("fxdsp.no_such_module", "a command still being built"))
+    with pytest.raises(ModuleNotFoundError, match="fxdsp.no_such_module"):
+        main(["broken"])
+    with pytest.raises(ModuleNotFoundError):
+        build_parser()
+
+
+def test_only_the_command_being_run_is_imported():
+    code = ("import sys; from fxdsp.cli import main\n"
+            "try:\n    main(['diagnose', '--help'])\nexcept SystemExit:\n    pass\n"
+            "print(sorted(m for m in sys.modules if m.startswith('fxdsp.') or m == 'numba'))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    loaded = out.strip().splitlines()[-1]
+    assert "fxdsp.diagnose.cli" in loaded
+    assert "numba" not in loaded and "fxdsp.commands.demo" not in loaded and "fxdsp.chains" not in loaded
+
+
+def test_no_module_has_an_entry_point_of_its_own():
+    # every runnable job is an `fxdsp` sub-command: no private argparse main, no __main__ block
+    package = Path(fxdsp.__file__).parent
+    for path in package.rglob("*.py"):
+        if path == package / "cli.py":
+            continue
+        text = path.read_text(encoding="utf-8")
+        assert not re.search(r"__name__\s*==\s*['\"]__main__['\"]|ArgumentParser\(", text), path
+
+
+def test_diagnose_rtd_names_the_curvature_of_a_callendar_van_dusen_table(tmp_path: Path, capsys):
+    from fxdsp.diagnose.rtd import IEC60751, cvd_law
+
+    t = np.arange(-50.0, 151.0)
+    table = tmp_path / "pt100.csv"
+    table.write_text("temperature_c,resistance_ohm\n" +
+                     "".join(f"{a:g},{r:.4f}\n" for a, r in zip(t, cvd_law(**IEC60751).resistance(t))))
+    assert main(["diagnose-rtd", str(table)]) == 0
+    out = capsys.readouterr().out
+    assert all(re.search(rf"^{key} +max \|error\|", out, re.M) for key in ("linear", "cvd_fit", "cvd_iec60751"))
+    assert "rtd_nonlinearity" in out.splitlines()[-1]
+    assert main(["diagnose-rtd", str(table), "--range", "0", "2"]) == 2
+    assert "--range" in capsys.readouterr().err
+
+
+def test_diagnose_hidden_prints_the_confusion_matrix(capsys):
+    assert main(["diagnose-hidden", "--per-cause", "1", "--causes", "none,hysteresis"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("truth / found") and "2 cases in" in out
+    assert re.search(r"^hysteresis +\d", out, re.M)
+    assert main(["diagnose-hidden", "--per-cause", "1", "--causes", "no_such_cause"]) == 2
+    assert "no_such_cause" in capsys.readouterr().err
+
+
+def test_diagnose_bench_times_a_log(capsys):
+    assert main(["diagnose-bench", "--rows", "500"]) == 0
+    assert re.search(r"^ +\d+ rows: +[\d.]+ s  -> thermal_lag", capsys.readouterr().out, re.M)
+    assert main(["diagnose-bench", "--rows", "10"]) == 2

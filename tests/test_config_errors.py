@@ -53,7 +53,9 @@ BAD = [
     ({"sf_divide.guard_bits": 40}, "sf_divide.guard_bits", "32"),
     ({"demod.f_hz": -5.0}, "demod.f_hz", None),
     ({"stimulus.samples": 3}, "stimulus.samples", "16"),
-    ({"bias_subtract.out_format": "s20.22"}, "iir.data_format", "connect"),       # chain cannot connect
+    # a wired format stated anyway must agree with the output it is wired to: the error names both
+    ({"iir.data_format": "s20.18"}, "iir.data_format", "bias_subtract.out_format"),
+    ({"demod.lpf.data_format": "s22.20"}, "demod.lpf.data_format", "demod.data_format"),
 ]
 
 

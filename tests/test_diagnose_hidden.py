@@ -4,7 +4,7 @@ that cause named, its parameters within 25 % and a held-out gain above 1.3; logs
 
 Case generation (scenario, optional columns, parameters, size as a multiple of the noise) is in
 fxdsp.diagnose.hidden, where the ranges are documented. The confusion matrix over 20 cases per
-cause: ``.venv/bin/python -m fxdsp.diagnose.hidden --per-cause 20``, or the slow test below with
+cause: ``.venv/bin/fxdsp diagnose-hidden --per-cause 20``, or the slow test below with
 ``FXDSP_SLOW=1 .venv/bin/python -m pytest -q -m slow tests/test_diagnose_hidden.py``.
 """
 
@@ -121,7 +121,8 @@ def test_two_causes_at_once_are_both_named():
 def test_confusion_matrix_over_20_cases_per_cause():
     from fxdsp.diagnose.hidden import confusion
 
-    matrix, failures = confusion(20, first_seed=1000)
+    res = confusion(20, first_seed=1000)
+    matrix, failures = res.matrix, res.failures
     correct = np.trace(matrix)
     assert correct >= 0.95 * matrix.sum(), failures
     assert matrix[0, 0] >= 19  # false alarms on cause-free logs

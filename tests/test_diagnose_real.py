@@ -3,7 +3,7 @@ published Pt100 table. The assertions are physics read from the raw data, not th
 
 from __future__ import annotations
 
-from conftest import SHARED
+from conftest import SHARED, needs_shared
 
 import json
 from pathlib import Path
@@ -14,16 +14,15 @@ import pytest
 
 from fxdsp.cli import main
 from fxdsp.diagnose.logio import parse_mapping, read_log
-from fxdsp.diagnose.rtd import (IEC60751, cvd_resistance, fit_cvd, fit_linear, linear_temperature, load_table,
-                                rtd_study)
+from fxdsp.diagnose.rtd import IEC60751, cvd_law, fit_cvd, fit_linear, linear_temperature, load_table, rtd_study
+from fxdsp.schemas import diagnose_report_schema
 
-TCKIT = (SHARED / "data/tckit/hp3458abx_hp34420a_tcsweep_1vdc_nplc100_test2_oct2024.dsv")
-PT100 = (SHARED / "data/pt100_table/pt100_table.csv")
-SCHEMA = json.loads((SHARED / "spec/diagnose-report.schema.json").read_text())
+TCKIT_REL = "data/tckit/hp3458abx_hp34420a_tcsweep_1vdc_nplc100_test2_oct2024.dsv"
+PT100_REL = "data/pt100_table/pt100_table.csv"
+TCKIT, PT100 = SHARED / TCKIT_REL, SHARED / PT100_REL
 TCKIT_ARGS = ["--map", "time_s=date", "--map", "temp_c=box_temp", "--map", "output=vbl5",
               "--delimiter", ";", "--time-format", "%d/%m/%Y-%H:%M:%S"]
-
-pytestmark = pytest.mark.skipif(not TCKIT.exists() or not PT100.exists(), reason="shared data not mounted")
+needs_tckit, needs_pt100 = needs_shared(TCKIT_REL), needs_shared(PT100_REL)
 
 
 def _dwell_relaxation_time_s(t, box, v, plateau):
@@ -41,6 +40,7 @@ def _dwell_relaxation_time_s(t, box, v, plateau):
     return best[0], tt[-1]
 
 
+@needs_tckit
 def test_tckit_log_is_read_through_the_mapping():
     log = read_log(TCKIT, parse_mapping(TCKIT_ARGS[1:6:2]), ";", "%d/%m/%Y-%H:%M:%S")
     t = log.columns["time_s"]
@@ -51,12 +51,13 @@ def test_tckit_log_is_read_through_the_mapping():
     assert 17.5 < log.columns["temp_c"].min() and log.columns["temp_c"].max() < 35.5
 
 
+@needs_tckit
 def test_tckit_vbl5_lags_the_bath(tmp_path, capsys):
     report = tmp_path / "tckit.json"
     code = main(["diagnose", str(TCKIT), *TCKIT_ARGS, "--json", str(report), "--report", str(tmp_path / "rep")])
     assert code == 0, capsys.readouterr().err
     data = json.loads(report.read_text())
-    jsonschema.validate(data, SCHEMA)
+    jsonschema.validate(data, diagnose_report_schema())
 
     log = read_log(TCKIT, parse_mapping(TCKIT_ARGS[1:6:2]), ";", "%d/%m/%Y-%H:%M:%S")
     t, box, v = log.columns["time_s"], log.columns["temp_c"], log.columns["output"]
@@ -76,6 +77,7 @@ def test_tckit_vbl5_lags_the_bath(tmp_path, capsys):
     assert (tmp_path / "rep" / "residuals.png").exists()
 
 
+@needs_pt100
 def test_pt100_linear_law_is_wrong_and_callendar_van_dusen_fixes_it():
     t, r = load_table(PT100)
     assert t[0] == -200 and t[-1] == 850 and r.size == 1051
@@ -93,6 +95,7 @@ def test_pt100_linear_law_is_wrong_and_callendar_van_dusen_fixes_it():
     assert study["diagnosis"]["causes"] == ["rtd_nonlinearity"]
 
 
+@needs_pt100
 def test_pt100_curvature_matches_callendar_van_dusen_above_zero():
     t, r = load_table(PT100)
     keep = t >= 0  # no C term: a linear readout is exactly T + (B/A) T^2 up to offset and gain
@@ -103,12 +106,11 @@ def test_pt100_curvature_matches_callendar_van_dusen_above_zero():
     assert b == pytest.approx(ratio / (1 + 50 * ratio), rel=0.02)
 
 
-def test_callendar_van_dusen_round_trip():
+def test_callendar_van_dusen_round_trip():  # no shared data: the IEC 60751 law itself
     temps = np.linspace(-200, 850, 300)
-    res = cvd_resistance(temps, *IEC60751.values())
-    from fxdsp.diagnose.rtd import cvd_temperature
-
-    np.testing.assert_allclose(cvd_temperature(res, *IEC60751.values()), temps, atol=1e-9)
+    law = cvd_law(**IEC60751)
+    res = law.resistance(temps)
+    np.testing.assert_allclose(law.temperature(res), temps, atol=1e-9)
     fit = fit_cvd(temps, res)
     for key in ("R0", "A", "B", "C"):
         assert fit[key] == pytest.approx(IEC60751[key], rel=1e-6)

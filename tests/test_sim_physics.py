@@ -21,6 +21,7 @@ def test_paper002_uncompensated_figures_are_the_right_order():
     g = PAPER002_GYRO
     sf_ppm = tempco(PAPER002_TEMPS, g.sf_mv_per_dps(PAPER002_TEMPS), relative=True) * 1e6
     bias = g.bias_deg_h(PAPER002_TEMPS)
+    # paper 002 (shared/papers/002_*.txt) line 54: 316.66e-6 /C and 366.22 deg/h/C, "clearly non-linear"
     assert 0.5 * 316.66 < sf_ppm < 2 * 316.66
     assert 0.5 * 366.22 < tempco(PAPER002_TEMPS, bias) < 2 * 366.22
     slopes = np.diff(bias) / np.diff(PAPER002_TEMPS)
@@ -70,7 +71,8 @@ def test_frequency_sweep_identifies_paper003_couplings():
     g, f, s, modes = _sweep()
     fit = fit_coupling(f, s, *modes)
     assert fit["r2"] > 0.99
-    # paper 003's reported kxy, cxy, lambda_yx (with the model's effective mass)
+    # paper 003's reported kxy, cxy, lambda_yx (shared/papers/003_*.txt line 221: -0.000374,
+    # -6.96e-8 N s/m, 0.103 N/m), with the model's effective mass
     assert fit["alpha"] * g.mass_kg == pytest.approx(0.103, rel=1e-6)
     assert fit["eta"] * g.mass_kg == pytest.approx(-6.96e-8, rel=1e-6)
     assert fit["lambda_yx"] == pytest.approx(-0.000374, rel=1e-6)
@@ -90,6 +92,7 @@ def test_channel_phase_mismatch_ruins_the_damping_coupling_but_not_the_stiffness
 
 
 def test_metal_gyro_laws_match_the_printed_data_point():
+    # paper 001 (shared/papers/001_*.txt): line 149 f(-10 C) = 3836.9354 Hz, line 155 f = 0.0536T+3837.4
     assert float(METAL_GYRO.frequency(-10.0)) == pytest.approx(3836.9354, abs=1e-3)
     assert float(METAL_GYRO.temperature(METAL_GYRO.frequency(37.0))) == pytest.approx(37.0)
     # the printed intercept 3837.4 would shift every temperature by about -1.33 C
@@ -115,6 +118,8 @@ def test_free_beam_turns_over_and_bonded_beam_is_nearly_linear_and_steeper_hot()
 def test_pair_scale_factor_and_bias_variation_before_compensation():
     t = np.linspace(-40.0, 60.0, 101)
     k1 = DEFAULT_PAIR.k1(t)
+    # paper 000 (shared/papers/000_*.txt): line 24 K1 about 52 Hz/g, rising with temperature;
+    # line 44 K0 varies 10..35 mg and K1 8e-4..1.6e-3 over the range
     assert float(DEFAULT_PAIR.k1(25.0)) == pytest.approx(52.0, abs=1.0)
     assert np.all(np.diff(k1) > 0)
     assert 8e-4 <= np.ptp(k1) / k1.mean() <= 1.6e-3

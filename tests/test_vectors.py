@@ -14,7 +14,7 @@ import pytest
 from fxdsp.chains import build
 from fxdsp.cli import main
 from fxdsp.fixed import Format
-from fxdsp.vectors import check, from_hex_lines, generate, load, to_hex_lines
+from fxdsp.vectors import check, from_hex_lines, generate, load, to_hex_lines, write_or_check
 
 ROOT = Path(__file__).parents[1]
 VECTORS = ROOT / "vectors"
@@ -52,6 +52,17 @@ def test_check_reports_missing_and_unexpected_files(tmp_path: Path, files):
     (copy / "rtd" / "stray.hex").write_text("00\n")
     problems = check(files, copy)
     assert "missing: rtd/temp.hex" in problems and "unexpected: rtd/stray.hex" in problems
+
+
+def test_write_or_check_returns_the_differences_and_prints_nothing(tmp_path: Path, files, capsys):
+    out = tmp_path / "v"
+    assert write_or_check(files, out, check_only=True) == [f"missing: {rel}" for rel in sorted(files)]
+    assert not out.exists()  # a check never writes
+    assert write_or_check(files, out, check_only=False) == []
+    assert write_or_check(files, out, check_only=True) == []
+    (out / "rtd" / "stray.hex").write_text("00\n")
+    assert write_or_check(files, out, check_only=True) == ["unexpected: rtd/stray.hex"]
+    assert capsys.readouterr() == ("", "")  # reporting is the command's job
 
 
 def test_deterministic(files):

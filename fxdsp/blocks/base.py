@@ -12,23 +12,33 @@ from ..fixed import Format, OverflowLog, check_in_format, to_float
 
 @dataclass
 class Result:
-    """Outputs of a bit-exact run (stored integers by port) and the overflow counts it made."""
+    """Outputs of a bit-exact run (stored integers by port), the overflow counts it made, and the
+    state after the last sample (scipy's ``zf``: pass it as ``state`` to continue the stream)."""
 
     outputs: dict[str, np.ndarray]
     overflows: OverflowLog = field(default_factory=OverflowLog)
+    state: object = None
 
 
 class Block:
-    """Base of all blocks. Subclasses set ``name``, ``inputs`` and ``outputs`` (port -> Format) and
-    implement ``_run(**stored) -> dict`` and ``reference(**real) -> dict``."""
+    """Base of all blocks. Subclasses set ``name`` (their config table), ``inputs`` and ``outputs``
+    (port -> Format), build ``datapath`` (their arithmetic, :mod:`fxdsp.blocks.datapath`) and
+    implement ``stream(log, **stored) -> dict`` and ``reference(**real) -> dict``.
+
+    State contract (scipy's ``zi``/``zf``): ``run`` and ``reference`` are pure. ``run(state=None)``
+    starts from the reset state, ``run(state=previous.state)`` continues a stream; calling either
+    twice on the same input gives the same output. ``stream`` is the building block the chains use:
+    it continues from the block's current internal state, which only ``run`` and ``reset`` set.
+    Blocks with memory override ``get_state``/``set_state``/``reset``."""
 
     name: str = "block"
     inputs: dict[str, Format]
     outputs: dict[str, Format]
 
-    def run(self, log: OverflowLog | None = None, **inputs) -> Result:
+    def run(self, log: OverflowLog | None = None, state=None, **inputs) -> Result:
         """Bit-exact model: stored integers in, stored integers out (every input checked against
-        its port format, so a caller cannot feed an out-of-range word silently)."""
+        its port format, so a caller cannot feed an out-of-range word silently), from the reset
+        state or from ``state`` (a previous result's ``state``)."""
         missing = set(self.inputs) - set(inputs)
         if missing:
             raise ValueError(f"{self.name}: missing input {sorted(missing)[0]!r}")
@@ -37,8 +47,15 @@ class Block:
             raise ValueError(f"{self.name}: unknown input {sorted(extra)[0]!r}")
         checked = {k: check_in_format(v, self.inputs[k], f"{self.name}.{k}") for k, v in inputs.items()}
         log = OverflowLog() if log is None else log
-        outputs = self._run(log, **checked)
-        return Result(outputs, log)
+        self.reset()
+        if state is not None:
+            self.set_state(state)
+        try:
+            outputs = self.stream(log, **checked)
+            final = self.get_state()
+        finally:
+            self.reset()
+        return Result(outputs, log, final)
 
     def run_float(self, **inputs) -> dict[str, np.ndarray]:
         """The float reference fed with the real values of the same stored inputs."""
@@ -49,10 +66,19 @@ class Block:
         return {k: to_float(v, self.outputs[k]) for k, v in result.outputs.items()}
 
     def reset(self) -> None:
-        """Clear internal state (blocks with memory override this); vectors always start reset."""
+        """Internal state back to power-on (blocks with memory override this)."""
+
+    def get_state(self):
+        """A copy of the internal state (None for a block without memory)."""
+        return None
+
+    def set_state(self, state) -> None:
+        if state is not None:
+            raise ValueError(f"{self.name}: state: this block has no memory, got {type(state).__name__}")
 
     # --- to implement ---
-    def _run(self, log: OverflowLog, **inputs) -> dict[str, np.ndarray]:  # pragma: no cover
+    def stream(self, log: OverflowLog, **inputs) -> dict[str, np.ndarray]:  # pragma: no cover
+        """Continue from the current internal state, inputs unchecked (``run`` checks them)."""
         raise NotImplementedError
 
     def reference(self, **inputs) -> dict[str, np.ndarray]:  # pragma: no cover

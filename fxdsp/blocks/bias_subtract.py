@@ -7,6 +7,8 @@ The difference is exact (aligned to the finer fraction length, one carry bit); t
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numba import njit
 
@@ -14,6 +16,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, sum_format
 from ..fixed.kernels import convert
 from .base import Block, corner_codes, random_codes
+from .datapath import Datapath, OvfField, info
 
 
 @njit(cache=True)
@@ -28,6 +31,23 @@ def _subtract_kernel(x, bias, x_align, b_align, shift, rounding, lo, hi, overflo
     return y, count
 
 
+@dataclass(frozen=True, eq=False)
+class BiasSubtractDatapath(Datapath):
+    """Fields in the order of the ``bias_subtract`` RTL module's parameters."""
+
+    MODULE = "bias_subtract"
+    in_w: int
+    bias_w: int
+    out_w: int
+    x_align: int         # x and bias left-aligned to the exact difference's fraction length
+    b_align: int
+    shift: int           # difference -> out_format
+    rules: Rules
+    diff_format: Format = info()
+    out_format: Format = info()
+    ovf: tuple = info(default=(OvfField("out", 1),))
+
+
 class BiasSubtract(Block):
     name = "bias_subtract"
 
@@ -36,7 +56,11 @@ class BiasSubtract(Block):
         self.name = name
         self.in_format, self.bias_format, self.out_format = in_format, bias_format, out_format
         self.rules = rules
-        self.diff_format = sum_format(in_format, bias_format)  # exact difference, checked against 63 bits
+        self.diff_format = d = sum_format(in_format, bias_format)  # exact difference, checked against 63 bits
+        self.datapath = BiasSubtractDatapath(
+            in_w=in_format.wl, bias_w=bias_format.wl, out_w=out_format.wl, x_align=d.fl - in_format.fl,
+            b_align=d.fl - bias_format.fl, shift=d.fl - out_format.fl, rules=rules, diff_format=d,
+            out_format=out_format)
         self.inputs = {"x": in_format, "bias": bias_format}
         self.outputs = {"y": out_format}
 
@@ -44,12 +68,11 @@ class BiasSubtract(Block):
     def from_config(cls, sec: Section, in_format: Format, bias_format: Format) -> "BiasSubtract":
         return cls(in_format, bias_format, sec.format("out_format"), sec.rules(), name=sec.path)
 
-    def _run(self, log: OverflowLog, x: np.ndarray, bias: np.ndarray) -> dict[str, np.ndarray]:
-        d = self.diff_format
-        y, n = _subtract_kernel(x, bias, d.fl - self.in_format.fl, d.fl - self.bias_format.fl,
-                                d.fl - self.out_format.fl, self.rules.rounding_code, self.out_format.min_int,
-                                self.out_format.max_int, self.rules.overflow_code)
-        log.add(f"{self.name}.out", n)
+    def stream(self, log: OverflowLog, x: np.ndarray, bias: np.ndarray) -> dict[str, np.ndarray]:
+        dp = self.datapath
+        y, n = _subtract_kernel(x, bias, dp.x_align, dp.b_align, dp.shift, dp.rules.rounding_code,
+                                dp.out_format.min_int, dp.out_format.max_int, dp.rules.overflow_code)
+        log.add(f"{self.name}.{dp.ovf[0].counter}", n)
         return {"y": y}
 
     def reference(self, x: np.ndarray, bias: np.ndarray) -> dict[str, np.ndarray]:

@@ -21,6 +21,8 @@ design, hypot and arctan2.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numba import njit
 
@@ -28,7 +30,8 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, product_format, quantize, resize
 from ..fixed.kernels import convert
 from .base import Block, corner_codes
-from .iir import Iir
+from .datapath import Datapath, OvfField, Rom, const, info, nested
+from .iir import Iir, IirDatapath
 
 
 @njit(cache=True)
@@ -97,35 +100,70 @@ class Nco:
         self.phase0 = int(quantize([phase_offset_turns % 1.0], self.phase_format, Rules("half_up", "wrap"))[0])
         self.phase_offset_turns = phase_offset_turns
         angle = 2 * np.pi * (np.arange(2**lut_bits) + 0.5) / 2**lut_bits  # bin centres
-        sat = Rules("half_up", "saturate")
-        self.cos_lut = quantize(np.cos(angle), lut_format, sat)
-        self.msin_lut = quantize(-np.sin(angle), lut_format, sat)
+        self.cos_lut = self.lut_quantize(np.cos(angle))
+        self.msin_lut = self.lut_quantize(-np.sin(angle))
         self.phase_mask = (1 << phase_bits) - 1
         self.addr_shift = phase_bits - lut_bits
         self.reset()
 
+    def lut_quantize(self, values) -> np.ndarray:
+        """cos / -sin values as the LUT stores them: nearest (half_up), saturated (cos 0 = 1 cannot be
+        held by an s.15 word)."""
+        return quantize(values, self.lut_format, Rules("half_up", "saturate"))
+
     def reset(self) -> None:
         self.phase = self.phase0  # the accumulator
-        self.n = 0
 
     def reference_phase(self, count: int, start: int = 0) -> np.ndarray:
         n = np.arange(start, start + count, dtype=float)
         return 2 * np.pi * (self.phase_offset_turns + n * self.f_hz / self.fs_hz)
 
 
-def cordic_vector(i: np.ndarray, q: np.ndarray, work: Format, angle_format: Format, iterations: int):
+def cordic_vector(i: np.ndarray, q: np.ndarray, dp: "DemodDatapath"):
     """CORDIC vectoring on stored integers: returns (x_final, angle) with x_final = K * |(i, q)|."""
-    exact = Rules("half_up", "saturate")
-    half_pi = int(quantize([np.pi / 2], angle_format, exact)[0])
-    atans = quantize(np.arctan(2.0 ** -np.arange(iterations)), angle_format, exact)
-    x, z = _cordic_kernel(i, q, atans, half_pi, iterations)
+    x, z = _cordic_kernel(i, q, dp.atan.words, dp.half_pi, dp.iterations)
     # |x| <= K * sqrt(2) * 2**(wl-1) < 2**(wl+1): the two guard bits of ``work`` always suffice
-    assert x.size == 0 or np.abs(x).max() <= work.max_int, "CORDIC guard bits exhausted"
+    assert x.size == 0 or np.abs(x).max() <= dp.work_format.max_int, "CORDIC guard bits exhausted"
     return x, z
 
 
 def cordic_gain(iterations: int) -> float:
     return float(np.prod(np.sqrt(1.0 + 2.0 ** (-2.0 * np.arange(iterations)))))
+
+
+@dataclass(frozen=True, eq=False)
+class DemodDatapath(Datapath):
+    """Fields in the order of the ``demod`` RTL module's parameters."""
+
+    MODULE = "demod"
+    in_w: int
+    data_w: int
+    phase_bits: int
+    lut_bits: int
+    lut_w: int
+    ftw: int = const()       # phase increment per sample (turns * 2**phase_bits)
+    phase0: int = const()
+    mix_shift: int           # exact x * lut product, read as 2 x lut, -> data_format
+    rules: Rules
+    lpf: IirDatapath = nested("LPF_")   # both channels' low-pass (one design)
+    iterations: int
+    angle_w: int
+    half_pi: int = const()   # pre-rotation angle on angle_format
+    inv_k: int = const()     # 1/K on INV_K_FORMAT
+    inv_k_w: int
+    amp_shift: int           # work x 1/K product -> data_format
+    cos: Rom                 # cos over a full turn at bin centres, lut_format
+    msin: Rom                # -sin, same
+    atan: Rom                # arctan(2**-j) on angle_format
+    addr_shift: int = info()     # LUT address = phase >> addr_shift (truncation)
+    phase_mask: int = info()
+    in_format: Format = info()
+    data_format: Format = info()
+    work_format: Format = info()     # CORDIC x, y: data_format and two guard bits
+    angle_format: Format = info()
+    mix_format: Format = info()      # the product read as 2 x lut
+    amp_format: Format = info()      # work x 1/K
+    ovf: tuple = info()
 
 
 class Demod(Block):
@@ -147,60 +185,88 @@ class Demod(Block):
         self.mix_format = product_format(in_format, nco.lut_format)
         self.mix_format = self.mix_format.with_fl(self.mix_format.fl - 1)  # read as 2 * x * lut
         self.work_format = Format(True, data_format.wl + 2, data_format.fl)
-        self.inv_k = int(quantize([1.0 / cordic_gain(cordic_iterations)], INV_K_FORMAT, Rules("half_up", "saturate"))[0])
+        exact = Rules("half_up", "saturate")
+        self.inv_k = int(quantize([1.0 / cordic_gain(cordic_iterations)], INV_K_FORMAT, exact)[0])
+        amp_format = product_format(self.work_format, INV_K_FORMAT)
+        lpf = lpf_i.datapath
+        lpf_ovf = lambda ch: tuple(OvfField(f"lpf_{ch}.{f.counter}", f.width) for f in lpf.ovf)  # noqa: E731
+        self.datapath = DemodDatapath(
+            in_w=in_format.wl, data_w=data_format.wl, phase_bits=nco.phase_bits, lut_bits=nco.lut_bits,
+            lut_w=nco.lut_format.wl, ftw=nco.ftw, phase0=nco.phase0, mix_shift=self.mix_format.fl - data_format.fl,
+            rules=rules, lpf=lpf, iterations=cordic_iterations, angle_w=angle_format.wl,
+            half_pi=int(quantize([np.pi / 2], angle_format, exact)[0]), inv_k=self.inv_k, inv_k_w=INV_K_FORMAT.wl,
+            amp_shift=amp_format.fl - data_format.fl, cos=Rom(nco.cos_lut, nco.lut_format.wl),
+            msin=Rom(nco.msin_lut, nco.lut_format.wl),
+            atan=Rom(quantize(np.arctan(2.0 ** -np.arange(cordic_iterations)), angle_format, exact),
+                     angle_format.wl),
+            addr_shift=nco.addr_shift, phase_mask=nco.phase_mask, in_format=in_format, data_format=data_format,
+            work_format=self.work_format, angle_format=angle_format, mix_format=self.mix_format,
+            amp_format=amp_format,
+            ovf=(OvfField("mix_i", 1), OvfField("mix_q", 1), *lpf_ovf("i"), *lpf_ovf("q"), OvfField("amp", 1)))
         self.inputs = {"x": in_format}
         self.outputs = {"i": data_format, "q": data_format, "amp": data_format, "phase": angle_format}
 
     @classmethod
-    def from_config(cls, sec: Section, fs_hz: float, in_format: Format) -> "Demod":
-        nco = Nco(fs_hz, sec.number("f_hz", low=0, low_open=True), sec.integer("phase_bits", 32, low=4, high=48),
-                  sec.integer("lut_bits", 10, low=4, high=20), sec.format("lut_format", "s16.15"),
+    def from_config(cls, sec: Section, fs_hz: float, in_format: Format, connect: bool = True) -> "Demod":
+        nco = Nco(fs_hz, sec.number("f_hz", low=0, low_open=True), sec.integer("phase_bits", low=4, high=48),
+                  sec.integer("lut_bits", low=4, high=20), sec.format("lut_format"),
                   sec.number("phase_offset_turns", 0.0))
         data_format = sec.format("data_format")
         lpf_sec = sec.sub("lpf")
-        lpf_i = Iir.from_config(lpf_sec, fs_hz, name="demod.lpf_i")
+        lpf_format = lpf_sec.wired_format("data_format", data_format, sec.field("data_format"), connect)
+        lpf_i = Iir.from_config(lpf_sec, fs_hz, lpf_format, name=f"{sec.path}.lpf_i")
         lpf_q = Iir(lpf_i.sos, lpf_i.data_format, lpf_i.num_format, lpf_i.den_format, lpf_i.rules,
-                    name="demod.lpf_q", dc_exact=lpf_i.dc_exact, error_feedback=lpf_i.error_feedback)
-        return cls(nco, in_format, data_format, lpf_i, lpf_q, sec.format("angle_format", "s20.17"),
-                   sec.integer("cordic_iterations", 16, low=4, high=40), sec.rules())
+                    name=f"{sec.path}.lpf_q", dc_exact=lpf_i.dc_exact, error_feedback=lpf_i.error_feedback)
+        return cls(nco, in_format, data_format, lpf_i, lpf_q, sec.format("angle_format"),
+                   sec.integer("cordic_iterations", low=4, high=40), sec.rules())
 
     def reset(self) -> None:
         self.nco.reset()
         self.lpf_i.reset()
         self.lpf_q.reset()
 
+    def get_state(self) -> dict:
+        """The NCO phase accumulator and both low-pass filters' states."""
+        return {"phase": int(self.nco.phase), "lpf_i": self.lpf_i.get_state(), "lpf_q": self.lpf_q.get_state()}
+
+    def set_state(self, state) -> None:
+        if not isinstance(state, dict) or set(state) != {"phase", "lpf_i", "lpf_q"}:
+            raise ValueError(f"{self.name}: state: expected a previous result's state {{'phase', 'lpf_i', 'lpf_q'}}")
+        self.nco.phase = int(state["phase"]) & self.datapath.phase_mask
+        self.lpf_i.set_state(state["lpf_i"])
+        self.lpf_q.set_state(state["lpf_q"])
+
     def mix(self, log: OverflowLog, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        nco, counts = self.nco, np.zeros(2, dtype=np.int64)
-        i, q, nco.phase = _mix_kernel(x, nco.phase, nco.ftw, nco.phase_mask, nco.addr_shift, nco.cos_lut,
-                                      nco.msin_lut, self.mix_format.fl - self.data_format.fl,
-                                      self.rules.rounding_code, self.data_format.min_int, self.data_format.max_int,
-                                      self.rules.overflow_code, counts)
-        nco.n += x.size
-        log.add("demod.mix_i", int(counts[0]))
-        log.add("demod.mix_q", int(counts[1]))
+        dp, counts = self.datapath, np.zeros(2, dtype=np.int64)
+        i, q, self.nco.phase = _mix_kernel(x, self.nco.phase, dp.ftw, dp.phase_mask, dp.addr_shift, dp.cos.words,
+                                           dp.msin.words, dp.mix_shift, dp.rules.rounding_code,
+                                           dp.data_format.min_int, dp.data_format.max_int, dp.rules.overflow_code,
+                                           counts)
+        log.add(f"{self.name}.{dp.ovf[0].counter}", int(counts[0]))
+        log.add(f"{self.name}.{dp.ovf[1].counter}", int(counts[1]))
         return i, q
 
     def iq(self, log: OverflowLog, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Mixers and low-pass filters: the rate (I) and quadrature (Q) channels."""
         i, q = self.mix(log, x)
-        return self.lpf_i._run(log, x=i)["y"], self.lpf_q._run(log, x=q)["y"]
+        return self.lpf_i.stream(log, x=i)["y"], self.lpf_q.stream(log, x=q)["y"]
 
-    def _run(self, log: OverflowLog, x: np.ndarray) -> dict[str, np.ndarray]:
+    def stream(self, log: OverflowLog, x: np.ndarray) -> dict[str, np.ndarray]:
         i, q = self.iq(log, x)
         amp, phase = self.polar(log, i, q)
         return {"i": i, "q": q, "amp": amp, "phase": phase}
 
     def polar(self, log: OverflowLog, i: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        xk, z = cordic_vector(i, q, self.work_format, self.angle_format, self.iterations)
-        prod_fmt = product_format(self.work_format, INV_K_FORMAT)
-        amp = resize(xk * self.inv_k, prod_fmt, self.data_format, self.rules, log, "demod.amp")
+        dp = self.datapath
+        xk, z = cordic_vector(i, q, dp)
+        amp = resize(xk * dp.inv_k, dp.amp_format, dp.data_format, dp.rules, log, f"{self.name}.{dp.ovf[-1].counter}")
         return amp, z
 
     def reference(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        """Pure: sample k has the NCO phase of the k-th sample after reset, on every call."""
         import scipy.signal as sps
 
-        ph = self.nco.reference_phase(len(x), self.nco.n)
-        self.nco.n += len(x)
+        ph = self.nco.reference_phase(len(x), 0)
         i = sps.sosfilt(self.lpf_i.sos, 2 * x * np.cos(ph))
         q = sps.sosfilt(self.lpf_q.sos, -2 * x * np.sin(ph))
         return {"i": i, "q": q, "amp": np.hypot(i, q), "phase": np.arctan2(q, i)}

@@ -17,11 +17,31 @@ paper 001 chain composes the three (see :mod:`fxdsp.chains`).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, product_format, quantize, resize, sub
 from .base import Block, corner_codes
+from .datapath import Datapath, OvfField, const, info
+
+
+@dataclass(frozen=True, eq=False)
+class Freq2TempDatapath(Datapath):
+    """Fields in the order of the ``freq2temp`` RTL module's parameters."""
+
+    MODULE = "freq2temp"
+    freq_w: int
+    kinv_w: int
+    temp_w: int
+    f0: int = const()        # f0 on freq_format
+    kinv: int = const()      # 1/k on kinv_format
+    shift: int               # (f - f0) * kinv -> temp_format
+    rules: Rules
+    p_format: Format = info()
+    temp_format: Format = info()
+    ovf: tuple = info(default=(OvfField("temp", 1),))
 
 
 class Freq2Temp(Block):
@@ -45,6 +65,9 @@ class Freq2Temp(Block):
             raise ValueError(f"freq2temp.kinv_format: {kinv_format} cannot hold 1/k = {1 / k_hz_per_c:.6g}")
         self.d_format = sub(np.zeros(1, np.int64), freq_format, np.zeros(1, np.int64), freq_format)[1]
         self.p_format = product_format(self.d_format, kinv_format)
+        self.datapath = Freq2TempDatapath(
+            freq_w=freq_format.wl, kinv_w=kinv_format.wl, temp_w=temp_format.wl, f0=self.f0, kinv=self.kinv,
+            shift=self.p_format.fl - temp_format.fl, rules=rules, p_format=self.p_format, temp_format=temp_format)
         self.inputs = {"f": freq_format}
         self.outputs = {"temp": temp_format}
 
@@ -54,9 +77,10 @@ class Freq2Temp(Block):
                    sec.number("f0_hz"), sec.number("k_hz_per_c"), sec.rules(),
                    sec.number("t_min_c", -40.0), sec.number("t_max_c", 85.0))
 
-    def _run(self, log: OverflowLog, f: np.ndarray) -> dict[str, np.ndarray]:
-        d = f - self.f0
-        return {"temp": resize(d * self.kinv, self.p_format, self.temp_format, self.rules, log, "freq2temp.temp")}
+    def stream(self, log: OverflowLog, f: np.ndarray) -> dict[str, np.ndarray]:
+        dp = self.datapath
+        return {"temp": resize((f - dp.f0) * dp.kinv, dp.p_format, dp.temp_format, dp.rules, log,
+                               f"{self.name}.{dp.ovf[0].counter}")}
 
     def reference(self, f: np.ndarray) -> dict[str, np.ndarray]:
         return {"temp": (np.asarray(f) - self.f0_hz) / self.k_hz_per_c}

@@ -31,6 +31,8 @@ unknown range as in transposed DF-II)::
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.signal as sps
 from numba import njit
@@ -39,6 +41,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, quantize
 from ..fixed.kernels import fit, shift_right_round
 from .base import Block, corner_codes, random_codes
+from .datapath import Datapath, OvfField, Rom, info
 
 DESIGNS = ("butter", "cheby1", "bessel")
 BTYPES = ("lowpass", "highpass")
@@ -105,6 +108,29 @@ def design_sos(design: str, order: int, cutoff_hz: float, fs_hz: float, btype: s
     return sos
 
 
+@dataclass(frozen=True, eq=False)
+class IirDatapath(Datapath):
+    """Fields in the order of the ``iir`` RTL module's parameters."""
+
+    MODULE = "iir"
+    data_w: int
+    sections: int
+    coef_w: int          # ROM word: the wider of num_format and den_format (>= 4 for the c weights)
+    shift_b: int         # b x products left-aligned to the accumulator's fraction length ...
+    shift_a: int         # ... and a y products
+    out_shift: int       # accumulator -> data_format (the one rounding of a section)
+    acc_w: int           # the bound acc_bits plus one bit: the RTL's signed accumulator register
+    rules: Rules
+    coef: Rom            # per section b0 b1 b2 a1 a2 c1 c2
+    b: np.ndarray = info()   # sections x 3, num_format
+    a: np.ndarray = info()   # sections x 2 (a1, a2), den_format
+    c: np.ndarray = info()   # sections x 2 error-feedback weights (0 when off)
+    c_w: int = info()        # bits the c weights need (the RTL holds 4)
+    acc_bits: int = info()
+    data_format: Format = info()
+    ovf: tuple = info()      # one flag per section output
+
+
 class Iir(Block):
     name = "iir"
 
@@ -135,23 +161,33 @@ class Iir(Block):
                              f"{np.abs(sos[:, 4:]).max():.6g}")
         fl_b = num_format.fl + data_format.fl
         fl_a = den_format.fl + data_format.fl
-        self.acc_fl = max(fl_b, fl_a)
-        self.shift_b, self.shift_a = self.acc_fl - fl_b, self.acc_fl - fl_a
+        acc_fl = max(fl_b, fl_a)
+        shift_b, shift_a = acc_fl - fl_b, acc_fl - fl_a
         # accumulator bound: |acc| <= 2**(data.wl-1) * (sum|b| 2**shift_b + sum|a| 2**shift_a) in stored units
         worst = float(2 ** (data_format.wl - 1)) * (
-            np.abs(self.b).sum(axis=1) * 2.0**self.shift_b + np.abs(self.a).sum(axis=1) * 2.0**self.shift_a).max() \
-            + 4.0 * 2.0 ** (self.acc_fl - data_format.fl)  # error feedback: |c1 e1 + c2 e2| < 4 * 2**out_shift
+            np.abs(self.b).sum(axis=1) * 2.0**shift_b + np.abs(self.a).sum(axis=1) * 2.0**shift_a).max() \
+            + 4.0 * 2.0 ** (acc_fl - data_format.fl)  # error feedback: |c1 e1 + c2 e2| < 4 * 2**out_shift
         self.acc_bits = int(np.ceil(np.log2(worst + 1))) + 1
         if self.acc_bits > 63:
             raise ValueError(f"{name}: accumulator needs {self.acc_bits} bits for data {data_format}, "
                              f"num {num_format}, den {den_format}; more than 63")
-        self.out_shift = self.acc_fl - data_format.fl
-        if self.out_shift < 0:
+        out_shift = acc_fl - data_format.fl
+        if out_shift < 0:
             raise ValueError(f"{name}: coefficient formats with negative fraction length are not supported")
         self.error_feedback = error_feedback
         # c = -nearest integer of (a1, a2), ties away from zero; the weights are tiny integers, not a datapath
         self.c = (-np.sign(sos[:, 4:]) * np.floor(np.abs(sos[:, 4:]) + 0.5)).astype(np.int64) if error_feedback \
             else np.zeros((sos.shape[0], 2), dtype=np.int64)
+        for arr in (self.b, self.a, self.c):
+            arr.setflags(write=False)
+        coef_w = max(num_format.wl, den_format.wl, 4)
+        words = np.concatenate([self.b, self.a, self.c], axis=1)
+        c_max = int(np.abs(self.c).max()) if self.c.size else 0
+        self.datapath = IirDatapath(
+            data_w=data_format.wl, sections=int(self.b.shape[0]), coef_w=coef_w, shift_b=shift_b, shift_a=shift_a,
+            out_shift=out_shift, acc_w=self.acc_bits + 1, rules=rules, coef=Rom(words, coef_w), b=self.b, a=self.a,
+            c=self.c, c_w=max(2, c_max.bit_length() + 1), acc_bits=self.acc_bits, data_format=data_format,
+            ovf=tuple(OvfField(f"section{s}", 1) for s in range(self.b.shape[0])))
         self.reset()
 
     def _make_dc_exact(self, name: str) -> None:
@@ -169,7 +205,8 @@ class Iir(Block):
                 raise ValueError(f"{name}.num_format: {self.num_format} cannot hold the DC-exact middle tap")
 
     @classmethod
-    def from_config(cls, sec: Section, fs_hz: float, name: str = "iir") -> "Iir":
+    def from_config(cls, sec: Section, fs_hz: float, data_format: Format, name: str = "iir") -> "Iir":
+        """``data_format`` is the format of the wire the filter sits on (the caller derives it)."""
         design = sec.choice("design", DESIGNS, "butter")
         order = sec.integer("order", 2, low=1, high=12)
         btype = sec.choice("btype", BTYPES, "lowpass")
@@ -179,26 +216,36 @@ class Iir(Block):
             sos = design_sos(design, order, cutoff, fs_hz, btype, ripple)
         except ValueError as exc:
             raise ValueError(f"{sec.field('cutoff_hz')}: {exc}") from None
-        return cls(sos, sec.format("data_format"), sec.format("num_format"), sec.format("den_format"),
+        return cls(sos, data_format, sec.format("num_format"), sec.format("den_format"),
                    sec.rules(), name=name, dc_exact=(btype == "lowpass"),
                    error_feedback=sec.choice("error_feedback", ("on", "off"), "on") == "on")
 
     def reset(self) -> None:
         self.state = np.zeros((self.b.shape[0], 6), dtype=np.int64)
 
-    def _run(self, log: OverflowLog, x: np.ndarray) -> dict[str, np.ndarray]:
+    def get_state(self) -> np.ndarray:
+        """Per section (x1, x2, y1, y2, e1, e2): the DF-I delay line and the error-feedback memory."""
+        return self.state.copy()
+
+    def set_state(self, state) -> None:
+        st = np.asarray(state)
+        if st.shape != self.state.shape or st.dtype.kind not in "iu":
+            raise ValueError(f"{self.name}: state: expected integers of shape {self.state.shape}, got "
+                             f"{st.dtype} {st.shape}")
+        self.state = st.astype(np.int64).copy()
+
+    def stream(self, log: OverflowLog, x: np.ndarray) -> dict[str, np.ndarray]:
         """Runs from the current state (call ``reset()`` for a fresh start; ``run`` chunks stream)."""
-        counts = np.zeros(self.b.shape[0], dtype=np.int64)
-        y = _df1_cascade(x, self.b, self.a, self.c, self.shift_b, self.shift_a, self.out_shift, self.rules.rounding_code,
-                         self.data_format.min_int, self.data_format.max_int, self.rules.overflow_code,
-                         self.state, counts)
-        for s, c in enumerate(counts):
-            log.add(f"{self.name}.section{s}", int(c))
+        dp = self.datapath
+        counts = np.zeros(dp.sections, dtype=np.int64)
+        y = _df1_cascade(x, dp.b, dp.a, dp.c, dp.shift_b, dp.shift_a, dp.out_shift, dp.rules.rounding_code,
+                         dp.data_format.min_int, dp.data_format.max_int, dp.rules.overflow_code, self.state, counts)
+        for f, c in zip(dp.ovf, counts):
+            log.add(f"{self.name}.{f.counter}", int(c))
         return {"y": y}
 
     def filter(self, x: np.ndarray, log: OverflowLog | None = None) -> np.ndarray:
         """Fresh-state bit-exact filtering of stored integers (convenience for chains)."""
-        self.reset()
         return self.run(log=log, x=x).outputs["y"]
 
     def reference(self, x: np.ndarray) -> dict[str, np.ndarray]:

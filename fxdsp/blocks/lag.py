@@ -25,6 +25,8 @@ from __future__ import annotations
 
 import math
 
+from dataclasses import dataclass
+
 import numpy as np
 from numba import njit
 
@@ -32,6 +34,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules
 from ..fixed.kernels import convert, shift_right_round
 from .base import Block, corner_codes
+from .datapath import Datapath, OvfField, info
 
 
 @njit(cache=True)
@@ -49,6 +52,22 @@ def _lag_kernel(x, m, s, g, rounding, lo, hi, overflow, state):
         y[i] = out
     state[0] = te
     return y, count
+
+
+@dataclass(frozen=True, eq=False)
+class LagDatapath(Datapath):
+    """Fields in the order of the ``lag`` RTL module's parameters."""
+
+    MODULE = "lag"
+    temp_w: int
+    guard: int           # g: state fraction bits beyond the temperature code
+    state_w: int
+    alpha_w: int
+    alpha_m: int         # alpha = alpha_m * 2**-alpha_s
+    alpha_s: int
+    rules: Rules
+    temp_format: Format = info()
+    ovf: tuple = info(default=(OvfField("te", 1),))
 
 
 class Lag(Block):
@@ -75,6 +94,9 @@ class Lag(Block):
         if self.state_format.wl + 1 + alpha_bits > 63:
             raise ValueError(f"{name}: state {self.state_format} times a {alpha_bits}-bit alpha exceeds 63 bits; "
                              f"reduce state_guard_bits or alpha_bits")
+        self.datapath = LagDatapath(temp_w=temp_format.wl, guard=self.g, state_w=self.state_format.wl,
+                                    alpha_w=alpha_bits, alpha_m=self.m, alpha_s=self.s, rules=rules,
+                                    temp_format=temp_format)
         self.inputs = {"temp": temp_format}
         self.outputs = {"te": temp_format}
         self.reset()
@@ -89,14 +111,25 @@ class Lag(Block):
         self.state = np.zeros(1, dtype=np.int64)
         self.primed = False
 
-    def _run(self, log: OverflowLog, temp: np.ndarray) -> dict[str, np.ndarray]:
+    def get_state(self) -> dict:
+        """Te with the guard bits, and whether it has been primed by a first reading."""
+        return {"te": int(self.state[0]), "primed": self.primed}
+
+    def set_state(self, state) -> None:
+        if not isinstance(state, dict) or set(state) != {"te", "primed"}:
+            raise ValueError(f"{self.name}: state: expected a previous result's state {{'te', 'primed'}}")
+        self.state = np.array([int(state["te"])], dtype=np.int64)
+        self.primed = bool(state["primed"])
+
+    def stream(self, log: OverflowLog, temp: np.ndarray) -> dict[str, np.ndarray]:
         if not self.primed and temp.size:
             # start settled on the first reading (power-on: die and thermometer at the same temperature)
-            self.state[0] = int(temp[0]) << self.g
+            self.state[0] = int(temp[0]) << self.datapath.guard
             self.primed = True
-        y, n = _lag_kernel(temp, self.m, self.s, self.g, self.rules.rounding_code, self.temp_format.min_int,
-                           self.temp_format.max_int, self.rules.overflow_code, self.state)
-        log.add(f"{self.name}.te", n)
+        dp = self.datapath
+        y, n = _lag_kernel(temp, dp.alpha_m, dp.alpha_s, dp.guard, dp.rules.rounding_code, dp.temp_format.min_int,
+                           dp.temp_format.max_int, dp.rules.overflow_code, self.state)
+        log.add(f"{self.name}.{dp.ovf[0].counter}", n)
         return {"te": y}
 
     def reference(self, temp: np.ndarray) -> dict[str, np.ndarray]:

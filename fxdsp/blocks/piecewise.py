@@ -24,6 +24,8 @@ than its c0 and wants its own scaling, as each coefficient ROM in hardware has).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numba import njit
 
@@ -31,10 +33,11 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, product_format, quantize, sum_format
 from ..fixed.kernels import convert
 from .base import Block
+from .datapath import Datapath, OvfField, Rom, const, frozen_array, info, packed
 
 
 @njit(cache=True)
-def _piecewise_kernel(temp, breakpoints, coef, t0, top_shift, prod_shift, acc_align, coef_align, sum_shift,
+def _piecewise_kernel(temp, breakpoints, coef, t0, top_shift, prod_shift, acc_align, coef_align,
                       out_shift, rounding, overflow, acc_lo, acc_hi, out_lo, out_hi, counts):
     """Segment select + Horner on stored integers. counts += (acc fits, product fits, output fits)."""
     n = temp.shape[0]
@@ -55,7 +58,8 @@ def _piecewise_kernel(temp, breakpoints, coef, t0, top_shift, prod_shift, acc_al
         for k in range(order - 1, -1, -1):
             p, o = convert(acc * t, prod_shift, rounding, acc_lo, acc_hi, overflow)
             n_prod += o
-            acc, o = convert((p << acc_align[k]) + (coef[seg, k] << coef_align[k]), sum_shift[k], rounding,
+            # the sum is exact at the finer fraction length, then back to acc_format: shifted by acc_align
+            acc, o = convert((p << acc_align[k]) + (coef[seg, k] << coef_align[k]), acc_align[k], rounding,
                              acc_lo, acc_hi, overflow)
             n_acc += o
         out, o = convert(acc, out_shift, rounding, out_lo, out_hi, overflow)
@@ -65,6 +69,34 @@ def _piecewise_kernel(temp, breakpoints, coef, t0, top_shift, prod_shift, acc_al
     counts[1] += n_prod
     counts[2] += n_out
     return y
+
+@dataclass(frozen=True, eq=False)
+class PiecewiseDatapath(Datapath):
+    """Fields in the order of the ``piecewise`` RTL module's parameters."""
+
+    MODULE = "piecewise"
+    t_w: int
+    order: int
+    segments: int
+    coef_w: int              # ROM word: the widest coefficient format
+    acc_w: int
+    out_w: int
+    out_signed: int
+    t0: int = const()        # t0 on the temperature code
+    top_shift: int           # top coefficient into acc_format (right shift, rounding; <= 0 exact)
+    prod_shift: int          # acc * t back to acc_format
+    acc_align: tuple = packed()   # per power k: acc left-aligned to the sum's fraction length ...
+    coef_align: tuple = packed()  # ... and c_k left-aligned to it; the sum goes back by acc_align
+    out_shift: int           # acc_format -> out_format
+    rules: Rules
+    coef: Rom                # segments x (order + 1) coefficients, ascending powers
+    bp: Rom                  # breakpoint codes (one 0 word when there is one segment)
+    temp_format: Format = info()
+    acc_format: Format = info()
+    out_format: Format = info()
+    t_format: Format = info()  # T - t0, one bit wider than the temperature
+    ovf: tuple = info()
+
 
 class Piecewise(Block):
     def __init__(self, breakpoints_c, coefficients, temp_format: Format, coef_format: Format | list[Format],
@@ -112,40 +144,48 @@ class Piecewise(Block):
             if qlog.total:
                 raise ValueError(f"{name}.coefficients: c{k} up to {np.abs(self.coefficients_real[:, k]).max():.6g} "
                                  f"does not fit coef_format {fmt}")
-        self.t_format = sum_format(temp_format, temp_format)
-        p_fmt = product_format(acc_format, self.t_format)  # raises if acc * t would not fit 63 bits
+        self.breakpoints.setflags(write=False)
+        t_format = sum_format(temp_format, temp_format)
+        p_fmt = product_format(acc_format, t_format)  # raises if acc * t would not fit 63 bits
         sums = [sum_format(acc_format, fmt) for fmt in coef_formats]
         # shifts of the datapath (right shift = rounding, negative = exact left shift)
-        self._top_shift = coef_formats[-1].fl - acc_format.fl
-        self._prod_shift = p_fmt.fl - acc_format.fl
-        self._acc_align = np.array([sf.fl - acc_format.fl for sf in sums], dtype=np.int64)
-        self._coef_align = np.array([sf.fl - cf.fl for sf, cf in zip(sums, coef_formats)], dtype=np.int64)
-        self._sum_shift = self._acc_align.copy()
-        self._out_shift = acc_format.fl - out_format.fl
+        coef_w = max(f.wl for f in coef_formats)
+        self.datapath = PiecewiseDatapath(
+            t_w=temp_format.wl, order=self.order, segments=int(self.coef.shape[0]), coef_w=coef_w,
+            acc_w=acc_format.wl, out_w=out_format.wl, out_signed=int(out_format.signed), t0=int(self.t0[0]),
+            top_shift=coef_formats[-1].fl - acc_format.fl, prod_shift=p_fmt.fl - acc_format.fl,
+            acc_align=tuple(sf.fl - acc_format.fl for sf in sums),
+            coef_align=tuple(sf.fl - cf.fl for sf, cf in zip(sums, coef_formats)),
+            out_shift=acc_format.fl - out_format.fl, rules=rules, coef=Rom(self.coef, coef_w),
+            bp=Rom(self.breakpoints if self.breakpoints.size else [0], temp_format.wl),
+            temp_format=temp_format, acc_format=acc_format, out_format=out_format, t_format=t_format,
+            ovf=(OvfField("acc", self.order + 1), OvfField("product", self.order), OvfField("out", 1)))
+        self.coef = self.datapath.coef.words
         self.inputs = {"temp": temp_format}
         self.outputs = {"y": out_format}
 
     @classmethod
     def from_config(cls, sec: Section, temp_format: Format) -> "Piecewise":
         """Named after its config table (``piecewise.sf``), so every error names the field."""
-        breakpoints = sec.numbers("breakpoints_c", [])
+        breakpoints = sec.numbers("breakpoints_c")
         coefficients = sec.matrix("coefficients")
         return cls(breakpoints, coefficients, temp_format, sec.formats("coef_format"), sec.format("acc_format"),
-                   sec.format("out_format"), sec.rules(), t0_c=sec.number("t0_c", 0.0), name=sec.path)
+                   sec.format("out_format"), sec.rules(), t0_c=sec.number("t0_c"), name=sec.path)
 
     def segment(self, temp: np.ndarray) -> np.ndarray:
         """Segment index per sample: the number of breakpoints <= T (what the comparators count)."""
         return np.searchsorted(self.breakpoints, temp, side="right").astype(np.int64)
 
-    def _run(self, log: OverflowLog, temp: np.ndarray) -> dict[str, np.ndarray]:
-        counts = np.zeros(3, dtype=np.int64)
-        a, o = self.acc_format, self.out_format
-        y = _piecewise_kernel(temp, self.breakpoints, self.coef, int(self.t0[0]), self._top_shift, self._prod_shift,
-                              self._acc_align, self._coef_align, self._sum_shift, self._out_shift,
-                              self.rules.rounding_code, self.rules.overflow_code, a.min_int, a.max_int,
+    def stream(self, log: OverflowLog, temp: np.ndarray) -> dict[str, np.ndarray]:
+        dp = self.datapath
+        counts = np.zeros(len(dp.ovf), dtype=np.int64)
+        a, o = dp.acc_format, dp.out_format
+        y = _piecewise_kernel(temp, self.breakpoints, dp.coef.words, dp.t0, dp.top_shift, dp.prod_shift,
+                              frozen_array(dp.acc_align), frozen_array(dp.coef_align), dp.out_shift,
+                              dp.rules.rounding_code, dp.rules.overflow_code, a.min_int, a.max_int,
                               o.min_int, o.max_int, counts)
-        for key, c in zip(("acc", "product", "out"), counts):
-            log.add(f"{self.name}.{key}", int(c))
+        for f, c in zip(dp.ovf, counts):
+            log.add(f"{self.name}.{f.counter}", int(c))
         return {"y": y}
 
     def reference(self, temp: np.ndarray) -> dict[str, np.ndarray]:

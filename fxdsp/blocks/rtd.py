@@ -26,6 +26,8 @@ one rounding.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numba import njit
 
@@ -33,6 +35,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, quantize
 from ..fixed.kernels import convert
 from .base import Block, corner_codes, random_codes
+from .datapath import Datapath, OvfField, Rom, info
 
 
 @njit(cache=True)
@@ -108,6 +111,24 @@ class RtdPhysics:
         return self.temperature(self.resistance_from_fraction(frac))
 
 
+@dataclass(frozen=True, eq=False)
+class RtdDatapath(Datapath):
+    """Fields in the order of the ``rtd`` RTL module's parameters."""
+
+    MODULE = "rtd"
+    adc_w: int
+    lut_index_bits: int      # k: segment index = top k bits of the offset-binary code
+    lut_w: int
+    temp_w: int
+    shift: int               # exact interpolation (lut.fl + s fraction bits) -> temp_format
+    rules: Rules
+    lut: Rom                 # temperature at the 2**k + 1 segment ends
+    frac_bits: int = info()  # s = adc_w - k: fraction bits within a segment
+    adc_format: Format = info()
+    temp_format: Format = info()
+    ovf: tuple = info(default=(OvfField("temp", 1),))
+
+
 class Rtd(Block):
     name = "rtd"
 
@@ -137,7 +158,11 @@ class Rtd(Block):
         # exact interpolation value lut.fl + s fraction bits, lut.wl + s + 2 bits wide
         if lut_format.wl + self.s + 2 > 63:
             raise ValueError(f"rtd: interpolation of {lut_format} over {self.s} fraction bits exceeds 63 bits")
-        self.shift = lut_format.fl + self.s - temp_format.fl
+        self.datapath = RtdDatapath(adc_w=adc_format.wl, lut_index_bits=self.k, lut_w=lut_format.wl,
+                                    temp_w=temp_format.wl, shift=lut_format.fl + self.s - temp_format.fl,
+                                    rules=rules, lut=Rom(self.lut, lut_format.wl), frac_bits=self.s,
+                                    adc_format=adc_format, temp_format=temp_format)
+        self.lut = self.datapath.lut.words
 
     @classmethod
     def from_config(cls, sec: Section) -> "Rtd":
@@ -164,11 +189,12 @@ class Rtd(Block):
         return block
 
     # --- bit-exact ---
-    def _run(self, log: OverflowLog, code: np.ndarray) -> dict[str, np.ndarray]:
-        out, n = _lut_interp_kernel(code, self.lut, self.adc_format.min_int, self.s, self.shift,
-                                    self.rules.rounding_code, self.temp_format.min_int, self.temp_format.max_int,
-                                    self.rules.overflow_code)
-        log.add("rtd.temp", n)
+    def stream(self, log: OverflowLog, code: np.ndarray) -> dict[str, np.ndarray]:
+        dp = self.datapath
+        out, n = _lut_interp_kernel(code, dp.lut.words, dp.adc_format.min_int, dp.frac_bits, dp.shift,
+                                    dp.rules.rounding_code, dp.temp_format.min_int, dp.temp_format.max_int,
+                                    dp.rules.overflow_code)
+        log.add(f"{self.name}.{dp.ovf[0].counter}", n)
         return {"temp": out}
 
     # --- float reference ---
@@ -177,7 +203,14 @@ class Rtd(Block):
 
     # --- the sensor side: true temperature -> ADC code ---
     def adc_code(self, t_c, log: OverflowLog | None = None) -> np.ndarray:
-        frac = self.physics.adc_fraction(self.physics.resistance(t_c))
+        return self.adc_quantize(self.adc_fraction(t_c), log)
+
+    def adc_fraction(self, t_c) -> np.ndarray:
+        """The ADC input at temperature t_c, as a fraction of full scale (analog, before the ADC)."""
+        return self.physics.adc_fraction(self.physics.resistance(t_c))
+
+    def adc_quantize(self, frac, log: OverflowLog | None = None) -> np.ndarray:
+        """The bridge ADC: nearest code (half_up), clipped at full scale (saturate)."""
         return quantize(frac, self.adc_format, Rules("half_up", "saturate"), log, "rtd.adc")
 
     def stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:

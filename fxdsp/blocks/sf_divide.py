@@ -16,6 +16,8 @@ The float reference divides the real values: x / SF.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numba import njit
 
@@ -23,6 +25,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, quantize
 from ..fixed.kernels import convert
 from .base import Block, corner_codes, random_codes, tie_codes
+from .datapath import Datapath, OvfField, info
 
 
 @njit(cache=True)
@@ -47,6 +50,23 @@ def _divide_kernel(x, sf, num_shift, out_shift, rounding, lo, hi, overflow, coun
     return y
 
 
+@dataclass(frozen=True, eq=False)
+class SfDivideDatapath(Datapath):
+    """Fields in the order of the ``sf_divide`` RTL module's parameters."""
+
+    MODULE = "sf_divide"
+    in_w: int
+    sf_w: int
+    sf_signed: int
+    out_w: int
+    num_shift: int       # numerator x << (sf.fl + guard_bits): the quotient keeps guard_bits extra bits
+    out_shift: int       # quotient -> out_format (the paper's rescale)
+    rules: Rules
+    q_format: Format = info()
+    out_format: Format = info()
+    ovf: tuple = info(default=(OvfField("out", 1), OvfField("zero", 1)))
+
+
 class SfDivide(Block):
     name = "sf_divide"
 
@@ -61,21 +81,28 @@ class SfDivide(Block):
         self.guard_bits = guard_bits
         self.rules = rules
         self.q_format = Format(True, min(63, self.num_bits + 1), in_format.fl + guard_bits)
+        if sf_format.fl + guard_bits < 0:
+            raise ValueError(f"sf_divide.guard_bits: numerator shift sf.fl + guard_bits = {sf_format.fl + guard_bits} "
+                             f"must be >= 0")
+        self.datapath = SfDivideDatapath(
+            in_w=in_format.wl, sf_w=sf_format.wl, sf_signed=int(sf_format.signed), out_w=out_format.wl,
+            num_shift=sf_format.fl + guard_bits, out_shift=self.q_format.fl - out_format.fl, rules=rules,
+            q_format=self.q_format, out_format=out_format)
         self.inputs = {"x": in_format, "sf": sf_format}
         self.outputs = {"y": out_format}
 
     @classmethod
     def from_config(cls, sec: Section, in_format: Format, sf_format: Format) -> "SfDivide":
-        return cls(in_format, sf_format, sec.format("out_format"), sec.integer("guard_bits", 4, low=0, high=32),
+        return cls(in_format, sf_format, sec.format("out_format"), sec.integer("guard_bits", low=0, high=32),
                    sec.rules(default=Rules("floor", "saturate")))
 
-    def _run(self, log: OverflowLog, x: np.ndarray, sf: np.ndarray) -> dict[str, np.ndarray]:
+    def stream(self, log: OverflowLog, x: np.ndarray, sf: np.ndarray) -> dict[str, np.ndarray]:
+        dp = self.datapath
         counts = np.zeros(2, dtype=np.int64)
-        y = _divide_kernel(x, sf, self.sf_format.fl + self.guard_bits, self.q_format.fl - self.out_format.fl,
-                           self.rules.rounding_code, self.out_format.min_int, self.out_format.max_int,
-                           self.rules.overflow_code, counts)
-        log.add("sf_divide.out", int(counts[0]))
-        log.add("sf_divide.zero", int(counts[1]))
+        y = _divide_kernel(x, sf, dp.num_shift, dp.out_shift, dp.rules.rounding_code, dp.out_format.min_int,
+                           dp.out_format.max_int, dp.rules.overflow_code, counts)
+        for f, c in zip(dp.ovf, counts):
+            log.add(f"{self.name}.{f.counter}", int(c))
         return {"y": y}
 
     def reference(self, x: np.ndarray, sf: np.ndarray) -> dict[str, np.ndarray]:

@@ -190,9 +190,7 @@ def attribute(design: Design, chain_name: str, port: str = "rate", n: int | None
               keep_signals: bool = True) -> Attribution:
     chain, stim, sources, run_fn = _stimulus(design, chain_name, n, seed_offset)
     unit, scale = port_units(design).get((chain_name, port), ("", 1.0))
-    chain.reset()
     result = chain.run(**stim["codes"])
-    chain.reset()
     bit = chain.real_outputs(result)[port]
     ref_nodes = run_fn(chain, stim["analog"], Switch())
     ref = ref_nodes[port]

@@ -14,7 +14,8 @@ import numpy as np
 from tqdm import tqdm
 
 from ..chains import build
-from ..config import load_config
+from ..config import dumps, load_config
+from ..hdl.hwreport import hw_report_path, load_hw_report
 from . import optimise as opt
 from .attribution import ADDITIVITY_DB, THEORY_DB, Attribution, attribute
 from .static import static_error
@@ -23,6 +24,15 @@ from .units import parse_target
 
 ATTRIBUTED = (("chain_paper002", "rate"), ("chain_paper002", "temp"), ("chain_paper001", "rate"),
               ("chain_paper001", "temp"))
+
+
+def synthesised_cost() -> dict[str, dict[str, float]] | None:
+    """LUT4 and SB_MAC16 of every synthesised block from the hardware report (None without one); a
+    count the synthesis did not produce counts 0."""
+    report = load_hw_report()
+    if report is None:
+        return None
+    return {r["name"]: {"lut": float(r["LUT"] or 0), "mac16": float(r["MAC16"] or 0)} for r in report["rows"]}
 
 
 def configure(parser) -> None:
@@ -147,13 +157,13 @@ def run(args) -> int:
             dc, nc = result.default_cost, result.cost
             print(f"  cost: register/coefficient bits {dc['register_bits']} -> {nc['register_bits']}, memory bits "
                   f"{dc['memory_bits']} -> {nc['memory_bits']}, total {dc['total_bits']} -> {nc['total_bits']}")
-            synth = opt.synth_estimate(opt.hw_report(opt.default_hw_report_path()), target.chain, dc["register_bits"],
-                                       nc["register_bits"])
+            synth = opt.synth_estimate(synthesised_cost(), design.instances[target.chain].members,
+                                       dc["register_bits"], nc["register_bits"])
             if synth:
-                print(f"  synthesised (hdl/HW_REPORT.md, default widths): LUT {synth['lut_default']:.0f}, MAC16 "
+                print(f"  synthesised ({hw_report_path()}, default widths): LUT {synth['lut_default']:.0f}, MAC16 "
                       f"{synth['mac16_default']:.0f}; estimate at the new widths: LUT {synth['lut_estimate']:.0f}")
             else:
-                print("  synthesised cost: hdl/HW_REPORT.md not found (bits only)")
+                print(f"  synthesised cost: {hw_report_path()} not found (bits only)")
             if args.config_out:
                 changed = [f"{k}: {result.default_values[k]} -> {v}" for k, v in result.values.items()
                            if v != result.default_values[k]]
@@ -161,7 +171,7 @@ def run(args) -> int:
                           f"from {cfg.source}; {target.port} {args.metric} error {result.error:.4g} {target.unit} "
                           f"(default {result.default_error:.4g}); total bits {nc['total_bits']} "
                           f"(default {dc['total_bits']})\nchanged word lengths:\n" + "\n".join("  " + c for c in changed))
-                Path(args.config_out).write_text(opt.to_toml(result.data, header), encoding="utf-8")
+                Path(args.config_out).write_text(dumps(result.data, header), encoding="utf-8")
                 build(args.config_out)  # must load
                 print(f"  wrote {args.config_out}")
             out["optimise"] = {"values": result.values, "default_values": result.default_values,

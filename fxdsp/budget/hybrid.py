@@ -20,7 +20,7 @@ import numpy as np
 from numba import njit
 
 from ..chains import Paper001Chain, Paper002Chain
-from ..fixed import Format, OverflowLog, Rules, quantize
+from ..fixed import Format, Rules, quantize
 from ..fixed.kernels import FLOOR, TOWARD_ZERO, round_float
 
 # categories of the attribution (item 2)
@@ -146,19 +146,18 @@ def iir_hybrid(block, x: np.ndarray, coef: str, rnd: str, sw: Switch) -> np.ndar
     lsb = block.data_format.lsb
     xs = np.asarray(x, dtype=float) / lsb
     coef_on = coef in sw
-    if coef_on and rnd in sw and np.all(xs == np.round(xs)):
+    dp = block.datapath
+    codes = xs.astype(np.int64)
+    if coef_on and rnd in sw and np.array_equal(codes, xs):
         # everything of this block is on and its input is on the data grid: the block's own kernel
-        block.reset()
-        y = block._run(OverflowLog(), x=np.round(xs).astype(np.int64))["y"].astype(float) * lsb
-        block.reset()
-        return y
+        return block.run(x=codes).outputs["y"].astype(float) * lsb
     if coef_on:
-        b = block.b.astype(float) * block.num_format.lsb
-        a = block.a.astype(float) * block.den_format.lsb
+        b = dp.b.astype(float) * block.num_format.lsb
+        a = dp.a.astype(float) * block.den_format.lsb
     else:
         b = block.sos[:, :3].copy()
         a = block.sos[:, 4:].copy()
-    c = block.c.astype(float)
+    c = dp.c.astype(float)
     if rnd in sw:
         mode = 1
     elif rnd in sw.inject:
@@ -197,15 +196,16 @@ def piecewise_hybrid(block, temp: np.ndarray, prefix: str, sw: Switch) -> np.nda
     t = temp - t0
     name = f"{prefix}.round"
     acc_f, rules = block.acc_format, block.rules
+    dp = block.datapath
     acc = c[:, block.order].copy()
-    if block._top_shift > 0:  # the top coefficient enters the accumulator: a constant rounding per segment
+    if dp.top_shift > 0:  # the top coefficient enters the accumulator: a constant rounding per segment
         acc = sw.round(name, acc, acc_f, rules, "coef_into_acc")
     for k in range(block.order - 1, -1, -1):
         acc = sw.round(name, acc * t, acc_f, rules, "acc")  # the product always drops t's fraction bits
         acc = acc + c[:, k]
-        if block._sum_shift[k] > 0:
+        if dp.acc_align[k] > 0:  # the sum returns to acc_format by acc_align: c_k's extra bits rounded
             acc = sw.round(name, acc, acc_f, rules, "acc")
-    if block._out_shift > 0:
+    if dp.out_shift > 0:
         acc = sw.round(name, acc, block.out_format, rules)
     return acc
 
@@ -214,14 +214,14 @@ def rtd_hybrid(block, frac: np.ndarray, sw: Switch) -> np.ndarray:
     """ADC fraction -> temperature; sources rtd.lut_resolution (linear interpolation over 2**k
     segments instead of the exact inverse), rtd.lut_coef (LUT entries quantised), rtd.round."""
     frac = np.asarray(frac, dtype=float)
-    adc = block.adc_format
+    adc, dp = block.adc_format, block.datapath
     exact = block.physics.temperature_from_fraction(frac)
     lut_q = block.lut.astype(float) * block.lut_format.lsb
 
     def interp(table):
         u = (frac - adc.min_value) / adc.lsb  # continuous offset-binary code
-        seg = float(1 << block.s)
-        idx = np.clip(np.floor(u / seg), 0, (1 << block.k) - 1).astype(np.int64)
+        seg = float(1 << dp.frac_bits)
+        idx = np.clip(np.floor(u / seg), 0, (1 << dp.lut_index_bits) - 1).astype(np.int64)
         fr = u - idx * seg
         return (table[idx] * seg + (table[idx + 1] - table[idx]) * fr) / seg
 
@@ -231,7 +231,7 @@ def rtd_hybrid(block, frac: np.ndarray, sw: Switch) -> np.ndarray:
         temp = exact + interp(lut_q - block.lut_real)
     else:
         temp = exact
-    if block.shift > 0:
+    if dp.shift > 0:
         temp = sw.round("rtd.round", temp, block.temp_format, block.rules)
     return temp
 
@@ -242,7 +242,7 @@ def divide_hybrid(block, x: np.ndarray, sf: np.ndarray, sw: Switch) -> np.ndarra
     v = np.asarray(x, dtype=float) / np.asarray(sf, dtype=float)
     name = "sf_divide.trunc"
     if name in sw:
-        scale = 2.0 ** (block.in_format.fl + block.guard_bits)
+        scale = 2.0 ** block.datapath.q_format.fl
         q = np.trunc(np.asarray(x, dtype=float) * scale / sf) / scale
         y = quantize(q, block.out_format, block.rules).astype(float) * block.out_format.lsb
         sw.record(name, "out", y - v)
@@ -255,25 +255,25 @@ def divide_hybrid(block, x: np.ndarray, sf: np.ndarray, sw: Switch) -> np.ndarra
 def nco_hybrid(block, n: int, sw: Switch) -> np.ndarray:
     """2 cos of the NCO phase (the I mixer's factor); sources demod.nco_phase (FTW and LUT address
     truncation) and demod.nco_amp (LUT amplitude quantisation)."""
-    nco = block.nco
+    nco, dp = block.nco, block.datapath
     if "demod.nco_phase" in sw:
         k = np.arange(n, dtype=np.int64)
-        phase = (nco.phase0 + k * nco.ftw) & nco.phase_mask
-        addr = phase >> nco.addr_shift
-        angle = 2 * np.pi * (addr + 0.5) / 2**nco.lut_bits
+        phase = (dp.phase0 + k * dp.ftw) & dp.phase_mask
+        addr = phase >> dp.addr_shift
+        angle = 2 * np.pi * (addr + 0.5) / 2**dp.lut_bits
         if "demod.nco_amp" in sw:
-            return nco.cos_lut[addr].astype(float) * nco.lut_format.lsb
+            return dp.cos.words[addr].astype(float) * nco.lut_format.lsb
         return np.cos(angle)
     angle = nco.reference_phase(n, 0)
     if "demod.nco_amp" in sw:
-        return quantize(np.cos(angle), nco.lut_format, Rules("half_up", "saturate")).astype(float) * nco.lut_format.lsb
+        return nco.lut_quantize(np.cos(angle)).astype(float) * nco.lut_format.lsb
     return np.cos(angle)
 
 
 def demod_hybrid(block, x: np.ndarray, sw: Switch) -> tuple[np.ndarray, np.ndarray]:
     """The rate (I) channel: mixer 2 x cos, rounding demod.mix_round, low-pass demod.lpf_*."""
     mix = 2.0 * np.asarray(x, dtype=float) * nco_hybrid(block, len(x), sw)
-    if block.mix_format.fl > block.data_format.fl:
+    if block.datapath.mix_shift > 0:
         mix = sw.round("demod.mix_round", mix, block.data_format, block.rules)
     i = iir_hybrid(block.lpf_i, mix, "demod.lpf_coef", "demod.lpf_round", sw)
     return mix, i
@@ -281,7 +281,7 @@ def demod_hybrid(block, x: np.ndarray, sw: Switch) -> tuple[np.ndarray, np.ndarr
 
 def subtract_hybrid(block, x, bias, name: str, sw: Switch) -> np.ndarray:
     r = np.asarray(x, dtype=float) - np.asarray(bias, dtype=float)
-    if block.diff_format.fl > block.out_format.fl:
+    if block.datapath.shift > 0:
         r = sw.round(name, r, block.out_format, block.rules)
     return r
 
@@ -290,32 +290,13 @@ def subtract_hybrid(block, x, bias, name: str, sw: Switch) -> np.ndarray:
 # chains: analog stimulus, sources, hybrid run
 # --------------------------------------------------------------------------------------------
 def analog_paper002(chain: Paper002Chain, rng: np.random.Generator, n: int) -> dict:
-    """The chain's nominal stimulus (same rng draws as ``nominal_stimulus``) before the ADCs.
-    Returns analog signals, the ADC codes the chain sees, and the noise-free sense signal."""
-    n = max(n, 8192)
-    t_c = np.linspace(-20.0, 60.0, n)
-    steps = np.array([0.0, 0.3, -0.3, 0.1, 0.0, -0.05, 0.2, 0.0])
-    rate = np.repeat(steps, -(-n // steps.size))[:n]
-    sf = chain.sf.reference(temp=t_c)["y"]
-    bias = chain.bias.reference(temp=t_c)["y"]
-    clean = chain.demod.carrier(sf * (rate + bias), 0.0, n) + chain.demod.carrier(sf * 0.05, np.pi / 2, n)
-    x = clean + rng.normal(0.0, 1e-3, n)
-    phys = chain.rtd.physics
-    frac = phys.adc_fraction(phys.resistance(t_c))
-    sat = Rules("half_up", "saturate")
-    return {"analog": {"vsa": x, "rtd_frac": frac}, "clean": {"vsa": clean, "rtd_frac": frac},
-            "codes": {"vsa": quantize(x, chain.divide.in_format, sat), "rtd_code": chain.rtd.adc_code(t_c)},
-            "t_c": t_c, "rate_fs": rate}
+    """The chain's own nominal stimulus (same draws as ``nominal_stimulus``) before the ADCs:
+    analog signals, the noise-free ones, the ADC codes the chain sees and the programme."""
+    return chain.nominal_analog(rng, n)
 
 
 def analog_paper001(chain: Paper001Chain, rng: np.random.Generator, n: int) -> dict:
-    t_c = np.repeat(np.arange(-10.0, 51.0, 10.0), -(-n // 7))[:n] + rng.normal(0, 0.05, n)
-    q = chain.bias.reference(temp=t_c)["y"]
-    noise = rng.normal(0.0, 1.0, n)
-    f = chain.f2t.f0_hz + chain.f2t.k_hz_per_c * t_c
-    codes = {"f": chain.f2t.freq_code(t_c),
-             "rate_in": quantize(q + noise, chain.subtract.in_format, Rules("half_up", "saturate"))}
-    return {"analog": {"f": f, "rate_in": q + noise}, "clean": {"f": f, "rate_in": q}, "codes": codes, "t_c": t_c}
+    return chain.nominal_analog(rng, n)
 
 
 def sources_paper002(chain: Paper002Chain) -> list[Source]:
@@ -323,9 +304,9 @@ def sources_paper002(chain: Paper002Chain) -> list[Source]:
                                         chain.subtract, chain.lpf)
     s = [Source("adc.sense", ADC, "sf_divide", "vsa", div.in_format.lsb, "half_up", "sense ADC"),
          Source("adc.rtd", ADC, "rtd", "rtd_frac", rtd.adc_format.lsb, "half_up", "RTD bridge ADC"),
-         Source("rtd.lut_resolution", LUTNCO, "rtd", "temp", note=f"{2**rtd.k} linear segments"),
+         Source("rtd.lut_resolution", LUTNCO, "rtd", "temp", note=f"{2**rtd.datapath.lut_index_bits} linear segments"),
          Source("rtd.lut_coef", COEF, "rtd", "temp", note=f"LUT entries in {rtd.lut_format}")]
-    if rtd.shift > 0:
+    if rtd.datapath.shift > 0:
         s.append(Source("rtd.round", ROUND, "rtd", "temp", rtd.temp_format.lsb, rtd.rules.rounding))
     s += [Source("piecewise_sf.coef", COEF, "piecewise_sf", "sf"),
           Source("piecewise_sf.round", ROUND, "piecewise_sf", "sf", sf.out_format.lsb, sf.rules.rounding),
@@ -333,13 +314,13 @@ def sources_paper002(chain: Paper002Chain) -> list[Source]:
                  "quotient toward zero, then the rescale"),
           Source("demod.nco_phase", LUTNCO, "demod", "mix", note=f"{dem.nco.lut_bits}-bit LUT address"),
           Source("demod.nco_amp", LUTNCO, "demod", "mix", note=f"LUT values in {dem.nco.lut_format}")]
-    if dem.mix_format.fl > dem.data_format.fl:
+    if dem.datapath.mix_shift > 0:
         s.append(Source("demod.mix_round", ROUND, "demod", "mix", dem.data_format.lsb, dem.rules.rounding))
     s += [Source("demod.lpf_coef", COEF, "demod", "i"),
           Source("demod.lpf_round", ROUND, "demod", "i", dem.data_format.lsb, dem.lpf_i.rules.rounding),
           Source("piecewise_bias.coef", COEF, "piecewise_bias", "bias"),
           Source("piecewise_bias.round", ROUND, "piecewise_bias", "bias", bias.out_format.lsb, bias.rules.rounding)]
-    if sub.diff_format.fl > sub.out_format.fl:
+    if sub.datapath.shift > 0:
         s.append(Source("bias_subtract.round", ROUND, "bias_subtract", "r", sub.out_format.lsb, sub.rules.rounding))
     s += [Source("iir.coef", COEF, "iir", "rate"),
           Source("iir.round", ROUND, "iir", "rate", lpf.data_format.lsb, lpf.rules.rounding)]
@@ -355,7 +336,7 @@ def sources_paper001(chain: Paper001Chain) -> list[Source]:
          Source("piecewise_bias001.coef", COEF, "piecewise_bias001", "bias"),
          Source("piecewise_bias001.round", ROUND, "piecewise_bias001", "bias", bias.out_format.lsb,
                 bias.rules.rounding)]
-    if sub.diff_format.fl > sub.out_format.fl:
+    if sub.datapath.shift > 0:
         s.append(Source("bias_subtract001.round", ROUND, "bias_subtract001", "rate", sub.out_format.lsb,
                         sub.rules.rounding))
     return s
@@ -388,7 +369,7 @@ def run_paper001(chain: Paper001Chain, analog: dict, sw: Switch) -> dict[str, np
     fi = chain.subtract.in_format
     rate_in = sw.round("adc.rate", rate_in, fi, Rules("half_up", "saturate"))
     if "freq2temp.coef" in sw:
-        temp = (f - f2t.f0 * f2t.freq_format.lsb) * (f2t.kinv * f2t.kinv_format.lsb)
+        temp = (f - f2t.datapath.f0 * f2t.freq_format.lsb) * (f2t.datapath.kinv * f2t.kinv_format.lsb)
     else:
         temp = (f - f2t.f0_hz) / f2t.k_hz_per_c
     temp = sw.round("freq2temp.round", temp, f2t.temp_format, f2t.rules)

@@ -25,13 +25,9 @@ and coefficients (word length times instances) and memory (LUT words times word 
 from __future__ import annotations
 
 import copy
-import json
 import math
-import re
 from dataclasses import dataclass, field
-from pathlib import Path
 
-import numpy as np
 
 from ..chains import build
 from ..config import Config
@@ -85,14 +81,14 @@ KNOBS = {
         Knob("demod.phase_bits", (("demod", "phase_bits"),), "int", 8, 48),
         Knob("demod.lut_bits", (("demod", "lut_bits"),), "int", 6, 16, instances="nco_index"),
         Knob("demod.lut_format", (("demod", "lut_format"),), instances="nco_lut"),
-        Knob("demod.data_format", (("demod", "data_format"), ("demod.lpf", "data_format")), instances=2),
+        Knob("demod.data_format", (("demod", "data_format"),), instances=2),  # the low-passes follow (wired)
         Knob("demod.lpf.num_format", (("demod.lpf", "num_format"),), instances=6),
         Knob("demod.lpf.den_format", (("demod.lpf", "den_format"),), instances=4),
         Knob("piecewise.bias.c0", (("piecewise.bias", "coef_format", 0),), instances="segments_bias"),
         Knob("piecewise.bias.c1", (("piecewise.bias", "coef_format", 1),), instances="segments_bias"),
         Knob("piecewise.bias.acc_format", (("piecewise.bias", "acc_format"),)),
         Knob("piecewise.bias.out_format", (("piecewise.bias", "out_format"),)),
-        Knob("iir.data_format", (("bias_subtract", "out_format"), ("iir", "data_format"))),
+        Knob("iir.data_format", (("bias_subtract", "out_format"),)),  # the filter's wire: it follows
         Knob("iir.num_format", (("iir", "num_format"),), instances=3),
         Knob("iir.den_format", (("iir", "den_format"),), instances=2),
     ],
@@ -356,100 +352,15 @@ def sweep(config: Config, chain: str, port: str, metric: str = "rms", span: int 
 
 
 # --------------------------------------------------------------------------------------------
-# TOML output and the synthesis report
+# The synthesis report (the optimised config is written by fxdsp.config.dumps)
 # --------------------------------------------------------------------------------------------
-_BARE = re.compile(r"^[A-Za-z0-9_-]+$")
-
-
-def _toml_value(v) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        if not math.isfinite(v):
-            raise ValueError(f"cannot write {v} to TOML")
-        return repr(v)
-    if isinstance(v, str):
-        return json.dumps(v)
-    if isinstance(v, list):
-        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
-    raise TypeError(f"cannot write {type(v).__name__} to TOML")
-
-
-def to_toml(data: dict, header: str = "") -> str:
-    lines = [f"# {ln}" if ln else "#" for ln in header.splitlines()]
-
-    def table(node: dict, path: list[str]):
-        scalars = {k: v for k, v in node.items() if not isinstance(v, dict)}
-        subs = {k: v for k, v in node.items() if isinstance(v, dict)}
-        if path and (scalars or not subs):
-            lines.append("")
-            lines.append("[" + ".".join(k if _BARE.match(k) else json.dumps(k) for k in path) + "]")
-        for k, v in scalars.items():
-            lines.append(f"{k if _BARE.match(k) else json.dumps(k)} = {_toml_value(v)}")
-        for k, v in subs.items():
-            table(v, path + [k])
-
-    table(data, [])
-    return "\n".join(lines) + "\n"
-
-
-def hw_report(path: Path) -> dict[str, dict[str, float]] | None:
-    """Per-block LUT / MAC16 counts from a Markdown table in hdl/HW_REPORT.md (None if absent or
-    without such columns). Rows are keyed by their first cell."""
-    if not path.is_file():
-        return None
-    rows, cols = {}, None
-    for line in path.read_text(encoding="utf-8", errors="replace").splitlines():
-        if not line.strip().startswith("|"):
-            cols = None if not line.strip() else cols
-            continue
-        cells = [c.strip().strip("`*") for c in line.strip().strip("|").split("|")]
-        if cols is None:
-            low = [c.lower() for c in cells]
-            lut = next((i for i, c in enumerate(low) if "lut" in c and "lut_" not in c), None)
-            mac = next((i for i, c in enumerate(low) if "mac16" in c or "dsp" in c), None)
-            cols = (lut, mac) if lut is not None else None
-            continue
-        if set("".join(cells)) <= set("-: "):
-            continue
-        lut, mac = cols
-
-        def num(i):
-            if i is None or i >= len(cells):
-                return 0.0
-            m = re.search(r"-?\d+(\.\d+)?", cells[i])
-            return float(m.group(0)) if m else 0.0
-        rows[cells[0]] = {"lut": num(lut), "mac16": num(mac)}
-    return rows or None
-
-
-CHAIN_BLOCKS = {"chain_paper002": ("rtd", "piecewise_sf", "piecewise.sf", "sf_divide", "demod", "piecewise_bias",
-                                   "piecewise.bias", "bias_subtract", "iir"),
-                "chain_paper001": ("freq2temp", "piecewise_bias001", "piecewise.bias001", "bias_subtract001")}
-
-
-def default_hw_report_path() -> Path:
-    """hdl/HW_REPORT.md of the repository this package lives in (else of the working directory)."""
-    repo = Path(__file__).resolve().parents[2] / "hdl" / "HW_REPORT.md"
-    return repo if repo.is_file() else Path("hdl") / "HW_REPORT.md"
-
-
-def synth_estimate(rows: dict | None, chain: str, bits_default: int, bits_new: int) -> dict | None:
-    """Synthesised LUT/MAC16 of the chain's blocks at the default widths, and an estimate for the new
-    widths scaled by the register-bit ratio (MAC16 count kept: a re-synthesis is the real answer)."""
+def synth_estimate(rows: dict | None, members: tuple[str, ...], bits_default: int, bits_new: int) -> dict | None:
+    """Synthesised LUT/MAC16 of a chain's member instances (``design.instances[chain].members``) at
+    the default widths, and an estimate for the new widths scaled by the register-bit ratio (MAC16
+    count kept: a re-synthesis is the real answer)."""
     if not rows:
         return None
-    names = CHAIN_BLOCKS[chain]
-    keys = []
-    for k in rows:
-        low = k.lower()
-        if not any(low == b or low.startswith(b) for b in names):
-            continue
-        if chain == "chain_paper002" and "001" in low:
-            continue
-        keys.append(k)
+    keys = [k for k in members if k in rows]
     if not keys:
         return None
     lut = sum(rows[k]["lut"] for k in keys)

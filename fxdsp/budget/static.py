@@ -31,11 +31,8 @@ def static_error(design, chain_name: str = "chain_paper002", port: str = "rate")
     plus the overflow count."""
     chain = design.chains[chain_name]
     stim, keep = static_stimulus(chain, design.seed)
-    chain.reset()
     res = chain.run(**stim)
-    chain.reset()
     ref = chain.run_float(**stim)
-    chain.reset()
     e = (chain.real_outputs(res)[port] - ref[port])[keep]
     return {"rms": float(np.sqrt(np.mean(e**2))), "max_abs": float(np.abs(e).max()), "mean": float(e.mean()),
             "samples": int(e.size), "overflows": res.overflows.total}

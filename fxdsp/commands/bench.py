@@ -140,11 +140,9 @@ def run(args) -> int:
     y_ref = iir.filter(x)
 
     stim = chain.nominal_stimulus(rng, args.samples)
-    chain.reset()
     chain.run(**{k: v[:1000] for k, v in stim.items()})
 
     def run_chain():
-        chain.reset()
         chain.run(**stim)
     t_chain = _best(run_chain, max(2, args.repeat // 2))
 

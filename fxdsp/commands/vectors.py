@@ -5,7 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..chains import build
-from ..vectors import generate, write_or_check
+from ..vectors import generate
+from .generated import sync_generated
 
 
 def configure(parser) -> None:
@@ -17,4 +18,4 @@ def configure(parser) -> None:
 
 def run(args) -> int:
     design = build(args.config)
-    return write_or_check(generate(design), Path(args.out), args.check, "vectors")
+    return sync_generated(generate(design), Path(args.out), args.check, "vectors")

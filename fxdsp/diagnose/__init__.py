@@ -1,8 +1,8 @@
 """`fxdsp diagnose`: explain where a measured log disagrees with the baseline model.
 
 See shared/spec/measured-data.md for the contract (log format, causes, report). The entry points
-are imported on first use, so that `fxdsp --help` (which loads every sub-command's cli module
-through this package) does not pay for scipy and numba.
+are imported on first use, so that loading a command module through this package (e.g. for
+`fxdsp diagnose --help`) does not pay for scipy and numba.
 """
 
 from __future__ import annotations

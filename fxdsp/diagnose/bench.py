@@ -1,6 +1,6 @@
 """Benchmark (not a test): seconds to diagnose a 6k-row and a 1M-row simulated log, file to report.
 
-    .venv/bin/python -m fxdsp.diagnose.bench [--rows 6000 1000000]
+    fxdsp diagnose-bench [--rows 6000 1000000]
 
 Each log is the paper002 chamber run with a thermal lag, every optional column, sampled so that it
 has about the requested number of rows; the time covers reading the CSV and the whole diagnosis.
@@ -8,8 +8,6 @@ has about the requested number of rows; the time covers reading the CSV and the 
 
 from __future__ import annotations
 
-import argparse
-import tempfile
 import time
 from pathlib import Path
 
@@ -29,20 +27,3 @@ def bench(rows: int, directory: Path) -> tuple[float, float, dict]:
     diag = diagnose_file(path)
     seconds = time.perf_counter() - start
     return seconds, float(len(log["time_s"])), report_dict(diag)
-
-
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rows", type=int, nargs="+", default=[6000, 1_000_000])
-    args = parser.parse_args(argv)
-    bench(500, Path(tempfile.mkdtemp()))  # warm up numba's cache and the imports
-    with tempfile.TemporaryDirectory() as tmp:
-        for rows in args.rows:
-            seconds, n, data = bench(rows, Path(tmp))
-            print(f"{int(n):>9d} rows: {seconds:7.2f} s  -> {data['cause']} {data['parameters']} "
-                  f"gain {data['gain']['ratio']:.2f}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

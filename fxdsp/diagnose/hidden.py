@@ -30,14 +30,12 @@ none                        nothing; a third of the cases add flicker (bias inst
 
 SNR is drawn uniformly in SNR_RANGE (5..20; ``--snr LO HI`` to probe the limit), WANDER in
 WANDER_RANGE (2..10). Every log is a full chamber programme with its dwells halved
-(DURATION_SCALE), 3k..6.5k rows at 10 s. Run ``python -m fxdsp.diagnose.hidden --per-cause 20``
-for the confusion matrix.
+(DURATION_SCALE), 3k..6.5k rows at 10 s. Run ``fxdsp diagnose-hidden --per-cause 20`` for the
+confusion matrix.
 """
 
 from __future__ import annotations
 
-import argparse
-import sys
 import time
 from dataclasses import dataclass
 
@@ -188,8 +186,28 @@ def parameters_within(case: Case, found: dict, tolerance: float = 0.25) -> bool:
     return all(abs(found.get(k, np.nan) - v) <= tolerance * abs(v) for k, v in truth.items())
 
 
-def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, out=sys.stdout, snr_range=SNR_RANGE):
-    """Run ``per_cause`` cases per cause; print the confusion matrix (rows: truth, cols: first cause)."""
+@dataclass
+class Confusion:
+    """Outcome of :func:`confusion`: ``matrix[truth, found]`` over ALL_CAUSES (found: the first cause
+    named, ``none`` when none), per-cause counts of the checks, and one tuple per case that missed."""
+
+    per_cause: int
+    causes: tuple[str, ...]
+    matrix: np.ndarray
+    params_ok: dict[str, int]
+    gain_ok: dict[str, int]
+    extra: dict[str, int]
+    failures: list[tuple]
+    seconds: float
+
+
+def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, snr_range=SNR_RANGE) -> Confusion:
+    """Run ``per_cause`` cases per cause and tally what the diagnosis names."""
+    unknown = [c for c in causes if c not in ALL_CAUSES]
+    if unknown:
+        raise ValueError(f"causes: unknown cause {unknown[0]!r}; expected some of {', '.join(ALL_CAUSES)}")
+    if per_cause < 1:
+        raise ValueError(f"per_cause: need at least 1 case per cause, got {per_cause}")
     index = {c: i for i, c in enumerate(ALL_CAUSES)}
     matrix = np.zeros((len(ALL_CAUSES), len(ALL_CAUSES)), dtype=int)
     params_ok = {c: 0 for c in causes}
@@ -212,30 +230,18 @@ def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, out=sys
                 failures.append((cause, case.seed, case.scenario, case.columns, round(case.snr, 1),
                                  diag.causes, diag.parameters.get(cause), case.effects.get(cause),
                                  round(diag.gain["ratio"], 2)))
-    abbrev = [c[:6] for c in ALL_CAUSES]
-    print(f"{'truth / found':24s}" + "".join(f"{a:>7s}" for a in abbrev) + "   params<=25%  gain>1.3  extra causes", file=out)
-    for c in causes:
-        i = index[c]
-        print(f"{c:24s}" + "".join(f"{v:7d}" for v in matrix[i]) +
-              f"   {params_ok[c]:5d}/{per_cause:<5d} {gain_ok[c]:5d}/{per_cause:<5d} {extra[c]:5d}", file=out)
-    print(f"{len(causes) * per_cause} cases in {time.perf_counter() - start:.0f} s", file=out)
-    for f in failures:
-        print("miss:", *f, file=out)
-    return matrix, failures
+    return Confusion(per_cause, tuple(causes), matrix, params_ok, gain_ok, extra, failures,
+                     time.perf_counter() - start)
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--per-cause", type=int, default=20)
-    parser.add_argument("--first-seed", type=int, default=1000)
-    parser.add_argument("--causes", default=",".join(ALL_CAUSES))
-    parser.add_argument("--snr", type=float, nargs=2, default=SNR_RANGE, metavar=("LO", "HI"),
-                        help="effect size range in noise units (default %(default)s)")
-    args = parser.parse_args(argv)
-    confusion(args.per_cause, args.first_seed, tuple(c for c in args.causes.split(",") if c),
-              snr_range=tuple(args.snr))
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+def format_confusion(res: Confusion) -> str:
+    """The matrix (rows: truth, columns: found, causes abbreviated), the per-cause checks and the misses."""
+    n = res.per_cause
+    lines = [f"{'truth / found':24s}" + "".join(f"{c[:6]:>7s}" for c in ALL_CAUSES)
+             + "   params<=25%  gain>1.3  extra causes"]
+    for c in res.causes:
+        lines.append(f"{c:24s}" + "".join(f"{v:7d}" for v in res.matrix[ALL_CAUSES.index(c)]) +
+                     f"   {res.params_ok[c]:5d}/{n:<5d} {res.gain_ok[c]:5d}/{n:<5d} {res.extra[c]:5d}")
+    lines.append(f"{len(res.causes) * n} cases in {res.seconds:.0f} s")
+    lines += [" ".join(["miss:", *map(str, f)]) for f in res.failures]
+    return "\n".join(lines)

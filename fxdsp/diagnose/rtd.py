@@ -7,7 +7,8 @@ a linear readout reports T + b (T - 25)^2 (+ offset and gain), b close to B/A.
 
 ``rtd_study`` runs the whole argument on a resistance table: linear least-squares law and its
 temperature error, the cause named by the diagnosis engine from a log built from the table, a
-Callendar-Van Dusen least-squares fit and the IEC 60751 constants, with their temperature errors.
+Callendar-Van Dusen least-squares fit and the IEC 60751 constants, with their temperature errors
+(``fxdsp diagnose-rtd TABLE`` prints it). The law is the RTD block's (:func:`cvd_law`).
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from fxdsp.blocks.rtd import RtdPhysics
 
 IEC60751 = {"R0": 100.0, "A": 3.9083e-3, "B": -5.775e-7, "C": -4.183e-12}
 
@@ -49,9 +52,11 @@ def linear_temperature(resistance, r0: float, beta: float) -> np.ndarray:
     return (np.asarray(resistance, float) / r0 - 1.0) / beta
 
 
-def cvd_resistance(temp_c, r0: float, a: float, b: float, c: float) -> np.ndarray:
-    t = np.asarray(temp_c, float)
-    return r0 * (1.0 + a * t + b * t * t + np.where(t < 0, c * (t - 100.0) * t ** 3, 0.0))
+def cvd_law(R0: float, A: float, B: float, C: float) -> RtdPhysics:
+    """The Callendar-Van Dusen element with these constants, as the RTD block models it (one law for
+    the block, the simulator and this study): ``.resistance(T)`` and its inverse ``.temperature(R)``.
+    Called as ``cvd_law(**IEC60751)`` or ``cvd_law(**fit_cvd(t, r))``."""
+    return RtdPhysics(law="cvd", r0_ohm=R0, cvd_a=A, cvd_b=B, cvd_c=C)
 
 
 def fit_cvd(temp_c, resistance) -> dict[str, float]:
@@ -70,18 +75,6 @@ def fit_cvd(temp_c, resistance) -> dict[str, float]:
             "C": float(coef[3] / r0) if has_cold else 0.0}
 
 
-def cvd_temperature(resistance, r0: float, a: float, b: float, c: float) -> np.ndarray:
-    """Invert Callendar-Van Dusen: the quadratic root, then Newton steps for the C term below 0 C."""
-    r = np.asarray(resistance, float)
-    t = (-a + np.sqrt(a * a - 4.0 * b * (1.0 - r / r0))) / (2.0 * b) if b != 0 else (r / r0 - 1.0) / a
-    for _ in range(20):
-        cold = t < 0
-        f = cvd_resistance(t, r0, a, b, c) - r
-        df = r0 * (a + 2 * b * t + np.where(cold, c * (4 * t ** 3 - 300.0 * t * t), 0.0))
-        t = t - f / df
-    return t
-
-
 def rtd_study(temp_c, resistance) -> dict:
     """Errors (in C) of the linear law, the fitted CVD law and the IEC 60751 law on a table, and the
     cause the diagnosis engine names for a linear readout of it."""
@@ -90,8 +83,8 @@ def rtd_study(temp_c, resistance) -> dict:
     r0, beta = fit_linear(t, r)
     linear_error = linear_temperature(r, r0, beta) - t
     cvd = fit_cvd(t, r)
-    cvd_error = cvd_temperature(r, cvd["R0"], cvd["A"], cvd["B"], cvd["C"]) - t
-    iec_error = cvd_temperature(r, *IEC60751.values()) - t
+    cvd_error = cvd_law(**cvd).temperature(r) - t
+    iec_error = cvd_law(**IEC60751).temperature(r) - t
     return {
         "range_c": [float(t.min()), float(t.max())],
         "linear": {"R0": r0, "beta": beta, "error": ErrorStats.of(linear_error)},
@@ -119,28 +112,3 @@ def diagnose_linear_readout(temp_c, resistance, r0: float, beta: float, seed: in
             "output": 1.0 + 1e-3 * rng.standard_normal(t.size)}
     diag = diagnose_log(Log(columns=cols, source="pt100 table"))
     return {"causes": diag.causes, "parameters": diag.parameters, "gain": diag.gain}
-
-
-def main(argv=None) -> int:
-    import argparse
-
-    parser = argparse.ArgumentParser(description="linear RTD law vs Callendar-Van Dusen on a table")
-    parser.add_argument("table", help="table CSV (temperature_c, resistance_ohm), e.g. "
-                                      "../shared/data/pt100_table/pt100_table.csv")
-    parser.add_argument("--range", nargs=2, type=float, default=None, metavar=("LO", "HI"))
-    args = parser.parse_args(argv)
-    t, r = load_table(args.table)
-    if args.range:
-        keep = (t >= args.range[0]) & (t <= args.range[1])
-        t, r = t[keep], r[keep]
-    study = rtd_study(t, r)
-    for key in ("linear", "cvd_fit", "cvd_iec60751"):
-        e = study[key]["error"]
-        coefs = {k: v for k, v in study[key].items() if k != "error"}
-        print(f"{key:13s} max |error| {e.max_abs_c:9.4f} C  rms {e.rms_c:9.4f} C  {coefs}")
-    print("diagnosis of the linear readout:", study["diagnosis"])
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

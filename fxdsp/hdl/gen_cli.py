@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..chains import build
-from ..vectors import write_or_check
+from ..commands.generated import sync_generated
 from .params import generate
 
 
@@ -19,4 +19,4 @@ def configure(parser) -> None:
 
 def run(args) -> int:
     files = generate(build(args.config))
-    return write_or_check(files, Path(args.out), args.check, "hdl-gen", patterns=("*.vh", "*.hex"))
+    return sync_generated(files, Path(args.out), args.check, "hdl-gen", patterns=("*.vh", "*.hex"))

@@ -1,6 +1,7 @@
 """`fxdsp hw-report`: synthesise every RTL block instance and both tops for the iCE40UP5K
 (yosys ``synth_ice40 -dsp``, nextpnr-ice40 ``--up5k``) and write a Markdown table of LUTs,
-SB_MAC16, flip-flops, block RAMs and Fmax to ``hdl/HW_REPORT.md``.
+SB_MAC16, flip-flops, block RAMs and Fmax to ``hdl/HW_REPORT.md``, and the same rows as data to
+``hdl/HW_REPORT.json`` beside it (:mod:`fxdsp.hdl.hwreport`).
 
 Resources are those of the bare module (its parameters from the same config as the models).
 Fmax comes from placing and routing the module inside a serial wrapper (one input pin, one
@@ -20,41 +21,36 @@ import time
 from pathlib import Path
 
 from ..chains import build
-from .params import CHAINS, PORTS, generate, instances, literal, module_of, ovf_width
+from .hwreport import HDL_DIR, report_json
+from .params import generate, instance, literal
 
-ROOT = Path(__file__).resolve().parents[2]
-RTL = ROOT / "hdl" / "rtl"
-TARGETS = ["rtd", "piecewise_sf", "piecewise_bias", "sf_divide", "demod", "bias_subtract", "iir",
-           "freq2temp", "piecewise_bias001", "bias_subtract001", "lag", "chain_paper001", "chain_paper002"]
+RTL = HDL_DIR / "rtl"
 UP5K = {"LUT": 5280, "MAC16": 8, "FF": 5280, "BRAM": 30}
 BUDGET = {"LUT": 2640, "MAC16": 8, "MHz": 40.0}
 
 
 def configure(parser) -> None:
     parser.add_argument("--config", help="TOML config (default: the built-in one)")
-    parser.add_argument("--out", default=str(ROOT / "hdl" / "HW_REPORT.md"), help="Markdown report to write")
-    parser.add_argument("--only", nargs="*", help="subset of targets (default: all)")
+    parser.add_argument("--out", default=str(HDL_DIR / "HW_REPORT.md"),
+                        help="Markdown report to write (its JSON twin goes beside it, suffix .json)")
+    parser.add_argument("--only", nargs="*", help="subset of the design's instances (default: every block and chain)")
     parser.add_argument("--freq", type=float, default=40.0, help="nextpnr target clock in MHz (default 40)")
     parser.add_argument("--timeout", type=int, default=1200, help="seconds per tool run")
 
 
-def _port_widths(design, name):
-    block = design.all[name]
-    return {p: f.wl for p, f in {**block.inputs, **block.outputs}.items()}
-
-
 def _dut_params(design, name) -> str:
-    if name in CHAINS:
-        return ""
-    inst = instances(design)[name]
+    if design.instances[name].members:
+        return ""  # a top takes its parameters from the generated headers
+    inst = instance(design, name)
     return "#(" + ", ".join(f".{k}({literal(inst, k, v)})" for k, v in inst.params.items()) + ")"
 
 
 def wrapper(design, name: str) -> str:
-    module = module_of(design, name)
-    ins, outs, ready = PORTS[module]
-    w = _port_widths(design, name)
-    n_ovf = ovf_width(design, name)
+    inst = design.instances[name]
+    module, ready = inst.module, inst.has_ready
+    ins, outs = [p.name for p in inst.inputs], [p.name for p in inst.outputs]
+    w = {p: port.format.wl for p, port in inst.ports.items()}
+    n_ovf = design.ovf_width(name)
     in_bits = sum(w[p] for p in ins) + 2  # + in_valid, rst
     out_bits = sum(w[p] for p in outs) + n_ovf + 1 + (1 if ready else 0)
     L = ["`default_nettype none", "module hw_wrap (input wire clk, input wire sin, output wire sout);",
@@ -94,10 +90,10 @@ def _sources():
 
 
 def synth(design, name: str, work: Path, timeout: int) -> dict:
-    module = module_of(design, name)
+    module = design.instances[name].module
     chparams = ""
-    if name not in CHAINS:
-        inst = instances(design)[name]
+    if not design.instances[name].members:
+        inst = instance(design, name)
         chparams = " ".join(f"-set {k} {literal(inst, k, v)}" if not isinstance(v, str)
                             else f'-set {k} "{v}"' for k, v in inst.params.items())
         chparams = f"chparam {chparams} {module};"
@@ -132,7 +128,10 @@ def run(args) -> int:
             print(f"fxdsp hw-report: {tool} not found (apt-get install yosys nextpnr-ice40)", file=sys.stderr)
             return 2
     design = build(args.config)
-    targets = args.only or TARGETS
+    targets = args.only or list(design.instances)
+    unknown = [t for t in targets if t not in design.instances]
+    if unknown:
+        raise ValueError(f"--only: {unknown[0]!r} is not an instance of the design ({', '.join(design.instances)})")
     rows = []
     with tempfile.TemporaryDirectory(prefix="fxdsp_hw_") as tmp:
         work = Path(tmp)
@@ -140,7 +139,7 @@ def run(args) -> int:
             (work / rel).write_text(text)
         for name in targets:
             t0 = time.perf_counter()
-            row = {"name": name, "module": module_of(design, name)}
+            row = {"name": name, "module": design.instances[name].module}
             try:
                 row.update(synth(design, name, work, args.timeout))
                 row["fmax"], row["note"] = place_route(design, name, work, args.freq, args.timeout)
@@ -154,8 +153,10 @@ def run(args) -> int:
             row["seconds"] = round(time.perf_counter() - t0, 1)
             rows.append(row)
             print(f"{name}: {row}", file=sys.stderr)
-    Path(args.out).write_text(markdown(rows, args.freq))
-    print(f"wrote {args.out}")
+    out = Path(args.out)
+    out.write_text(markdown(rows, args.freq))
+    out.with_suffix(".json").write_text(report_json(rows, args.freq, UP5K))
+    print(f"wrote {out} and {out.with_suffix('.json')}")
     return 0
 
 

@@ -70,7 +70,7 @@ class Compensator002:
         """The RTD's ADC code of the logged temperature, converted by the rtd block (LUT)."""
         log = OverflowLog() if log is None else log
         code = self.rtd.adc_code(_finite("temp_c", temp_c), log)
-        return self.rtd._run(log, code=code)["temp"]
+        return self.rtd.stream(log, code=code)["temp"]
 
     def temperature_code_direct(self, temp_c) -> np.ndarray:
         """A temperature estimate (C) quantised straight into the temperature format."""
@@ -79,10 +79,10 @@ class Compensator002:
     def run(self, output_mv, temp_code, log: OverflowLog | None = None) -> dict[str, np.ndarray]:
         log = OverflowLog() if log is None else log
         x = quantize(_finite("output", output_mv) / FS_MV, self.divide.in_format, ROUND, log, "input")
-        sf = self.sf._run(log, temp=temp_code)["y"]
-        v = self.divide._run(log, x=x, sf=sf)["y"]
-        b = self.bias._run(log, temp=temp_code)["y"]
-        r = self.subtract._run(log, x=v, bias=b)["y"]
+        sf = self.sf.stream(log, temp=temp_code)["y"]
+        v = self.divide.stream(log, x=x, sf=sf)["y"]
+        b = self.bias.stream(log, temp=temp_code)["y"]
+        r = self.subtract.stream(log, x=v, bias=b)["y"]
         return {"rate_dps": to_float(r, self.subtract.out_format) * self.rate_fs_dps,
                 "temp_c": to_float(temp_code, self.rtd.temp_format), "overflows": log}
 
@@ -100,7 +100,7 @@ class Compensator002:
         ovf = OverflowLog()
         code = self.temperature_code(log_data["temp_c"], ovf)
         self.lag.reset()
-        te = self.lag._run(ovf, temp=code)["te"]
+        te = self.lag.stream(ovf, temp=code)["te"]
         return self.run(log_data["output"], te, ovf)
 
     def frequency_thermometer(self, f0_hz: float, k_hz_per_c: float) -> Freq2Temp:
@@ -112,7 +112,7 @@ class Compensator002:
         f2t = self.frequency_thermometer(f0_hz, k_hz_per_c)
         ovf = OverflowLog()
         f = quantize(_finite("freq_hz", log_data["freq_hz"]), DRIVE_FREQ_FORMAT, ROUND, ovf, "freq")
-        code = f2t._run(ovf, f=f)["temp"]
+        code = f2t.stream(ovf, f=f)["temp"]
         return self.run(log_data["output"], code, ovf)
 
 
@@ -148,9 +148,9 @@ class Compensator000:
         ovf = OverflowLog()
         t = quantize(_finite("temp_c", temp_c), self.temp_format, ROUND, ovf, "temp")
         df = quantize(_finite("output", df_hz), DF_FORMAT, ROUND, ovf, "df")
-        k0 = self.k0._run(ovf, temp=t)["y"]
-        k1 = self.k1._run(ovf, temp=t)["y"]
-        diff = self.subtract._run(ovf, x=df, bias=k0)["y"]
-        a = self.divide._run(ovf, x=diff, sf=k1)["y"]
+        k0 = self.k0.stream(ovf, temp=t)["y"]
+        k1 = self.k1.stream(ovf, temp=t)["y"]
+        diff = self.subtract.stream(ovf, x=df, bias=k0)["y"]
+        a = self.divide.stream(ovf, x=diff, sf=k1)["y"]
         return {"accel_g": to_float(a, ACCEL_FORMAT), "k0_hz": to_float(k0, self.k0.out_format),
                 "k1_hz_per_g": to_float(k1, self.k1.out_format), "overflows": ovf}

@@ -31,8 +31,7 @@ import tomllib
 import numpy as np
 
 from fxdsp.chains import build
-from fxdsp.config import Config, default_config_text
-from fxdsp.fixed import Format
+from fxdsp.config import Config, default_config_text, dumps_value
 
 FS_MV = 4096.0
 LOG_IN_FORMAT = "s24.23"
@@ -57,21 +56,6 @@ def fit_format(values, wl: int = COEF_WL, headroom_bits: int = 1, signed: bool =
     return f"{'s' if signed else 'u'}{wl}.{fl}"
 
 
-def _toml_value(value) -> str:
-    if isinstance(value, str):
-        return '"' + value + '"'
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    if isinstance(value, (int, np.integer)):
-        return str(int(value))
-    f = float(value)
-    if not math.isfinite(f):
-        raise ValueError(f"config value: {f} cannot be written to TOML")
-    return repr(f)
-
-
 def set_table_keys(text: str, table: str, updates: dict) -> str:
     """Rewrite ``key = value`` lines of ``[table]`` in TOML text (keys must already exist there)."""
     lines = text.splitlines(keepends=True)
@@ -94,7 +78,7 @@ def set_table_keys(text: str, table: str, updates: dict) -> str:
             # keep a trailing comment when the old value had one (values never contain '#')
             if cm and "#" in value_part:
                 comment = "   " + value_part[value_part.index("#"):]
-            lines[i] = f"{km.group(1)}{key}{km.group(3)}{_toml_value(updates[key])}{comment}\n"
+            lines[i] = f"{km.group(1)}{key}{km.group(3)}{dumps_value(updates[key], f'{table}.{key}')}{comment}\n"
             done.add(key)
     missing = set(updates) - done
     if missing:
@@ -124,10 +108,7 @@ def piecewise_table(coefficients, breakpoints=(), t0_c: float = 0.0, out_signed:
     # the accumulator is as wide as the Horner product allows: the top coefficient is converted into
     # it and every product rounded to it, so its LSB times |t|^order bounds the evaluation error
     acc_fmt = fit_format([peak, *np.abs(coef[:, 0])], acc_wl, 2, True, f"{name}.acc")
-    # Horner: acc * t must fit 63 bits with t = T - t0 in s19.9 (the temperature code plus a bit)
-    a = Format.parse(acc_fmt)
-    if a.wl + 19 > 63:
-        raise ValueError(f"{name}: accumulator {acc_fmt} too wide for the Horner product")
+    # whether acc * t fits 63 bits is the piecewise block's own check, made when the config is built
     return {"breakpoints_c": [float(b) for b in breakpoints],
             "coefficients": [[float(c) for c in row] for row in coef],
             "t0_c": float(t0_c),

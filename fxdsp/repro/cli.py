@@ -4,8 +4,7 @@
     fxdsp repro --paper 003 --sweep-points 15
     fxdsp repro --paper all --report docs   # docs/REPRODUCTIONS.md + docs/img/*.png
 
-Register with ``configure(subparser)`` and ``run(args) -> int`` (also runnable as
-``python -m fxdsp.repro.cli``).
+A sub-command module of :mod:`fxdsp.cli`: ``configure(subparser)`` and ``run(args) -> int``.
 """
 
 from __future__ import annotations
@@ -46,18 +45,3 @@ def run(args) -> int:
         path = write_report(res, args.report, command=cmd)
         sys.stdout.write(f"report: {path}\n")
     return 0
-
-
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="fxdsp repro", description=__doc__.splitlines()[0])
-    configure(parser)
-    args = parser.parse_args(argv)
-    try:
-        return run(args)
-    except ValueError as exc:
-        sys.stderr.write(f"fxdsp repro: error: {exc}\n")
-        return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -72,8 +72,8 @@ def measure(freqs_hz, gyro=PAPER002_GYRO, seed: int = 1, phase_noise_rad: float 
             dem.reset()
             codes = quantize(sig, adc, sat, log, "adc") << (fmt.fl - adc.fl)  # exact widening
             mi, mq = dem.mix(log, codes)
-            li = dem.lpf_i._run(log, x=mi)["y"]
-            lq = dem.lpf_q._run(log, x=mq)["y"]
+            li = dem.lpf_i.stream(log, x=mi)["y"]
+            lq = dem.lpf_q.stream(log, x=mq)["y"]
             df = dem.data_format
             half = slice(n // 2, n)
             chans[name] = (complex(to_float(li[-1:], df)[0], to_float(lq[-1:], df)[0]),

@@ -449,7 +449,7 @@ def write_report(res: dict, out_dir, command: str = "fxdsp repro --paper all --r
         "",
         f"    {command}",
         "",
-        "(or `python -m fxdsp.repro.cli --paper all --report docs`). Every compensated figure below "
+        "Every compensated figure below "
         "comes from a config written by calibration (a copy of `fxdsp/configs/default.toml` with the "
         "calibrated tables; `fxdsp.chains.build` accepts it) and the bit-exact blocks. "
         f"The reproductions took {sum(r.get('seconds', 0) for r in res.values()):.1f} s on {platform.machine()} "

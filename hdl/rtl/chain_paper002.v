@@ -7,8 +7,9 @@
 // part of the reference) but only I is used; amp and phase are left unconnected.
 // Interface: valid/ready with one sample in flight: in_ready is high when the chain is idle; a
 // sample is accepted on in_valid && in_ready and leaves (temp, rate) with out_valid
-// ceil((VSA_W + sf.fl + guard_bits) / DIV_UNROLL) + 7 cycles later (49 at DIV_UNROLL = 1 on the
-// default config); in_ready is high again from the cycle after out_valid.
+// ceil((VSA_W + sf.fl + guard_bits) / DIV_UNROLL) + 7 cycles later (55 at DIV_UNROLL = 1 on the
+// default config: 16 + 22 + 10 = 48 divider steps); in_ready is high again from the cycle after
+// out_valid, so one sample takes latency + 1 cycles.
 // ovf: every block's overflow flags of the sample, valid with out_valid:
 // {iir, bias_subtract, demod, sf_divide (zero, out), piecewise_bias, piecewise_sf, rtd}.
 `default_nettype none

@@ -32,13 +32,12 @@ RTL = ROOT / "hdl" / "rtl"
 VECTORS = ROOT / "vectors"
 SIM_BUILD = HERE / "sim_build"
 
-PORTS, CHAINS = hp.PORTS, hp.CHAINS
-# vectors name -> RTL module
-MODULE = {"rtd": "rtd", "iir": "iir", "demod": "demod", "sf_divide": "sf_divide", "freq2temp": "freq2temp",
-          "bias_subtract": "bias_subtract", "bias_subtract001": "bias_subtract", "lag": "lag",
-          "piecewise_sf": "piecewise", "piecewise_bias": "piecewise", "piecewise_bias001": "piecewise",
-          "piecewise_k0": "piecewise", "piecewise_k1": "piecewise",
-          "chain_paper002": "chain_paper002", "chain_paper001": "chain_paper001"}
+
+
+def ports_of(design, name: str) -> tuple[str, list[str], list[str], bool]:
+    """(RTL module, input ports, output ports, has in_ready) of an instance, from the design's table."""
+    inst = design.instances[name]
+    return inst.module, [p.name for p in inst.inputs], [p.name for p in inst.outputs], inst.has_ready
 
 
 def require_iverilog() -> None:
@@ -88,9 +87,9 @@ def generate_into(design, d: Path) -> None:
 
 def dut_parameters(design, name: str, extra: dict | None = None) -> dict[str, str]:
     """Command-line parameters of a block DUT (chains take theirs from the headers)."""
-    if name in CHAINS:
+    if design.instances[name].members:
         return dict(extra or {})
-    p = hp.iverilog_params(hp.instances(design)[name])
+    p = hp.iverilog_params(hp.instance(design, name))
     p.update(extra or {})
     return p
 
@@ -105,9 +104,7 @@ def ovf_ignore(design, name: str) -> int:
     paper 002 chain (the chain uses I only; the model never computes amp there)."""
     if name != "chain_paper002":
         return 0
-    cp = hp.chain_params(design)["chain_paper002"]
-    bit = 1 + cp["SF_OVF_W"] + cp["B_OVF_W"] + 2 + cp["DEMOD_OVF_W"] - 1
-    return 1 << bit
+    return 1 << design.ovf_bit(name, "demod.amp")
 
 
 def model_run(design, name: str, inputs: dict[str, np.ndarray]):
@@ -141,10 +138,9 @@ def run_cocotb(design, name: str, segments: list[dict], tag: str, gap: float = 0
     require_iverilog()
     from cocotb_tools.runner import get_runner
 
-    module = MODULE[name]
+    module, ins, outs, ready = ports_of(design, name)
     d = build_dir(f"{tag}")
     generate_into(design, d)
-    ins, outs, ready = PORTS[module]
     spec = {"segments": segments, "inputs": ins, "outputs": outs, "ready": ready, "gap": gap, "seed": seed,
             "ovf_ignore": ovf_ignore(design, name), "summary": str(d / "summary.json")}
     (d / "spec.json").write_text(json.dumps(spec))
@@ -170,19 +166,13 @@ def run_cocotb(design, name: str, segments: list[dict], tag: str, gap: float = 0
 def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool = False) -> str:
     """A self-checking-free Verilog testbench: $readmemh the inputs, drive back to back (honouring
     in_ready), $writememh every output after n samples, print the cycle count and overflow flags."""
-    module = MODULE[name]
+    module, ins, outs, ready = ports_of(design, name)
     block = design.all[name]
-    ins, outs, ready = PORTS[module]
-    if name in CHAINS:
-        cp = hp.chain_params(design)[name]
-        n_ovf = cp["N_OVF"]
+    n_ovf = design.ovf_width(name)
+    if design.instances[name].members:
         pov = f"#(.DIV_UNROLL({unroll or 1}))" if name == "chain_paper002" else ""
     else:
-        inst = hp.instances(design)[name]
-        n_ovf = {"rtd": 1, "freq2temp": 1, "bias_subtract": 1, "sf_divide": 2, "lag": 1,
-                 "iir": inst.params.get("SECTIONS", 0),
-                 "piecewise": 2 * inst.params.get("ORDER", 0) + 2,
-                 "demod": 2 * inst.params.get("LPF_SECTIONS", 0) + 3}[module]
+        inst = hp.instance(design, name)
         plist = dict(inst.params)
         if module == "sf_divide" and unroll:
             plist["UNROLL"] = unroll

@@ -4,6 +4,11 @@ one file, still compiling) must make a regression check fail.
 Checks are file-driven runs (fast) of either the committed golden vectors or a model-computed
 stream on a design that uses the mutated mode; a mutation is *caught* when an output word or the
 overflow-flag count differs from the model.
+
+A mutant that does not compile proves nothing about the checks: every mutant is first compiled on
+its own (``iverilog -g2005`` on all mutated sources, generated headers of the default design, in its
+own build directory), and a compile failure there or of a check's harness raises
+:class:`MutantBroken`, an error of the harness, never a kill.
 """
 
 from __future__ import annotations
@@ -18,7 +23,11 @@ from pathlib import Path
 import numpy as np
 
 from fxdsp.vectors import load
-from hdl_util import RTL, VECTORS, design_of, model_run, run_harness
+from hdl_util import RTL, VECTORS, build_dir, design_of, generate_into, model_run, rtl_sources, run_harness
+
+
+class MutantBroken(RuntimeError):
+    """A mutant (or the unmutated copy) that does not compile: the mutation list is wrong."""
 
 HALF_EVEN = {"bias_subtract": {"out_format": "s23.21", "rounding": "half_even"},
              "iir": {"data_format": "s23.21", "num_format": "s24.32"}}
@@ -101,6 +110,9 @@ def _check(rtl: Path, overrides, name: str, gapped: bool, tag: str) -> tuple[boo
     try:
         got, ovf, _, _ = run_harness(d, name, ins, tag, unroll=unroll, gap=gapped, rtl=rtl)
     except subprocess.CalledProcessError as exc:
+        if Path(str(exc.cmd[0])).name == "iverilog":  # the harness did not compile: broken, not caught
+            raise MutantBroken(f"{tag}: the {name} harness does not compile on {rtl.name}:\n"
+                               f"{(exc.stderr or '')[-2000:]}") from exc
         return True, f"simulation failed ({exc.returncode})"
     except ValueError as exc:  # an output word with x/z bits
         return True, f"undefined output word ({exc})"
@@ -113,9 +125,25 @@ def _check(rtl: Path, overrides, name: str, gapped: bool, tag: str) -> tuple[boo
     return False, "all outputs and flags match"
 
 
+def precompile(rtl: Path, key: str, headers: Path | None = None) -> None:
+    """Compile every source of ``rtl`` (all root modules at their defaults, with the default design's
+    generated headers) in its own build directory; raise MutantBroken with the compiler's words if
+    it fails."""
+    d = build_dir(f"mut_{key}_compile")
+    if headers is None:
+        generate_into(design_of(), d)
+        headers = d
+    cmd = ["iverilog", "-g2005", "-I", str(headers), "-o", str(d / "mutant.vvp"), *map(str, rtl_sources(rtl))]
+    proc = subprocess.run(cmd, cwd=d, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise MutantBroken(f"{key}: does not compile (exit status {proc.returncode}):\n"
+                           f"{(proc.stdout + proc.stderr).strip()[-2000:]}")
+
+
 def run(mutations=MUTATIONS, baseline: bool = True) -> list[dict]:
     rows = []
     with tempfile.TemporaryDirectory(prefix="fxdsp_mut_") as tmp:
+        todo = []
         for m in ([None] if baseline else []) + list(mutations):
             rtl = Path(tmp) / (m.key if m else "baseline")
             shutil.copytree(RTL, rtl)
@@ -124,6 +152,19 @@ def run(mutations=MUTATIONS, baseline: bool = True) -> list[dict]:
                 text = path.read_text()
                 assert text.count(m.old) == 1, f"{m.key}: mutation site not found exactly once in {m.file}"
                 path.write_text(text.replace(m.old, m.new))
+            todo.append((m, rtl))
+        # every mutant must compile before any check may count it as caught
+        broken = []
+        headers = build_dir("mut_headers")
+        generate_into(design_of(), headers)
+        for m, rtl in todo:
+            try:
+                precompile(rtl, m.key if m else "baseline", headers)
+            except MutantBroken as exc:
+                broken.append(str(exc))
+        if broken:
+            raise MutantBroken(f"{len(broken)} mutant(s) do not compile:\n" + "\n".join(broken))
+        for m, rtl in todo:
             checks = m.checks if m else ((None, "rtd", False), (None, "bias_subtract", False))
             t0 = time.perf_counter()
             caught, why = False, ""

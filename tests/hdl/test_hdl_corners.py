@@ -49,15 +49,15 @@ def design(key):
 
 def rtd_ties(block) -> np.ndarray:
     """Every ADC code whose exact interpolated value sits on a rounding tie (searched exhaustively)."""
-    fmt = block.adc_format
+    fmt, s, shift = block.adc_format, block.datapath.frac_bits, block.datapath.shift
     code = np.arange(fmt.min_int, fmt.max_int + 1, dtype=np.int64)
     u = code - fmt.min_int
-    idx = u >> block.s
+    idx = u >> s
     base = block.lut[idx]
-    exact = (base << block.s) + (block.lut[idx + 1] - base) * (u & ((1 << block.s) - 1))
-    if block.shift <= 0:
+    exact = (base << s) + (block.lut[idx + 1] - base) * (u & ((1 << s) - 1))
+    if shift <= 0:
         return code[:0]
-    tie = (exact & ((1 << block.shift) - 1)) == (1 << (block.shift - 1))
+    tie = (exact & ((1 << shift) - 1)) == (1 << (shift - 1))
     return code[tie][:200]
 
 

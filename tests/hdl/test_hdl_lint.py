@@ -1,14 +1,18 @@
 """Lint: every RTL module through `iverilog -g2005 -Wall` and `verilator --lint-only -Wall`, at its
-default parameters and at a few non-default ones; any warning fails. Plus `fxdsp hdl-gen --check`."""
+default parameters and at a few non-default ones; any warning fails, and so does any nonzero exit
+status, with or without output. Plus `fxdsp hdl-gen --check`, and the rounding rule (tests/hdl/rtl_rules.py):
+no module but fx_round rounds, checked on the parsed Verilog and proven on injected hand-written roundings."""
 
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
 import sys
 
 import pytest
 
+import rtl_rules
 from hdl_util import ROOT, RTL, rtl_sources
 
 GEN = ROOT / "hdl" / "gen"
@@ -30,16 +34,21 @@ VARIANTS = [
 ]
 
 
-def _clean(proc) -> str:
-    return (proc.stdout + proc.stderr).strip()
+def _verdict(proc) -> str:
+    """'' only for a clean run: exit status 0 and nothing printed. Anything else is the problem:
+    a failure with no output (a crash, a killed tool) fails as surely as a warning."""
+    out = (proc.stdout + proc.stderr).strip()
+    if proc.returncode != 0:
+        return f"exit status {proc.returncode}" + (f"\n{out}" if out else " with no output")
+    return out
 
 
 def _iverilog(top: str, params: dict) -> str:
     if shutil.which("iverilog") is None:
         pytest.skip("iverilog is not installed")
-    cmd = ["iverilog", "-g2005", "-Wall", "-I", str(GEN), "-o", "/dev/null", "-s", top]
+    cmd = ["iverilog", "-g2005", "-Wall", "-I", str(GEN), "-o", os.devnull, "-s", top]
     cmd += [f"-P{top}.{k}={v}" for k, v in params.items()]
-    return _clean(subprocess.run(cmd + [str(p) for p in rtl_sources()], capture_output=True, text=True))
+    return _verdict(subprocess.run(cmd + [str(p) for p in rtl_sources()], capture_output=True, text=True))
 
 
 def _verilator(top: str, params: dict) -> str:
@@ -47,8 +56,7 @@ def _verilator(top: str, params: dict) -> str:
         pytest.skip("verilator is not installed (lint only)")
     cmd = ["verilator", "--lint-only", "-Wall", f"-I{GEN}", "--top-module", top]
     cmd += [f"-G{k}={v}" for k, v in params.items()]
-    proc = subprocess.run(cmd + [str(p) for p in rtl_sources()], capture_output=True, text=True)
-    return _clean(proc) if proc.returncode or _clean(proc) else ""
+    return _verdict(subprocess.run(cmd + [str(p) for p in rtl_sources()], capture_output=True, text=True))
 
 
 @pytest.mark.parametrize("top", MODULES)
@@ -65,8 +73,28 @@ def test_verilator_wall(top):
 
 @pytest.mark.parametrize("top,params", VARIANTS, ids=[f"{m}-{i}" for i, (m, _) in enumerate(VARIANTS)])
 def test_lint_variants(top, params):
-    assert _iverilog(top, params) == ""
-    assert _verilator(top, params) == ""
+    out = _iverilog(top, params)
+    assert out == "", out
+    out = _verilator(top, params)
+    assert out == "", out
+
+
+@pytest.mark.parametrize("rc,output", [(1, ""), (3, "some diagnostic"), (0, "%Warning-WIDTH: something")])
+@pytest.mark.parametrize("tool", ["iverilog", "verilator"])
+def test_lint_runner_fails_on_any_exit_status_or_output(tool, rc, output, tmp_path, monkeypatch):
+    """The runners themselves: a stand-in tool that exits nonzero silently, nonzero with text, or
+    zero with a warning must each give a nonempty verdict (the old runner passed a silent failure)."""
+    fake = tmp_path / tool
+    fake.write_text(f"#!/bin/sh\n{'echo ' + repr(output) + ' >&2' if output else ''}\nexit {rc}\n")
+    fake.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{tmp_path}{os.pathsep}{os.environ.get('PATH', '')}")
+    run = _iverilog if tool == "iverilog" else _verilator
+    verdict = run("fx_round", {})
+    assert verdict != ""
+    if rc:
+        assert f"exit status {rc}" in verdict
+    if output:
+        assert output in verdict
 
 
 def test_headers_rom_files_match_config():
@@ -79,10 +107,92 @@ def test_every_block_has_a_module_and_shared_primitives():
     names = {p.stem for p in RTL.glob("*.v")}
     assert {"rtd", "iir", "nco", "demod", "piecewise", "sf_divide", "bias_subtract", "freq2temp", "lag",
             "chain_paper002", "chain_paper001", "fx_round", "fx_fit"} <= names
-    # one rounding implementation, one fit: no block computes its own rounding constant or clamp
     for p in RTL.glob("*.v"):
-        if p.stem in ("fx_round", "fx_fit", "fx_convert"):
-            continue
         text = p.read_text()
         assert "`default_nettype none" in text, p.name
-        assert "half_up" in text or p.stem == "nco", f"{p.name}: header must name the rounding modes"
+        if p.stem not in ("fx_round", "fx_fit", "fx_convert", "nco"):
+            assert "half_up" in text, f"{p.name}: header must name the rounding modes"
+
+
+def test_every_rounding_goes_through_fx_round():
+    """One rounding implementation: no module but fx_round drops low bits of a value or builds a
+    rounding constant, and every rounding mode reaches fx_round through a parameter."""
+    problems = rtl_rules.check(RTL)
+    assert problems == [], "\n".join(problems)
+
+
+# Hand-written roundings injected into a copy of one module: (file, [(old, new)], rule expected).
+# The first one is a *correct* half_up (the bit-exact tests could not see it): only this rule can.
+INJECTIONS = {
+    "half_up_by_shift": ("freq2temp.v", [
+        ("    fx_convert_reg #(.IN_W(PW), .SHIFT(SHIFT),",
+         "    wire signed [PW:0] ph = {p[PW-1], p} + ({{PW{1'b0}}, 1'b1} <<< (SHIFT - 1));\n"
+         "    wire signed [PW-SHIFT:0] pr = ph >>> SHIFT;\n"
+         "    fx_convert_reg #(.IN_W(PW - SHIFT + 1), .SHIFT(0),"),
+        (".x(p),", ".x(pr),")], "power-of-two"),
+    "half_constant_concat": ("bias_subtract.v", [
+        ("    fx_convert_reg #(", "    wire signed [DW-1:0] dh = d + {{(DW-SHIFT){1'b0}}, 1'b1, {(SHIFT-1){1'b0}}};\n"
+                               "    fx_convert_reg #("),
+        (".x(d),", ".x(dh),")], "constant"),
+    "half_literal": ("bias_subtract.v", [(".x(d),", ".x(d + 24'h000800),")], "constant"),
+    "half_even_odd_bit": ("rtd.v", [("exact = (be <<< S) + prod;",
+                                     "exact = (be <<< S) + prod + {{(EW-1){1'b0}}, prod[SHIFT]};")], "data-bit"),
+    "toward_zero_mask": ("lag.v", [("p = d * m;", "p = d * m + (d[DW-1] ? {ALPHA_S{1'b1}} : {PW{1'b0}});")],
+                         "constant"),
+    "sticky_bit": ("piecewise.v", [("sum = (pe <<< AA) + (ce <<< CA);", "sum = (pe <<< AA) + (ce <<< CA) + |pe[AA:0];")],
+                   "sticky-bit"),
+    "floor_by_select": ("freq2temp.v", [(".IN_W(PW), .SHIFT(SHIFT)", ".IN_W(PW - SHIFT), .SHIFT(0)"),
+                                        (".x(p),", ".x(p[PW-1:SHIFT]),")], "select"),
+    "floor_by_divide": ("bias_subtract.v", [(".x(d),", ".x(d / 4),")], "divide"),
+    "state_truncated": ("lag.v", [("st     <= st_next;", "st     <= (st_next >>> GUARD) <<< GUARD;")], "right-shift"),
+    "one_wire_shifted": ("iir.v", [("wire signed [AW-1:0] acc = ",
+                                    "wire signed [AW-1:0] one = {{(AW-1){1'b0}}, 1'b1};\n"
+                                    "            wire signed [AW-1:0] acc = (one <<< (OUT_SHIFT - 1)) + ")],
+                         "power-of-two"),
+    "hard_wired_mode": ("lag.v", [(".SHIFT(ALPHA_S), .ROUNDING(ROUNDING)", ".SHIFT(ALPHA_S), .ROUNDING(0)")],
+                        "rounding mode must come from"),
+    "default_mode": ("iir.v", [(".SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), ", ".SHIFT(OUT_SHIFT), ")], "at its default"),
+    "cordic_shift_changed": ("demod.v", [("tx = cx + (cy >>> j);", "tx = cx + (cy >>> (j + 1));")], "cy>>>(j+1)"),
+}
+
+
+def _inject(tmp_path, file, edits):
+    rtl = tmp_path / "rtl"
+    shutil.copytree(RTL, rtl)
+    path = rtl / file
+    text = path.read_text()
+    for old, new in edits:
+        assert text.count(old) == 1, f"injection site {old!r} not found exactly once in {file}"
+        text = text.replace(old, new)
+    path.write_text(text)
+    return rtl
+
+
+@pytest.mark.parametrize("key", sorted(INJECTIONS))
+def test_rounding_rule_flags_an_injected_hand_written_rounding(key, tmp_path):
+    file, edits, expect = INJECTIONS[key]
+    problems = rtl_rules.check(_inject(tmp_path, file, edits))
+    assert problems, f"{key}: hand-written rounding in {file} not flagged"
+    assert all(p.startswith(file) for p in problems), problems
+    assert any(expect in p for p in problems), problems
+
+
+def test_injected_half_up_compiles_so_only_the_rule_can_see_it(tmp_path):
+    """The correct hand-written half_up above is real Verilog (compiles), not a strawman."""
+    if shutil.which("iverilog") is None:
+        pytest.skip("iverilog is not installed")
+    file, edits, _ = INJECTIONS["half_up_by_shift"]
+    rtl = _inject(tmp_path, file, edits)
+    proc = subprocess.run(["iverilog", "-g2005", "-Wall", "-I", str(GEN), "-o", os.devnull, "-s", "freq2temp",
+                           *map(str, rtl_sources(rtl))],
+                          capture_output=True, text=True)
+    assert _verdict(proc) == ""
+
+
+def test_rounding_rule_reads_code_not_comments(tmp_path):
+    """A rounding written in a comment or a string is not code: no finding."""
+    rtl = _inject(tmp_path, "bias_subtract.v", [(
+        "    fx_convert_reg #(",
+        "    // wire h = 1 << (SHIFT - 1); y = (d + h) >>> SHIFT; d[DW-1:SHIFT] + {15'd0, d[SHIFT]}\n"
+        "    /* {S{1'b1}} |d[SHIFT-1:0] */\n    fx_convert_reg #(")])
+    assert rtl_rules.check(rtl) == []

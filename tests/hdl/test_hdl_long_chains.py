@@ -1,12 +1,50 @@
 """(d) Long file-driven streams, >= 100k samples, for the demodulator and both tops; and the
-committed chain_paper002 vectors with the hardware divider setting (one quotient bit per cycle)."""
+committed chain_paper002 vectors with the hardware divider setting (one quotient bit per cycle),
+timed against a latency computed here from the config, not copied from the RTL."""
+
+import math
+import re
+import shutil
 
 import numpy as np
 import pytest
 
 from fxdsp.vectors import load
-from hdl_util import VECTORS, run_harness
+from hdl_util import RTL, VECTORS, default_data, run_harness
 from long_common import default_design, long_stream
+
+# Per-block latencies of the spec (hdl/README.md, "latency (cycles)"), in chain_paper002's order
+# rtd -> piecewise (SF and bias in parallel) -> sf_divide -> demod -> bias_subtract -> iir.
+BLOCK_LATENCY = {"rtd": 1, "piecewise": 1, "demod": 2, "bias_subtract": 1, "iir": 1}
+
+
+def _wl_fl(fmt: str) -> tuple[int, int]:
+    m = re.fullmatch(r"[su](\d+)\.(-?\d+)", fmt)
+    assert m, fmt
+    return int(m.group(1)), int(m.group(2))
+
+
+def chain002_latency(unroll: int) -> int:
+    """Cycles from acceptance to out_valid, from the config: the divider runs one restoring step per
+    numerator bit, numerator = vsa << (SF fraction + guard bits) (blocks/sf_divide.py), so it takes
+    ceil((vsa wl + SF fl + guard_bits) / UNROLL) steps plus its output register; the other blocks
+    add their spec latencies."""
+    cfg = default_data()
+    vsa_wl, _ = _wl_fl(cfg["sf_divide"]["in_format"])
+    _, sf_fl = _wl_fl(cfg["piecewise"]["sf"]["out_format"])
+    numerator_bits = vsa_wl + sf_fl + cfg["sf_divide"]["guard_bits"]
+    divider = math.ceil(numerator_bits / unroll) + 1
+    return sum(BLOCK_LATENCY.values()) + divider
+
+
+def assert_chain002_cycles(cycles: int, n: int, unroll: int) -> None:
+    """One sample in flight: a sample is accepted, leaves `latency` cycles later, and in_ready is
+    high again the cycle after out_valid, so n samples take n * (latency + 1) cycles (+ at most one
+    sample period of start-up / drain in the harness). Slower or faster both fail."""
+    period = chain002_latency(unroll) + 1
+    assert n * period <= cycles <= n * period + period, (
+        f"chain_paper002 at DIV_UNROLL={unroll}: {cycles} cycles for {n} samples = {cycles / n:.3f} per sample, "
+        f"expected {period} (latency {period - 1} from the config)")
 
 
 @pytest.mark.hdl
@@ -26,4 +64,42 @@ def test_golden_chain_paper002_hardware_divider():
     got, _, cycles, _ = run_harness(default_design(), "chain_paper002", ins, "golden_file_chain_paper002", unroll=1)
     for port, want in outs.items():
         assert np.array_equal(got[port], want), port
-    assert cycles >= 49 * len(ins["vsa"])  # one sample per ceil(42 / 1) + 7 cycles
+    assert_chain002_cycles(cycles, len(ins["vsa"]), unroll=1)
+
+
+def _prefix(n: int):
+    ins, outs, _ = load(VECTORS, "chain_paper002")
+    return {k: v[:n] for k, v in ins.items()}, {k: v[:n] for k, v in outs.items()}
+
+
+@pytest.mark.hdl
+@pytest.mark.parametrize("unroll", [7, 48])
+def test_chain_paper002_latency_follows_the_divider_unroll(unroll):
+    """Other divider settings on a short prefix: the latency formula holds for each UNROLL."""
+    ins, outs = _prefix(64)
+    got, _, cycles, _ = run_harness(default_design(), "chain_paper002", ins, f"latency_chain002_u{unroll}",
+                                    unroll=unroll)
+    for port, want in outs.items():
+        assert np.array_equal(got[port], want), port
+    assert_chain002_cycles(cycles, 64, unroll)
+
+
+@pytest.mark.hdl
+def test_latency_check_catches_one_extra_cycle_per_sample(tmp_path):
+    """An RTL latency regression (the chain stays busy one more cycle after out_valid): outputs still
+    bit-exact, only the cycle count shows it, and the check must fail."""
+    rtl = tmp_path / "rtl"
+    shutil.copytree(RTL, rtl)
+    top = rtl / "chain_paper002.v"
+    text = top.read_text()
+    for old in ("assign in_ready = ~busy;", "wire accept = in_valid & ~busy;"):
+        assert text.count(old) == 1, old
+        text = text.replace(old, old.replace("~busy", "~busy & ~out_valid"))
+    top.write_text(text)
+    ins, outs = _prefix(64)
+    got, _, cycles, _ = run_harness(default_design(), "chain_paper002", ins, "latency_chain002_slow", unroll=7,
+                                    rtl=rtl)
+    for port, want in outs.items():
+        assert np.array_equal(got[port], want), port
+    with pytest.raises(AssertionError, match="per sample"):
+        assert_chain002_cycles(cycles, 64, unroll=7)

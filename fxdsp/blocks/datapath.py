@@ -1,0 +1,149 @@
+"""The one description of a block's arithmetic: a frozen datapath that the block builds once.
+
+A block's kernel, the Verilog parameter generator (:mod:`fxdsp.hdl.params`) and the error budget
+(:mod:`fxdsp.budget.hybrid`) all read the same :class:`Datapath`; none of them re-derives a shift,
+a width or a table. Each block declares its own subclass whose fields are, in order, the
+parameters of its RTL module: a field ``top_shift`` *is* the Verilog parameter ``TOP_SHIFT``
+(one name for one quantity, as in verilog-axis). Field metadata says how a field reaches the RTL:
+
+* ``param()`` (the default for ints): ``NAME(value)``;
+* ``const()``: a 64-bit two's-complement constant (``64'h...``), for values that may not fit 32 bits;
+* ``packed()``: a tuple of small shifts packed 8 bits per element into one 64-bit constant;
+* a :class:`~fxdsp.fixed.Rules` field: ``ROUNDING`` and ``OVERFLOW`` codes at its place;
+* a :class:`Rom` field: the table of ``$readmemh`` file ``<instance>_<field>.hex`` whose name is
+  passed as ``<FIELD>_FILE`` after the module's other parameters;
+* a nested datapath with ``nested(prefix)``: its parameters under ``prefix`` (its ROM files named
+  ``<instance>_<field>_<rom>.hex``), leaving out the ones the outer module already has;
+* ``info()``: Python-side facts (formats, the overflow fields) that are not RTL parameters.
+
+The overflow flag vector of the RTL is described once, as :class:`OvfField`\\ s in bit order (bit 0
+first): each field is the flags of one overflow counter of the model, so the width of the ovf
+port, the position of a flag in a chain's vector and the counter a flag belongs to all come from it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Iterator
+
+import numpy as np
+
+from ..fixed import Rules
+from ..fixed.rules import OVERFLOW_CODE, ROUNDING_CODE
+
+PARAM, CONST, PACKED, INFO, NESTED = "param", "const", "packed", "info", "nested"
+
+
+def param(**kw):
+    return field(metadata={"kind": PARAM}, **kw)
+
+
+def const(**kw):
+    return field(metadata={"kind": CONST}, **kw)
+
+
+def packed(**kw):
+    """A tuple of shifts, 8 bits each, element k at bits 8k..8k+7 (the RTL unpacks it per term)."""
+    return field(metadata={"kind": PACKED}, **kw)
+
+
+def info(**kw):
+    return field(metadata={"kind": INFO}, **kw)
+
+
+def nested(prefix: str, **kw):
+    return field(metadata={"kind": NESTED, "prefix": prefix}, **kw)
+
+
+def frozen_array(values, dtype=np.int64) -> np.ndarray:
+    """A read-only copy: a datapath's tables cannot be changed behind the RTL's back."""
+    a = np.array(values, dtype=dtype)
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class Rom:
+    """A ROM table: stored integers (read-only) and the word width of the RTL memory."""
+
+    words: np.ndarray
+    width: int
+
+    def __post_init__(self):
+        object.__setattr__(self, "words", frozen_array(self.words))
+        if self.words.size and not (-(1 << (self.width - 1)) <= int(self.words.min())
+                                    and int(self.words.max()) < (1 << self.width)):
+            raise ValueError(f"ROM words do not fit {self.width} bits")
+
+
+@dataclass(frozen=True)
+class OvfField:
+    """One field of an RTL ovf vector: ``width`` flags counted by the model under ``counter``."""
+
+    counter: str
+    width: int
+
+
+@dataclass(frozen=True, eq=False)
+class Datapath:
+    """Base of every block's datapath description (subclasses add the fields)."""
+
+    MODULE = ""   # the RTL module (class attribute of each subclass)
+
+    def ovf_fields(self) -> tuple[OvfField, ...]:
+        return getattr(self, "ovf", ())
+
+    @property
+    def ovf_width(self) -> int:
+        return sum(f.width for f in self.ovf_fields())
+
+    def verilog(self, instance: str) -> tuple[dict[str, int | str], dict[str, Rom], set[str]]:
+        """The RTL module's parameters in declaration order, the ROMs by file name and the names
+        of the 64-bit constants: a plain mapping of the fields, nothing computed."""
+        params: dict[str, int | str] = {}
+        roms: dict[str, Rom] = {}
+        consts: set[str] = set()
+        self._emit(instance, "", params, roms, consts, outer={})
+        return params, roms, consts
+
+    def _emit(self, instance, prefix, params, roms, consts, outer) -> None:
+        files: list[tuple[str, str, Rom]] = []
+        own = {f.name.upper(): getattr(self, f.name) for f in dataclasses.fields(self)}
+        for f in dataclasses.fields(self):
+            kind = f.metadata.get("kind", PARAM)
+            value = getattr(self, f.name)
+            name = prefix + f.name.upper()
+            if kind == INFO:
+                continue
+            if kind in (PARAM, CONST) and not isinstance(value, (Rules, Rom)) and f.name.upper() in outer:  # shared with the outer module
+                if outer[f.name.upper()] != value:
+                    raise ValueError(f"hdl: {instance}: {f.name.upper()} = {value} differs from the outer "
+                                     f"module's {outer[f.name.upper()]}")
+                continue
+            if isinstance(value, Rules):
+                params[prefix + "ROUNDING"] = ROUNDING_CODE[value.rounding]
+                params[prefix + "OVERFLOW"] = OVERFLOW_CODE[value.overflow]
+            elif isinstance(value, Rom):
+                files.append((name + "_FILE", f"{instance}_{f.name}.hex", value))
+            elif kind == NESTED:
+                value._emit(f"{instance}_{f.name}", f.metadata["prefix"], params, roms, consts, outer=own)
+            elif kind == PACKED:
+                word = 0
+                for k, v in enumerate(value):
+                    if not 0 <= int(v) <= 255:
+                        raise ValueError(f"hdl: {instance}: {f.name}[{k}] = {int(v)} outside 0..255")
+                    word |= int(v) << (8 * k)
+                params[name] = word
+                consts.add(name)
+            else:
+                params[name] = int(value)
+                if kind == CONST:
+                    consts.add(name)
+        for pname, fname, rom in files:
+            params[pname] = fname
+            roms[fname] = rom
+
+    def items(self) -> Iterator[tuple[str, object]]:
+        for f in dataclasses.fields(self):
+            yield f.name, getattr(self, f.name)

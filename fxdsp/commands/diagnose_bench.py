@@ -1,0 +1,28 @@
+"""`fxdsp diagnose-bench [--rows N ...]`: seconds to diagnose simulated logs of N rows, file to report
+(a benchmark, not a test; see :mod:`fxdsp.diagnose.bench`)."""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+WARM_UP_ROWS = 500
+
+
+def configure(parser) -> None:
+    parser.add_argument("--rows", type=int, nargs="+", default=[6000, 1_000_000], metavar="N",
+                        help="rows of each simulated log (default: 6000 1000000)")
+
+
+def run(args) -> int:
+    from fxdsp.diagnose.bench import bench
+
+    if min(args.rows) < WARM_UP_ROWS:
+        raise ValueError(f"--rows: need at least {WARM_UP_ROWS} rows per log, got {min(args.rows)}")
+    with tempfile.TemporaryDirectory() as tmp:
+        bench(WARM_UP_ROWS, Path(tmp))  # numba's cache and the imports, out of the timings
+        for rows in args.rows:
+            seconds, n, data = bench(rows, Path(tmp))
+            print(f"{int(n):>9d} rows: {seconds:7.2f} s  -> {data['cause']} {data['parameters']} "
+                  f"gain {data['gain']['ratio']:.2f}")
+    return 0

@@ -1,0 +1,24 @@
+"""`fxdsp diagnose-hidden [--per-cause N] [--causes A,B] [--snr LO HI]`: simulated logs with one
+randomly drawn hidden cause each, diagnosed; prints the confusion matrix (see
+:mod:`fxdsp.diagnose.hidden` for how the cases are drawn)."""
+
+from __future__ import annotations
+
+
+def configure(parser) -> None:
+    from fxdsp.diagnose.hidden import ALL_CAUSES, SNR_RANGE
+
+    parser.add_argument("--per-cause", type=int, default=20, metavar="N", help="cases per cause (default 20)")
+    parser.add_argument("--first-seed", type=int, default=1000, metavar="S", help="seed of the first case")
+    parser.add_argument("--causes", default=",".join(ALL_CAUSES), metavar="A,B",
+                        help="comma-separated causes to draw (default: all)")
+    parser.add_argument("--snr", type=float, nargs=2, default=SNR_RANGE, metavar=("LO", "HI"),
+                        help="effect size range in noise units (default %(default)s)")
+
+
+def run(args) -> int:
+    from fxdsp.diagnose.hidden import confusion, format_confusion
+
+    causes = tuple(c for c in args.causes.split(",") if c)
+    print(format_confusion(confusion(args.per_cause, args.first_seed, causes, snr_range=tuple(args.snr))))
+    return 0

@@ -1,0 +1,44 @@
+"""The iCE40UP5K hardware report as data: ``hdl/HW_REPORT.json``, written by ``fxdsp hw-report``
+beside the Markdown table (``hdl/HW_REPORT.md``) from the same rows, and read by whoever needs the
+synthesised cost (``fxdsp budget --optimise``) without parsing Markdown.
+
+Each row: ``name`` (block instance or top), ``module``, ``LUT`` (SB_LUT4), ``MAC16`` (SB_MAC16),
+``FF``, ``BRAM`` (SB_RAM40_4K), ``fmax`` (MHz after place and route) and ``note``; a count is
+null when its tool run failed, ``fmax`` when the design does not place.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+# hdl/ of the checkout this package runs from (RTL sources and reports): the one place that knows it
+HDL_DIR = Path(__file__).resolve().parents[2] / "hdl"
+REPORT_NAME = "HW_REPORT.json"
+COLUMNS = ("name", "module", "LUT", "MAC16", "FF", "BRAM", "fmax", "note")
+
+
+def hw_report_path() -> Path:
+    """The committed JSON hardware report: the checkout's ``hdl/HW_REPORT.json``, else (package
+    installed elsewhere) ``hdl/HW_REPORT.json`` under the working directory."""
+    path = HDL_DIR / REPORT_NAME
+    return path if path.is_file() else Path("hdl") / REPORT_NAME
+
+
+def report_json(rows: list[dict], freq_mhz: float, device: dict[str, int]) -> str:
+    """The report's JSON text: the table's columns of every row, the target clock and the device."""
+    data = {"generator": "fxdsp hw-report", "device": {"name": "iCE40UP5K", **device},
+            "target_mhz": freq_mhz,
+            "rows": [{c: row.get(c, "" if c == "note" else None) for c in COLUMNS} for row in rows]}
+    return json.dumps(data, indent=1) + "\n"
+
+
+def load_hw_report(path: str | Path | None = None) -> dict | None:
+    """The parsed report (default :func:`hw_report_path`), or None when there is none."""
+    p = hw_report_path() if path is None else Path(path)
+    if not p.is_file():
+        return None
+    data = json.loads(p.read_text(encoding="utf-8"))
+    if not isinstance(data, dict) or not isinstance(data.get("rows"), list):
+        raise ValueError(f"{p}: not a hardware report (no list of rows)")
+    return data

@@ -1,0 +1,47 @@
+"""The hardware report as data: hdl/HW_REPORT.json holds the same table as hdl/HW_REPORT.md, is found
+through fxdsp.hdl.hwreport.hw_report_path(), and is what the budget reads."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from fxdsp.budget.cli import synthesised_cost
+from fxdsp.hdl import hwreport
+from fxdsp.hdl.hwreport import hw_report_path, load_hw_report, report_json
+from fxdsp.hdl.report_cli import UP5K, markdown
+
+ROOT = Path(__file__).parents[1]
+
+
+def test_committed_json_holds_the_markdown_table():
+    assert hw_report_path() == ROOT / "hdl" / "HW_REPORT.json"
+    report = load_hw_report()
+    # the Markdown written from the JSON's rows is the committed Markdown, byte for byte
+    assert markdown(report["rows"], report["target_mhz"]) == (ROOT / "hdl" / "HW_REPORT.md").read_text()
+    assert report["device"]["MAC16"] == UP5K["MAC16"]
+
+
+def test_json_is_written_from_the_rows_hw_report_collects(tmp_path):
+    rows = [{"name": "rtd", "module": "rtd", "LUT": 301, "MAC16": 2, "FF": 20, "BRAM": 0, "fmax": 21.83, "note": "",
+             "CARRY": 7, "seconds": 3.2},
+            {"name": "demod", "module": "demod", "note": "timed out after 1200 s", "seconds": 1200.0}]
+    path = tmp_path / "HW_REPORT.json"
+    path.write_text(report_json(rows, 40.0, UP5K))
+    got = load_hw_report(path)["rows"]
+    assert got[0] == {"name": "rtd", "module": "rtd", "LUT": 301, "MAC16": 2, "FF": 20, "BRAM": 0, "fmax": 21.83,
+                      "note": ""}
+    assert got[1]["LUT"] is None and got[1]["fmax"] is None and got[1]["note"].startswith("timed out")
+    assert load_hw_report(tmp_path / "absent.json") is None
+
+
+def test_budget_reads_the_json_through_the_locator(tmp_path, monkeypatch):
+    rows = {r["name"]: r for r in load_hw_report()["rows"]}
+    committed = synthesised_cost()
+    assert set(committed) == set(rows) and committed["iir"] == {"lut": rows["iir"]["LUT"], "mac16": rows["iir"]["MAC16"]}
+    report = tmp_path / "HW_REPORT.json"
+    report.write_text(json.dumps({"rows": [{"name": "iir", "LUT": 10, "MAC16": None}]}))
+    monkeypatch.setattr(hwreport, "hw_report_path", lambda: report)
+    assert synthesised_cost() == {"iir": {"lut": 10.0, "mac16": 0.0}}
+    report.unlink()
+    assert synthesised_cost() is None
