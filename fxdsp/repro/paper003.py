@@ -26,7 +26,7 @@ from tqdm import tqdm
 
 from fxdsp.blocks.demod import Demod, Nco
 from fxdsp.chains import build
-from fxdsp.fixed import OverflowLog, Rules, quantize, to_float
+from fxdsp.fixed import OverflowLog, Rules, quantize, resize, to_float
 from fxdsp.sim.gyro import PAPER002_GYRO, fit_coupling
 
 PAPER = {"lambda_yx": -0.000374, "cxy": -6.96e-8, "kxy": 0.103, "err_cxy": 0.0609,
@@ -70,7 +70,7 @@ def measure(freqs_hz, gyro=PAPER002_GYRO, seed: int = 1, phase_noise_rad: float 
         for name, a, phi in (("x", amp, 0.0), ("y", amp * gain * abs(s), np.angle(s) + phase_offset_rad)):
             sig = a * np.cos(ph + phi + phase_noise_rad * rng.standard_normal(n)) + noise_fs * rng.standard_normal(n)
             dem.reset()
-            codes = quantize(sig, adc, sat, log, "adc") << (fmt.fl - adc.fl)  # exact widening
+            codes = resize(quantize(sig, adc, sat, log, "adc"), adc, fmt, sat, log, "adc")  # exact widening
             mi, mq = dem.mix(log, codes)
             li = dem.lpf_i.stream(log, x=mi)["y"]
             lq = dem.lpf_q.stream(log, x=mq)["y"]
