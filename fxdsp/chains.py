@@ -153,9 +153,9 @@ class Paper001Chain(Block):
         t_c = np.repeat(np.arange(-10.0, 51.0, 10.0), -(-n // 7))[:n] + rng.normal(0, 0.05, n)
         q = self.bias.reference(temp=t_c)["y"]
         noise = rng.normal(0.0, 1.0, n)
-        f = self.f2t.f0_hz + self.f2t.k_hz_per_c * t_c
-        sat = Rules("half_up", "saturate")
-        codes = {"f": quantize(f, self.f2t.freq_format, sat), "rate_in": quantize(q + noise, self.subtract.in_format, sat)}
+        f = self.f2t.frequency(t_c)
+        codes = {"f": self.f2t.freq_code(t_c),
+                 "rate_in": quantize(q + noise, self.subtract.in_format, Rules("half_up", "saturate"))}
         return {"analog": {"f": f, "rate_in": q + noise}, "clean": {"f": f, "rate_in": q}, "codes": codes, "t_c": t_c}
 
     def nominal_stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
@@ -229,7 +229,7 @@ class Design:
         out = []
         for member in inst.members or (name,):
             m = self.instances[member]
-            out += [(member, f"{m.config_path}.{f.counter}", f.width) for f in m.block.datapath.ovf_fields()]
+            out += [(member, f"{m.config_path}.{f.counter}", f.width) for f in m.block.datapath.ovf]
         return out
 
     def ovf_width(self, name: str) -> int:

@@ -34,7 +34,6 @@ def test_iir(rounding, overflow):
                        "iir.data_format": "s18.16", "iir.cutoff_hz": 2000.0, "iir.num_format": "s24.26"})
     b = d.blocks["iir"]
     x = b.stimulus(np.random.default_rng(2), 200)["x"][:1400]  # impulses, steps, corners, saturating square
-    b.reset()
     got = b.run(x=x)
     assert got.outputs["y"].tolist() == oracle.iir(b, x)
     if overflow == "saturate":
@@ -132,9 +131,7 @@ def test_chain_paper002_equals_the_oracles_composed_from_the_config(design):
     the chain is caught, unlike a recomposition of the chain's own block objects."""
     c = design.chains["chain_paper002"]
     st = _chain_rows(c.stimulus(np.random.default_rng(10), 8192), step=8, tail=256)
-    c.reset()
     res = c.run(**st)
-    c.reset()
     p = design_with()  # the same config, blocks only: parameters for the oracles
     temp = oracle.rtd(p.blocks["rtd"], st["rtd_code"])
     sf = oracle.piecewise(p.blocks["piecewise_sf"], temp)
@@ -171,5 +168,4 @@ def test_lag(rounding, overflow):
     d = design_with(**{"lag.rounding": rounding, "lag.overflow": overflow, "lag.tau_s": 5.0, "lag.alpha_bits": 12})
     b = d.blocks["lag"]
     st = b.stimulus(np.random.default_rng(11), 300)
-    b.reset()
     assert b.run(**st).outputs["te"].tolist() == oracle.lag(b, st["temp"])

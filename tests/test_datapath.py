@@ -94,11 +94,7 @@ def test_wired_inputs_follow_their_driver(dst, src):
     key = {"temp": "temp_format", "y": "out_format", "i": "data_format"}[src.split(".")[1]]
     old = _fmt(DESIGN, src)
     sec[key] = f"{'s' if old.signed else 'u'}{old.wl + 1}.{old.fl + 1}"
-    try:
-        d = build(Config(data, source="<test>"))
-    except ValueError as exc:  # a wider format some other block cannot take: must name a field
-        assert "." in str(exc).split(":")[0], exc
-        pytest.skip(f"{src} widened is not buildable: {exc}")
+    d = build(Config(data, source="<test>"))
     assert _fmt(d, src) != old
     assert _fmt(d, dst) == _fmt(d, src)
 
@@ -151,7 +147,8 @@ def test_datapath_is_frozen(name):
     first = dataclasses.fields(dp)[0].name
     with pytest.raises(dataclasses.FrozenInstanceError):
         setattr(dp, first, 0)
-    for _, value in dp.items():
+    for f in dataclasses.fields(dp):
+        value = getattr(dp, f.name)
         if hasattr(value, "words"):
             with pytest.raises(ValueError):
                 value.words[...] = 0

@@ -6,9 +6,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from fxdsp.budget.cli import synthesised_cost
 from fxdsp.hdl import hwreport
-from fxdsp.hdl.hwreport import hw_report_path, load_hw_report, report_json
+from fxdsp.hdl.hwreport import hw_report_path, load_hw_report, report_json, synthesised_cost
 from fxdsp.hdl.report_cli import UP5K, markdown
 
 ROOT = Path(__file__).parents[1]

@@ -6,7 +6,7 @@ a width or a table. Each block declares its own subclass whose fields are, in or
 parameters of its RTL module: a field ``top_shift`` *is* the Verilog parameter ``TOP_SHIFT``
 (one name for one quantity, as in verilog-axis). Field metadata says how a field reaches the RTL:
 
-* ``param()`` (the default for ints): ``NAME(value)``;
+* a plain int field: ``NAME(value)``;
 * ``const()``: a 64-bit two's-complement constant (``64'h...``), for values that may not fit 32 bits;
 * ``packed()``: a tuple of small shifts packed 8 bits per element into one 64-bit constant;
 * a :class:`~fxdsp.fixed.Rules` field: ``ROUNDING`` and ``OVERFLOW`` codes at its place;
@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import Iterator
 
 import numpy as np
 
@@ -35,16 +34,12 @@ from ..fixed.rules import OVERFLOW_CODE, ROUNDING_CODE
 PARAM, CONST, PACKED, INFO, NESTED = "param", "const", "packed", "info", "nested"
 
 
-def param(**kw):
-    return field(metadata={"kind": PARAM}, **kw)
-
-
 def const(**kw):
     return field(metadata={"kind": CONST}, **kw)
 
 
 def packed(**kw):
-    """A tuple of shifts, 8 bits each, element k at bits 8k..8k+7 (the RTL unpacks it per term)."""
+    """An array of shifts, 8 bits each, element k at bits 8k..8k+7 (the RTL unpacks it per term)."""
     return field(metadata={"kind": PACKED}, **kw)
 
 
@@ -65,16 +60,14 @@ def frozen_array(values, dtype=np.int64) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class Rom:
-    """A ROM table: stored integers (read-only) and the word width of the RTL memory."""
+    """A ROM table: stored integers (read-only) and the word width of the RTL memory (whether every
+    word fits is checked by the one hex encoder, :func:`fxdsp.fixed.hexfile.hex_words`)."""
 
     words: np.ndarray
     width: int
 
     def __post_init__(self):
         object.__setattr__(self, "words", frozen_array(self.words))
-        if self.words.size and not (-(1 << (self.width - 1)) <= int(self.words.min())
-                                    and int(self.words.max()) < (1 << self.width)):
-            raise ValueError(f"ROM words do not fit {self.width} bits")
 
 
 @dataclass(frozen=True)
@@ -89,14 +82,7 @@ class OvfField:
 class Datapath:
     """Base of every block's datapath description (subclasses add the fields)."""
 
-    MODULE = ""   # the RTL module (class attribute of each subclass)
-
-    def ovf_fields(self) -> tuple[OvfField, ...]:
-        return getattr(self, "ovf", ())
-
-    @property
-    def ovf_width(self) -> int:
-        return sum(f.width for f in self.ovf_fields())
+    MODULE = ""   # the RTL module (class attribute of each subclass); every subclass has ``ovf``
 
     def verilog(self, instance: str) -> tuple[dict[str, int | str], dict[str, Rom], set[str]]:
         """The RTL module's parameters in declaration order, the ROMs by file name and the names
@@ -143,7 +129,3 @@ class Datapath:
         for pname, fname, rom in files:
             params[pname] = fname
             roms[fname] = rom
-
-    def items(self) -> Iterator[tuple[str, object]]:
-        for f in dataclasses.fields(self):
-            yield f.name, getattr(self, f.name)

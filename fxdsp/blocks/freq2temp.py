@@ -85,10 +85,13 @@ class Freq2Temp(Block):
     def reference(self, f: np.ndarray) -> dict[str, np.ndarray]:
         return {"temp": (np.asarray(f) - self.f0_hz) / self.k_hz_per_c}
 
+    def frequency(self, t_c) -> np.ndarray:
+        """Resonant frequency (Hz) at temperature t_c under the linear law f = f0 + k T (analog)."""
+        return self.f0_hz + self.k_hz_per_c * np.asarray(t_c, dtype=float)
+
     def freq_code(self, t_c) -> np.ndarray:
-        """Frequency word of a resonator at temperature t_c under the linear law."""
-        return quantize(self.f0_hz + self.k_hz_per_c * np.asarray(t_c, dtype=float), self.freq_format,
-                        Rules("half_up", "saturate"))
+        """Frequency word of a resonator at temperature t_c: the nearest word (half_up), saturated."""
+        return quantize(self.frequency(t_c), self.freq_format, Rules("half_up", "saturate"))
 
     def nominal_stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
         return {"f": self.freq_code(rng.uniform(self.t_min_c, self.t_max_c, n))}

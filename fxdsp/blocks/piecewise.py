@@ -85,8 +85,8 @@ class PiecewiseDatapath(Datapath):
     t0: int = const()        # t0 on the temperature code
     top_shift: int           # top coefficient into acc_format (right shift, rounding; <= 0 exact)
     prod_shift: int          # acc * t back to acc_format
-    acc_align: tuple = packed()   # per power k: acc left-aligned to the sum's fraction length ...
-    coef_align: tuple = packed()  # ... and c_k left-aligned to it; the sum goes back by acc_align
+    acc_align: np.ndarray = packed()   # per power k: acc left-aligned to the sum's fraction length ...
+    coef_align: np.ndarray = packed()  # ... and c_k left-aligned to it; the sum goes back by acc_align
     out_shift: int           # acc_format -> out_format
     rules: Rules
     coef: Rom                # segments x (order + 1) coefficients, ascending powers
@@ -154,8 +154,8 @@ class Piecewise(Block):
             t_w=temp_format.wl, order=self.order, segments=int(self.coef.shape[0]), coef_w=coef_w,
             acc_w=acc_format.wl, out_w=out_format.wl, out_signed=int(out_format.signed), t0=int(self.t0[0]),
             top_shift=coef_formats[-1].fl - acc_format.fl, prod_shift=p_fmt.fl - acc_format.fl,
-            acc_align=tuple(sf.fl - acc_format.fl for sf in sums),
-            coef_align=tuple(sf.fl - cf.fl for sf, cf in zip(sums, coef_formats)),
+            acc_align=frozen_array([sf.fl - acc_format.fl for sf in sums]),
+            coef_align=frozen_array([sf.fl - cf.fl for sf, cf in zip(sums, coef_formats)]),
             out_shift=acc_format.fl - out_format.fl, rules=rules, coef=Rom(self.coef, coef_w),
             bp=Rom(self.breakpoints if self.breakpoints.size else [0], temp_format.wl),
             temp_format=temp_format, acc_format=acc_format, out_format=out_format, t_format=t_format,
@@ -181,7 +181,7 @@ class Piecewise(Block):
         counts = np.zeros(len(dp.ovf), dtype=np.int64)
         a, o = dp.acc_format, dp.out_format
         y = _piecewise_kernel(temp, self.breakpoints, dp.coef.words, dp.t0, dp.top_shift, dp.prod_shift,
-                              frozen_array(dp.acc_align), frozen_array(dp.coef_align), dp.out_shift,
+                              dp.acc_align, dp.coef_align, dp.out_shift,
                               dp.rules.rounding_code, dp.rules.overflow_code, a.min_int, a.max_int,
                               o.min_int, o.max_int, counts)
         for f, c in zip(dp.ovf, counts):

@@ -15,7 +15,7 @@ from tqdm import tqdm
 
 from ..chains import build
 from ..config import dumps, load_config
-from ..hdl.hwreport import hw_report_path, load_hw_report
+from ..hdl.hwreport import hw_report_path, synthesised_cost
 from . import optimise as opt
 from .attribution import ADDITIVITY_DB, THEORY_DB, Attribution, attribute
 from .static import static_error
@@ -24,15 +24,6 @@ from .units import parse_target
 
 ATTRIBUTED = (("chain_paper002", "rate"), ("chain_paper002", "temp"), ("chain_paper001", "rate"),
               ("chain_paper001", "temp"))
-
-
-def synthesised_cost() -> dict[str, dict[str, float]] | None:
-    """LUT4 and SB_MAC16 of every synthesised block from the hardware report (None without one); a
-    count the synthesis did not produce counts 0."""
-    report = load_hw_report()
-    if report is None:
-        return None
-    return {r["name"]: {"lut": float(r["LUT"] or 0), "mac16": float(r["MAC16"] or 0)} for r in report["rows"]}
 
 
 def configure(parser) -> None:

@@ -42,3 +42,12 @@ def load_hw_report(path: str | Path | None = None) -> dict | None:
     if not isinstance(data, dict) or not isinstance(data.get("rows"), list):
         raise ValueError(f"{p}: not a hardware report (no list of rows)")
     return data
+
+
+def synthesised_cost() -> dict[str, dict[str, float]] | None:
+    """LUT4 and SB_MAC16 of every synthesised instance from the report (None without one); a count
+    the synthesis did not produce counts 0."""
+    report = load_hw_report()
+    if report is None:
+        return None
+    return {r["name"]: {"lut": float(r["LUT"] or 0), "mac16": float(r["MAC16"] or 0)} for r in report["rows"]}

@@ -99,8 +99,7 @@ class Compensator002:
             raise ValueError("config: has no [lag] table for the lag-aware temperature estimate")
         ovf = OverflowLog()
         code = self.temperature_code(log_data["temp_c"], ovf)
-        self.lag.reset()
-        te = self.lag.stream(ovf, temp=code)["te"]
+        te = self.lag.run(log=ovf, temp=code).outputs["te"]
         return self.run(log_data["output"], te, ovf)
 
     def frequency_thermometer(self, f0_hz: float, k_hz_per_c: float) -> Freq2Temp:

@@ -108,10 +108,7 @@ def ovf_ignore(design, name: str) -> int:
 
 
 def model_run(design, name: str, inputs: dict[str, np.ndarray]):
-    block = design.all[name]
-    block.reset()
-    res = block.run(**inputs)
-    block.reset()
+    res = design.all[name].run(**inputs)  # from reset, as the RTL after rst
     return res.outputs, res.overflows.total
 
 
@@ -220,7 +217,7 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
         L.append(f'                $writememh("out_{p}.hex", res_{p});')
     L += ['                $display("HARNESS cycles=%0d ovf=%0d", cycles, ovf_total);', "                $finish;",
           "            end", "        end",
-          f"        if (cycles > N * 200 + 1000) begin $display(\"HARNESS timeout\"); $finish; end",
+          "        if (cycles > N * 200 + 1000) begin $display(\"HARNESS timeout\"); $finish; end",
           "    end", "endmodule", "`default_nettype wire", ""]
     return "\n".join(L)
 

@@ -139,29 +139,29 @@ _OPEN = {"(": ")", "[": "]", "{": "}"}
 _CLOSE = {v: k for k, v in _OPEN.items()}
 
 
-def _match_forward(toks, i) -> int:
-    """Index of the bracket closing the one at i."""
+def _match(toks, i, partner: dict, step: int) -> int:
+    """Index of the bracket matching the one at i, searching in direction ``step``."""
     depth, want = 0, toks[i].text
-    for j in range(i, len(toks)):
+    j = i
+    while 0 <= j < len(toks):
         if toks[j].text == want:
             depth += 1
-        elif toks[j].text == _OPEN[want]:
+        elif toks[j].text == partner[want]:
             depth -= 1
             if depth == 0:
                 return j
+        j += step
     raise ValueError(f"unbalanced {want}")
+
+
+def _match_forward(toks, i) -> int:
+    """Index of the bracket closing the one at i."""
+    return _match(toks, i, _OPEN, 1)
 
 
 def _match_back(toks, i) -> int:
-    depth, want = 0, toks[i].text
-    for j in range(i, -1, -1):
-        if toks[j].text == want:
-            depth += 1
-        elif toks[j].text == _CLOSE[want]:
-            depth -= 1
-            if depth == 0:
-                return j
-    raise ValueError(f"unbalanced {want}")
+    """Index of the bracket opening the one closed at i."""
+    return _match(toks, i, _CLOSE, -1)
 
 
 def _operand_before(toks, i) -> int:

@@ -3,12 +3,12 @@ committed chain_paper002 vectors with the hardware divider setting (one quotient
 timed against a latency computed here from the config, not copied from the RTL."""
 
 import math
-import re
 import shutil
 
 import numpy as np
 import pytest
 
+from fxdsp.fixed import Format
 from fxdsp.vectors import load
 from hdl_util import RTL, VECTORS, default_data, run_harness
 from long_common import default_design, long_stream
@@ -18,21 +18,15 @@ from long_common import default_design, long_stream
 BLOCK_LATENCY = {"rtd": 1, "piecewise": 1, "demod": 2, "bias_subtract": 1, "iir": 1}
 
 
-def _wl_fl(fmt: str) -> tuple[int, int]:
-    m = re.fullmatch(r"[su](\d+)\.(-?\d+)", fmt)
-    assert m, fmt
-    return int(m.group(1)), int(m.group(2))
-
-
 def chain002_latency(unroll: int) -> int:
     """Cycles from acceptance to out_valid, from the config: the divider runs one restoring step per
     numerator bit, numerator = vsa << (SF fraction + guard bits) (blocks/sf_divide.py), so it takes
     ceil((vsa wl + SF fl + guard_bits) / UNROLL) steps plus its output register; the other blocks
     add their spec latencies."""
     cfg = default_data()
-    vsa_wl, _ = _wl_fl(cfg["sf_divide"]["in_format"])
-    _, sf_fl = _wl_fl(cfg["piecewise"]["sf"]["out_format"])
-    numerator_bits = vsa_wl + sf_fl + cfg["sf_divide"]["guard_bits"]
+    vsa = Format.parse(cfg["sf_divide"]["in_format"])
+    sf = Format.parse(cfg["piecewise"]["sf"]["out_format"])
+    numerator_bits = vsa.wl + sf.fl + cfg["sf_divide"]["guard_bits"]
     divider = math.ceil(numerator_bits / unroll) + 1
     return sum(BLOCK_LATENCY.values()) + divider
 
