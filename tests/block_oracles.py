@@ -143,17 +143,44 @@ def freq2temp(block, fs) -> list[int]:
     return out
 
 
+def nco_table(lut_bits: int, lut_format) -> list[int]:
+    """Quarter-wave sine at the bin centres of a 2**lut_bits-bin turn, nearest (half_up), saturated."""
+    quarter = 1 << (lut_bits - 2)
+    out = []
+    for k in range(quarter):
+        v = Fraction(math.sin(math.pi / 2 * (k + 0.5) / quarter)) * (1 << lut_format.fl)
+        out.append(fit(round_to_int(v, "half_up"), lut_format, "saturate")[0])
+    return out
+
+
+def nco_wave(nco, phase: int, table: list[int]) -> tuple[int, int]:
+    """(cos, -sin) of one phase word: the bin centre by quadrant symmetry of the quarter table, then
+    the first-order correction cos - sin * delta, -sin - cos * delta, delta the sub-bin centre in
+    radians with 2 pi taken on s24.20, each correction rounded by the demodulator's rounding."""
+    P, L, D = nco.phase_bits, nco.lut_bits, nco.interp_bits
+    a = phase >> (P - L)
+    quad, k = a >> (L - 2), a % (1 << (L - 2))
+    sin_c = [table[k], table[-1 - k], -table[k], -table[-1 - k]][quad]          # sin of the bin centre
+    cos_c = [table[-1 - k], -table[k], -table[-1 - k], table[k]][quad]
+    r = (phase >> (P - L - D)) % (1 << D)
+    two_pi = round_to_int(Fraction(2 * math.pi) * (1 << 20), "half_up")
+    delta = Fraction((2 * r + 1 - (1 << D)) * two_pi, 1 << (D + 1 + 20 + L))     # radians, times 2**0
+    rule = nco.rules.rounding
+    return cos_c + round_to_int(-sin_c * delta, rule), -sin_c + round_to_int(-cos_c * delta, rule)
+
+
 def demod_mix(block, xs) -> tuple[list[int], list[int]]:
-    """NCO phase n*ftw + phase0 modulo 2**P, LUT address = top lut_bits, products read as 2*x*lut."""
+    """NCO phase n*ftw + phase0 modulo 2**P, the interpolated quarter-wave NCO, products read as
+    2*x*nco."""
     nco = block.nco
-    P, L = nco.phase_bits, nco.lut_bits
+    P = nco.phase_bits
     d, rules = block.data_format, block.rules
     in_fl, lut_fl = block.in_format.fl, nco.lut_format.fl
+    table = nco_table(nco.lut_bits, nco.lut_format)
     i_out, q_out = [], []
     for n, x in enumerate(xs):
-        addr = ((nco.phase0 + n * nco.ftw) % (1 << P)) >> (P - L)
-        for lut, out in ((nco.cos_lut, i_out), (nco.msin_lut, q_out)):
-            v = 2 * Fraction(int(x), 1 << in_fl) * Fraction(int(lut[addr]), 1 << lut_fl)
+        for wave, out in zip(nco_wave(nco, (nco.phase0 + n * nco.ftw) % (1 << P), table), (i_out, q_out)):
+            v = 2 * Fraction(int(x), 1 << in_fl) * Fraction(wave, 1 << lut_fl)
             out.append(fit(round_to_int(v * (1 << d.fl), rules.rounding), d, rules.overflow)[0])
     return i_out, q_out
 

@@ -31,7 +31,8 @@ def test_rtd(rounding, overflow):
 @pytest.mark.parametrize("rounding,overflow", RULES)
 def test_iir(rounding, overflow):
     d = design_with(**{"iir.rounding": rounding, "iir.overflow": overflow, "iir.order": 4,
-                       "iir.data_format": "s18.16", "iir.cutoff_hz": 2000.0, "iir.num_format": "s24.26"})
+                       "iir.data_format": "s18.16", "iir.cutoff_hz": 2000.0, "iir.num_format": "s24.26",
+                       "iir.den_format": "s28.26"})
     b = d.blocks["iir"]
     x = b.stimulus(np.random.default_rng(2), 200)["x"][:1400]  # impulses, steps, corners, saturating square
     got = b.run(x=x)
@@ -85,10 +86,12 @@ def test_freq2temp(rounding, overflow):
     assert b.run(**st).outputs["temp"].tolist() == oracle.freq2temp(b, st["f"])
 
 
+@pytest.mark.parametrize("interp_bits", [0, 1, 7])
 @pytest.mark.parametrize("rounding,overflow", RULES)
-def test_demod_mixer_and_cordic(rounding, overflow):
+def test_demod_mixer_and_cordic(rounding, overflow, interp_bits):
     d = design_with(**{"demod.rounding": rounding, "demod.overflow": overflow, "demod.lut_bits": 8,
-                       "demod.phase_offset_turns": 0.1})
+                       "demod.interp_bits": interp_bits, "demod.phase_offset_turns": 0.1,
+                       "demod.lut_format": "s16.15"})
     b = d.blocks["demod"]
     x = b.stimulus(np.random.default_rng(8), 100)["x"][:600]
     b.reset()

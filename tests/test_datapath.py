@@ -93,7 +93,7 @@ def test_wired_inputs_follow_their_driver(dst, src):
         sec = sec[part]
     key = {"temp": "temp_format", "y": "out_format", "i": "data_format"}[src.split(".")[1]]
     old = _fmt(DESIGN, src)
-    sec[key] = f"{'s' if old.signed else 'u'}{old.wl + 1}.{old.fl + 1}"
+    sec[key] = f"{'s' if old.signed else 'u'}{old.wl - 1}.{old.fl - 1}"  # narrower: every width check still holds
     d = build(Config(data, source="<test>"))
     assert _fmt(d, src) != old
     assert _fmt(d, dst) == _fmt(d, src)

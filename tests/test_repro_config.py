@@ -79,12 +79,14 @@ def test_piecewise_tables_match_the_float_fit_within_quantisation(noiseless002):
     _, cal, text = noiseless002
     d = build(config_from_text(text))
     t = np.linspace(-25.0, 65.0, 181)
-    code = np.round(t * 2 ** 9).astype(np.int64)  # s18.9 temperature code
-    tq = code / 2 ** 9
-    sf = d.blocks["piecewise_sf"].run(temp=code).outputs["y"] / 2 ** 22  # u24.22
+    tf = d.blocks["piecewise_sf"].temp_format
+    code = np.floor(t * 2 ** tf.fl).astype(np.int64)  # any temperature code
+    tq = code / 2 ** tf.fl
+    sf_block, bias_block = d.blocks["piecewise_sf"], d.blocks["piecewise_bias"]
+    sf = sf_block.run(temp=code).outputs["y"] * sf_block.out_format.lsb
     expect_sf = _polyval_segments(cal["sf"], tq) / cal["sf_nominal"]
-    assert np.abs(sf - expect_sf).max() < 2 ** -21
-    bias = d.blocks["piecewise_bias"].run(temp=code).outputs["y"] / 2 ** 22  # s24.22
+    assert np.abs(sf - expect_sf).max() < 2 * sf_block.out_format.lsb   # output rounding + coefficient steps
+    bias = bias_block.run(temp=code).outputs["y"] * bias_block.out_format.lsb
     expect_bias = _polyval_segments(cal["bias"], tq) * cal["sf_nominal"] / FS_MV
     assert np.abs(bias - expect_bias).max() < 2 ** -20
 

@@ -2,9 +2,18 @@
 (the ``iir`` block), and a CORDIC for amplitude and phase (drive loop; paper 003's sweep).
 
 * NCO: ``phase[n] = (n * ftw + phase0) mod 2**phase_bits`` with ``ftw = f_hz / fs_hz * 2**phase_bits``
-  quantised half_up; the LUT address is the top ``lut_bits`` bits of the phase (truncation, the
-  usual phase-truncation spur); the LUT holds cos and -sin over a full turn in ``lut_format``,
-  quantised half_up and saturated (cos 0 = 1 does not fit s.15 exactly: it saturates to 1 - 2**-15).
+  quantised half_up (``phase_bits`` = 40: the tuning word's half-LSB frequency error drifts the phase
+  by < 1e-7 rad over a million samples). One quarter-wave sine table, ``qsin[k] = sin((k + 1/2)
+  (pi/2) / 2**(lut_bits-2))`` (bin centres, ``lut_format``, half_up, saturated), serves cos and -sin
+  over the whole turn by quadrant symmetry: the top ``lut_bits`` phase bits are the bin (quadrant,
+  index), the two reads are ``qsin[k]`` and ``qsin[~k]``. First-order (Taylor) interpolation removes
+  the phase-truncation error: the next ``interp_bits`` phase bits give the offset from the bin centre,
+  ``delta = (2 r + 1 - 2**interp_bits) / 2**(interp_bits+1)`` bins (the centre of each sub-bin, so the
+  offset itself has no truncation bias), ``d = delta_code * two_pi`` (2 pi on TWO_PI_FORMAT), and
+  ``cos = cb + R(mb * d)``, ``-sin = mb + R(-cb * d)`` with ``R`` = shift right by ``corr_shift``
+  rounded by ``rounding``: d cos/d phase = -sin and d(-sin)/d phase = -cos, both read anyway. The
+  result is one integer bit wider than the table (``nco_format``): it cannot overflow (checked when
+  built), so the NCO has no fit point. ``interp_bits = 0`` is the plain truncating table.
 * Mixers: ``i = 2 x cos``, ``q = -2 x sin`` exact products, the factor 2 taken by reading the
   product one fraction bit coarser (so I and Q are the in-phase and quadrature *amplitudes*),
   then rounded by ``rounding`` and fitted by ``overflow`` into ``data_format``.
@@ -28,27 +37,62 @@ from numba import njit
 
 from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, product_format, quantize, resize
-from ..fixed.kernels import convert
+from ..fixed.kernels import convert, shift_right_round
 from .base import Block, corner_codes
 from .datapath import Datapath, OvfField, Rom, const, info, nested
 from .iir import Iir, IirDatapath
 
 
 @njit(cache=True)
-def _mix_kernel(x, phase0, ftw, phase_mask, addr_shift, cos_lut, msin_lut, shift, rounding, lo, hi, overflow,
-                counts):
+def _nco_wave(phase, addr_shift, lut_bits, interp_bits, qsin, two_pi, corr_shift, rounding):
+    """(cos, -sin) of one phase word on nco_format: quarter-wave bin-centre values and the
+    first-order correction from the sub-bin offset (see the module docstring)."""
+    a = phase >> addr_shift
+    qbits = lut_bits - 2
+    qmask = (np.int64(1) << qbits) - 1
+    quad = (a >> qbits) & 3
+    k = a & qmask
+    s_k = qsin[k]
+    s_r = qsin[qmask - k]
+    if quad == 0:
+        cb, mb = s_r, -s_k
+    elif quad == 1:
+        cb, mb = -s_k, -s_r
+    elif quad == 2:
+        cb, mb = -s_r, s_k
+    else:
+        cb, mb = s_k, s_r
+    r = (phase >> (addr_shift - interp_bits)) & ((np.int64(1) << interp_bits) - 1)
+    d = (2 * r + 1 - (np.int64(1) << interp_bits)) * two_pi
+    return (cb + shift_right_round(mb * d, corr_shift, rounding),
+            mb + shift_right_round(-cb * d, corr_shift, rounding))
+
+
+@njit(cache=True)
+def _nco_waves(phases, addr_shift, lut_bits, interp_bits, qsin, two_pi, corr_shift, rounding):
+    n = phases.shape[0]
+    c = np.empty(n, dtype=np.int64)
+    m = np.empty(n, dtype=np.int64)
+    for k in range(n):
+        c[k], m[k] = _nco_wave(phases[k], addr_shift, lut_bits, interp_bits, qsin, two_pi, corr_shift, rounding)
+    return c, m
+
+
+@njit(cache=True)
+def _mix_kernel(x, phase0, ftw, phase_mask, addr_shift, lut_bits, interp_bits, qsin, two_pi, corr_shift,
+                shift, rounding, lo, hi, overflow, counts):
     """NCO + both mixers. phase = (phase0 + n ftw) mod 2**phase_bits accumulated sample by sample
-    (masking after each add keeps it within 48 bits); counts += (I fits, Q fits)."""
+    (masking after each add keeps it within 49 bits); counts += (I fits, Q fits)."""
     n = x.shape[0]
     i_out = np.empty(n, dtype=np.int64)
     q_out = np.empty(n, dtype=np.int64)
     phase = phase0
     for k in range(n):
-        addr = phase >> addr_shift
-        v, o = convert(x[k] * cos_lut[addr], shift, rounding, lo, hi, overflow)
+        c, m = _nco_wave(phase, addr_shift, lut_bits, interp_bits, qsin, two_pi, corr_shift, rounding)
+        v, o = convert(x[k] * c, shift, rounding, lo, hi, overflow)
         i_out[k] = v
         counts[0] += o
-        v, o = convert(x[k] * msin_lut[addr], shift, rounding, lo, hi, overflow)
+        v, o = convert(x[k] * m, shift, rounding, lo, hi, overflow)
         q_out[k] = v
         counts[1] += o
         phase = (phase + ftw) & phase_mask
@@ -83,27 +127,45 @@ def _cordic_kernel(i_in, q_in, atans, half_pi, iterations):
 INV_K_FORMAT = Format(True, 18, 17)
 
 
+TWO_PI_FORMAT = Format(True, 24, 20)   # 2 pi of the interpolation step: relative error < 1e-7
+
+
 class Nco:
-    """Phase accumulator and quarter-free full-turn LUT (cos, -sin)."""
+    """Phase accumulator, quarter-wave sine table and first-order interpolation (cos, -sin)."""
 
     def __init__(self, fs_hz: float, f_hz: float, phase_bits: int, lut_bits: int, lut_format: Format,
-                 phase_offset_turns: float = 0.0):
+                 phase_offset_turns: float = 0.0, interp_bits: int = 0, rules: Rules = Rules("half_up", "saturate")):
         if not 0 < f_hz < fs_hz / 2:
             raise ValueError(f"demod.f_hz: must be within (0, fs/2 = {fs_hz / 2}), got {f_hz}")
         if not 4 <= lut_bits <= phase_bits <= 48:
             raise ValueError(f"demod.lut_bits/phase_bits: need 4 <= lut_bits <= phase_bits <= 48, "
                              f"got {lut_bits}, {phase_bits}")
+        if not 0 <= interp_bits <= phase_bits - lut_bits:
+            raise ValueError(f"demod.interp_bits: must be within 0..phase_bits - lut_bits = "
+                             f"{phase_bits - lut_bits}, got {interp_bits}")
+        # the correction product qsin x delta_code x two_pi must fit 63 bits
+        if lut_format.wl + interp_bits + TWO_PI_FORMAT.wl - 1 > 63:
+            raise ValueError(f"demod.interp_bits: {interp_bits} with lut_format {lut_format} makes the "
+                             f"interpolation product {lut_format.wl + interp_bits + TWO_PI_FORMAT.wl - 1} bits; "
+                             f"more than 63")
         self.fs_hz, self.f_hz = fs_hz, f_hz
         self.phase_bits, self.lut_bits, self.lut_format = phase_bits, lut_bits, lut_format
+        self.interp_bits, self.rules = interp_bits, rules
         self.phase_format = Format(False, phase_bits, phase_bits)  # turns
         self.ftw = int(quantize([f_hz / fs_hz], self.phase_format, Rules("half_up", "saturate"))[0])
         self.phase0 = int(quantize([phase_offset_turns % 1.0], self.phase_format, Rules("half_up", "wrap"))[0])
         self.phase_offset_turns = phase_offset_turns
-        angle = 2 * np.pi * (np.arange(2**lut_bits) + 0.5) / 2**lut_bits  # bin centres
-        self.cos_lut = self.lut_quantize(np.cos(angle))
-        self.msin_lut = self.lut_quantize(-np.sin(angle))
+        quarter = 2 ** (lut_bits - 2)
+        self.qsin = self.lut_quantize(np.sin(0.5 * np.pi * (np.arange(quarter) + 0.5) / quarter))
+        self.two_pi = int(quantize([2 * np.pi], TWO_PI_FORMAT, Rules("half_up", "saturate"))[0])
+        self.corr_shift = interp_bits + 1 + TWO_PI_FORMAT.fl + lut_bits
+        self.nco_format = Format(True, lut_format.wl + 1, lut_format.fl)
         self.phase_mask = (1 << phase_bits) - 1
         self.addr_shift = phase_bits - lut_bits
+        # proof that the interpolated value fits nco_format: the largest table value plus the
+        # largest correction (|delta| < 1/2 bin, rounded up by one LSB)
+        corr_max = ((lut_format.max_int * ((1 << interp_bits) - 1) * self.two_pi) >> self.corr_shift) + 1
+        assert lut_format.max_int + corr_max <= self.nco_format.max_int, "NCO output format too narrow"
         self.reset()
 
     def lut_quantize(self, values) -> np.ndarray:
@@ -117,6 +179,24 @@ class Nco:
     def reference_phase(self, count: int, start: int = 0) -> np.ndarray:
         n = np.arange(start, start + count, dtype=float)
         return 2 * np.pi * (self.phase_offset_turns + n * self.f_hz / self.fs_hz)
+
+    def phases(self, count: int) -> np.ndarray:
+        """The accumulator words of the first ``count`` samples after reset."""
+        return (self.phase0 + np.arange(count, dtype=np.int64) * self.ftw) & self.phase_mask
+
+    def wave(self, phases: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(cos, -sin) stored on nco_format for each accumulator word (the RTL's nco outputs)."""
+        return _nco_waves(np.asarray(phases, dtype=np.int64), self.addr_shift, self.lut_bits, self.interp_bits,
+                          self.qsin, self.two_pi, self.corr_shift, self.rules.rounding_code)
+
+    def bin_phase(self, phases: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(bin-centre angle, interpolation offset) in radians, unquantised: the phase the NCO
+        really evaluates, for the budget's phase-only source."""
+        phases = np.asarray(phases, dtype=np.int64)
+        a = phases >> self.addr_shift
+        r = (phases >> (self.addr_shift - self.interp_bits)) & ((1 << self.interp_bits) - 1)
+        step = 2 * np.pi / 2**self.lut_bits
+        return (a + 0.5) * step, (2 * r + 1 - 2**self.interp_bits) / 2 ** (self.interp_bits + 1) * step
 
 
 def cordic_vector(i: np.ndarray, q: np.ndarray, dp: "DemodDatapath"):
@@ -141,9 +221,14 @@ class DemodDatapath(Datapath):
     phase_bits: int
     lut_bits: int
     lut_w: int
+    interp_bits: int         # phase bits below the table address that drive the interpolation
+    two_pi: int = const()    # 2 pi on TWO_PI_FORMAT
+    two_pi_w: int
+    corr_shift: int          # qsin x delta_code x two_pi -> table LSBs
+    nco_w: int               # NCO output: lut_w + 1 (the interpolated value cannot overflow it)
     ftw: int = const()       # phase increment per sample (turns * 2**phase_bits)
     phase0: int = const()
-    mix_shift: int           # exact x * lut product, read as 2 x lut, -> data_format
+    mix_shift: int           # exact x * nco product, read as 2 x nco, -> data_format
     rules: Rules
     lpf: IirDatapath = nested("LPF_")   # both channels' low-pass (one design)
     iterations: int
@@ -152,8 +237,7 @@ class DemodDatapath(Datapath):
     inv_k: int = const()     # 1/K on INV_K_FORMAT
     inv_k_w: int
     amp_shift: int           # work x 1/K product -> data_format
-    cos: Rom                 # cos over a full turn at bin centres, lut_format
-    msin: Rom                # -sin, same
+    qsin: Rom                # sin over the first quadrant at bin centres, lut_format
     atan: Rom                # arctan(2**-j) on angle_format
     addr_shift: int = info()     # LUT address = phase >> addr_shift (truncation)
     phase_mask: int = info()
@@ -182,7 +266,7 @@ class Demod(Block):
         self.lpf_i, self.lpf_q = lpf_i, lpf_q
         self.rules = rules
         self.iterations = cordic_iterations
-        self.mix_format = product_format(in_format, nco.lut_format)
+        self.mix_format = product_format(in_format, nco.nco_format)
         self.mix_format = self.mix_format.with_fl(self.mix_format.fl - 1)  # read as 2 * x * lut
         self.work_format = Format(True, data_format.wl + 2, data_format.fl)
         exact = Rules("half_up", "saturate")
@@ -192,11 +276,11 @@ class Demod(Block):
         lpf_ovf = lambda ch: tuple(OvfField(f"lpf_{ch}.{f.counter}", f.width) for f in lpf.ovf)  # noqa: E731
         self.datapath = DemodDatapath(
             in_w=in_format.wl, data_w=data_format.wl, phase_bits=nco.phase_bits, lut_bits=nco.lut_bits,
-            lut_w=nco.lut_format.wl, ftw=nco.ftw, phase0=nco.phase0, mix_shift=self.mix_format.fl - data_format.fl,
+            lut_w=nco.lut_format.wl, interp_bits=nco.interp_bits, two_pi=nco.two_pi, two_pi_w=TWO_PI_FORMAT.wl,
+            corr_shift=nco.corr_shift, nco_w=nco.nco_format.wl, ftw=nco.ftw, phase0=nco.phase0, mix_shift=self.mix_format.fl - data_format.fl,
             rules=rules, lpf=lpf, iterations=cordic_iterations, angle_w=angle_format.wl,
             half_pi=int(quantize([np.pi / 2], angle_format, exact)[0]), inv_k=self.inv_k, inv_k_w=INV_K_FORMAT.wl,
-            amp_shift=amp_format.fl - data_format.fl, cos=Rom(nco.cos_lut, nco.lut_format.wl),
-            msin=Rom(nco.msin_lut, nco.lut_format.wl),
+            amp_shift=amp_format.fl - data_format.fl, qsin=Rom(nco.qsin, nco.lut_format.wl),
             atan=Rom(quantize(np.arctan(2.0 ** -np.arange(cordic_iterations)), angle_format, exact),
                      angle_format.wl),
             addr_shift=nco.addr_shift, phase_mask=nco.phase_mask, in_format=in_format, data_format=data_format,
@@ -210,7 +294,7 @@ class Demod(Block):
     def from_config(cls, sec: Section, fs_hz: float, in_format: Format, connect: bool = True) -> "Demod":
         nco = Nco(fs_hz, sec.number("f_hz", low=0, low_open=True), sec.integer("phase_bits", low=4, high=48),
                   sec.integer("lut_bits", low=4, high=20), sec.format("lut_format"),
-                  sec.number("phase_offset_turns", 0.0))
+                  sec.number("phase_offset_turns", 0.0), sec.integer("interp_bits", low=0, high=24), sec.rules())
         data_format = sec.format("data_format")
         lpf_sec = sec.sub("lpf")
         lpf_format = lpf_sec.wired_format("data_format", data_format, sec.field("data_format"), connect)
@@ -238,8 +322,9 @@ class Demod(Block):
 
     def mix(self, log: OverflowLog, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         dp, counts = self.datapath, np.zeros(2, dtype=np.int64)
-        i, q, self.nco.phase = _mix_kernel(x, self.nco.phase, dp.ftw, dp.phase_mask, dp.addr_shift, dp.cos.words,
-                                           dp.msin.words, dp.mix_shift, dp.rules.rounding_code,
+        i, q, self.nco.phase = _mix_kernel(x, self.nco.phase, dp.ftw, dp.phase_mask, dp.addr_shift, dp.lut_bits,
+                                           dp.interp_bits, dp.qsin.words, dp.two_pi, dp.corr_shift, dp.mix_shift,
+                                           dp.rules.rounding_code,
                                            dp.data_format.min_int, dp.data_format.max_int, dp.rules.overflow_code,
                                            counts)
         log.add(f"{self.name}.{dp.ovf[0].counter}", int(counts[0]))
@@ -293,6 +378,7 @@ class Demod(Block):
     def parameters(self) -> dict:
         return {"fs_hz": self.nco.fs_hz, "f_hz": self.nco.f_hz, "ftw": self.nco.ftw, "phase0": self.nco.phase0,
                 "phase_bits": self.nco.phase_bits, "lut_bits": self.nco.lut_bits, "lut_format": str(self.nco.lut_format),
+                "interp_bits": self.nco.interp_bits,
                 "in_format": str(self.in_format), "data_format": str(self.data_format),
                 "angle_format": str(self.angle_format), "cordic_iterations": self.iterations, "inv_k": self.inv_k,
                 "rounding": self.rules.rounding, "overflow": self.rules.overflow,

@@ -104,7 +104,7 @@ class Lag(Block):
     @classmethod
     def from_config(cls, sec: Section, temp_format: Format) -> "Lag":
         return cls(temp_format, sec.number("tau_s", low=0, low_open=True), sec.number("rate_hz", low=0, low_open=True),
-                   sec.integer("alpha_bits", 16, low=4, high=24), sec.integer("state_guard_bits", 24, low=0, high=40),
+                   sec.integer("alpha_bits", low=4, high=24), sec.integer("state_guard_bits", low=0, high=40),
                    sec.rules(), name=sec.path)
 
     def reset(self) -> None:

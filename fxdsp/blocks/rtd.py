@@ -184,7 +184,7 @@ class Rtd(Block):
         if t_max <= t_min:
             raise ValueError(f"{sec.field('t_max_c')}: must exceed t_min_c")
         block = cls(physics, sec.format("adc_format", "s16.15"), sec.format("lut_format", "s26.16"),
-                    sec.format("temp_format", "s18.9"), sec.integer("lut_index_bits", 5, low=1, high=16),
+                    sec.format("temp_format"), sec.integer("lut_index_bits", low=1, high=16),
                     sec.rules(), t_min, t_max)
         return block
 

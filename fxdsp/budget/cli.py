@@ -1,13 +1,15 @@
 """`fxdsp budget [--config F] [--json F] [--report DIR] [--target T [--optimise --config-out F]]`:
 float vs fixed error budget of every block and chain in LSBs and physical units, attribution of
 each chain's error to its quantisation sources, theory check of every rounding point, and
-word-length exploration."""
+word-length exploration; floor and margin of each attributed output against its ADCs, Allan
+deviation of the paper 002 rate error, and a drive-frequency sweep."""
 
 from __future__ import annotations
 
 import json
 import math
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +20,8 @@ from ..config import dumps, load_config
 from ..hdl.hwreport import hw_report_path, synthesised_cost
 from . import optimise as opt
 from .attribution import ADDITIVITY_DB, THEORY_DB, Attribution, attribute
+from .floor import (DOMINANT_FACTOR, FLICKER_FACTOR, WITHIN_DB, Allan, DriveSweep, Floor, allan_chain_paper002,
+                    drive_sweep, floor_of)
 from .static import static_error
 from .table import budget_rows, format_rows
 from .units import parse_target
@@ -86,6 +90,55 @@ def format_theory(a: Attribution) -> str:
     return "\n".join(lines)
 
 
+def format_floor(f: Floor) -> str:
+    head = f"floor: {f.chain}.{f.port} "
+    dom = ", ".join(f"{n} {r:.3g}" + (f" ({20 * math.log10(r / f.total):+.1f} dB)" if f.total > 0 else "")
+                    for n, r in f.dominant) or "none"
+    tail = f"; dominant (within {20 * math.log10(1 / DOMINANT_FACTOR):.0f} dB of the total): {dom}"
+    if f.floor <= 0:
+        return head + f"floor 0 (no ADC reaches this output), total {f.total:.3g} {f.unit}: no margin" + tail
+    if f.total <= 0:
+        return head + f"floor {f.floor:.3g} {f.unit} (ADC), total 0: no margin" + tail
+    verdict = f"within {WITHIN_DB:g} dB" if f.within else f"NOT within {WITHIN_DB:g} dB"
+    if f.margin_db < 0:  # possible: correlated sources can partly cancel the ADCs' error
+        verdict += " (total below the floor: the sources partly cancel)"
+    return head + (f"floor {f.floor:.3g} {f.unit} (ADC), total {f.total:.3g}, margin {f.margin_db:+.1f} dB "
+                   f"-> {verdict}") + tail
+
+
+def format_allan(a: Allan) -> str:
+    edge = " (at the longest tau: the curve is still falling, an upper bound)" if a.bi_at_longest_tau else ""
+    how = ("measured" if a.measured_1s else
+           f"extrapolated along tau^-1/2 from tau {a.fit_taus[0]:.3g}..{a.fit_taus[-1]:.3g} s")
+    return "\n".join([
+        f"{a.chain}.{a.port} bit-exact minus float at {a.temp_c:g} C and {a.rate_fs:g} FS, {a.samples} samples at "
+        f"{a.fs:g} Hz after {a.settle} settling samples (allantools.oadev, octave-spaced taus "
+        f"{a.taus[0]:.3g}..{a.taus[-1]:.3g} s):",
+        f"  bias instability: min adev {a.bi_adev:.3g} {a.unit} at tau {a.bi_tau:.3g} s{edge}; flicker floor "
+        f"B = min / {FLICKER_FACTOR} = {a.flicker_floor:.3g} {a.unit} (IEEE 952: sigma = {FLICKER_FACTOR} B on "
+        f"the flat part)",
+        f"  angle random walk of the fixed-point design: adev(1 s) {a.adev_1s:.3g} {a.unit} ({how}) -> "
+        f"ARW = adev(1 s) / 60 = {a.arw:.3g} deg/sqrt(h)"])
+
+
+def format_sweep(s: DriveSweep) -> str:
+    lo_t, hi_t = s.temp_range_c
+    lines = [f"chain_paper002.rate vs drive frequency: w(T) = w0 [1 - a (T - T0) / 2], a {s.a_ppm_per_c:g} ppm/C, "
+             f"T0 {s.t0_c:g} C, {lo_t:g}..{hi_t:g} C -> {s.band[0]:.2f}..{s.band[1]:.2f} Hz around f0 "
+             f"{s.f0:g} Hz, {len(s.points)} points ({s.unit}; nominal = section 1's chain row, static = "
+             f"quasi-static chamber points)",
+             f"  {'f Hz':>10s} {'rms':>9s} {'mean':>10s} {'static rms':>10s} {'static mean':>11s} {'ovf':>4s}"]
+    for p in s.points:
+        lines.append(f"  {p.f_hz:10.2f} {p.rms:9.4g} {p.mean:+10.3g} {p.static_rms:10.4g} {p.static_mean:+11.3g} "
+                     f"{p.overflows:4d}")
+    w = {k: s.worst(k) for k in ("rms", "mean", "static_rms", "static_mean")}
+    lines.append(f"  worst over the band: rms {w['rms'].rms:.4g} at {w['rms'].f_hz:.2f} Hz, |mean| "
+                 f"{abs(w['mean'].mean):.4g} at {w['mean'].f_hz:.2f} Hz; quasi-static rms "
+                 f"{w['static_rms'].static_rms:.4g} at {w['static_rms'].f_hz:.2f} Hz, |mean| "
+                 f"{abs(w['static_mean'].static_mean):.4g} at {w['static_mean'].f_hz:.2f} Hz")
+    return "\n".join(lines)
+
+
 def run(args) -> int:
     t0 = time.time()
     cfg = load_config(args.config)
@@ -113,15 +166,32 @@ def run(args) -> int:
     print("\n2. attribution (one source quantised at a time, the rest in float; vs float on the analog inputs):")
     for a in attrs.values():
         print(format_attribution(a))
+    floors = [floor_of(a) for a in attrs.values()]
+    print("\nfloor and margin (floor = the input ADCs' quantisation carried to the output; margin = 20 log10"
+          "(total / floor); dominant: a non-ADC source with rms >= total / 2):")
+    for f in floors:
+        print(format_floor(f))
     print(f"\n3. theory check (flag: more than {THEORY_DB} dB worse than theory):")
     for key in (("chain_paper002", "rate"), ("chain_paper001", "rate")):
         print(format_theory(attrs[key]))
+    print("\n4. Allan deviation of the fixed-point error:")
+    allan = allan_chain_paper002(design)
+    print(format_allan(allan))
+    print("\n5. drive-frequency sweep (the demodulator reference tracks the drive loop, which moves with "
+          "temperature):")
+    t_sweep = time.time()
+    sweep = drive_sweep(cfg, progress=partial(tqdm, delay=2.0))  # a bar only if it ever takes > 2 s
+    t_sweep = time.time() - t_sweep
+    print(format_sweep(sweep))
+    print(f"  ({len(sweep.points)} points in {t_sweep:.1f} s)")
 
     out = {"config": cfg.source, "seed": design.seed,
            "table": [r.as_dict() for r in rows],
            "static_paper002_rate": {k: (v * scale if k in ("rms", "max_abs", "mean") else v) for k, v in st.items()},
            "attribution": [_attr_dict(a) for a in attrs.values()], "additivity_tolerance_db": ADDITIVITY_DB,
-           "theory_limit_db": THEORY_DB}
+           "theory_limit_db": THEORY_DB, "floor": [f.as_dict() for f in floors], "allan": allan.as_dict(),
+           "drive_sweep": sweep.as_dict(),
+           "null_means": "an infinite or undefined value (an exact port's SNR, a margin without a floor)"}
     status = 0
     result = None
     if target:
@@ -139,7 +209,7 @@ def run(args) -> int:
                          "port": target.port, "metric": args.metric, "measured": measured, "met": meets}
         if args.optimise:
             result = opt.optimise(cfg, target, args.metric, args.margin, progress=tqdm, cost_model=args.cost)
-            print(f"\n4. word-length search ({result.evaluations} evaluations, greedy min+b):")
+            print(f"\n6. word-length search ({result.evaluations} evaluations, greedy min+b):")
             for k in result.values:
                 mark = "" if result.values[k] == result.default_values[k] else "  *"
                 print(f"  {k:30s} {result.default_values[k]:3d} -> {result.values[k]:3d}{mark}")
@@ -174,13 +244,26 @@ def run(args) -> int:
             status = 1
 
     if args.report:
-        _report(Path(args.report), design, cfg, rows, attrs, st, target, result, args)
+        _report(Path(args.report), design, cfg, rows, attrs, st, target, result, args, floors, allan, sweep)
         print(f"\nreport written to {args.report}/budget.md")
-    out["seconds"] = time.time() - t0
-    if args.json:
-        Path(args.json).write_text(json.dumps(out, indent=1, default=_jsonable), encoding="utf-8")
+    if args.json:  # no wall-clock time in it: the same config and seed give the same bytes
+        Path(args.json).write_text(json.dumps(_finite(out), indent=1, default=_jsonable, allow_nan=False),
+                                   encoding="utf-8")
     print(f"\n({time.time() - t0:.1f} s)")
     return status
+
+
+def _finite(v):
+    """``v`` with every non-finite float replaced by None (strict JSON has no inf or nan)."""
+    if isinstance(v, dict):
+        return {k: _finite(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_finite(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return _finite(v.tolist())
+    if isinstance(v, (float, np.floating)):
+        return float(v) if math.isfinite(v) else None
+    return v
 
 
 def _jsonable(v):
@@ -193,7 +276,7 @@ def _jsonable(v):
     return str(v)
 
 
-def _report(out: Path, design, cfg, rows, attrs, st, target, result, args) -> None:
+def _report(out: Path, design, cfg, rows, attrs, st, target, result, args, floors, allan, sweep) -> None:
     from . import report as rp
 
     out.mkdir(parents=True, exist_ok=True)
@@ -209,6 +292,8 @@ def _report(out: Path, design, cfg, rows, attrs, st, target, result, args) -> No
                    out / "wordlength_chain_paper002.png",
                    "chain_paper002.rate: error vs word length, one knob at a time (others at default)")
     figs.append("wordlength_chain_paper002.png")
+    rp.plot_allan(allan, out / "allan_chain_paper002.png")
+    rp.plot_drive_sweep(sweep, out / "drive_sweep_chain_paper002.png")
     md = [f"# fxdsp error budget\n\nConfig `{cfg.source}`, seed {design.seed}.\n",
           "## 1. Bit-exact vs float reference\n\nFloat fed with the same stored inputs (ADC excluded), nominal "
           "stimulus of each block; physical units per port (rates deg/h, SF ppm, temperatures C, K0 Hz).\n",
@@ -221,13 +306,25 @@ def _report(out: Path, design, cfg, rows, attrs, st, target, result, args) -> No
     for a in attrs.values():
         md.append("```\n" + format_attribution(a) + "\n```\n")
     md.append("![attribution](attribution_chain_paper002.png)\n\n![attribution](attribution_chain_paper001.png)\n")
+    md.append("### Floor and margin\n\nThe floor of an output is the quantisation of the input ADCs carried to it "
+              "(power sum of the ADC sources above); margin = 20 log10(total / floor). A non-ADC source whose rms is "
+              "at least half the total (power within 6 dB of it) dominates the design error.\n")
+    md.append("```\n" + "\n".join(format_floor(f) for f in floors) + "\n```\n")
     md.append("## 3. Theory check\n\nEach rounding point's residue against q^2/12 and zero mean; each source's "
               "output contribution against the white uniform noise model pushed through the same chain (the gain "
               "after the stage).\n")
     for key in (("chain_paper002", "rate"), ("chain_paper001", "rate")):
         md.append("```\n" + format_theory(attrs[key]) + "\n```\n")
     md.append("![spectrum](spectrum_chain_paper002.png)\n")
-    md.append("## 4. Word length\n\n![sweep](wordlength_chain_paper002.png)\n")
+    md.append("## 4. Allan deviation\n\nOverlapping Allan deviation of the bit-exact minus float error (both fed "
+              "the same ADC codes) at constant temperature and rate.\n")
+    md.append("```\n" + format_allan(allan) + "\n```\n")
+    md.append("![allan](allan_chain_paper002.png)\n")
+    md.append("## 5. Drive-frequency sweep\n\nThe design rebuilt with demod.f_hz at each drive frequency the "
+              "temperature range produces; both the carrier and the NCO move.\n")
+    md.append("```\n" + format_sweep(sweep) + "\n```\n")
+    md.append("![drive sweep](drive_sweep_chain_paper002.png)\n")
+    md.append("## 6. Word length\n\n![sweep](wordlength_chain_paper002.png)\n")
     if result:
         md.append(f"Target {args.target} ({result.target.value:.4g} {result.target.unit}, {result.metric}): error "
                   f"{result.default_error:.4g} -> {result.error:.4g}; total bits {result.default_cost['total_bits']} -> "

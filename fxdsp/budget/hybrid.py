@@ -253,17 +253,16 @@ def divide_hybrid(block, x: np.ndarray, sf: np.ndarray, sw: Switch) -> np.ndarra
 
 
 def nco_hybrid(block, n: int, sw: Switch) -> np.ndarray:
-    """2 cos of the NCO phase (the I mixer's factor); sources demod.nco_phase (FTW and LUT address
-    truncation) and demod.nco_amp (LUT amplitude quantisation)."""
-    nco, dp = block.nco, block.datapath
+    """2 cos of the NCO phase (the I mixer's factor); sources demod.nco_phase (tuning word, bin
+    address and interpolation offset: the phase the NCO evaluates, with an exact table and an exact
+    first-order correction) and demod.nco_amp (table values and correction quantised)."""
+    nco = block.nco
+    phases = nco.phases(n)
     if "demod.nco_phase" in sw:
-        k = np.arange(n, dtype=np.int64)
-        phase = (dp.phase0 + k * dp.ftw) & dp.phase_mask
-        addr = phase >> dp.addr_shift
-        angle = 2 * np.pi * (addr + 0.5) / 2**dp.lut_bits
         if "demod.nco_amp" in sw:
-            return dp.cos.words[addr].astype(float) * nco.lut_format.lsb
-        return np.cos(angle)
+            return nco.wave(phases)[0].astype(float) * nco.nco_format.lsb
+        centre, delta = nco.bin_phase(phases)
+        return np.cos(centre) - np.sin(centre) * delta
     angle = nco.reference_phase(n, 0)
     if "demod.nco_amp" in sw:
         return nco.lut_quantize(np.cos(angle)).astype(float) * nco.lut_format.lsb
@@ -312,7 +311,7 @@ def sources_paper002(chain: Paper002Chain) -> list[Source]:
           Source("piecewise_sf.round", ROUND, "piecewise_sf", "sf", sf.out_format.lsb, sf.rules.rounding),
           Source("sf_divide.trunc", DIVIDER, "sf_divide", "v", div.out_format.lsb, div.rules.rounding,
                  "quotient toward zero, then the rescale"),
-          Source("demod.nco_phase", LUTNCO, "demod", "mix", note=f"{dem.nco.lut_bits}-bit LUT address"),
+          Source("demod.nco_phase", LUTNCO, "demod", "mix", note=f"{dem.nco.lut_bits}-bit address, {dem.nco.interp_bits}-bit interpolation"),
           Source("demod.nco_amp", LUTNCO, "demod", "mix", note=f"LUT values in {dem.nco.lut_format}")]
     if dem.datapath.mix_shift > 0:
         s.append(Source("demod.mix_round", ROUND, "demod", "mix", dem.data_format.lsb, dem.rules.rounding))

@@ -80,6 +80,7 @@ KNOBS = {
         Knob("sf_divide.out_format", (("sf_divide", "out_format"),)),
         Knob("demod.phase_bits", (("demod", "phase_bits"),), "int", 8, 48),
         Knob("demod.lut_bits", (("demod", "lut_bits"),), "int", 6, 16, instances="nco_index"),
+        Knob("demod.interp_bits", (("demod", "interp_bits"),), "int", 0, 20),
         Knob("demod.lut_format", (("demod", "lut_format"),), instances="nco_lut"),
         Knob("demod.data_format", (("demod", "data_format"),), instances=2),  # the low-passes follow (wired)
         Knob("demod.lpf.num_format", (("demod.lpf", "num_format"),), instances=6),
@@ -113,8 +114,8 @@ def _instances(knob: Knob, data: dict) -> tuple[int, bool]:
         return rule, False
     if rule == "rtd_lut":
         return 2 ** int(_get(data, ("rtd", "lut_index_bits"))) + 1, True
-    if rule == "nco_lut":
-        return 2 * 2 ** int(_get(data, ("demod", "lut_bits"))), True
+    if rule == "nco_lut":  # one quarter-wave sine table
+        return 2 ** (int(_get(data, ("demod", "lut_bits"))) - 2), True
     if rule.startswith("segments_"):
         sec = "piecewise." + rule.split("_", 1)[1]
         return len(_get(data, (sec, "coefficients"))), True

@@ -73,3 +73,46 @@ def plot_sweeps(sweeps: dict, unit: str, target: float | None, path: Path, title
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def plot_allan(allan, path: Path) -> None:
+    """Log-log Allan deviation with the bias-instability point and the 1 s value marked."""
+    fig, ax = plt.subplots(figsize=(8, 5.5))
+    ok = allan.adev > 0  # a zero deviation (exactly constant error) has no place on a log axis
+    ax.loglog(allan.taus[ok], allan.adev[ok], "o-", ms=3, lw=1.0, label="overlapping Allan deviation")
+    if allan.bi_adev > 0:
+        ax.loglog([allan.bi_tau], [allan.bi_adev], "rv", label=f"min {allan.bi_adev:.3g} {allan.unit} "
+                  f"(B = min/0.664 = {allan.flicker_floor:.3g})")
+    if allan.adev_1s > 0:
+        how = "measured" if allan.measured_1s else "extrapolated"
+        ax.loglog([1.0], [allan.adev_1s], "ks", label=f"tau 1 s ({how}): ARW {allan.arw:.3g} deg/sqrt(h)")
+    ax.set_xlabel("tau (s)")
+    ax.set_ylabel(f"Allan deviation ({allan.unit})")
+    ax.set_title(f"{allan.chain}.{allan.port}: fixed minus float error, {allan.temp_c:g} C, {allan.rate_fs:g} FS")
+    ax.legend(fontsize=7)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_drive_sweep(sweep, path: Path) -> None:
+    """rms and |mean| of the chain error (nominal and quasi-static) against the drive frequency."""
+    f = np.array([p.f_hz for p in sweep.points])
+    series = {"rms (nominal)": [p.rms for p in sweep.points], "|mean| (nominal)": [abs(p.mean) for p in sweep.points],
+              "rms (quasi-static)": [p.static_rms for p in sweep.points],
+              "|mean| (quasi-static)": [abs(p.static_mean) for p in sweep.points]}
+    fig, ax = plt.subplots(figsize=(8, 5))
+    for i, (name, v) in enumerate(series.items()):
+        ax.plot(f, v, marker="o", ms=3, lw=0.9, ls="-" if "rms" in name else "--", color=f"C{i}", label=name)
+    ax.axvline(sweep.f0, color="k", ls=":", lw=0.8, label=f"f0 {sweep.f0:g} Hz")
+    ax.set_yscale("log", nonpositive="mask")  # an exact zero (no error at all) is left out
+    ax.set_xlabel("drive frequency (Hz)")
+    ax.set_ylabel(f"error ({sweep.unit})")
+    ax.set_title(f"chain_paper002.rate vs drive frequency ({sweep.temp_range_c[0]:g}..{sweep.temp_range_c[1]:g} C, "
+                 f"a {sweep.a_ppm_per_c:g} ppm/C)")
+    ax.legend(fontsize=7)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

@@ -17,9 +17,10 @@ Units of the log -> fixed-point mapping (documented choices):
 
 Coefficient formats are chosen per power so the largest calibrated coefficient fits with one bit of
 headroom in a ``COEF_WL``-bit word (:func:`fit_format`); output and accumulator formats likewise from
-the range the table takes over -40..85 C; the accumulator is 43 bits (the widest whose Horner
-product with the 19-bit t = T - t0 fits 63 bits), because the top coefficient is converted into it
-and every product rounded to it.
+the range the table takes over -40..85 C; the accumulator is the widest whose Horner product with
+t = T - t0 (one bit wider than the default config's temperature word) fits 63 bits, because the top
+coefficient is converted into it and every product rounded to it. The output formats the chain wires
+onward (the bias tables') are the default config's, which sit below the rate word's LSB.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import numpy as np
 
 from fxdsp.chains import build
 from fxdsp.config import Config, default_config_text, dumps_value
+from fxdsp.fixed import Format
 
 FS_MV = 4096.0
 LOG_IN_FORMAT = "s24.23"
@@ -95,6 +97,18 @@ def _range(coefficients, breakpoints, t0_c: float) -> float:
     return float(np.abs(vals).max())
 
 
+def _default(table: str, key: str):
+    node = tomllib.loads(default_config_text())
+    for part in table.split("."):
+        node = node[part]
+    return node[key]
+
+
+def acc_width(temp_format: str) -> int:
+    """The widest accumulator whose product with t = T - t0 (temperature word + 1 bit) fits 63 bits."""
+    return 63 - (Format.parse(temp_format).wl + 1)
+
+
 def piecewise_table(coefficients, breakpoints=(), t0_c: float = 0.0, out_signed: bool = True,
                     out_wl: int = 24, acc_wl: int = 43, name: str = "piecewise") -> dict:
     """Keys of a ``[piecewise.*]`` table with formats chosen for these coefficients."""
@@ -137,13 +151,15 @@ def paper002_tables(cal: dict, order: int = 1) -> dict:
         raise ValueError(f"sf_nominal: must be > 0, got {sfn!r}")
     sf_coef = np.asarray(cal["sf"]["coefficients"], float) / sfn
     bias_coef = np.asarray(cal["bias"]["coefficients"], float) * sfn / FS_MV
-    sf = piecewise_table(sf_coef, cal["sf"]["breakpoints_c"], 0.0, out_signed=False, out_wl=18,
+    acc_wl = acc_width(_default("rtd", "temp_format"))
+    sf = piecewise_table(sf_coef, cal["sf"]["breakpoints_c"], 0.0, out_signed=False, out_wl=18, acc_wl=acc_wl,
                          name="piecewise.sf")
     # SF normalised to ~1 in u24.22 (0.24 ppm; the default's u18.16 is a 15 ppm step, i.e.
     # 0.003 deg/s at 200 deg/s); the divider's numerator is 24 + 22 + 10 guard bits = 56 bits
     sf["out_format"] = "u24.22"
-    bias = piecewise_table(bias_coef, cal["bias"]["breakpoints_c"], 0.0, out_wl=24, name="piecewise.bias")
-    bias["out_format"] = "s24.22"  # must equal the subtractor's bias input (chain wiring)
+    bias = piecewise_table(bias_coef, cal["bias"]["breakpoints_c"], 0.0, out_wl=24, acc_wl=acc_wl,
+                           name="piecewise.bias")
+    bias["out_format"] = _default("piecewise.bias", "out_format")  # finer than the rate word it is subtracted from
     # 1 FS of the quotient = FS_MV / sf_nominal deg/s: the config's own rate scale
     return {"piecewise.sf": sf, "piecewise.bias": bias, "sf_divide": {"in_format": LOG_IN_FORMAT},
             "system": {"rate_full_scale_dps": FS_MV / sfn}}
@@ -153,16 +169,18 @@ def paper001_tables(cal: dict) -> dict:
     q = [float(c) for c in cal["bias_poly"]]
     if len(q) == 2:
         q.append(0.0)
-    bias = piecewise_table([q], [], 0.0, out_wl=24, name="piecewise.bias001")
-    bias["out_format"] = "s24.6"  # the subtractor's in/out format: deg/h, LSB 0.0156 deg/h
+    bias = piecewise_table([q], [], 0.0, out_wl=24, acc_wl=acc_width(_default("freq2temp", "temp_format")),
+                           name="piecewise.bias001")
+    bias["out_format"] = _default("piecewise.bias001", "out_format")  # deg/h, finer than the rate input word
     return {"freq2temp": {"f0_hz": float(cal["f0_hz"]), "k_hz_per_c": float(cal["k_hz_per_c"])},
             "piecewise.bias001": bias}
 
 
 def paper000_tables(cal: dict) -> dict:
     t0 = float(cal.get("t_ref_c", 25.0))
-    return {"piecewise.k0": piecewise_table([cal["k0_poly"]], [], t0, name="piecewise.k0"),
-            "piecewise.k1": piecewise_table([cal["k1_poly"]], [], t0, name="piecewise.k1")}
+    acc_wl = acc_width(_default("piecewise", "qvba_temp_format"))
+    return {"piecewise.k0": piecewise_table([cal["k0_poly"]], [], t0, acc_wl=acc_wl, name="piecewise.k0"),
+            "piecewise.k1": piecewise_table([cal["k1_poly"]], [], t0, acc_wl=acc_wl, name="piecewise.k1")}
 
 
 def config_text(tables: dict, base_text: str | None = None, provenance: str = "") -> str:

@@ -31,8 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fxdsp.blocks.lag import Lag
-from fxdsp.fixed import Rules
+from fxdsp.chains import build
 from fxdsp.mechanisms import first_order_lag
 from fxdsp.repro.bitexact import Compensator002
 from fxdsp.repro.calconfig import config_from_text, config_text, lag_table, paper002_tables
@@ -117,7 +116,7 @@ def _method(cal_log, ver_log, ramp_log, order: int, thermo) -> dict:
         tau = identify_lag(cal_log["time_s"], cal_log["temp_c"], t_f)
         rate_hz = 1.0 / float(np.median(np.diff(cal_log["time_s"])))
         # calibrate on what the lag block will compute (its float reference), compensate bit-exactly
-        lag = Lag(Compensator002(None).rtd.temp_format, tau, rate_hz, 16, 24, Rules("half_up", "saturate"))
+        lag = build(config_from_text(config_text(lag_table(tau, rate_hz)))).blocks["lag"]  # the config's lag
         cal = calibrate002(cal_log, order, temp=lag.reference(temp=cal_log["temp_c"])["te"])
         comp = Compensator002(config_from_text(config_text({**paper002_tables(cal), **lag_table(tau, rate_hz)})))
         run = comp.compensate_lagged

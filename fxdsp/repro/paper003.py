@@ -63,7 +63,8 @@ def measure(freqs_hz, gyro=PAPER002_GYRO, seed: int = 1, phase_noise_rad: float 
     filtered, raw, averaged = [], [], []
     log = OverflowLog()
     for f, s in tqdm(list(zip(freqs, truth)), disable=not progress, desc="sweep", leave=False):
-        nco = Nco(fs, float(f), base.nco.phase_bits, base.nco.lut_bits, base.nco.lut_format)
+        nco = Nco(fs, float(f), base.nco.phase_bits, base.nco.lut_bits, base.nco.lut_format,
+                  interp_bits=base.nco.interp_bits, rules=base.nco.rules)
         dem = Demod(nco, fmt, base.data_format, base.lpf_i, base.lpf_q, base.angle_format, base.iterations, base.rules)
         ph = nco.reference_phase(n)
         chans = {}

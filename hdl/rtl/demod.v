@@ -1,5 +1,6 @@
-// demod: synchronous demodulator (fxdsp.blocks.demod): nco, two mixers, two iir low-pass
-// filters, CORDIC vectoring for amplitude and phase.
+// demod: synchronous demodulator (fxdsp.blocks.demod): nco (quarter-wave table with first-order
+// interpolation, NCO_W-bit cos / -sin), two mixers, two iir low-pass filters, CORDIC vectoring
+// for amplitude and phase.
 //   mixers: i = fit(round(x * cos >> MIX_SHIFT)), q = fit(round(x * msin >> MIX_SHIFT)) into
 //     DATA_W bits (the factor 2 is in MIX_SHIFT: the product read one fraction bit coarser);
 //   low-pass: iir with the LPF_* parameters, one per channel;
@@ -16,10 +17,15 @@
 module demod #(
     parameter integer IN_W          = 24,
     parameter integer DATA_W        = 24,
-    parameter integer PHASE_BITS    = 32,
+    parameter integer PHASE_BITS    = 40,
     parameter integer LUT_BITS      = 12,
-    parameter integer LUT_W         = 16,
-    parameter [63:0]  FTW           = 64'd357913941,
+    parameter integer LUT_W         = 22,
+    parameter integer INTERP_BITS   = 12,
+    parameter [63:0]  TWO_PI        = 64'd6588397,
+    parameter integer TWO_PI_W      = 24,
+    parameter integer CORR_SHIFT    = 45,
+    parameter integer NCO_W         = 23,
+    parameter [63:0]  FTW           = 64'd91625968981,
     parameter [63:0]  PHASE0        = 64'd0,
     parameter integer MIX_SHIFT     = 14,
     parameter integer ROUNDING      = 1,
@@ -38,8 +44,7 @@ module demod #(
     parameter [63:0]  INV_K         = 64'd79594,
     parameter integer INV_K_W       = 18,
     parameter integer AMP_SHIFT     = 17,
-    parameter         COS_FILE      = "demod_cos.hex",
-    parameter         MSIN_FILE     = "demod_msin.hex",
+    parameter         QSIN_FILE     = "demod_qsin.hex",
     parameter         LPF_COEF_FILE = "demod_lpf_coef.hex",
     parameter         ATAN_FILE     = "demod_atan.hex"
 ) (
@@ -54,15 +59,16 @@ module demod #(
     output reg  [ANGLE_W-1:0]        phase,
     output reg  [2*LPF_SECTIONS+2:0] ovf
 );
-    localparam integer MW = IN_W + LUT_W;
+    localparam integer MW = IN_W + NCO_W;
     localparam integer WW = DATA_W + 3;        // CORDIC work: DATA_W + 2 guard bits, + 1 spare
     localparam integer AW = ANGLE_W + 2;       // angle accumulator, never overflows the port
     localparam integer PW = WW + INV_K_W;
 
     // ---- NCO and mixers ----
-    wire [LUT_W-1:0] cos_w, msin_w;
-    nco #(.PHASE_BITS(PHASE_BITS), .LUT_BITS(LUT_BITS), .LUT_W(LUT_W), .FTW(FTW), .PHASE0(PHASE0),
-          .COS_FILE(COS_FILE), .MSIN_FILE(MSIN_FILE)) u_nco
+    wire [NCO_W-1:0] cos_w, msin_w;
+    nco #(.PHASE_BITS(PHASE_BITS), .LUT_BITS(LUT_BITS), .LUT_W(LUT_W), .INTERP_BITS(INTERP_BITS),
+          .TWO_PI(TWO_PI), .TWO_PI_W(TWO_PI_W), .CORR_SHIFT(CORR_SHIFT), .NCO_W(NCO_W), .FTW(FTW),
+          .PHASE0(PHASE0), .ROUNDING(ROUNDING), .QSIN_FILE(QSIN_FILE)) u_nco
         (.clk(clk), .rst(rst), .step(in_valid), .cos_o(cos_w), .msin_o(msin_w));
 
     wire signed [MW-1:0] pi_ = $signed(x) * $signed(cos_w);

@@ -1,43 +1,99 @@
 // nco: numerically controlled oscillator of the demodulator (fxdsp.blocks.demod.Nco).
-// phase[n] = (PHASE0 + n FTW) mod 2**PHASE_BITS; the LUT address is the top LUT_BITS bits of the
-// phase (truncation); cos / -sin at the bin centres (COS_FILE, MSIN_FILE: 2**LUT_BITS words of
-// LUT_W bits, quantised half_up / saturate by the generator). cos/msin show the current phase
-// (combinational); the phase advances by FTW on each `step`; rst returns it to PHASE0.
-// FTW, PHASE0: 64-bit constants, low PHASE_BITS bits used. Latency: combinational read.
+// phase[n] = (PHASE0 + n FTW) mod 2**PHASE_BITS. The top LUT_BITS phase bits are the bin: the
+// quadrant (2 bits) and the index k of a quarter-wave sine table (QSIN_FILE: 2**(LUT_BITS-2) words
+// of LUT_W bits, sin at the bin centres, quantised half_up / saturate by the generator). cos and -sin
+// of the bin centre are +-qsin[k], +-qsin[~k] by quadrant (cb, mb). First-order interpolation
+// removes the phase-truncation error: the next INTERP_BITS phase bits r give the sub-bin centre
+// delta = 2 r + 1 - 2**INTERP_BITS, d = delta * TWO_PI (2 pi, TWO_PI_W bits), and
+//   cos_o  = cb + R(mb * d),   msin_o = mb + R(-cb * d),   R = >> CORR_SHIFT rounded by ROUNDING
+// (d cos = -sin d phase, d(-sin) = -cos d phase). The outputs are NCO_W = LUT_W + 1 bits, which
+// the model proves they never exceed: no fit point. INTERP_BITS = 0: the plain truncating table.
+// cos_o / msin_o show the current phase (combinational); the phase advances by FTW on each `step`;
+// rst returns it to PHASE0. FTW, PHASE0, TWO_PI: 64-bit constants. Latency: combinational read.
 `default_nettype none
 
 module nco #(
-    parameter integer PHASE_BITS = 32,
-    parameter integer LUT_BITS   = 12,
-    parameter integer LUT_W      = 16,
-    parameter [63:0]  FTW        = 64'd357913941,
-    parameter [63:0]  PHASE0     = 64'd0,
-    parameter         COS_FILE   = "demod_cos.hex",
-    parameter         MSIN_FILE  = "demod_msin.hex"
+    parameter integer PHASE_BITS  = 40,   // phase accumulator (turns * 2**PHASE_BITS)
+    parameter integer LUT_BITS    = 12,   // bins per turn = 2**LUT_BITS (2 quadrant bits + index)
+    parameter integer LUT_W       = 22,   // quarter-table word
+    parameter integer INTERP_BITS = 12,   // phase bits below the bin that drive the interpolation
+    parameter [63:0]  TWO_PI      = 64'd6588397,
+    parameter integer TWO_PI_W    = 24,
+    parameter integer CORR_SHIFT  = 45,   // qsin * delta * TWO_PI -> table LSBs
+    parameter integer NCO_W       = 23,   // output word: LUT_W + 1
+    parameter [63:0]  FTW         = 64'd91625968981,
+    parameter [63:0]  PHASE0      = 64'd0,
+    parameter integer ROUNDING    = 1,    // of the correction: 0 floor, 1 half_up, 2 half_even, 3 toward_zero
+    parameter         QSIN_FILE   = "demod_qsin.hex"
 ) (
     input  wire             clk,
     input  wire             rst,
     input  wire             step,
-    output wire [LUT_W-1:0] cos_o,
-    output wire [LUT_W-1:0] msin_o
+    output wire [NCO_W-1:0] cos_o,
+    output wire [NCO_W-1:0] msin_o
 );
+    localparam integer QBITS = LUT_BITS - 2;
     localparam [PHASE_BITS-1:0] FTW_C    = FTW[PHASE_BITS-1:0];
     localparam [PHASE_BITS-1:0] PHASE0_C = PHASE0[PHASE_BITS-1:0];
+    localparam [TWO_PI_W-1:0]   TWO_PI_C = TWO_PI[TWO_PI_W-1:0];
+    localparam integer DLW = INTERP_BITS + 2;           // delta: odd, |delta| < 2**INTERP_BITS
+    localparam integer DW  = DLW + TWO_PI_W + 1;        // d = delta * TWO_PI (TWO_PI > 0)
+    localparam integer PW  = NCO_W + DW;                // correction product
+    localparam integer CW  = PW - CORR_SHIFT + 1;       // rounded correction
+    localparam integer SW  = ((CW > NCO_W) ? CW : NCO_W) + 1;
 
-    reg [LUT_W-1:0] cos_lut  [0:(1<<LUT_BITS)-1];
-    reg [LUT_W-1:0] msin_lut [0:(1<<LUT_BITS)-1];
-    initial $readmemh(COS_FILE, cos_lut);
-    initial $readmemh(MSIN_FILE, msin_lut);
+    reg [LUT_W-1:0] qsin [0:(1<<QBITS)-1];
+    initial $readmemh(QSIN_FILE, qsin);
 
     reg [PHASE_BITS-1:0] phase;
-    wire [LUT_BITS-1:0] addr = phase[PHASE_BITS-1 -: LUT_BITS];
-    assign cos_o  = cos_lut[addr];
-    assign msin_o = msin_lut[addr];
-
     always @(posedge clk) begin
         if (rst) phase <= PHASE0_C;
         else if (step) phase <= phase + FTW_C;
     end
+
+    // ---- bin centre: quadrant symmetry of the quarter table ----
+    wire [1:0]       quad = phase[PHASE_BITS-1 -: 2];
+    wire [QBITS-1:0] k    = phase[PHASE_BITS-3 -: QBITS];
+    wire [LUT_W-1:0] s_k  = qsin[k];
+    wire [LUT_W-1:0] s_r  = qsin[~k];
+    wire signed [NCO_W-1:0] sk = {s_k[LUT_W-1], s_k};
+    wire signed [NCO_W-1:0] sr = {s_r[LUT_W-1], s_r};
+    // cb: |sr| in even quadrants, |sk| in odd ones, negative in quadrants 1, 2;
+    // mb: |sk| in even quadrants, |sr| in odd ones, negative in quadrants 0, 1
+    wire signed [NCO_W-1:0] ca = quad[0] ? sk : sr;
+    wire signed [NCO_W-1:0] ma = quad[0] ? sr : sk;
+    wire signed [NCO_W-1:0] cb = (quad[1] ^ quad[0]) ? -ca : ca;
+    wire signed [NCO_W-1:0] mb = quad[1] ? ma : -ma;
+
+    // ---- first-order correction from the sub-bin offset ----
+    wire signed [DLW-1:0] delta;
+    generate
+        if (INTERP_BITS > 0) begin : g_interp
+            wire [INTERP_BITS-1:0] r = phase[PHASE_BITS-LUT_BITS-1 -: INTERP_BITS];
+            // 2 r + 1 - 2**INTERP_BITS: r with a 1 appended is 2 r + 1; inverting its top bit
+            // subtracts 2**INTERP_BITS when the word is read as signed
+            wire [INTERP_BITS:0] odd = {r, 1'b1};
+            wire signed [INTERP_BITS:0] centred = {~odd[INTERP_BITS], odd[INTERP_BITS-1:0]};
+            assign delta = {{(DLW-INTERP_BITS-1){centred[INTERP_BITS]}}, centred};
+        end else begin : g_plain
+            assign delta = {DLW{1'b0}};
+        end
+    endgenerate
+    wire signed [TWO_PI_W:0] twopi = {1'b0, TWO_PI_C};
+    wire signed [DW-1:0] d  = delta * twopi;
+    wire signed [PW-1:0] pc = mb * d;
+    wire signed [NCO_W-1:0] ncb = -cb;                 // cb >= -max: fits
+    wire signed [PW-1:0] pm = ncb * d;
+    wire signed [CW-1:0] rc, rm;
+    fx_round #(.IN_W(PW), .SHIFT(CORR_SHIFT), .ROUNDING(ROUNDING), .OUT_W(CW)) u_rc (.x(pc), .y(rc));
+    fx_round #(.IN_W(PW), .SHIFT(CORR_SHIFT), .ROUNDING(ROUNDING), .OUT_W(CW)) u_rm (.x(pm), .y(rm));
+
+    /* verilator lint_off UNUSEDSIGNAL */  // the top bit of the sums: the model proves it is a sign copy
+    wire signed [SW-1:0] c_sum = {{(SW-NCO_W){cb[NCO_W-1]}}, cb} + {{(SW-CW){rc[CW-1]}}, rc};
+    wire signed [SW-1:0] m_sum = {{(SW-NCO_W){mb[NCO_W-1]}}, mb} + {{(SW-CW){rm[CW-1]}}, rm};
+    /* verilator lint_on UNUSEDSIGNAL */
+    assign cos_o  = c_sum[NCO_W-1:0];
+    assign msin_o = m_sum[NCO_W-1:0];
 endmodule
 
 `default_nettype wire

@@ -30,7 +30,7 @@ class MutantBroken(RuntimeError):
     """A mutant (or the unmutated copy) that does not compile: the mutation list is wrong."""
 
 HALF_EVEN = {"bias_subtract": {"out_format": "s23.21", "rounding": "half_even"},
-             "iir": {"data_format": "s23.21", "num_format": "s24.32"}}
+             "iir": {"data_format": "s23.21", "num_format": "s24.32", "den_format": "s28.26"}}
 # SF(T) with steps at the breakpoints: the default calibration is continuous there, so the
 # segment rule (a breakpoint belongs to the upper segment) is invisible in the committed vectors
 DISCONTINUOUS = {"piecewise": {"sf": {"coefficients": [[0.99, 2.1e-4], [1.0, 2.7e-4], [0.98, 3.3e-4],
@@ -38,7 +38,10 @@ DISCONTINUOUS = {"piecewise": {"sf": {"coefficients": [[0.99, 2.1e-4], [1.0, 2.7
 # lag with 2 guard bits and a fast alpha: the rounding of each state step shows in the output
 LAG_FEW_GUARD = {"lag": {"tau_s": 0.4, "alpha_bits": 8, "state_guard_bits": 2}}
 TOWARD_ZERO = {"bias_subtract": {"out_format": "s23.21", "rounding": "toward_zero"},
-               "iir": {"data_format": "s23.21", "num_format": "s24.32"}}
+               "iir": {"data_format": "s23.21", "num_format": "s24.32", "den_format": "s28.26"}}
+# a drive frequency off any simple ratio of fs, with a phase offset: the NCO visits every bin and
+# sub-bin offset (at the default f/fs = 1/12 the golden vectors see only 12 phases)
+NCO_GENERIC = {"demod": {"f_hz": 7993.1234, "phase_offset_turns": 0.3}}
 
 
 @dataclass
@@ -81,6 +84,18 @@ MUTATIONS = [
              ((None, "iir", True),)),
     Mutation("nco_free_running", "nco.v", "else if (step) phase <= phase + FTW_C;", "else phase <= phase + FTW_C;",
              "NCO phase advances without in_valid", ((None, "demod", True),)),
+    Mutation("nco_no_interpolation", "nco.v", "assign cos_o  = c_sum[NCO_W-1:0];", "assign cos_o  = cb;",
+             "NCO cos without its first-order correction: the old phase-truncating table",
+             ((None, "demod", False),)),
+    Mutation("nco_quadrant_sign", "nco.v", "wire signed [NCO_W-1:0] mb = quad[1] ? ma : -ma;",
+             "wire signed [NCO_W-1:0] mb = quad[1] ? -ma : ma;", "NCO -sin with the quadrant sign inverted",
+             ((None, "demod", False),)),
+    Mutation("nco_offset_not_centred", "nco.v", "wire [INTERP_BITS:0] odd = {r, 1'b1};",
+             "wire [INTERP_BITS:0] odd = {r, 1'b0};", "NCO sub-bin offset truncated instead of centred (a bias)",
+             ((None, "demod", False), (NCO_GENERIC, "demod", False))),
+    Mutation("nco_correction_floor", "nco.v", ".ROUNDING(ROUNDING), .OUT_W(CW)) u_rm",
+             ".ROUNDING(0), .OUT_W(CW)) u_rm", "NCO -sin correction rounded by floor, not the configured rule",
+             ((None, "demod", False),)),
     Mutation("cordic_logical_shift", "demod.v", "tx = cx - (cy >>> j);", "tx = cx - (cy >> j);",
              "CORDIC arithmetic shift -> logical", ((None, "demod", False),)),
     Mutation("divider_strict_compare", "sf_divide.v", "if (!t_v[DW+1]) begin", "if (!t_v[DW+1] && t_v[DW:0] != 0) begin",

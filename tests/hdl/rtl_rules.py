@@ -42,7 +42,11 @@ ALLOWED: dict[tuple[str, str, str], tuple[int, str]] = {
     ("demod", "right-shift", "cy>>>j"): (2, "CORDIC micro-rotation: floor shift by definition (blocks.demod.cordic_vector)"),
     ("demod", "right-shift", "cx>>>j"): (2, "CORDIC micro-rotation: floor shift by definition (blocks.demod.cordic_vector)"),
     ("demod", "select", "atan_flat[ANGLE_W*j+:ANGLE_W]"): (1, "field of the flat arctan table, not a value"),
-    ("nco", "select", "phase[PHASE_BITS-1-:LUT_BITS]"): (1, "LUT address = top phase bits (model: phase >> (P - L))"),
+    ("nco", "select", "phase[PHASE_BITS-1-:2]"): (1, "quadrant = top two phase bits (model: Nco bin, a >> (L - 2))"),
+    ("nco", "select", "phase[PHASE_BITS-3-:QBITS]"): (1, "quarter-table index = the next L - 2 phase bits (model: a & qmask)"),
+    ("nco", "select", "phase[PHASE_BITS-LUT_BITS-1-:INTERP_BITS]"): (
+        1, "interpolation offset = the interp_bits below the bin; the bits below are the residual phase error "
+           "(model: _nco_wave r)"),
     ("rtd", "select", "u[ADC_W-1:S]"): (1, "LUT index; the low bits are kept as the interpolation fraction"),
     ("sf_divide", "constant", "{1'b0,{(OUT_W-1){1'b1}}}"): (1, "x / 0 result: positive full scale (a value, never added)"),
     ("sf_divide", "constant", "{1'b1,{(OUT_W-1){1'b0}}}"): (1, "x / 0 result: negative full scale (a value, never added)"),

@@ -16,7 +16,7 @@ _NARROW = {
     "rtd": {"temp_format": "s14.7"},                        # +-64 C: the LUT range saturates
     "freq2temp": {"temp_format": "s12.5"},                  # +-64 C
     "bias_subtract": {"out_format": "s23.21"},              # one fraction bit dropped: ties
-    "iir": {"data_format": "s23.21", "num_format": "s24.32"},
+    "iir": {"data_format": "s23.21", "num_format": "s24.32", "den_format": "s28.26"},
     "bias_subtract001": {"out_format": "s24.5"},
     "sf_divide": {"out_format": "s22.20"},
     "lag": {"tau_s": 0.4, "alpha_bits": 8, "state_guard_bits": 2},   # alpha 0.22, ties every few steps

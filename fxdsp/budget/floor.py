@@ -1,0 +1,321 @@
+"""How far the design is from what its input ADCs allow, how its error behaves over averaging
+time, and how it moves with the drive frequency.
+
+* Floor and margin: the floor of an output is the quantisation of the input ADCs carried to it,
+  the power sum of the one-source errors of the ``ADC quantisation`` sources of the attribution.
+  The margin is 20 log10(total / floor); a design within ``WITHIN_DB`` of its floor spends its bits
+  well. A non-ADC source whose rms is at least half the total (its power within 6 dB of the total
+  power) dominates the design error and is named.
+* Allan deviation of the fixed-minus-float error of chain_paper002.rate at constant temperature
+  and rate (``allantools.oadev``, octave-spaced averaging factors): bias instability (minimum of
+  the curve) and the angle random walk the fixed-point design adds (adev at tau = 1 s / 60).
+* Drive-frequency sweep: the demodulator reference tracks the drive loop, whose frequency moves
+  with temperature, w(T) = w0 [1 - a (T - T0) / 2]; the chain error is measured at drive
+  frequencies across the band that the sensor's temperature range produces.
+
+Everything returns data; ``fxdsp budget`` (cli.py) prints it.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass, field
+
+import allantools
+import numpy as np
+import scipy.signal as sps
+
+from ..chains import Design, build
+from ..config import Config
+from .attribution import Attribution
+from .hybrid import ADC
+from .static import static_error
+from .table import budget_rows
+
+WITHIN_DB = 3.0          # "within 3 dB of its floor"
+DOMINANT_FACTOR = 0.5    # rms >= total / 2: power within 20 log10(2) = 6.02 dB of the total power
+
+FLICKER_FACTOR = 0.664   # IEEE 952: on the flicker floor sigma(tau) = 0.664 B, so B = min(adev) / 0.664
+ALLAN_SAMPLES = 2**20    # 10.9 s at 96 kHz: tau = 1 s is measured, with 10 intervals, not extrapolated
+ALLAN_TEMP_C = 25.0      # at T0 of the drive-frequency law
+ALLAN_RATE_FS = 0.1      # a constant rate, a tenth of full scale
+MIN_INTERVALS = 4        # a tau needs at least 4 intervals of the record for a usable estimate
+SETTLE_TOL = 1e-6        # the filters have settled when their step response is this close to its end
+WHITE_SLOPE = (-0.75, -0.25)   # local log-log slope accepted as the tau^-1/2 (white noise) part
+
+SILICON_PPM_PER_C = 60.0       # a of silicon: w(T) = w0 [1 - a (T - T0) / 2]
+T0_C = 25.0
+TEMP_RANGE_C = (-40.0, 85.0)
+SWEEP_POINTS = 21
+
+
+# ----------------------------------------------------------------------------------------------
+# Floor and margin
+# ----------------------------------------------------------------------------------------------
+@dataclass
+class Floor:
+    chain: str
+    port: str
+    unit: str
+    floor: float                 # rms of the power sum of the ADC sources (0: no ADC reaches the output)
+    total: float                 # total rms of the attribution (bit-exact vs float on the analog inputs)
+    adc_sources: list[str]
+    dominant: list[tuple[str, float]]   # (name, rms) of the non-ADC sources with rms >= total / 2
+
+    @property
+    def margin_db(self) -> float | None:
+        """20 log10(total / floor); None when either is 0 (no ADC, or no error: no ratio)."""
+        if self.floor <= 0 or self.total <= 0:
+            return None
+        return 20 * math.log10(self.total / self.floor)
+
+    @property
+    def within(self) -> bool | None:
+        m = self.margin_db
+        return None if m is None else m <= WITHIN_DB
+
+    def as_dict(self) -> dict:
+        return {"chain": self.chain, "port": self.port, "unit": self.unit, "floor": self.floor,
+                "total": self.total, "margin_db": self.margin_db, "within_db": WITHIN_DB,
+                "within": self.within, "adc_sources": self.adc_sources,
+                "dominant_factor": DOMINANT_FACTOR,
+                "dominant": [{"name": n, "rms": r} for n, r in self.dominant]}
+
+
+def floor_of(att: Attribution) -> Floor:
+    """Floor, total and dominant sources of one attributed output."""
+    adc = [s for s in att.sources if s.source.category == ADC]
+    floor = math.sqrt(sum(s.rms**2 for s in adc))
+    # a source at 0 never dominates, even when the total is 0 too
+    dominant = [(s.source.name, s.rms) for s in sorted(att.sources, key=lambda s: -s.rms)
+                if s.source.category != ADC and s.rms > 0 and s.rms >= DOMINANT_FACTOR * att.total_rms]
+    return Floor(att.chain, att.port, att.unit, floor, att.total_rms, [s.source.name for s in adc], dominant)
+
+
+# ----------------------------------------------------------------------------------------------
+# Allan deviation
+# ----------------------------------------------------------------------------------------------
+@dataclass
+class Allan:
+    chain: str
+    port: str
+    unit: str
+    fs: float
+    samples: int                 # measured samples (after the settling)
+    settle: int                  # samples discarded first
+    temp_c: float
+    rate_fs: float
+    taus: np.ndarray             # s
+    adev: np.ndarray             # unit
+    intervals: np.ndarray        # number of averages allantools used per tau
+    bi_adev: float               # minimum of the curve
+    bi_tau: float
+    adev_1s: float               # measured at tau = 1 s, or extrapolated (see fit_taus)
+    fit_taus: list[float] = field(default_factory=list)   # empty: measured; else the tau^-1/2 points used
+    error: np.ndarray | None = None   # the error signal (unit), not exported
+
+    @property
+    def measured_1s(self) -> bool:
+        return not self.fit_taus
+
+    @property
+    def bi_at_longest_tau(self) -> bool:
+        """The minimum sits at the end of the curve: still falling, so only an upper bound."""
+        return bool(self.taus.size) and self.bi_tau == float(self.taus[-1])
+
+    @property
+    def flicker_floor(self) -> float:
+        return self.bi_adev / FLICKER_FACTOR
+
+    @property
+    def arw(self) -> float:
+        """deg/sqrt(h): sigma(1 s) in deg/h times sqrt(1 s in h) = sigma / 60."""
+        return self.adev_1s / 60.0
+
+    def as_dict(self) -> dict:
+        return {"chain": self.chain, "port": self.port, "unit": self.unit, "fs_hz": self.fs, "samples": self.samples,
+                "settle_samples": self.settle, "temp_c": self.temp_c, "rate_fs": self.rate_fs,
+                "curve": [{"tau_s": float(t), "adev": float(a), "intervals": float(n)}
+                          for t, a, n in zip(self.taus, self.adev, self.intervals)],
+                "bias_instability": {"min_adev": self.bi_adev, "tau_s": self.bi_tau,
+                                     "at_longest_tau": self.bi_at_longest_tau,
+                                     "flicker_floor": self.flicker_floor, "flicker_factor": FLICKER_FACTOR},
+                "arw": {"adev_1s": self.adev_1s, "measured": self.measured_1s, "fit_taus_s": self.fit_taus,
+                        "deg_per_sqrt_h": self.arw}}
+
+
+def settling_samples(chain, tol: float = SETTLE_TOL) -> int:
+    """Samples until the step response of the chain's float low-passes (demodulator, then output)
+    stays within ``tol`` of its final value: the start-up transient is not part of the noise."""
+    if not 0 < tol < 1:
+        raise ValueError(f"tol: must be within (0, 1), got {tol}")
+    sos = np.vstack([chain.demod.lpf_i.sos, chain.lpf.sos])
+    n = 4096
+    while True:
+        step = sps.sosfilt(sos, np.ones(n))
+        final = step[-1]
+        off = np.nonzero(np.abs(step - final) > tol * abs(final))[0]
+        last = int(off[-1]) + 1 if off.size else 0
+        if last < n // 2 or n >= 2**22:  # the tail is long enough to trust the final value
+            return last
+        n *= 2
+
+
+def octave_taus(samples: int, fs: float) -> np.ndarray:
+    """tau = m / fs for m = 1, 2, 4, ... while the record holds MIN_INTERVALS of them."""
+    m = 2 ** np.arange(int(math.log2(max(samples // MIN_INTERVALS, 1))) + 1)
+    return m / fs
+
+
+def white_fit(taus: np.ndarray, adev: np.ndarray) -> tuple[float, list[float]]:
+    """adev at 1 s extrapolated along tau^-1/2 from the white-noise part of the curve nearest to
+    1 s (the longest-tau run of points whose local slope is -1/2 +- 1/4): a filtered error is white
+    only beyond the filter's correlation time, so the shortest taus can understate it. Returns
+    (N = adev(tau) sqrt(tau) averaged in log over the run, the taus used)."""
+    ok = adev > 0
+    t, a = taus[ok], adev[ok]
+    if t.size == 0:
+        return 0.0, []
+    if t.size == 1:
+        return float(a[0] * math.sqrt(t[0])), [float(t[0])]
+    slope = np.diff(np.log(a)) / np.diff(np.log(t))
+    white = (slope >= WHITE_SLOPE[0]) & (slope <= WHITE_SLOPE[1])
+    if not white.any():  # no white part: assume it starts at the last point (stated by fit_taus)
+        return float(a[-1] * math.sqrt(t[-1])), [float(t[-1])]
+    end = int(np.nonzero(white)[0][-1])
+    start = end
+    while start > 0 and white[start - 1]:
+        start -= 1
+    idx = np.arange(start, end + 2)
+    n = float(np.exp(np.mean(np.log(a[idx] * np.sqrt(t[idx])))))
+    return n, [float(x) for x in t[idx]]
+
+
+def allan_figures(error: np.ndarray, fs: float) -> dict:
+    """Octave-spaced Allan curve of ``error`` (rate samples at ``fs``), its minimum, and adev at
+    tau = 1 s (measured if the record holds MIN_INTERVALS seconds, else extrapolated)."""
+    e = np.asarray(error, dtype=float)
+    if fs <= 0:
+        raise ValueError(f"fs: must be > 0, got {fs}")
+    if e.size < 2 * MIN_INTERVALS:
+        raise ValueError(f"error: need at least {2 * MIN_INTERVALS} samples, got {e.size}")
+    taus, adev, _, ns = allantools.oadev(e, rate=fs, data_type="freq", taus=octave_taus(e.size, fs))
+    taus, adev, ns = np.asarray(taus, float), np.asarray(adev, float), np.asarray(ns, float)
+    k = int(np.argmin(adev))
+    m1 = round(fs)  # averaging factor of tau = 1 s
+    if e.size >= MIN_INTERVALS * m1:
+        _, a1, _, _ = allantools.oadev(e, rate=fs, data_type="freq", taus=[m1 / fs])
+        adev_1s, fit = float(a1[0]), []
+    else:
+        adev_1s, fit = white_fit(taus, adev)
+    return {"taus": taus, "adev": adev, "intervals": ns, "bi_adev": float(adev[k]), "bi_tau": float(taus[k]),
+            "adev_1s": adev_1s, "fit_taus": fit}
+
+
+def allan_error(design: Design, samples: int = ALLAN_SAMPLES, temp_c: float = ALLAN_TEMP_C,
+                rate_fs: float = ALLAN_RATE_FS, seed_offset: int = 3000) -> tuple[np.ndarray, int]:
+    """chain_paper002.rate bit-exact minus float (both on the same ADC codes), deg/h, at a constant
+    temperature and rate with the nominal stimulus' quadrature and sensor noise (the noise dithers
+    the ADCs as in a real sensor), after the filters' settling. Returns (error, settle)."""
+    if samples < 2 * MIN_INTERVALS:
+        raise ValueError(f"samples: need at least {2 * MIN_INTERVALS}, got {samples}")
+    chain = design.chains["chain_paper002"]
+    settle = settling_samples(chain)
+    n = samples + settle
+    rng = np.random.default_rng([design.seed, seed_offset])
+    stim = chain.sensor_inputs(np.full(n, float(temp_c)), np.full(n, float(rate_fs)), quad_fs=0.05, rng=rng,
+                               noise_fs=1e-3)
+    got = chain.real_outputs(chain.run(**stim))["rate"]
+    ref = chain.run_float(**stim)["rate"]
+    return (got - ref)[settle:] * design.rate_full_scale_dps * 3600.0, settle
+
+
+def allan_chain_paper002(design: Design, samples: int = ALLAN_SAMPLES, temp_c: float = ALLAN_TEMP_C,
+                         rate_fs: float = ALLAN_RATE_FS) -> Allan:
+    err, settle = allan_error(design, samples, temp_c, rate_fs)
+    f = allan_figures(err, design.fs_hz)
+    return Allan("chain_paper002", "rate", "deg/h", design.fs_hz, int(err.size), settle, float(temp_c),
+                 float(rate_fs), f["taus"], f["adev"], f["intervals"], f["bi_adev"], f["bi_tau"], f["adev_1s"],
+                 f["fit_taus"], err)
+
+
+# ----------------------------------------------------------------------------------------------
+# Drive-frequency sweep
+# ----------------------------------------------------------------------------------------------
+@dataclass
+class DrivePoint:
+    f_hz: float
+    rms: float           # section 1's chain row (nominal stimulus, float on the same codes), deg/h
+    mean: float
+    static_rms: float    # quasi-static chamber points (static.py), deg/h
+    static_mean: float
+    overflows: int       # nominal + quasi-static
+
+    def as_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+@dataclass
+class DriveSweep:
+    f0: float
+    a_ppm_per_c: float
+    t0_c: float
+    temp_range_c: tuple[float, float]
+    band: tuple[float, float]
+    points: list[DrivePoint]
+    unit: str = "deg/h"
+
+    def worst(self, attr: str) -> DrivePoint:
+        """The point of the largest |attr| over the band."""
+        return max(self.points, key=lambda p: abs(getattr(p, attr)))
+
+    def as_dict(self) -> dict:
+        worst = {k: {"f_hz": self.worst(k).f_hz, "value": abs(getattr(self.worst(k), k))}
+                 for k in ("rms", "mean", "static_rms", "static_mean")}
+        return {"chain": "chain_paper002", "port": "rate", "unit": self.unit, "f0_hz": self.f0,
+                "a_ppm_per_c": self.a_ppm_per_c, "t0_c": self.t0_c, "temp_range_c": list(self.temp_range_c),
+                "band_hz": list(self.band), "points": [p.as_dict() for p in self.points], "worst_abs": worst}
+
+
+def drive_band(f0: float, a_ppm_per_c: float = SILICON_PPM_PER_C, t0_c: float = T0_C,
+               temp_range_c: tuple[float, float] = TEMP_RANGE_C) -> tuple[float, float]:
+    """(lowest, highest) drive frequency over the temperature range, w(T) = w0 [1 - a (T - T0) / 2]
+    (the frequency falls as the temperature rises for a > 0)."""
+    lo_t, hi_t = temp_range_c
+    if not lo_t < hi_t:
+        raise ValueError(f"temp_range_c: lowest must be below highest, got {temp_range_c}")
+    if f0 <= 0:
+        raise ValueError(f"f0: must be > 0, got {f0}")
+    a = a_ppm_per_c * 1e-6
+    ends = sorted((f0 * (1 - a * (hi_t - t0_c) / 2), f0 * (1 - a * (lo_t - t0_c) / 2)))
+    return ends[0], ends[1]
+
+
+def drive_point(data: dict, f_hz: float) -> DrivePoint:
+    """Build the design with demod.f_hz = f_hz and measure the chain_paper002.rate error as section 1
+    of the budget does, plus the quasi-static error."""
+    d = copy.deepcopy(data)
+    d["demod"]["f_hz"] = float(f_hz)
+    design = build(Config(d, source=f"<drive sweep {f_hz:.3f} Hz>"))
+    row = next(r for r in budget_rows(design, names=["chain_paper002"]) if r.stats.port == "rate").stats
+    st = static_error(design)
+    scale = design.rate_full_scale_dps * 3600.0
+    return DrivePoint(float(f_hz), row.rms * row.scale, row.mean * row.scale, st["rms"] * scale, st["mean"] * scale,
+                      int(row.overflows + st["overflows"]))
+
+
+def drive_sweep(config: Config, points: int = SWEEP_POINTS, a_ppm_per_c: float = SILICON_PPM_PER_C,
+                t0_c: float = T0_C, temp_range_c: tuple[float, float] = TEMP_RANGE_C, progress=None) -> DriveSweep:
+    """chain_paper002.rate error at ``points`` drive frequencies evenly across the band of
+    :func:`drive_band` around the config's demod.f_hz. ``progress``: a tqdm-like wrapper."""
+    if points < 2:
+        raise ValueError(f"points: need at least 2, got {points}")
+    f0 = float(config.data["demod"]["f_hz"])
+    band = drive_band(f0, a_ppm_per_c, t0_c, temp_range_c)
+    # the nominal frequency too: an exact ratio such as f/fs = 1/12 is where a phase-truncating NCO
+    # repeats the same few phases and its error becomes a bias; an even grid would step over it
+    freqs = np.unique(np.append(np.linspace(band[0], band[1], points), f0))
+    it = progress(freqs, desc="drive-frequency sweep", unit="f") if progress else freqs
+    pts = [drive_point(config.data, f) for f in it]
+    return DriveSweep(f0, a_ppm_per_c, t0_c, tuple(temp_range_c), band, pts)
