@@ -147,6 +147,10 @@ def test_optimiser_meets_target_with_fewer_bits(tmp_path, capsys):
     (["budget", "--target", "10furlong"], "--target"),
     (["budget", "--target", "abc"], "--target"),
     (["budget", "--optimise", "--target", "1e-9deg/h"], "unreachable"),
+    (["budget", "--max-mean", "0.05deg/h"], "--max-mean"),
+    (["budget", "--drive-band"], "--drive-band"),
+    (["budget", "--optimise", "--target", "1deg/h", "--max-mean", "5mC"], "--max-mean"),
+    (["budget", "--optimise", "--chain", "chain_paper001", "--target", "1deg/h", "--drive-band"], "--drive-band"),
 ])
 def test_bad_input_exits_2_with_one_line(argv, word, capsys):
     assert main(argv) == 2
@@ -161,3 +165,32 @@ def test_synth_estimate_sums_the_chain_members():
             "freq2temp": {"lut": 50.0, "mac16": 1.0}}
     est = synth_estimate(rows, build().instances["chain_paper002"].members, 100, 50)
     assert est["lut_default"] == 420 and est["mac16_default"] == 5 and est["lut_estimate"] == 210
+
+
+def _evaluator(edits=(), **kw):
+    from fxdsp.budget.optimise import Evaluator
+
+    data = copy.deepcopy(load_config().data)
+    for dotted, value in dict(edits).items():
+        *parents, key = dotted.split(".")
+        node = data
+        for part in parents:
+            node = node[part]
+        node[key] = value
+    return Evaluator(data, "chain_paper002", "rate", **kw)
+
+
+def test_optimiser_bias_limit_sees_a_bias_the_rms_target_weighs_lightly():
+    """With --max-mean the search error is max(rms, target / limit x |mean|): the old truncating NCO,
+    whose error is nearly all bias, scores the weight times worse; a design without bias does not."""
+    weight = 0.33 / 0.05
+    old = {k: v for k, v in OLD_NCO.items()}
+    plain, weighted = _evaluator(old), _evaluator(old, mean_weight=weight)
+    assert weighted.error({}) > 0.8 * weight * plain.error({})
+    assert _evaluator(mean_weight=weight).error({}) < 2 * _evaluator().error({})
+
+
+def test_optimiser_drive_band_takes_the_worst_frequency():
+    f = (7987.3, 8011.55)
+    singles = [_evaluator({"demod.f_hz": x}).error({}) for x in (8000.0, *f)]
+    assert _evaluator(frequencies=f).error({}) == max(singles)

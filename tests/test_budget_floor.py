@@ -239,3 +239,22 @@ def test_rate_error_at_the_floor_over_the_drive_band(sweep):
         assert p.rms <= 0.33 and abs(p.mean) <= 0.05, f"{p.f_hz} Hz: {p}"
         assert p.static_rms <= 0.33 and abs(p.static_mean) <= 0.05, f"{p.f_hz} Hz (chamber points): {p}"
         assert p.overflows == 0
+
+
+def _long_tau_trend(design) -> float:
+    """adev at the longest tau over adev at ~0.1 s: < 1 when the error averages down (white), > 1
+    when it wanders (a drift: e.g. an open-loop NCO whose tuning-word error accumulates phase)."""
+    a = allan_chain_paper002(design)
+    taus, adev = np.asarray(a.taus), np.asarray(a.adev)
+    return float(adev[-1] / adev[np.argmin(np.abs(taus - 0.1))])
+
+
+def test_fixed_point_error_averages_down_without_drift():
+    assert _long_tau_trend(build()) < 1.0
+
+
+def test_tuning_word_drift_shows_in_the_allan_deviation():
+    """The same check catches an accumulator too short for its tuning word (40 bits at f/fs = 1/12)."""
+    data = copy.deepcopy(load_config().data)
+    data["demod"]["phase_bits"] = 40
+    assert _long_tau_trend(build(Config(data))) > 1.5

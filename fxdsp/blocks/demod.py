@@ -2,8 +2,8 @@
 (the ``iir`` block), and a CORDIC for amplitude and phase (drive loop; paper 003's sweep).
 
 * NCO: ``phase[n] = (n * ftw + phase0) mod 2**phase_bits`` with ``ftw = f_hz / fs_hz * 2**phase_bits``
-  quantised half_up (``phase_bits`` = 40: the tuning word's half-LSB frequency error drifts the phase
-  by < 1e-7 rad over a million samples). One quarter-wave sine table, ``qsin[k] = sin((k + 1/2)
+  quantised half_up (an open-loop frequency error of up to half a tuning-word LSB: its phase drift is
+  why the default accumulator is 48 bits). One quarter-wave sine table, ``qsin[k] = sin((k + 1/2)
   (pi/2) / 2**(lut_bits-2))`` (bin centres, ``lut_format``, half_up, saturated), serves cos and -sin
   over the whole turn by quadrant symmetry: the top ``lut_bits`` phase bits are the bin (quadrant,
   index), the two reads are ``qsin[k]`` and ``qsin[~k]``. First-order (Taylor) interpolation removes
@@ -182,7 +182,9 @@ class Nco:
 
     def phases(self, count: int) -> np.ndarray:
         """The accumulator words of the first ``count`` samples after reset."""
-        return (self.phase0 + np.arange(count, dtype=np.int64) * self.ftw) & self.phase_mask
+        # uint64 wraps modulo 2**64, a multiple of 2**phase_bits: the low phase_bits bits are exact
+        n = np.arange(count, dtype=np.uint64)
+        return ((np.uint64(self.phase0) + n * np.uint64(self.ftw)) & np.uint64(self.phase_mask)).astype(np.int64)
 
     def wave(self, phases: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(cos, -sin) stored on nco_format for each accumulator word (the RTL's nco outputs)."""

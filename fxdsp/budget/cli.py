@@ -21,7 +21,7 @@ from ..hdl.hwreport import hw_report_path, synthesised_cost
 from . import optimise as opt
 from .attribution import ADDITIVITY_DB, THEORY_DB, Attribution, attribute
 from .floor import (DOMINANT_FACTOR, FLICKER_FACTOR, WITHIN_DB, Allan, DriveSweep, Floor, allan_chain_paper002,
-                    drive_sweep, floor_of)
+                    drive_frequencies, drive_sweep, floor_of)
 from .static import static_error
 from .table import budget_rows, format_rows
 from .units import parse_target
@@ -44,6 +44,11 @@ def configure(parser) -> None:
                         help="cost the search minimises: every bit (registers, coefficients, LUT memory; default) "
                              "or register/coefficient bits only")
     parser.add_argument("--margin", type=float, default=0.02, help="optimise to (1 - margin) x target (default 0.02)")
+    parser.add_argument("--max-mean", help="with --optimise: also keep |mean| (a bias) of the --target output within "
+                                           "this, <value><unit> as --target")
+    parser.add_argument("--drive-band", action="store_true",
+                        help="with --optimise on chain_paper002: meet the target at every frequency of the drive "
+                             "sweep too (the band a -40..85 C silicon resonator covers), not only at demod.f_hz")
 
 
 def _attr_dict(a: Attribution) -> dict:
@@ -151,6 +156,9 @@ def run(args) -> int:
         raise ValueError(f"--chain: unknown chain {args.chain!r}; expected one of {', '.join(design.chains)}")
     if not 0 <= args.margin < 0.5:
         raise ValueError(f"--margin: must be within [0, 0.5), got {args.margin}")
+    for opt_only in ("max_mean", "drive_band"):
+        if getattr(args, opt_only) and not args.optimise:
+            raise ValueError(f"--{opt_only.replace('_', '-')}: only with --optimise")
     attrs = {(c, p): attribute(design, c, p) for c, p in ATTRIBUTED}
     noise = {p: attrs[(args.chain, p)].sensor_noise_rms for c, p in ATTRIBUTED if c == args.chain}
     target = parse_target(args.target, design, args.chain, noise) if args.target else None
@@ -208,7 +216,10 @@ def run(args) -> int:
         out["target"] = {"text": args.target, "value": target.value, "unit": target.unit, "chain": target.chain,
                          "port": target.port, "metric": args.metric, "measured": measured, "met": meets}
         if args.optimise:
-            result = opt.optimise(cfg, target, args.metric, args.margin, progress=tqdm, cost_model=args.cost)
+            max_mean = parse_target(args.max_mean, design, args.chain, noise, "--max-mean") if args.max_mean else None
+            freqs = tuple(drive_frequencies(float(cfg.data["demod"]["f_hz"]))) if args.drive_band else ()
+            result = opt.optimise(cfg, target, args.metric, args.margin, progress=tqdm, cost_model=args.cost,
+                                  max_mean=max_mean, frequencies=freqs)
             print(f"\n6. word-length search ({result.evaluations} evaluations, greedy min+b):")
             for k in result.values:
                 mark = "" if result.values[k] == result.default_values[k] else "  *"

@@ -292,6 +292,17 @@ def drive_band(f0: float, a_ppm_per_c: float = SILICON_PPM_PER_C, t0_c: float = 
     return ends[0], ends[1]
 
 
+def drive_frequencies(f0: float, points: int = SWEEP_POINTS, a_ppm_per_c: float = SILICON_PPM_PER_C,
+                      t0_c: float = T0_C, temp_range_c: tuple[float, float] = TEMP_RANGE_C) -> np.ndarray:
+    """``points`` frequencies evenly across :func:`drive_band`, and f0 itself: an exact ratio such as
+    f/fs = 1/12 is where a phase-truncating NCO repeats the same few phases and its error becomes a
+    bias; an even grid would step over it."""
+    if points < 2:
+        raise ValueError(f"points: need at least 2, got {points}")
+    band = drive_band(f0, a_ppm_per_c, t0_c, temp_range_c)
+    return np.unique(np.append(np.linspace(band[0], band[1], points), f0))
+
+
 def drive_point(data: dict, f_hz: float) -> DrivePoint:
     """Build the design with demod.f_hz = f_hz and measure the chain_paper002.rate error as section 1
     of the budget does, plus the quasi-static error."""
@@ -309,13 +320,9 @@ def drive_sweep(config: Config, points: int = SWEEP_POINTS, a_ppm_per_c: float =
                 t0_c: float = T0_C, temp_range_c: tuple[float, float] = TEMP_RANGE_C, progress=None) -> DriveSweep:
     """chain_paper002.rate error at ``points`` drive frequencies evenly across the band of
     :func:`drive_band` around the config's demod.f_hz. ``progress``: a tqdm-like wrapper."""
-    if points < 2:
-        raise ValueError(f"points: need at least 2, got {points}")
     f0 = float(config.data["demod"]["f_hz"])
     band = drive_band(f0, a_ppm_per_c, t0_c, temp_range_c)
-    # the nominal frequency too: an exact ratio such as f/fs = 1/12 is where a phase-truncating NCO
-    # repeats the same few phases and its error becomes a bias; an even grid would step over it
-    freqs = np.unique(np.append(np.linspace(band[0], band[1], points), f0))
+    freqs = drive_frequencies(f0, points, a_ppm_per_c, t0_c, temp_range_c)
     it = progress(freqs, desc="drive-frequency sweep", unit="f") if progress else freqs
     pts = [drive_point(config.data, f) for f in it]
     return DriveSweep(f0, a_ppm_per_c, t0_c, tuple(temp_range_c), band, pts)

@@ -164,6 +164,8 @@ class Evaluator:
     port: str
     metric: str = "rms"
     samples: int | None = None
+    mean_weight: float = 0.0        # |mean| x this joins the error: target / the bias limit (0: no limit)
+    frequencies: tuple = ()         # further demod.f_hz at which the same error is measured (the worst counts)
     evaluations: int = 0
     cache: dict = field(default_factory=dict)
 
@@ -178,27 +180,41 @@ class Evaluator:
         return d
 
     def error(self, values: dict[str, int], seed_offset: int = 1000) -> float:
-        """The chain port's error in physical units (inf if the config does not build)."""
+        """The chain port's error in physical units (inf if the config does not build): the larger of
+        the metric and ``mean_weight`` x |mean|, at the config's drive frequency and at each of
+        ``frequencies``."""
         key = (tuple(sorted(values.items())), seed_offset)
         if key in self.cache:
             return self.cache[key]
         self.evaluations += 1
-        try:
-            design = build(Config(self.data(values), source="<optimise>"))
-        except (ValueError, TypeError, AssertionError):
-            self.cache[key] = math.inf
-            return math.inf
+        data = self.data(values)
+        err = 0.0
+        for f_hz in (None, *self.frequencies):
+            if f_hz is not None:
+                data["demod"]["f_hz"] = float(f_hz)
+            try:
+                design = build(Config(data, source="<optimise>"))
+            except (ValueError, TypeError, AssertionError):
+                err = math.inf
+                break
+            err = max(err, self._error_of(design, seed_offset))
+            if math.isinf(err):
+                break
+        self.cache[key] = float(err)
+        return float(err)
+
+    def _error_of(self, design, seed_offset: int) -> float:
         stats = {s.port: s for s in block_errors(design, self.chain, self.samples, seed_offset=seed_offset)}
         s = stats[self.port]
-        err = (s.rms if self.metric == "rms" else s.max_abs) * s.scale
         if s.overflows:  # saturating on the nominal stimulus: not an acceptable word length
-            err = math.inf
+            return math.inf
+        err = max((s.rms if self.metric == "rms" else s.max_abs), self.mean_weight * abs(s.mean)) * s.scale
         if self.chain == "chain_paper002":  # and the quasi-static chamber points (see static.py)
             st = static_error(design, self.chain, self.port)
-            err = max(err, (st["rms"] if self.metric == "rms" else st["max_abs"]) * s.scale)
             if st["overflows"]:
-                err = math.inf
-        self.cache[key] = float(err)
+                return math.inf
+            err = max(err, (st["rms"] if self.metric == "rms" else st["max_abs"]) * s.scale,
+                      self.mean_weight * abs(st["mean"]) * s.scale)
         return float(err)
 
 
@@ -220,14 +236,23 @@ class OptResult:
 
 
 def optimise(config: Config, target: Target, metric: str = "rms", margin: float = 0.02, samples: int | None = None,
-             progress=None, cost_model: str = "total_bits") -> OptResult:
-    """``cost_model``: "total_bits" (registers, coefficients and memory) or "register_bits" (memory free)."""
+             progress=None, cost_model: str = "total_bits", max_mean: Target | None = None,
+             frequencies: tuple = ()) -> OptResult:
+    """``cost_model``: "total_bits" (registers, coefficients and memory) or "register_bits" (memory free).
+    ``max_mean``: a limit on |mean| (a bias) of the same port, met together with the target;
+    ``frequencies``: drive frequencies (chain_paper002) at which both must hold as well."""
     if cost_model not in ("total_bits", "register_bits"):
         raise ValueError(f"--cost: unknown cost model {cost_model!r}; expected total_bits or register_bits")
     chain = target.chain
     if chain not in KNOBS:
         raise ValueError(f"--chain: no word-length knobs for {chain}")
-    ev = Evaluator(copy.deepcopy(config.data), chain, target.port, metric, samples)
+    if max_mean is not None and (max_mean.port != target.port or max_mean.chain != chain):
+        raise ValueError(f"--max-mean: must be on {chain}.{target.port}, like --target, got "
+                         f"{max_mean.chain}.{max_mean.port}")
+    if frequencies and chain != "chain_paper002":
+        raise ValueError(f"--drive-band: only chain_paper002 has a drive frequency, not {chain}")
+    weight = target.value / max_mean.value if max_mean is not None else 0.0
+    ev = Evaluator(copy.deepcopy(config.data), chain, target.port, metric, samples, weight, tuple(frequencies))
     knobs = KNOBS[chain]
     goal = target.value * (1.0 - margin)
     default = {k.name: knob_value(ev.base, k) for k in knobs}

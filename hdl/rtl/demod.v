@@ -17,7 +17,7 @@
 module demod #(
     parameter integer IN_W          = 24,
     parameter integer DATA_W        = 24,
-    parameter integer PHASE_BITS    = 40,
+    parameter integer PHASE_BITS    = 48,
     parameter integer LUT_BITS      = 12,
     parameter integer LUT_W         = 22,
     parameter integer INTERP_BITS   = 12,
@@ -25,7 +25,7 @@ module demod #(
     parameter integer TWO_PI_W      = 24,
     parameter integer CORR_SHIFT    = 45,
     parameter integer NCO_W         = 23,
-    parameter [63:0]  FTW           = 64'd91625968981,
+    parameter [63:0]  FTW           = 64'd23456248059221,
     parameter [63:0]  PHASE0        = 64'd0,
     parameter integer MIX_SHIFT     = 14,
     parameter integer ROUNDING      = 1,

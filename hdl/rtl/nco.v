@@ -13,7 +13,7 @@
 `default_nettype none
 
 module nco #(
-    parameter integer PHASE_BITS  = 40,   // phase accumulator (turns * 2**PHASE_BITS)
+    parameter integer PHASE_BITS  = 48,   // phase accumulator (turns * 2**PHASE_BITS)
     parameter integer LUT_BITS    = 12,   // bins per turn = 2**LUT_BITS (2 quadrant bits + index)
     parameter integer LUT_W       = 22,   // quarter-table word
     parameter integer INTERP_BITS = 12,   // phase bits below the bin that drive the interpolation
@@ -21,7 +21,7 @@ module nco #(
     parameter integer TWO_PI_W    = 24,
     parameter integer CORR_SHIFT  = 45,   // qsin * delta * TWO_PI -> table LSBs
     parameter integer NCO_W       = 23,   // output word: LUT_W + 1
-    parameter [63:0]  FTW         = 64'd91625968981,
+    parameter [63:0]  FTW         = 64'd23456248059221,
     parameter [63:0]  PHASE0      = 64'd0,
     parameter integer ROUNDING    = 1,    // of the correction: 0 floor, 1 half_up, 2 half_even, 3 toward_zero
     parameter         QSIN_FILE   = "demod_qsin.hex"
