@@ -156,15 +156,15 @@ def nco_table(lut_bits: int, lut_format) -> list[int]:
 def nco_wave(nco, phase: int, table: list[int]) -> tuple[int, int]:
     """(cos, -sin) of one phase word: the bin centre by quadrant symmetry of the quarter table, then
     the first-order correction cos - sin * delta, -sin - cos * delta, delta the sub-bin centre in
-    radians with 2 pi taken on s24.20, each correction rounded by the demodulator's rounding."""
+    radians with 2 pi taken on s16.12, each correction rounded by the demodulator's rounding."""
     P, L, D = nco.phase_bits, nco.lut_bits, nco.interp_bits
     a = phase >> (P - L)
     quad, k = a >> (L - 2), a % (1 << (L - 2))
     sin_c = [table[k], table[-1 - k], -table[k], -table[-1 - k]][quad]          # sin of the bin centre
     cos_c = [table[-1 - k], -table[k], -table[-1 - k], table[k]][quad]
     r = (phase >> (P - L - D)) % (1 << D)
-    two_pi = round_to_int(Fraction(2 * math.pi) * (1 << 20), "half_up")
-    delta = Fraction((2 * r + 1 - (1 << D)) * two_pi, 1 << (D + 1 + 20 + L))     # radians, times 2**0
+    two_pi = round_to_int(Fraction(2 * math.pi) * (1 << 12), "half_up")
+    delta = Fraction((2 * r + 1 - (1 << D)) * two_pi, 1 << (D + 1 + 12 + L))     # radians
     rule = nco.rules.rounding
     return cos_c + round_to_int(-sin_c * delta, rule), -sin_c + round_to_int(-cos_c * delta, rule)
 

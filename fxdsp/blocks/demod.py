@@ -127,7 +127,8 @@ def _cordic_kernel(i_in, q_in, atans, half_pi, iterations):
 INV_K_FORMAT = Format(True, 18, 17)
 
 
-TWO_PI_FORMAT = Format(True, 24, 20)   # 2 pi of the interpolation step: relative error < 1e-7
+TWO_PI_FORMAT = Format(True, 16, 12)   # 2 pi of the interpolation step: relative error 3e-6, i.e. < 0.005
+# table LSB on the largest correction (pi / 2**lut_bits); a wider constant only widens the products
 
 
 class Nco:

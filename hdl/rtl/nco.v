@@ -17,9 +17,9 @@ module nco #(
     parameter integer LUT_BITS    = 12,   // bins per turn = 2**LUT_BITS (2 quadrant bits + index)
     parameter integer LUT_W       = 22,   // quarter-table word
     parameter integer INTERP_BITS = 12,   // phase bits below the bin that drive the interpolation
-    parameter [63:0]  TWO_PI      = 64'd6588397,
-    parameter integer TWO_PI_W    = 24,
-    parameter integer CORR_SHIFT  = 45,   // qsin * delta * TWO_PI -> table LSBs
+    parameter [63:0]  TWO_PI      = 64'd25736,
+    parameter integer TWO_PI_W    = 16,
+    parameter integer CORR_SHIFT  = 37,   // qsin * delta * TWO_PI -> table LSBs
     parameter integer NCO_W       = 23,   // output word: LUT_W + 1
     parameter [63:0]  FTW         = 64'd23456248059221,
     parameter [63:0]  PHASE0      = 64'd0,
