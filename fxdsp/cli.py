@@ -5,8 +5,11 @@ the command being run is imported, so that a quick command does not pay for the 
 others (numba and the blocks); ``fxdsp --help`` lists every command from COMMANDS without importing
 any. A module that fails to import is an error (its traceback), never a silently missing command.
 
-Bad input (ValueError, TypeError, a missing file, a malformed TOML) becomes one line on stderr and
-exit status 2; nothing else is caught, so a real bug still shows its traceback.
+Every path option a command declares (its module's ``PATHS``) is checked before the command runs
+(:func:`fxdsp.outputs.check_paths`). Bad input (ValueError, TypeError, an OSError such as a missing
+or unwritable file or a full disk, a malformed TOML, undecodable text) becomes one line on stderr and
+exit status 2; an interrupt (Ctrl-C) one line and 130, with the outputs left as they were (they are
+staged, :mod:`fxdsp.outputs`). Nothing else is caught, so a real bug still shows its traceback.
 """
 
 from __future__ import annotations
@@ -60,12 +63,19 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     try:
+        from .outputs import check_paths
+
+        check_paths(args, getattr(args._module, "PATHS", {}))
         return int(args._module.run(args) or 0)
-    except (ValueError, TypeError, FileNotFoundError, IsADirectoryError, PermissionError,
-            tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+    except KeyboardInterrupt:
+        print(f"fxdsp {args.command}: interrupted; outputs left as they were", file=sys.stderr)
+        return 130
+    except (ValueError, TypeError, OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         message = str(exc).splitlines()[0] if str(exc) else exc.__class__.__name__
-        if isinstance(exc, (FileNotFoundError, IsADirectoryError, PermissionError)) and exc.filename:
-            message = f"{exc.strerror}: {exc.filename}"
+        if isinstance(exc, OSError) and exc.filename:
+            message = f"{exc.strerror or exc.__class__.__name__}: {exc.filename}"
+        elif isinstance(exc, UnicodeDecodeError):
+            message = f"not UTF-8 text ({exc.reason} at byte {exc.start})"
         print(f"fxdsp {args.command}: error: {message}", file=sys.stderr)
         return 2
 

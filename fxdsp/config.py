@@ -187,6 +187,12 @@ class Config:
         self.root = Section(data, "")
         self._sections: dict[str, Section] = {}
 
+    @property
+    def name(self) -> str:
+        """The source as written into outputs: a file's name without its folder (no absolute path in
+        a written file: the same config gives the same bytes wherever it lies), or ``<default>``."""
+        return self.source if self.source.startswith("<") else Path(self.source).name
+
     def section(self, dotted: str) -> Section:
         node, prefix = self.root, ""
         for part in dotted.split("."):

@@ -17,6 +17,7 @@ import numpy as np
 from .chains import Design
 from .fixed import Format
 from .fixed.hexfile import hex_words, read_hex_words
+from .outputs import staged
 
 MANIFEST = "manifest.json"
 
@@ -38,7 +39,7 @@ def _sha256(text: str) -> str:
 def generate(design: Design) -> dict[str, str]:
     """All vector files in memory: relative path -> text (manifest included)."""
     files: dict[str, str] = {}
-    manifest: dict = {"generator": "fxdsp vectors", "config": design.config.source, "seed": design.seed,
+    manifest: dict = {"generator": "fxdsp vectors", "config": design.config.name, "seed": design.seed,
                       "samples": design.samples, "hex": "two's complement, ceil(wl/4) digits per line",
                       "blocks": {}}
     for index, (name, block) in enumerate(design.all.items()):
@@ -62,10 +63,11 @@ def generate(design: Design) -> dict[str, str]:
 
 
 def write(files: dict[str, str], out: Path) -> None:
-    for rel, text in files.items():
-        path = out / rel
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text, encoding="ascii")
+    """Every file staged first, then all moved into place together (:mod:`fxdsp.outputs`): an
+    interrupted run leaves the previous set, manifest included, as it was."""
+    with staged() as stage:
+        for rel, text in files.items():
+            stage.write_text(out / rel, text, encoding="ascii")
 
 
 def check(files: dict[str, str], out: Path, patterns: tuple[str, ...] = ("**/*.hex",)) -> list[str]:

@@ -13,11 +13,12 @@ from functools import partial
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
+from tqdm import tqdm as _tqdm
 
 from ..chains import build
 from ..config import dumps, load_config
 from ..hdl.hwreport import hw_report_path, synthesised_cost
+from ..outputs import IN, OUT_DIR, OUT_FILE, staged
 from . import optimise as opt
 from .attribution import ADDITIVITY_DB, THEORY_DB, Attribution, attribute
 from .floor import (DOMINANT_FACTOR, FLICKER_FACTOR, WITHIN_DB, Allan, DriveSweep, Floor, allan_chain_paper002,
@@ -26,8 +27,14 @@ from .static import static_error
 from .table import budget_rows, format_rows
 from .units import parse_target
 
+# progress bars on a terminal only: redirected, stderr keeps to the one line an error needs
+tqdm = partial(_tqdm, disable=None)
+
 ATTRIBUTED = (("chain_paper002", "rate"), ("chain_paper002", "temp"), ("chain_paper001", "rate"),
               ("chain_paper001", "temp"))
+
+
+PATHS = {"--config": IN, "--json": OUT_FILE, "--report": OUT_DIR, "--config-out": OUT_FILE}
 
 
 def configure(parser) -> None:
@@ -145,6 +152,11 @@ def format_sweep(s: DriveSweep) -> str:
 
 
 def run(args) -> int:
+    with staged() as stage:  # every output moved into place only when the whole run has succeeded
+        return _run(args, stage)
+
+
+def _run(args, stage) -> int:
     t0 = time.time()
     cfg = load_config(args.config)
     design = build(cfg)
@@ -193,7 +205,7 @@ def run(args) -> int:
     print(format_sweep(sweep))
     print(f"  ({len(sweep.points)} points in {t_sweep:.1f} s)")
 
-    out = {"config": cfg.source, "seed": design.seed,
+    out = {"config": cfg.name, "seed": design.seed,
            "table": [r.as_dict() for r in rows],
            "static_paper002_rate": {k: (v * scale if k in ("rms", "max_abs", "mean") else v) for k, v in st.items()},
            "attribution": [_attr_dict(a) for a in attrs.values()], "additivity_tolerance_db": ADDITIVITY_DB,
@@ -243,8 +255,9 @@ def run(args) -> int:
                           f"from {cfg.source}; {target.port} {args.metric} error {result.error:.4g} {target.unit} "
                           f"(default {result.default_error:.4g}); total bits {nc['total_bits']} "
                           f"(default {dc['total_bits']})\nchanged word lengths:\n" + "\n".join("  " + c for c in changed))
-                Path(args.config_out).write_text(dumps(result.data, header), encoding="utf-8")
-                build(args.config_out)  # must load
+                written = stage.path(args.config_out)
+                written.write_text(dumps(result.data, header), encoding="utf-8")
+                build(str(written))  # must load
                 print(f"  wrote {args.config_out}")
             out["optimise"] = {"values": result.values, "default_values": result.default_values,
                                "error": result.error, "default_error": result.default_error,
@@ -255,11 +268,10 @@ def run(args) -> int:
             status = 1
 
     if args.report:
-        _report(Path(args.report), design, cfg, rows, attrs, st, target, result, args, floors, allan, sweep)
+        _report(stage.dir(args.report), design, cfg, rows, attrs, st, target, result, args, floors, allan, sweep)
         print(f"\nreport written to {args.report}/budget.md")
     if args.json:  # no wall-clock time in it: the same config and seed give the same bytes
-        Path(args.json).write_text(json.dumps(_finite(out), indent=1, default=_jsonable, allow_nan=False),
-                                   encoding="utf-8")
+        stage.write_text(args.json, json.dumps(_finite(out), indent=1, default=_jsonable, allow_nan=False))
     print(f"\n({time.time() - t0:.1f} s)")
     return status
 

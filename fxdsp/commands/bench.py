@@ -12,18 +12,20 @@ against the same biquad written with fxpmath and with apytypes.
 
 from __future__ import annotations
 
-import json
 import platform
 import time
-from pathlib import Path
 
 import numpy as np
 
 from ..chains import build
 from ..fixed import Format
+from ..outputs import IN, OUT_FILE, json_text, staged
 
 
 APY_QUANT = {"floor": "TO_NEG", "half_up": "TIES_POS", "half_even": "TIES_EVEN", "toward_zero": "TO_ZERO"}
+
+
+PATHS = {"--config": IN, "--json": OUT_FILE}
 
 
 def configure(parser) -> None:
@@ -127,6 +129,11 @@ def biquad_fxpmath(iir, x: np.ndarray) -> np.ndarray:
 def run(args) -> int:
     if args.samples < 200_000:
         raise ValueError(f"--samples: the benchmark needs >= 200000 samples, got {args.samples}")
+    if args.repeat < 1:
+        raise ValueError(f"--repeat: at least one timed run, got {args.repeat}")
+    for option, value in (("--prefix-apytypes", args.prefix_apytypes), ("--prefix-fxpmath", args.prefix_fxpmath)):
+        if not 1 <= value <= args.samples:
+            raise ValueError(f"{option}: must be within 1..--samples ({args.samples}), got {value}")
     design = build(args.config)
     iir = design.blocks["iir"]
     chain = design.chains["chain_paper002"]
@@ -173,7 +180,8 @@ def run(args) -> int:
               f"{r['ratio_fxdsp_over_lib']:,.0f}x faster;  bit-identical on {r['bit_identical_samples']}/"
               f"{r['prefix_samples']}")
     if args.json:
-        Path(args.json).write_text(json.dumps(results, indent=1) + "\n")
+        with staged() as stage:
+            stage.write_text(args.json, json_text(results, "--json", indent=1))
     return 0
 
 

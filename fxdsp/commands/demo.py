@@ -13,7 +13,11 @@ import numpy as np
 
 from ..chains import build
 from ..errors_table import all_errors, format_table
+from ..outputs import IN, OUT_DIR
 from ..vectors import generate, write
+
+
+PATHS = {"--config": IN, "--out": OUT_DIR}
 
 
 def configure(parser) -> None:

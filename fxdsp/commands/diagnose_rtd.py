@@ -4,6 +4,10 @@ of each, and the cause the diagnosis names for the linear readout (see :mod:`fxd
 
 from __future__ import annotations
 
+from ..outputs import IN
+
+PATHS = {"table": IN}
+
 
 def configure(parser) -> None:
     parser.add_argument("table", metavar="TABLE",

@@ -5,8 +5,13 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..chains import build
+from ..outputs import IN, IN_DIR, OUT_DIR
 from ..vectors import generate
 from .generated import sync_generated
+
+
+def PATHS(args) -> dict:
+    return {"--config": IN, "--out": IN_DIR if args.check else OUT_DIR}
 
 
 def configure(parser) -> None:

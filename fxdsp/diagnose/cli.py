@@ -6,6 +6,10 @@ from __future__ import annotations
 import json
 import sys
 
+from fxdsp.outputs import IN, OUT_DIR, OUT_FILE
+
+PATHS = {"log": IN, "--json": OUT_FILE, "--report": OUT_DIR, "--model-out": OUT_FILE}
+
 
 def configure(parser) -> None:
     parser.add_argument("log", metavar="LOG", help="log file (canonical CSV, or foreign with --map)")
@@ -34,14 +38,17 @@ def run(args) -> int:
         raise InputError(f"--delimiter {args.delimiter!r}: expected one character")
     diag = diagnose_file(args.log, parse_mapping(args.map), delimiter, args.time_format)
     data = report_dict(diag)
-    if args.json:
-        write_json(args.json, data)
-    else:
-        print(json.dumps(data, indent=2))
-    if args.report:
-        write_report(diag, args.report)
-    if args.model_out:
-        write_json(args.model_out, replay_model(diag))
+    from fxdsp.outputs import staged
+
+    with staged() as stage:  # all or nothing: a late error leaves no report without its model
+        if args.json:
+            write_json(stage.path(args.json), data)
+        if args.report:
+            write_report(diag, stage.dir(args.report))
+        if args.model_out:
+            write_json(stage.path(args.model_out), replay_model(diag))
+    if not args.json:
+        print(json.dumps(data, indent=2, allow_nan=False))
     g = data["gain"]
     print(f"cause: {data['cause']}  causes: {','.join(data['causes']) or 'none'}  "
           f"parameters: {json.dumps(data['parameters'])}  held-out gain ({g['channel']}): {g['ratio']:.2f}  "

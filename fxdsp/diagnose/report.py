@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -87,7 +86,9 @@ def replay_model(diag: Diagnosis) -> dict:
 
 
 def write_json(path, data: dict) -> None:
-    Path(path).write_text(json.dumps(data, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    from fxdsp.outputs import json_text
+
+    Path(path).write_text(json_text(data, "diagnose report", indent=2), encoding="utf-8")
 
 
 # -- human report --------------------------------------------------------------------------------

@@ -7,7 +7,12 @@ from pathlib import Path
 
 from ..chains import build
 from ..commands.generated import sync_generated
+from ..outputs import IN, IN_DIR, OUT_DIR
 from .params import generate
+
+
+def PATHS(args) -> dict:
+    return {"--config": IN, "--out": IN_DIR if args.check else OUT_DIR}
 
 
 def configure(parser) -> None:

@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 
 from ..chains import build
+from ..outputs import IN, OUT_FILE, check_output, staged
 from .hwreport import HDL_DIR, report_json
 from .params import generate, instance, literal
 
@@ -122,7 +123,11 @@ def place_route(design, name: str, work: Path, freq: float, timeout: int) -> tup
     return float(fmax[-1]), ""
 
 
+PATHS = {"--config": IN, "--out": OUT_FILE}
+
+
 def run(args) -> int:
+    check_output(Path(args.out).with_suffix(".json"), OUT_FILE, "--out (its .json twin)")
     for tool in ("yosys", "nextpnr-ice40"):
         if shutil.which(tool) is None:
             print(f"fxdsp hw-report: {tool} not found (apt-get install yosys nextpnr-ice40)", file=sys.stderr)
@@ -154,8 +159,9 @@ def run(args) -> int:
             rows.append(row)
             print(f"{name}: {row}", file=sys.stderr)
     out = Path(args.out)
-    out.write_text(markdown(rows, args.freq))
-    out.with_suffix(".json").write_text(report_json(rows, args.freq, UP5K))
+    with staged() as stage:  # the Markdown table and its JSON twin land together
+        stage.write_text(out, markdown(rows, args.freq))
+        stage.write_text(out.with_suffix(".json"), report_json(rows, args.freq, UP5K))
     print(f"wrote {out} and {out.with_suffix('.json')}")
     return 0
 

@@ -11,8 +11,13 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
+
+from fxdsp.outputs import OUT_DIR, staged
 
 CHOICES = ("002", "001", "000", "003", "all")
+
+PATHS = {"--report": OUT_DIR}
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -39,9 +44,11 @@ def run(args) -> int:
     w = [max(a, len(b)) for a, b in zip(w, head)]
     for r in (head, *rows):
         sys.stdout.write("  ".join(c.ljust(n) for c, n in zip(r, w)).rstrip() + "\n")
+    sys.stdout.write(f"({sum(r.get('seconds', 0) for r in res.values()):.1f} s of reproductions)\n")
     if args.report:
         cmd = "fxdsp repro --paper all --report " + args.report if args.paper == "all" else \
             f"fxdsp repro --paper {args.paper} --report {args.report}"
-        path = write_report(res, args.report, command=cmd)
+        with staged() as stage:
+            path = Path(args.report) / write_report(res, stage.dir(args.report), command=cmd).name
         sys.stdout.write(f"report: {path}\n")
     return 0

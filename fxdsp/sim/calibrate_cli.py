@@ -16,10 +16,9 @@ second run's log and adds its figures to the output under ``"apply"``.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-from pathlib import Path
 
+from fxdsp.outputs import IN, OUT_FILE, json_text, staged
 from fxdsp.sim import calibration
 from fxdsp.sim.logio import read_log
 
@@ -38,14 +37,15 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="paper 002: polynomial order per segment for the config (1 = the paper's, 2)")
 
 
-def _write(path: str, text: str, option: str) -> None:
-    try:
-        Path(path).write_text(text, encoding="utf-8")
-    except OSError as exc:
-        raise ValueError(f"{option}: cannot write {path}: {exc.strerror or exc}") from None
+PATHS = {"log": IN, "--apply": IN, "--json": OUT_FILE, "--config-out": OUT_FILE}
 
 
 def run(args) -> int:
+    with staged() as stage:  # the config and the JSON land together, or neither does
+        return _run(args, stage)
+
+
+def _run(args, stage) -> int:
     if args.paper not in FITS:
         raise ValueError(f"--paper: unknown paper {args.paper!r}; expected one of {', '.join(FITS)}")
     if args.order not in (1, 2, 3):
@@ -60,13 +60,13 @@ def run(args) -> int:
         if "thermometer_check" in cal:
             result["config"]["thermometer_check"] = cal["thermometer_check"]
         if args.config_out:
-            _write(args.config_out, text, "--config-out")
+            stage.write_text(args.config_out, text)
         if args.apply:
             log2, _ = read_log(args.apply)
             result["apply"] = {"log": args.apply, **apply_config(args.paper, text, log2)}
-    text = json.dumps(result, indent=2) + "\n"
+    text = json_text(result, "--json" if args.json else "calibrate", indent=2)
     if args.json:
-        _write(args.json, text, "--json")
+        stage.write_text(args.json, text)
         if "apply" in result:
             for key, value in result["apply"].items():
                 sys.stdout.write(f"{key}: {value}\n")

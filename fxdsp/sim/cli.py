@@ -15,6 +15,7 @@ import json
 import math
 
 from fxdsp.mechanisms import CAUSES
+from fxdsp.outputs import IN, OUT_FILE, staged
 from fxdsp.sim.generate import DEFAULT_TIME_STEP_S, OPTIONAL_COLUMNS, SCENARIOS, generate_log
 from fxdsp.sim.logio import write_log
 from fxdsp.sim.thermal import NODES, ThermalChain
@@ -93,6 +94,9 @@ def _noise(specs: list[str]):
     return out
 
 
+PATHS = {"--model": IN, "--out": OUT_FILE}
+
+
 def run(args) -> int:
     if args.scenario not in SCENARIOS:
         raise ValueError(f"--scenario: unknown name {args.scenario!r}; expected one of {', '.join(SCENARIOS)}")
@@ -112,5 +116,6 @@ def run(args) -> int:
         comments["model"] = args.model
     if args.rtd_node:
         comments["thermal"] = f"air->package->die, RTD on {args.rtd_node}"
-    write_log(args.out, log, header_comments=comments)
+    with staged() as stage:  # an interrupted run leaves the previous log whole
+        write_log(stage.path(args.out), log, header_comments=comments)
     return 0

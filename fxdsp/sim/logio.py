@@ -45,10 +45,7 @@ def write_log(path, log: dict, header_comments: dict | list | None = None) -> No
         buffer.write(line + "\n")
     buffer.write(",".join(names) + "\n")
     np.savetxt(buffer, data, fmt="%.12g", delimiter=",")
-    try:
-        Path(path).write_text(buffer.getvalue(), encoding="utf-8")
-    except OSError as exc:
-        raise ValueError(f"cannot write log {path}: {exc.strerror or exc}") from None
+    Path(path).write_text(buffer.getvalue(), encoding="utf-8")  # an OSError names the file (the CLI reports it)
 
 
 def read_log(path) -> tuple[dict[str, np.ndarray], dict[str, str]]:

@@ -1,0 +1,211 @@
+"""Outputs that cannot be lost: checked before any work, written aside, moved into place together.
+
+Every command declares its path options in a module-level ``PATHS`` table (option dest -> kind:
+``IN`` an input file, ``IN_DIR`` an input folder, ``OUT_FILE`` a file it writes, ``OUT_DIR`` a folder
+it writes into). :func:`check_paths` validates them all before the command does any work: an output
+must be of the right kind (a file target is not a folder, a folder target not a file), the folder
+that holds it must exist and be writable, and no output may be an input or another output. A bad
+path is one :class:`ValueError` naming the option.
+
+Writing goes through :func:`staged`: each output is written to a staging folder created beside its
+target (same file system), and only when the whole command has succeeded are the staged files moved
+into place with ``os.replace``, with SIGINT held off during the moves. An interrupt, a full disk or a
+late error before that leaves the previous outputs intact and no partial ones; the staging folder is
+removed. Files of a directory output that the command does not produce are left alone (``--out .``
+never wipes a folder). A power cut in the middle of the moves can still leave a mix: the moves are
+renames, the shortest window a file system offers without journalling of our own.
+
+``FXDSP_UNSAFE_DIRECT_WRITES=1`` (test-only) writes straight into the targets: the interrupt and fuzz
+tests use it to show that they fail without the staging.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import tempfile
+import threading
+from contextlib import contextmanager
+from pathlib import Path
+
+IN, IN_DIR, OUT_FILE, OUT_DIR = "in", "in-dir", "out-file", "out-dir"
+DIRECT_ENV = "FXDSP_UNSAFE_DIRECT_WRITES"
+
+
+def _direct() -> bool:
+    return os.environ.get(DIRECT_ENV, "") == "1"
+
+
+def _nearest_existing(path: Path) -> Path:
+    p = path
+    while not p.exists():
+        if p.parent == p:
+            break
+        p = p.parent
+    return p
+
+
+def check_output(path: Path, kind: str, option: str) -> None:
+    """ValueError naming ``option`` when ``path`` cannot be written as a ``kind`` output."""
+    if path.exists():
+        if kind == OUT_FILE and path.is_dir():
+            raise ValueError(f"{option}: {path} is a directory, expected a file")
+        if kind == OUT_DIR and not path.is_dir():
+            raise ValueError(f"{option}: {path} exists and is not a directory")
+    holder = path.parent if str(path.parent) else Path(".")
+    if not holder.exists():
+        raise ValueError(f"{option}: cannot write {path}: the folder {holder} does not exist")
+    if not holder.is_dir():
+        raise ValueError(f"{option}: cannot write {path}: {holder} is a file, not a folder")
+    # files are replaced (written aside, then renamed), so the holding folder must be writable
+    writable = path if kind == OUT_DIR and path.exists() else holder
+    if not os.access(writable, os.W_OK | os.X_OK):
+        raise ValueError(f"{option}: cannot write {path}: {writable} is not writable")
+
+
+def check_paths(args, paths) -> None:
+    """Validate every path option of a command before it runs (see the module docstring). ``paths``
+    maps the option as the user types it (``--out``, or a positional's name) to its kind; it may be a
+    function of ``args`` (``--check`` turns an output folder into an input)."""
+    if callable(paths):
+        paths = paths(args)
+    seen: dict[Path, tuple[str, str]] = {}
+    for option, kind in paths.items():
+        value = getattr(args, option.lstrip("-").replace("-", "_"), None)
+        if value is None or value == "-":
+            continue
+        path = Path(value)
+        raw = str(value)
+        # pathlib reads "f.txt/." as "f.txt": a name that ends like a folder is not a file
+        if kind in (IN, OUT_FILE) and (raw.endswith(("/", "/.", "/..")) or raw in (".", "..")):
+            raise ValueError(f"{option}: {raw} names a folder, expected a file")
+        if kind == IN:
+            if path.is_dir():
+                raise ValueError(f"{option}: {path} is a directory, expected a file")
+        elif kind == IN_DIR:
+            if path.exists() and not path.is_dir():
+                raise ValueError(f"{option}: {path} is not a directory")
+        else:
+            check_output(path, kind, option)
+        key = path.resolve()
+        if key in seen:
+            other, other_kind = seen[key]
+            inputs = (IN, IN_DIR)
+            if kind not in inputs or other_kind not in inputs:
+                what = "an input" if kind in inputs or other_kind in inputs else "another output"
+                raise ValueError(f"{option}: {path} is also {other}: an output must not overwrite {what}")
+        seen[key] = (option, kind)
+
+
+def json_text(data, what: str, **kw) -> str:
+    """Strict JSON (no NaN or Infinity tokens): a non-finite number is refused with one line naming
+    ``what`` (the option or report it was going to), never written."""
+    try:
+        return json.dumps(data, allow_nan=False, **kw) + "\n"
+    except ValueError:
+        raise ValueError(f"{what}: the result holds a non-finite number (nan or inf); nothing written") from None
+
+
+@contextmanager
+def _interrupts_held():
+    """SIGINT during the block is delivered (as KeyboardInterrupt) when it ends."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if caught:
+            raise KeyboardInterrupt
+
+
+class Stage:
+    """Staged outputs: :meth:`path` gives where to write the file that will become ``final``."""
+
+    def __init__(self):
+        self._dirs: dict[Path, Path] = {}        # nearest existing ancestor -> its staging folder
+        self._moves: list[tuple[Path, Path]] = []  # (staged file, final file)
+        self._trees: list[tuple[Path, Path]] = []  # (staged folder, final folder): every file in it
+
+    def _staged(self, final: Path) -> Path:
+        base = _nearest_existing(final.parent)
+        if base not in self._dirs:
+            self._dirs[base] = Path(tempfile.mkdtemp(prefix=".fxdsp-staging-", dir=base))
+        return self._dirs[base] / final.resolve().relative_to(base.resolve())
+
+    def path(self, final: str | Path) -> Path:
+        """Where to write the file that becomes ``final``."""
+        final = Path(final)
+        if _direct():
+            final.parent.mkdir(parents=True, exist_ok=True)
+            return final
+        staged = self._staged(final)
+        staged.parent.mkdir(parents=True, exist_ok=True)
+        self._moves.append((staged, final))
+        return staged
+
+    def dir(self, final: str | Path) -> Path:
+        """A folder whose files (at any depth) become the files of ``final`` (others there are kept)."""
+        final = Path(final)
+        if _direct():
+            final.mkdir(parents=True, exist_ok=True)
+            return final
+        staged = self._staged(final)
+        staged.mkdir(parents=True, exist_ok=True)
+        self._trees.append((staged, final))
+        return staged
+
+    def write_text(self, final: str | Path, text: str, encoding: str = "utf-8") -> None:
+        self.path(final).write_text(text, encoding=encoding)
+
+    def commit(self) -> None:
+        moves = list(self._moves)
+        for staged, final in self._trees:
+            moves += [(f, final / f.relative_to(staged)) for f in sorted(staged.rglob("*")) if not f.is_dir()]
+        with _interrupts_held():
+            for staged, final in moves:
+                final.parent.mkdir(parents=True, exist_ok=True)
+                os.replace(staged, final)
+        self.discard()
+
+    def final_of(self, staged: str | Path) -> Path | None:
+        """The target a staged path stands for (to name it in an error), or None."""
+        staged = Path(staged)
+        for s, final in self._moves:
+            if s == staged:
+                return final
+        for s, final in self._trees:
+            if staged == s or s in staged.parents:
+                return final / staged.relative_to(s)
+        return None
+
+    def discard(self) -> None:
+        for folder in self._dirs.values():
+            shutil.rmtree(folder, ignore_errors=True)
+        self._dirs.clear()
+        self._moves.clear()
+        self._trees.clear()
+
+
+@contextmanager
+def staged():
+    """A :class:`Stage` whose files replace their targets together if the block succeeds, and are
+    dropped (targets untouched) if it raises or is interrupted."""
+    stage = Stage()
+    try:
+        yield stage
+    except OSError as exc:  # name the target, not its staging copy
+        final = stage.final_of(exc.filename) if exc.filename else None
+        stage.discard()
+        if final is not None:
+            raise OSError(exc.errno, exc.strerror, str(final)) from exc
+        raise
+    except BaseException:
+        stage.discard()
+        raise
+    stage.commit()

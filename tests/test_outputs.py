@@ -1,0 +1,259 @@
+"""Nothing lost: outputs checked before any work, written aside and moved into place together; an
+interrupt or a late error leaves the previous outputs whole and no partial ones.
+
+Every check here is also run with ``FXDSP_UNSAFE_DIRECT_WRITES=1`` (writes straight into the targets)
+and must then fail: that is how the tests show they can catch the loss they guard against.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import io
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from unittest import mock
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from fxdsp.cli import main
+from fxdsp.outputs import DIRECT_ENV
+from fxdsp.sim import generate_log, write_log
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def snapshot(root: Path) -> dict[str, str]:
+    """Every file and folder under ``root``: relative path -> sha256 (folders: 'dir')."""
+    out = {}
+    for p in sorted(root.rglob("*")):
+        rel = p.relative_to(root).as_posix()
+        out[rel] = "dir" if p.is_dir() else hashlib.sha256(p.read_bytes()).hexdigest()
+    return out
+
+
+def one_line_error(capsys) -> str:
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert "Traceback" not in err[0]
+    return err[0]
+
+
+@pytest.fixture(scope="module")
+def log(tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp("log") / "run.csv"
+    write_log(path, generate_log("paper001", effects={}, seed=3, duration_scale=0.05))
+    return path
+
+
+# ---- bad paths: refused before any work, one line, nothing touched -------------------------------
+def _probes(tmp: Path, log: Path) -> list[tuple[list[str], str]]:
+    afile, adir = tmp / "a_file.txt", tmp / "a_dir"
+    return [
+        (["vectors", "--out", str(afile)], "--out"),
+        (["demo", "--out", str(afile)], "--out"),
+        (["hdl-gen", "--out", str(afile)], "--out"),
+        (["hdl-gen", "--out", str(tmp / "missing" / "gen")], "--out"),
+        (["budget", "--report", str(afile)], "--report"),
+        (["budget", "--json", str(adir)], "--json"),
+        (["budget", "--json", str(afile / "x.json")], "--json"),
+        (["budget", "--json", str(tmp / "same.json"), "--report", str(tmp / "r"), "--config-out",
+          str(tmp / "same.json"), "--optimise", "--target", "40deg/h"], "--config-out"),
+        (["diagnose", str(log), "--report", str(tmp / "rep"), "--model-out", str(tmp / "nodir" / "m.json")],
+         "--model-out"),
+        (["diagnose", str(log), "--json", str(log)], "--json"),
+        (["calibrate", "--paper", "001", str(log), "--config-out", str(log)], "--config-out"),
+        (["calibrate", "--paper", "001", str(log), "--json", str(adir)], "--json"),
+        (["simulate", "--scenario", "ramp", "--out", str(adir)], "--out"),
+        (["simulate", "--scenario", "ramp", "--model", str(adir), "--out", str(tmp / "x.csv")], "--model"),
+        (["bench", "--json", str(adir)], "--json"),
+        (["hw-report", "--out", str(adir)], "--out"),
+        (["repro", "--report", str(afile)], "--report"),
+        (["diagnose-rtd", str(adir)], "table"),
+        (["vectors", "--config", str(afile), "--out", str(afile)], "--out"),
+        (["budget", "--json", str(afile) + "/."], "--json"),             # pathlib would read it as a_file.txt
+        (["diagnose", str(log), "--model-out", str(adir) + "/"], "--model-out"),
+    ]
+
+
+def test_bad_output_paths_refused_before_any_work(tmp_path, log, capsys):
+    (tmp_path / "a_file.txt").write_text("keep me\n")
+    (tmp_path / "a_dir").mkdir()
+    (tmp_path / "a_dir" / "inside.txt").write_text("keep me too\n")
+    before = snapshot(tmp_path)
+    for argv, option in _probes(tmp_path, log):
+        t0 = time.perf_counter()
+        assert main(argv) == 2, argv
+        assert option in one_line_error(capsys), argv
+        assert snapshot(tmp_path) == before, f"{argv} touched the tree"
+        assert time.perf_counter() - t0 < 5.0, f"{argv}: refused only after doing the work"
+
+
+# ---- a late failure: staged outputs dropped, previous ones whole ----------------------------------
+def _fail_on_call(monkeypatch, target, name: str, k: int, exc: type[BaseException]):
+    """Make ``target.name`` raise ``exc`` on its k-th call (a full disk or a Ctrl-C mid-write)."""
+    original = getattr(target, name)
+    calls = {"n": 0}
+
+    def wrapper(*a, **kw):
+        calls["n"] += 1
+        if calls["n"] == k:
+            raise exc("injected mid-write")
+        return original(*a, **kw)
+
+    monkeypatch.setattr(target, name, wrapper)
+
+
+@pytest.mark.parametrize("exc, status", [(KeyboardInterrupt, 130), (OSError, 2)])
+def test_vectors_interrupted_mid_write_leave_the_previous_set(tmp_path, monkeypatch, capsys, exc, status):
+    out = tmp_path / "v"
+    assert main(["vectors", "--out", str(out)]) == 0
+    # the previous set must differ from the new one in every file, or a mix could not be seen
+    (out / "manifest.json").write_text((out / "manifest.json").read_text().replace('"seed"', '"seed_old"'))
+    for p in out.rglob("*.hex"):
+        p.write_text("0\n")
+    before = snapshot(out)
+    capsys.readouterr()
+    _fail_on_call(monkeypatch, Path, "write_text", 20, exc)
+    assert main(["vectors", "--out", str(out)]) == status
+    one_line_error(capsys)
+    assert snapshot(out) == before
+    assert not list(tmp_path.glob(".fxdsp-staging-*")), "the staging folder is removed"
+
+
+def test_direct_writes_would_be_caught(tmp_path, monkeypatch, capsys):
+    """The same injected interrupt with the staging switched off leaves a mix: the check above fails."""
+    monkeypatch.setenv(DIRECT_ENV, "1")
+    out = tmp_path / "v"
+    assert main(["vectors", "--out", str(out)]) == 0
+    (out / "manifest.json").write_text((out / "manifest.json").read_text().replace('"seed"', '"seed_old"'))
+    for p in out.rglob("*.hex"):
+        p.write_text("0\n")
+    before = snapshot(out)
+    capsys.readouterr()
+    _fail_on_call(monkeypatch, Path, "write_text", 20, KeyboardInterrupt)
+    assert main(["vectors", "--out", str(out)]) == 130
+    assert snapshot(out) != before
+
+
+def test_diagnose_late_failure_writes_no_report(tmp_path, log, monkeypatch, capsys):
+    """The model is written last; if it fails, the report and JSON written before it are dropped too."""
+    import fxdsp.diagnose.report as report
+
+    calls = {"n": 0}
+    original = report.write_json
+
+    def failing(path, data):
+        calls["n"] += 1
+        if calls["n"] == 2:  # the --model-out write
+            raise OSError(28, "No space left on device", str(path))
+        return original(path, data)
+
+    monkeypatch.setattr(report, "write_json", failing)
+    rc = main(["diagnose", str(log), "--json", str(tmp_path / "d.json"), "--report", str(tmp_path / "rep"),
+               "--model-out", str(tmp_path / "m.json")])
+    assert rc == 2 and "No space left" in one_line_error(capsys)
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+# ---- a real Ctrl-C: one line, exit 130, the previous log whole or the new one complete ------------
+@pytest.mark.parametrize("delay", [0.5, 1.0, 1.4])   # a 46 MB log: generation, formatting, writing
+def test_simulate_sigint_keeps_the_previous_log(tmp_path, delay):
+    out = tmp_path / "log.csv"
+    out.write_text("previous log\n")
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    proc = subprocess.Popen([sys.executable, "-m", "fxdsp.cli", "simulate", "--scenario", "paper002", "--time-step", "0.1", "--out",
+                             str(out)], stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env)
+    time.sleep(delay)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode in (0, 130), err
+    lines = err.strip().splitlines()
+    assert "Traceback" not in err and len(lines) <= 1, err
+    text = out.read_text()
+    if proc.returncode == 130:
+        assert text == "previous log\n"
+    else:  # finished before the signal: a complete log
+        assert text.splitlines()[-1].count(",") == text.splitlines()[-2].count(",")
+    assert not list(tmp_path.glob(".fxdsp-staging-*"))
+
+
+# ---- fuzz: colliding and malformed paths on the fast commands -------------------------------------
+KINDS = ("new", "existing_file", "existing_dir", "under_file", "missing_parent", "same_as_config")
+
+
+def _path(tmp: Path, kind: str, name: str) -> Path:
+    return {"new": tmp / name, "existing_file": tmp / "file.txt", "existing_dir": tmp / "dir",
+            "under_file": tmp / "file.txt" / name, "missing_parent": tmp / "nope" / name,
+            "same_as_config": tmp / "cfg.toml"}[kind]
+
+
+def _main_quiet(argv) -> tuple[int, str]:
+    err, out = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(out):
+        rc = main(argv)
+    return rc, err.getvalue()
+
+
+@settings(max_examples=30, deadline=None, derandomize=True, database=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(command=st.sampled_from(["hdl-gen", "vectors", "hdl-gen --check", "vectors --check"]),
+       kind=st.sampled_from(KINDS), second=st.sampled_from(["", "--config-is-out"]),
+       fail_at=st.one_of(st.none(), st.integers(1, 45)), fail=st.sampled_from([KeyboardInterrupt, OSError]))
+def test_fuzz_paths_exit_0_or_2_and_outputs_whole_or_untouched(tmp_path_factory, command, kind, second, fail_at,
+                                                               fail):
+    """Bad, colliding and good paths, with a Ctrl-C or a disk error injected at the fail_at-th file
+    write: exit 0 (complete, valid outputs), 1 (a --check difference), 2 or 130 (one line, the tree
+    exactly as before)."""
+    tmp = tmp_path_factory.mktemp("fuzz")
+    from fxdsp.config import default_config_text
+
+    (tmp / "cfg.toml").write_text(default_config_text())
+    (tmp / "file.txt").write_text("keep\n")
+    (tmp / "dir").mkdir()
+    target = _path(tmp, kind, "out")
+    name, *flags = command.split()
+    config = target if second else tmp / "cfg.toml"
+    argv = [name, "--config", str(config), "--out", str(target), *flags]
+    before = snapshot(tmp)
+    original, calls = Path.write_text, {"n": 0}
+
+    def write_text(self, *a, **kw):
+        calls["n"] += 1
+        if calls["n"] == fail_at:
+            raise fail("injected mid-write")
+        return original(self, *a, **kw)
+
+    with mock.patch.object(Path, "write_text", write_text):
+        rc, err = _main_quiet(argv)
+    assert rc in (0, 1, 2, 130), err
+    assert "Traceback" not in err
+    if rc in (2, 130):
+        assert len(err.strip().splitlines()) == 1, err
+        assert snapshot(tmp) == before
+    elif rc == 0 and not flags:
+        assert _main_quiet([name, "--config", str(config), "--out", str(target), "--check"])[0] == 0  # complete
+    assert not list(tmp.rglob(".fxdsp-staging-*"))
+
+
+def test_simulate_disk_full_mid_write_keeps_the_previous_log(tmp_path, capsys):
+    """A full disk after the file was opened (truncated) and partly written: the previous log stays."""
+    out = tmp_path / "log.csv"
+    out.write_text("previous log\n")
+
+    def disk_full(self, data, *a, **kw):
+        with open(self, "w", encoding="utf-8") as f:   # opening truncates, as a real write does
+            f.write(data[: len(data) // 2])
+        raise OSError(28, "No space left on device", str(self))
+
+    with mock.patch.object(Path, "write_text", disk_full):
+        assert main(["simulate", "--scenario", "ramp", "--out", str(out)]) == 2
+    line = one_line_error(capsys)
+    assert "No space left" in line and line.endswith(str(out))   # the target is named, not its staging copy
+    assert out.read_text() == "previous log\n"
+    assert not list(tmp_path.glob(".fxdsp-staging-*"))
