@@ -110,36 +110,36 @@ def _fail_on_call(monkeypatch, target, name: str, k: int, exc: type[BaseExceptio
     monkeypatch.setattr(target, name, wrapper)
 
 
-@pytest.mark.parametrize("exc, status", [(KeyboardInterrupt, 130), (OSError, 2)])
-def test_vectors_interrupted_mid_write_leave_the_previous_set(tmp_path, monkeypatch, capsys, exc, status):
+def _interrupted_vectors(tmp_path, monkeypatch, capsys, exc) -> tuple[int, dict, dict]:
+    """A previous vector set that differs from the new one in every file (or a mix could not be
+    seen), then ``fxdsp vectors`` again with ``exc`` raised at its 20th file write: (status, tree
+    before, tree after)."""
     out = tmp_path / "v"
     assert main(["vectors", "--out", str(out)]) == 0
-    # the previous set must differ from the new one in every file, or a mix could not be seen
     (out / "manifest.json").write_text((out / "manifest.json").read_text().replace('"seed"', '"seed_old"'))
     for p in out.rglob("*.hex"):
         p.write_text("0\n")
     before = snapshot(out)
     capsys.readouterr()
     _fail_on_call(monkeypatch, Path, "write_text", 20, exc)
-    assert main(["vectors", "--out", str(out)]) == status
+    status = main(["vectors", "--out", str(out)])
+    return status, before, snapshot(out)
+
+
+@pytest.mark.parametrize("exc, status", [(KeyboardInterrupt, 130), (OSError, 2)])
+def test_vectors_interrupted_mid_write_leave_the_previous_set(tmp_path, monkeypatch, capsys, exc, status):
+    got, before, after = _interrupted_vectors(tmp_path, monkeypatch, capsys, exc)
+    assert got == status
     one_line_error(capsys)
-    assert snapshot(out) == before
+    assert after == before
     assert not list(tmp_path.glob(".fxdsp-staging-*")), "the staging folder is removed"
 
 
 def test_direct_writes_would_be_caught(tmp_path, monkeypatch, capsys):
     """The same injected interrupt with the staging switched off leaves a mix: the check above fails."""
     monkeypatch.setenv(DIRECT_ENV, "1")
-    out = tmp_path / "v"
-    assert main(["vectors", "--out", str(out)]) == 0
-    (out / "manifest.json").write_text((out / "manifest.json").read_text().replace('"seed"', '"seed_old"'))
-    for p in out.rglob("*.hex"):
-        p.write_text("0\n")
-    before = snapshot(out)
-    capsys.readouterr()
-    _fail_on_call(monkeypatch, Path, "write_text", 20, KeyboardInterrupt)
-    assert main(["vectors", "--out", str(out)]) == 130
-    assert snapshot(out) != before
+    got, before, after = _interrupted_vectors(tmp_path, monkeypatch, capsys, KeyboardInterrupt)
+    assert got == 130 and after != before
 
 
 def test_diagnose_late_failure_writes_no_report(tmp_path, log, monkeypatch, capsys):
