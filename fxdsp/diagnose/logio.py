@@ -164,6 +164,9 @@ def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
     if not lines:
         raise InputError(f"{path}: empty file (no header row)")
     header = [h.strip().strip('"') for h in lines[0].split(delimiter)]
+    twice = sorted({h for h in header if h and header.count(h) > 1})
+    if twice:  # which of the two would be read is a guess: refuse rather than pick one
+        raise InputError(f"{path}: column {twice[0]!r} appears more than once in the header")
     body = lines[1:]
     if not body:
         raise InputError(f"{path}: no data rows after the header")
@@ -232,4 +235,7 @@ def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
         bad = int(np.argmax(step < 0))
         raise InputError(f"{path}: non-monotonic time: time_s goes back from {time[bad]:g} to {time[bad + 1]:g} "
                          f"(usable row {bad + 2})")
+    flat = columns["output"]
+    if flat.size > 1 and np.all(flat == flat[0]):  # nothing to explain or fit: refuse it by name
+        raise InputError(f"{path}: column {sources['output']!r} (output) is flat: every usable row is {flat[0]:g}")
     return Log(columns=columns, dropped=n - used, source=str(path), notes=notes)

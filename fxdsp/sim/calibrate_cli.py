@@ -20,7 +20,7 @@ import sys
 
 from fxdsp.outputs import IN, OUT_FILE, json_text, staged
 from fxdsp.sim import calibration
-from fxdsp.sim.logio import read_log
+from fxdsp.diagnose.logio import read_log
 
 FITS = {"002": calibration.calibrate_paper002, "001": calibration.calibrate_paper001,
         "000": calibration.calibrate_paper000_log}
@@ -50,7 +50,7 @@ def _run(args, stage) -> int:
         raise ValueError(f"--paper: unknown paper {args.paper!r}; expected one of {', '.join(FITS)}")
     if args.order not in (1, 2, 3):
         raise ValueError(f"--order: must be 1, 2 or 3, got {args.order}")
-    log, _ = read_log(args.log)
+    log = read_log(args.log).columns   # the contract's reader: bad rows dropped, bad logs refused
     result = FITS[args.paper](log)
     if args.config_out or args.apply:
         from fxdsp.repro.apply import apply_config, calibrated_config
@@ -62,7 +62,7 @@ def _run(args, stage) -> int:
         if args.config_out:
             stage.write_text(args.config_out, text)
         if args.apply:
-            log2, _ = read_log(args.apply)
+            log2 = read_log(args.apply).columns
             result["apply"] = {"log": args.apply, **apply_config(args.paper, text, log2)}
     text = json_text(result, "--json" if args.json else "calibrate", indent=2)
     if args.json:

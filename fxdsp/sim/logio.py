@@ -49,35 +49,18 @@ def write_log(path, log: dict, header_comments: dict | list | None = None) -> No
 
 
 def read_log(path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
-    """Read a canonical CSV written by :func:`write_log`: (columns, header comments as key -> value).
+    """(columns, header comments as key -> value) of a canonical log. The columns come from the one
+    reader of the contract (:func:`fxdsp.diagnose.logio.read_log`: unusable rows dropped, duplicate
+    or missing columns and a flat output refused); the ``# key: value`` lines are this writer's."""
+    from fxdsp.diagnose.logio import read_log as read_contract
 
-    This is a strict reader for the bench's own files (calibration, round trips); foreign logs with
-    mappings and dropped rows are the diagnosis engine's reader's job.
-    """
-    try:
-        lines = Path(path).read_text(encoding="utf-8").splitlines()
-    except OSError as exc:
-        raise ValueError(f"cannot read log {path}: {exc.strerror or exc}") from None
-    comments, body = {}, []
-    for line in lines:
-        if line.startswith("#"):
+    columns = read_contract(path).columns
+    comments = {}
+    with open(path, encoding="utf-8-sig") as handle:
+        for line in handle:
+            if not line.startswith("#"):
+                break
             key, sep, value = line[1:].strip().partition(":")
             if sep:
                 comments[key.strip()] = value.strip()
-        elif line.strip():
-            body.append(line)
-    if not body:
-        raise ValueError(f"log {path}: no header row")
-    names = [n.strip() for n in body[0].split(",")]
-    for required in REQUIRED_COLUMNS:
-        if required not in names:
-            raise ValueError(f"log {path}: missing column {required!r}")
-    if len(body) < 2:
-        raise ValueError(f"log {path}: no data rows")
-    try:
-        data = np.loadtxt(io.StringIO("\n".join(body[1:])), delimiter=",", ndmin=2)
-    except ValueError as exc:
-        raise ValueError(f"log {path}: {str(exc).splitlines()[0]}") from None
-    if data.shape[1] != len(names):
-        raise ValueError(f"log {path}: {data.shape[1]} values per row for {len(names)} columns")
-    return {n: data[:, i].copy() for i, n in enumerate(names)}, comments
+    return dict(columns), comments
