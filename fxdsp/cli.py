@@ -40,10 +40,18 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with its errors on one line (no usage block): ``fxdsp X: error: ...``, exit 2."""
+
+    def error(self, message):
+        hint = " (a value starting with '-': write --option=VALUE)" if "expected one argument" in message else ""
+        self.exit(2, f"{self.prog}: error: {message}{hint}\n")
+
+
 def build_parser(load: Iterable[str] | None = None) -> argparse.ArgumentParser:
     """The parser with every command. The modules of the commands in ``load`` (default: all) are
     imported and configure their options; the others are listed only. Import errors propagate."""
-    parser = argparse.ArgumentParser(prog="fxdsp", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="fxdsp", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (module_name, help_text) in COMMANDS.items():
         sp = sub.add_parser(name, help=help_text, description=help_text)
@@ -58,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     # the command is the first argument (fxdsp has no options of its own but --help): load only it
     parser = build_parser(load=argv[:1] if argv and argv[0] in COMMANDS else ())
-    args = parser.parse_args(argv)  # argparse itself exits 2 with one usage line on bad flags
+    args = parser.parse_args(argv)  # bad flags: one line and exit 2 (_Parser.error)
     if not getattr(args, "command", None):
         parser.print_help()
         return 2

@@ -51,6 +51,16 @@ def _as_1d(name: str, values) -> np.ndarray:
     return arr
 
 
+def sample_interval(time_s) -> float:
+    """The log's sampling interval: the median step between *distinct* time stamps (the contract
+    allows repeated stamps, whose zero steps would make a plain median of the steps 0)."""
+    steps = np.diff(np.asarray(time_s, float))
+    steps = steps[steps > 0]
+    if steps.size == 0:
+        raise ValueError("time_s: the log has no two distinct time stamps")
+    return float(np.median(steps))
+
+
 def first_order_lag(time_s, temp_c, tau_s: float, initial: float | None = None) -> np.ndarray:
     """Te with dTe/dt = (temp_c - Te)/tau_s, exact for a piecewise-linear input between samples.
 

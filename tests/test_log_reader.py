@@ -5,10 +5,14 @@ not with fxdsp's own writer."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import math
 
 import pytest
+from hypothesis import HealthCheck, event, given, settings
+from hypothesis import strategies as st
 
 from fxdsp.cli import main
 
@@ -73,3 +77,91 @@ def test_calibrate_drops_a_bad_row_instead_of_writing_nan(tmp_path, capsys, hole
     capsys.readouterr()
     a, b = fits[0]["sf"]["slopes"], fits[1]["sf"]["slopes"]
     assert a == pytest.approx(b, rel=1e-2)   # one dropped row of thousands barely moves the fit
+
+
+def test_calibrate_accepts_repeated_time_stamps(tmp_path, capsys):
+    """The contract allows two readings per stamp: the sampling interval is that of distinct stamps."""
+    from fxdsp.sim import generate_log
+
+    log = generate_log("paper002", effects={}, seed=1)
+    names = list(log)
+    lines = [",".join(names)]
+    for i in range(len(log["time_s"])):
+        row = ",".join(f"{log[c][i]:.12g}" for c in names)
+        lines += [row, row]
+    path = tmp_path / "twice.csv"
+    path.write_text("\n".join(lines) + "\n")
+    assert main(["calibrate", "--paper", "002", str(path), "--json", str(tmp_path / "c.json")]) == 0
+    json.loads((tmp_path / "c.json").read_text())
+
+
+def test_rtd_table_reader_refuses_a_log(tmp_path, capsys):
+    path = _csv(tmp_path / "log.csv", "time_s,temp_c,output,ref_temp_c", _ramp_rows(20))
+    assert main(["diagnose-rtd", path]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "temperature_c,resistance_ohm" in err[0]
+
+
+@pytest.mark.parametrize("argv", [["budget", "--target", "-1deg/h"], ["budget", "--bogus"], ["simulate"],
+                                  ["vectors", "--out"]])
+def test_argument_errors_are_one_line(argv, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "error:" in err[0]
+
+
+# ---- fuzz: logs built from the contract's grammar, then damaged ------------------------------------
+_COLUMNS = ["time_s", "temp_c", "output", "ref_temp_c", "rate_dps", "freq_hz", "quad"]
+_DAMAGE = ["nan", "", "inf", "-inf", "9.9e37", "-1e38", "x", "1,2", '"3"']
+
+
+@st.composite
+def damaged_logs(draw):
+    cols = ["time_s", "temp_c", "output"] if draw(st.booleans()) else []   # often a usable log
+    cols += draw(st.lists(st.sampled_from(_COLUMNS[3:]), unique=True, max_size=4))
+    if not cols or draw(st.integers(0, 4)) == 0:
+        cols.append(draw(st.sampled_from(_COLUMNS)))   # a missing required or a duplicated column
+    n = draw(st.integers(0, 400))
+    step = draw(st.sampled_from([10.0, 10.0, 1.0, 0.0, -1.0]))
+    repeat = draw(st.integers(1, 2))
+    lines = [",".join(cols)]
+    for i in range(n):
+        t = (i // repeat) * step
+        temp = -20.0 + 80.0 * i / max(n, 1)
+        values = {"time_s": t, "temp_c": temp, "output": 1.0 + 1e-3 * temp + 1e-4 * math.sin(i),
+                  "ref_temp_c": temp + 0.1, "rate_dps": 0.0, "freq_hz": 3837.0 + 0.05 * temp, "quad": 1e-3}
+        lines.append(",".join(f"{values[c]:.9g}" for c in cols))
+    for _ in range(draw(st.integers(0, 5))):
+        if n:
+            i = draw(st.integers(1, n))
+            cells = lines[i].split(",")
+            cells[draw(st.integers(0, len(cells) - 1))] = draw(st.sampled_from(_DAMAGE))
+            lines[i] = ",".join(cells)
+    if n and draw(st.booleans()):
+        lines[-1] = lines[-1][: len(lines[-1]) // 2]   # a logger stopped mid-line
+    return "\n".join(lines) + "\n"
+
+
+@settings(max_examples=40, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(text=damaged_logs(), command=st.sampled_from(["diagnose", "calibrate"]))
+def test_fuzz_damaged_logs_give_a_result_or_one_line(tmp_path_factory, text, command):
+    tmp = tmp_path_factory.mktemp("log")
+    path = tmp / "log.csv"
+    path.write_text(text)
+    out = tmp / "r.json"
+    argv = ["diagnose", str(path), "--json", str(out)] if command == "diagnose" else \
+        ["calibrate", "--paper", "002", str(path), "--json", str(out)]
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        rc = main(argv)
+    lines = err.getvalue().strip().splitlines()
+    event(f"{command} exit {rc}")
+    assert rc in (0, 2)
+    if rc == 2:
+        assert len(lines) == 1 and "Traceback" not in err.getvalue()
+        assert not out.exists()
+    else:
+        json.loads(out.read_text(), parse_constant=lambda c: pytest.fail(f"{c} in the JSON"))

@@ -257,3 +257,22 @@ def test_simulate_disk_full_mid_write_keeps_the_previous_log(tmp_path, capsys):
     assert "No space left" in line and line.endswith(str(out))   # the target is named, not its staging copy
     assert out.read_text() == "previous log\n"
     assert not list(tmp_path.glob(".fxdsp-staging-*"))
+
+
+def test_written_files_hold_no_folder_or_clock(tmp_path, capsys):
+    """Same inputs -> same bytes wherever the files lie: no absolute path, time or host is written."""
+    from fxdsp.config import default_config_text
+
+    cfg = tmp_path / "my.toml"
+    cfg.write_text(default_config_text())
+    texts = []
+    for run in ("a", "b"):
+        out = tmp_path / run
+        out.mkdir()
+        assert main(["vectors", "--config", str(cfg), "--out", str(out / "v")]) == 0
+        assert main(["budget", "--config", str(cfg), "--json", str(out / "b.json")]) == 0
+        texts.append(((out / "v" / "manifest.json").read_text(), (out / "b.json").read_text()))
+    capsys.readouterr()
+    assert texts[0] == texts[1]
+    for text in texts[0]:
+        assert str(tmp_path) not in text and "my.toml" in text

@@ -9,6 +9,7 @@ from scipy.optimize import minimize_scalar
 from fxdsp.diagnose import model as M
 from fxdsp.diagnose.blockfit import jackknife_sd, parabolic_argmin
 from fxdsp.diagnose.context import MIN_GAIN, Candidate, Context
+from fxdsp.mechanisms import sample_interval
 
 
 def affected_channels(ctx: Context, cause: str) -> list[str]:
@@ -49,7 +50,7 @@ def available(ctx: Context, cause: str) -> bool:
 def grid(ctx: Context, cause: str) -> np.ndarray:
     """Search grid of a nonlinear parameter: time constants from two samples to the log's length."""
     s = ctx.series
-    dt = float(np.median(np.diff(s.t))) if s.n > 1 else 1.0
+    dt = sample_interval(s.t) if np.ptp(s.t) > 0 else 1.0
     lo = max(2.0 * dt, 5.0)
     if cause == "thermal_lag":
         return np.geomspace(lo, max(s.duration, 4 * lo), 36)

@@ -20,6 +20,7 @@ import math
 import numpy as np
 
 from fxdsp.diagnose.context import Diagnosis
+from fxdsp.mechanisms import sample_interval
 
 
 def _heldout_rms(y: np.ndarray, temp: np.ndarray, rate: np.ndarray | None, folds: np.ndarray,
@@ -46,7 +47,7 @@ def lag_extension(diag: Diagnosis, tau_s: float) -> dict:
 
     s = diag.context.series
     template = build(chains=False).blocks["lag"]
-    dt = float(np.median(np.diff(s.t)))
+    dt = sample_interval(s.t)
     block = Lag(template.temp_format, tau_s, 1.0 / dt, template.alpha_bits, template.g, template.rules)
     code = quantize(s.temp, block.temp_format, Rules("half_up", "saturate"))
     te = to_float(block.run(temp=code).outputs["te"], block.temp_format)

@@ -101,7 +101,7 @@ class Series:
 def smoothed(t: np.ndarray, values: np.ndarray, window_s: float) -> tuple[np.ndarray, float, int]:
     """Centred moving average over about ``window_s`` (2 k + 1 samples, edges shrink), the time by
     which it widens a ramp (2 k dt) and k."""
-    dt = float(np.median(np.diff(t))) if t.size > 1 else window_s
+    dt = mech.sample_interval(t) if np.ptp(t) > 0 else window_s
     k = int(window_s / dt) // 2 if dt > 0 else 0
     if k < 1 or values.size < 2 * k + 1:
         return np.asarray(values, dtype=float), 0.0, 0

@@ -35,10 +35,22 @@ class ErrorStats:
 
 
 def load_table(path) -> tuple[np.ndarray, np.ndarray]:
-    """(temperature_c, resistance_ohm) from a two-column CSV with a header row."""
-    data = np.loadtxt(Path(path), delimiter=",", skiprows=1, ndmin=2)
-    if data.shape[1] < 2 or data.shape[0] < 4:
-        raise ValueError(f"{path}: expected columns temperature_c,resistance_ohm and at least 4 rows")
+    """(temperature_c, resistance_ohm) from a CSV with a header row naming those two columns (any
+    other table, e.g. a chamber log, is refused by name rather than read as one)."""
+    text = Path(path).read_text(encoding="utf-8-sig")
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    header = [h.strip().strip('"') for h in (lines[0].split(",") if lines else [])]
+    missing = [c for c in ("temperature_c", "resistance_ohm") if c not in header]
+    if missing:
+        raise ValueError(f"{path}: expected columns temperature_c,resistance_ohm; the header has "
+                         f"{', '.join(header) or 'nothing'}")
+    try:
+        data = np.loadtxt(lines[1:], delimiter=",", ndmin=2, usecols=[header.index("temperature_c"),
+                                                                      header.index("resistance_ohm")])
+    except ValueError as exc:
+        raise ValueError(f"{path}: {str(exc).splitlines()[0]}") from None
+    if data.shape[0] < 4 or not np.all(np.isfinite(data)):
+        raise ValueError(f"{path}: need at least 4 rows of finite temperature_c, resistance_ohm")
     return data[:, 0].copy(), data[:, 1].copy()
 
 

@@ -32,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from fxdsp.chains import build
-from fxdsp.mechanisms import first_order_lag
+from fxdsp.mechanisms import first_order_lag, sample_interval
 from fxdsp.repro.bitexact import Compensator002
 from fxdsp.repro.calconfig import config_from_text, config_text, lag_table, paper002_tables
 from fxdsp.repro.calibrate import calibrate002, frequency_thermometer
@@ -68,7 +68,7 @@ def identify_lag(time_s, temp_ext, temp_die, taus=None) -> float:
 
 def _ramp_error(rate_dps, time_s, window_s: float = 100.0) -> float:
     """Worst |zero-rate output| in deg/h over windows of ``window_s`` (the true rate is zero)."""
-    dt = float(np.median(np.diff(time_s)))
+    dt = sample_interval(time_s)
     n = max(int(round(window_s / dt)), 1)
     m = rate_dps.size // n * n
     return float(np.abs(rate_dps[:m].reshape(-1, n).mean(axis=1)).max() * 3600.0)
@@ -114,7 +114,7 @@ def _method(cal_log, ver_log, ramp_log, order: int, thermo) -> dict:
         ft = frequency_thermometer(cal_log)
         t_f = (cal_log["freq_hz"] - ft["f0_hz"]) / ft["k_hz_per_c"]  # identification only
         tau = identify_lag(cal_log["time_s"], cal_log["temp_c"], t_f)
-        rate_hz = 1.0 / float(np.median(np.diff(cal_log["time_s"])))
+        rate_hz = 1.0 / sample_interval(cal_log["time_s"])
         # calibrate on what the lag block will compute (its float reference), compensate bit-exactly
         lag = build(config_from_text(config_text(lag_table(tau, rate_hz)))).blocks["lag"]  # the config's lag
         cal = calibrate002(cal_log, order, temp=lag.reference(temp=cal_log["temp_c"])["te"])

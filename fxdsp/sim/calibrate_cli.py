@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from fxdsp.outputs import IN, OUT_FILE, json_text, staged
 from fxdsp.sim import calibration
@@ -56,14 +57,15 @@ def _run(args, stage) -> int:
         from fxdsp.repro.apply import apply_config, calibrated_config
 
         text, cal = calibrated_config(args.paper, log, args.order)
-        result["config"] = {"path": args.config_out, "order": args.order}
+        # file names only: the same run gives the same JSON wherever its files lie
+        result["config"] = {"path": Path(args.config_out).name if args.config_out else None, "order": args.order}
         if "thermometer_check" in cal:
             result["config"]["thermometer_check"] = cal["thermometer_check"]
         if args.config_out:
             stage.write_text(args.config_out, text)
         if args.apply:
             log2 = read_log(args.apply).columns
-            result["apply"] = {"log": args.apply, **apply_config(args.paper, text, log2)}
+            result["apply"] = {"log": Path(args.apply).name, **apply_config(args.paper, text, log2)}
     text = json_text(result, "--json" if args.json else "calibrate", indent=2)
     if args.json:
         stage.write_text(args.json, text)

@@ -20,6 +20,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
+from fxdsp.mechanisms import sample_interval
+
 G = 1.0  # the tumble's input unit: accelerations in g, so K1 is per g and K0/K1 is in g
 
 
@@ -37,7 +39,7 @@ def find_plateaus(time_s, temp_c, window_s: float = 1200.0, tol_c: float = 0.15,
     temp = np.asarray(temp_c, float)
     if t.size < 3:
         return []
-    dt = float(np.median(np.diff(t)))
+    dt = sample_interval(t)
     n = max(int(round(window_s / dt)), 1)
     # trailing window [i - n, i]: a centred filter of size n+1 shifted by n/2
     shift = n // 2

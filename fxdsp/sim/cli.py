@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from pathlib import Path
 
 from fxdsp.mechanisms import CAUSES
 from fxdsp.outputs import IN, OUT_FILE, staged
@@ -113,7 +114,7 @@ def run(args) -> int:
     comments = {"generator": "fxdsp simulate", "scenario": args.scenario, "seed": seed,
                 "effects": json.dumps(effects, sort_keys=True)}
     if args.model:
-        comments["model"] = args.model
+        comments["model"] = Path(args.model).name   # no folder in a written file
     if args.rtd_node:
         comments["thermal"] = f"air->package->die, RTD on {args.rtd_node}"
     with staged() as stage:  # an interrupted run leaves the previous log whole
