@@ -63,6 +63,14 @@ def build_parser(load: Iterable[str] | None = None) -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:  # while the command's modules were still being imported
+        print("fxdsp: interrupted", file=sys.stderr)
+        return 130
+
+
+def _main(argv: list[str] | None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     # the command is the first argument (fxdsp has no options of its own but --help): load only it
     parser = build_parser(load=argv[:1] if argv and argv[0] in COMMANDS else ())

@@ -131,6 +131,7 @@ class Stage:
         self._dirs: dict[Path, Path] = {}        # nearest existing ancestor -> its staging folder
         self._moves: list[tuple[Path, Path]] = []  # (staged file, final file)
         self._trees: list[tuple[Path, Path]] = []  # (staged folder, final folder): every file in it
+        self._removals: list[Path] = []            # stale files of a replaced set
 
     def _staged(self, final: Path) -> Path:
         base = _nearest_existing(final.parent)
@@ -171,7 +172,16 @@ class Stage:
             for staged, final in moves:
                 final.parent.mkdir(parents=True, exist_ok=True)
                 os.replace(staged, final)
+            for final in self._removals:
+                final.unlink(missing_ok=True)
         self.discard()
+
+    def remove(self, final: str | Path) -> None:
+        """Delete ``final`` when the staged files are moved into place (a file the new set lacks)."""
+        if _direct():
+            Path(final).unlink(missing_ok=True)
+        else:
+            self._removals.append(Path(final))
 
     def final_of(self, staged: str | Path) -> Path | None:
         """The target a staged path stands for (to name it in an error), or None."""
@@ -190,6 +200,7 @@ class Stage:
         self._dirs.clear()
         self._moves.clear()
         self._trees.clear()
+        self._removals.clear()
 
 
 @contextmanager

@@ -62,12 +62,31 @@ def generate(design: Design) -> dict[str, str]:
     return files
 
 
-def write(files: dict[str, str], out: Path) -> None:
-    """Every file staged first, then all moved into place together (:mod:`fxdsp.outputs`): an
-    interrupted run leaves the previous set, manifest included, as it was."""
+def _previous_set(files: dict[str, str], out: Path, patterns: tuple[str, ...]) -> list[Path]:
+    """The files a previous set in ``out`` owned: those its manifest listed (a set with a manifest
+    owns nothing else, so ``--out .`` cannot reach other files), else the files matching ``patterns``."""
+    if not out.is_dir():
+        return []
+    if MANIFEST not in files:
+        return sorted({p for pattern in patterns for p in out.glob(pattern)})
+    try:
+        old = json.loads((out / MANIFEST).read_text(encoding="utf-8"))
+        return [out / port["file"] for entry in old["blocks"].values() for kind in ("inputs", "outputs")
+                for port in entry[kind].values()]
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return []   # no readable previous manifest: nothing is known to be ours
+
+
+def write(files: dict[str, str], out: Path, patterns: tuple[str, ...] = ("**/*.hex",)) -> None:
+    """The set replaced as a whole: every file staged first, then all moved into place together, and
+    the files of the previous set that this one lacks removed in the same step (:mod:`fxdsp.outputs`).
+    An interrupted run leaves the previous set, manifest included, as it was."""
     with staged() as stage:
         for rel, text in files.items():
             stage.write_text(out / rel, text, encoding="ascii")
+        for path in _previous_set(files, out, patterns):
+            if path.resolve().parent.is_relative_to(out.resolve()) and path.relative_to(out).as_posix() not in files:
+                stage.remove(path)
 
 
 def check(files: dict[str, str], out: Path, patterns: tuple[str, ...] = ("**/*.hex",)) -> list[str]:
@@ -100,7 +119,7 @@ def write_or_check(files: dict[str, str], out: Path, check_only: bool,
     otherwise write the files and return no differences. Reporting is the command's job."""
     if check_only:
         return check(files, out, patterns)
-    write(files, out)
+    write(files, out, patterns)
     return []
 
 

@@ -276,3 +276,33 @@ def test_written_files_hold_no_folder_or_clock(tmp_path, capsys):
     assert texts[0] == texts[1]
     for text in texts[0]:
         assert str(tmp_path) not in text and "my.toml" in text
+
+
+def test_a_generated_set_is_replaced_as_a_whole(tmp_path, capsys):
+    """A file of the previous set that the new one does not produce is removed with the move, so the
+    folder holds exactly the new set (``--check`` clean); files of other kinds are left alone."""
+    out = tmp_path / "gen"
+    assert main(["hdl-gen", "--out", str(out)]) == 0
+    (out / "old_block_table.hex").write_text("0\n")   # e.g. a ROM of an NCO design since replaced
+    (out / "notes.txt").write_text("mine\n")
+    assert main(["hdl-gen", "--out", str(out), "--check"]) == 1
+    assert main(["hdl-gen", "--out", str(out)]) == 0
+    assert main(["hdl-gen", "--out", str(out), "--check"]) == 0
+    assert not (out / "old_block_table.hex").exists() and (out / "notes.txt").read_text() == "mine\n"
+    capsys.readouterr()
+
+
+def test_a_vector_set_removes_only_what_its_manifest_listed(tmp_path, capsys):
+    import json as _json
+
+    out = tmp_path / "v"
+    assert main(["vectors", "--out", str(out)]) == 0
+    manifest = _json.loads((out / "manifest.json").read_text())
+    manifest["blocks"]["gone"] = {"inputs": {"x": {"file": "gone/x.hex"}}, "outputs": {}}
+    (out / "manifest.json").write_text(_json.dumps(manifest))
+    (out / "gone").mkdir()
+    (out / "gone" / "x.hex").write_text("0\n")          # listed by the previous manifest: removed
+    (out / "stray.hex").write_text("0\n")               # not listed: someone else's, kept
+    assert main(["vectors", "--out", str(out)]) == 0
+    assert not (out / "gone" / "x.hex").exists() and (out / "stray.hex").exists()
+    capsys.readouterr()
