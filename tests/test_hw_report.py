@@ -17,7 +17,8 @@ def test_committed_json_holds_the_markdown_table():
     assert hw_report_path() == ROOT / "hdl" / "HW_REPORT.json"
     report = load_hw_report()
     # the Markdown written from the JSON's rows is the committed Markdown, byte for byte
-    assert markdown(report["rows"], report["target_mhz"]) == (ROOT / "hdl" / "HW_REPORT.md").read_text()
+    assert markdown(report["rows"], report["target_mhz"], report.get("source_sha256", "")) == \
+        (ROOT / "hdl" / "HW_REPORT.md").read_text()
     assert report["device"]["MAC16"] == UP5K["MAC16"]
 
 
@@ -44,3 +45,31 @@ def test_budget_reads_the_json_through_the_locator(tmp_path, monkeypatch):
     assert synthesised_cost() == {"iir": {"lut": 10.0, "mac16": 0.0}}
     report.unlink()
     assert synthesised_cost() is None
+
+
+def test_committed_report_is_current_for_the_rtl_and_default_config():
+    """A change to any RTL source, generated header or ROM makes the committed report stale: rerun
+    `make hw-report` (yosys + nextpnr-ice40) and commit hdl/HW_REPORT.md and .json."""
+    from fxdsp.chains import build
+    from fxdsp.hdl.hwreport import source_hash
+
+    design = build()
+    report = load_hw_report()
+    assert report.get("source_sha256") == source_hash(design), "hdl/HW_REPORT.* is stale: run make hw-report"
+    assert {r["name"] for r in report["rows"]} == set(design.instances)
+
+
+def test_source_hash_sees_a_one_character_rtl_change(tmp_path, monkeypatch):
+    from fxdsp.chains import build
+    from fxdsp.hdl.hwreport import source_hash
+
+    design = build()
+    before = source_hash(design)
+    rtl = tmp_path / "hdl" / "rtl"
+    rtl.mkdir(parents=True)
+    for p in (ROOT / "hdl" / "rtl").glob("*.v"):
+        (rtl / p.name).write_text(p.read_text())
+    monkeypatch.setattr(hwreport, "HDL_DIR", tmp_path / "hdl")
+    assert source_hash(design) == before
+    (rtl / "nco.v").write_text((rtl / "nco.v").read_text().replace("1'b1}", "1'b0}", 1))
+    assert source_hash(design) != before

@@ -165,3 +165,34 @@ def test_fuzz_damaged_logs_give_a_result_or_one_line(tmp_path_factory, text, com
         assert not out.exists()
     else:
         json.loads(out.read_text(), parse_constant=lambda c: pytest.fail(f"{c} in the JSON"))
+
+
+# ---- fuzz: numeric options given values outside their range --------------------------------------
+_NUMERIC = [(["simulate", "--scenario", "ramp", "--out", "{tmp}/s.csv"], "--time-step"),
+            (["simulate", "--scenario", "ramp", "--out", "{tmp}/s.csv"], "--duration-scale"),
+            (["simulate", "--scenario", "ramp", "--out", "{tmp}/s.csv"], "--seed"),
+            (["bench"], "--repeat"), (["bench"], "--samples"), (["bench"], "--prefix-fxpmath"),
+            (["budget"], "--margin"), (["repro", "--paper", "003"], "--sweep-points"),
+            (["calibrate", "--paper", "002", "{tmp}/none.csv"], "--order"),
+            (["diagnose-hidden"], "--per-cause")]
+_BAD_NUMBERS = ["-1", "0", "nan", "inf", "-inf", "1e400", "x", "", "1.5e-300", "-0"]
+
+
+@settings(max_examples=40, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(case=st.sampled_from(_NUMERIC), value=st.sampled_from(_BAD_NUMBERS))
+def test_fuzz_bad_numbers_are_one_line(tmp_path_factory, case, value):
+    """Exit 2 with one line (argparse's own errors included), or a run that accepts the value; never
+    a traceback. Values a command may legitimately accept (a seed of 0) are allowed to pass."""
+    tmp = tmp_path_factory.mktemp("opt")
+    argv, option = case
+    full = [a.format(tmp=tmp) for a in argv] + [f"{option}={value}"]
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        try:
+            rc = main(full)
+        except SystemExit as exc:   # argparse (type=int) refuses before main's handler
+            rc = exc.code
+    assert "Traceback" not in err.getvalue()
+    if rc != 0:
+        assert rc == 2 and len(err.getvalue().strip().splitlines()) == 1, (full, err.getvalue())

@@ -5,10 +5,15 @@ synthesised cost (``fxdsp budget --optimise``) without parsing Markdown.
 Each row: ``name`` (block instance or top), ``module``, ``LUT`` (SB_LUT4), ``MAC16`` (SB_MAC16),
 ``FF``, ``BRAM`` (SB_RAM40_4K), ``fmax`` (MHz after place and route) and ``note``; a count is
 null when its tool run failed, ``fmax`` when the design does not place.
+
+``source_sha256`` identifies what was synthesised: the RTL sources and the generated parameter
+headers and ROMs of the config (:func:`source_hash`). A report whose hash differs from the current
+RTL and default config is stale (the tests say so; ``make hw-report`` regenerates it).
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 
@@ -25,10 +30,24 @@ def hw_report_path() -> Path:
     return path if path.is_file() else Path("hdl") / REPORT_NAME
 
 
-def report_json(rows: list[dict], freq_mhz: float, device: dict[str, int]) -> str:
-    """The report's JSON text: the table's columns of every row, the target clock and the device."""
+def source_hash(design) -> str:
+    """sha256 of everything a synthesis run reads: every RTL source and the generated parameter
+    headers and ROM files of ``design``, by relative name."""
+    from .params import generate
+
+    h = hashlib.sha256()
+    items = [(f"rtl/{p.name}", p.read_text(encoding="utf-8")) for p in sorted((HDL_DIR / "rtl").glob("*.v"))]
+    items += [(f"gen/{name}", text) for name, text in sorted(generate(design).items())]
+    for name, text in items:
+        h.update(name.encode() + b"\0" + text.encode() + b"\0")
+    return h.hexdigest()
+
+
+def report_json(rows: list[dict], freq_mhz: float, device: dict[str, int], source_sha256: str = "") -> str:
+    """The report's JSON text: the table's columns of every row, the target clock, the device and the
+    hash of the sources synthesised."""
     data = {"generator": "fxdsp hw-report", "device": {"name": "iCE40UP5K", **device},
-            "target_mhz": freq_mhz,
+            "target_mhz": freq_mhz, "source_sha256": source_sha256,
             "rows": [{c: row.get(c, "" if c == "note" else None) for c in COLUMNS} for row in rows]}
     return json.dumps(data, indent=1) + "\n"
 
