@@ -58,7 +58,7 @@ def generate(design: Design) -> dict[str, str]:
                 entry[kind][port] = {"file": rel, "format": str(fmt), "signed": fmt.signed, "wl": fmt.wl,
                                      "fl": fmt.fl, "sha256": _sha256(text)}
         manifest["blocks"][name] = entry
-    files[MANIFEST] = json.dumps(manifest, indent=1, sort_keys=True) + "\n"
+    files[MANIFEST] = json.dumps(manifest, indent=1, sort_keys=True, allow_nan=False) + "\n"
     return files
 
 

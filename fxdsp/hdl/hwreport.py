@@ -49,7 +49,7 @@ def report_json(rows: list[dict], freq_mhz: float, device: dict[str, int], sourc
     data = {"generator": "fxdsp hw-report", "device": {"name": "iCE40UP5K", **device},
             "target_mhz": freq_mhz, "source_sha256": source_sha256,
             "rows": [{c: row.get(c, "" if c == "note" else None) for c in COLUMNS} for row in rows]}
-    return json.dumps(data, indent=1) + "\n"
+    return json.dumps(data, indent=1, allow_nan=False) + "\n"   # strict JSON: a failed count is null
 
 
 def load_hw_report(path: str | Path | None = None) -> dict | None:

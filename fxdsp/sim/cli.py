@@ -112,7 +112,7 @@ def run(args) -> int:
                        duration_scale=_number("--duration-scale", args.duration_scale),
                        noise=_noise(args.noise), model=args.model, thermal=thermal)
     comments = {"generator": "fxdsp simulate", "scenario": args.scenario, "seed": seed,
-                "effects": json.dumps(effects, sort_keys=True)}
+                "effects": json.dumps(effects, sort_keys=True, allow_nan=False)}
     if args.model:
         comments["model"] = Path(args.model).name   # no folder in a written file
     if args.rtd_node:

@@ -209,7 +209,9 @@ def read_model(path) -> Model:
 
 
 def write_model(path, model: Model) -> None:
-    Path(path).write_text(json.dumps(model.as_dict(), indent=2) + "\n", encoding="utf-8")
+    from fxdsp.outputs import json_text
+
+    Path(path).write_text(json_text(model.as_dict(), "model", indent=2), encoding="utf-8")
 
 
 def as_model(model) -> Model | None:
