@@ -54,7 +54,7 @@ def check_output(path: Path, kind: str, option: str) -> None:
             raise ValueError(f"{option}: {path} is a directory, expected a file")
         if kind == OUT_DIR and not path.is_dir():
             raise ValueError(f"{option}: {path} exists and is not a directory")
-    holder = path.parent if str(path.parent) else Path(".")
+    holder = path.parent
     if not holder.exists():
         raise ValueError(f"{option}: cannot write {path}: the folder {holder} does not exist")
     if not holder.is_dir():

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import copy
+import io
 import tomllib
+from unittest import mock
 
 import pytest
 
@@ -30,9 +33,13 @@ def default_data() -> dict:
     return tomllib.loads(default_config_text())
 
 
-def design_with(chains: bool = False, **edits):
-    """Build the design from the default config with dotted-path edits, e.g.
-    ``design_with(**{"iir.rounding": "floor"})`` (blocks only unless ``chains``)."""
+# the demodulator's NCO before the floor issue: full-turn tables addressed by the truncated phase of a
+# 32-bit accumulator, no interpolation (injected to show the checks catch its phase bias)
+OLD_NCO = {"demod.phase_bits": 32, "demod.lut_bits": 12, "demod.interp_bits": 0, "demod.lut_format": "s16.15"}
+
+
+def edited_data(**edits) -> dict:
+    """The default config's data with dotted-path edits, e.g. ``edited_data(**{"iir.rounding": "floor"})``."""
     data = copy.deepcopy(default_data())
     for dotted, value in edits.items():
         node = data
@@ -40,7 +47,52 @@ def design_with(chains: bool = False, **edits):
         for p in parents:
             node = node[p]
         node[key] = value
-    return build(Config(data, source="<test>"), chains=chains)
+    return data
+
+
+def design_with(chains: bool = False, **edits):
+    """Build the design from the default config with dotted-path edits (see :func:`edited_data`;
+    blocks only unless ``chains``)."""
+    return build(Config(edited_data(**edits), source="<test>"), chains=chains)
+
+
+def config_leaves(node, prefix=()):
+    """Dotted paths (as tuples) of every leaf of a config table."""
+    for k, v in node.items():
+        if isinstance(v, dict):
+            yield from config_leaves(v, prefix + (k,))
+        else:
+            yield prefix + (k,)
+
+
+def run_cli(argv) -> tuple[int, str]:
+    """``fxdsp argv`` in-process: (exit status, stderr); stdout is dropped. argparse's own refusals
+    (SystemExit) count as their exit status."""
+    from fxdsp.cli import main
+
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        try:
+            rc = main(argv)
+        except SystemExit as exc:
+            rc = exc.code
+    return rc, err.getvalue()
+
+
+@contextlib.contextmanager
+def failing_writes(k: int | None, exc: type[BaseException]):
+    """Every ``Path.write_text`` as usual, except that the k-th call raises ``exc`` (a Ctrl-C or a
+    full disk in the middle of writing a command's outputs); k None: no failure."""
+    original, calls = Path.write_text, {"n": 0}
+
+    def write_text(self, *a, **kw):
+        calls["n"] += 1
+        if calls["n"] == k:
+            raise exc("injected mid-write")
+        return original(self, *a, **kw)
+
+    with mock.patch.object(Path, "write_text", write_text):
+        yield
 
 
 @pytest.fixture(scope="session")

@@ -8,7 +8,7 @@ import tomllib
 import numpy as np
 import pytest
 
-from conftest import design_with
+from conftest import OLD_NCO, design_with, edited_data
 from fxdsp.budget.attribution import attribute, check_rounding
 from fxdsp.chains import build
 from fxdsp.cli import main
@@ -37,8 +37,6 @@ def test_paper001_attribution_adds_up_in_power(design):
 # sense and RTD ADCs' quantisation carried to it, and no bias beyond 0.05 deg/h
 FLOOR_DB = 3.0
 MAX_BIAS_DPH = 0.05
-# the NCO before the floor issue: full-turn tables addressed by the truncated phase, 32-bit accumulator
-OLD_NCO = {"demod.phase_bits": 32, "demod.lut_bits": 12, "demod.interp_bits": 0, "demod.lut_format": "s16.15"}
 
 
 def _floor_violations(a) -> list[str]:
@@ -170,22 +168,14 @@ def test_synth_estimate_sums_the_chain_members():
 def _evaluator(edits=(), **kw):
     from fxdsp.budget.optimise import Evaluator
 
-    data = copy.deepcopy(load_config().data)
-    for dotted, value in dict(edits).items():
-        *parents, key = dotted.split(".")
-        node = data
-        for part in parents:
-            node = node[part]
-        node[key] = value
-    return Evaluator(data, "chain_paper002", "rate", **kw)
+    return Evaluator(edited_data(**dict(edits)), "chain_paper002", "rate", **kw)
 
 
 def test_optimiser_bias_limit_sees_a_bias_the_rms_target_weighs_lightly():
     """With --max-mean the search error is max(rms, target / limit x |mean|): the old truncating NCO,
     whose error is nearly all bias, scores the weight times worse; a design without bias does not."""
     weight = 0.33 / 0.05
-    old = {k: v for k, v in OLD_NCO.items()}
-    plain, weighted = _evaluator(old), _evaluator(old, mean_weight=weight)
+    plain, weighted = _evaluator(OLD_NCO), _evaluator(OLD_NCO, mean_weight=weight)
     assert weighted.error({}) > 0.8 * weight * plain.error({})
     assert _evaluator(mean_weight=weight).error({}) < 2 * _evaluator().error({})
 

@@ -3,9 +3,7 @@ and exits 2, with no traceback."""
 
 from __future__ import annotations
 
-import contextlib
 import copy
-import io
 import subprocess
 import sys
 import tempfile
@@ -15,9 +13,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import default_data
+from conftest import config_leaves, default_data, edited_data, run_cli
 from fxdsp.chains import build
-from fxdsp.cli import main
 from fxdsp.config import Config
 
 
@@ -116,15 +113,7 @@ def test_cli_unknown_flag_exits_2():
 
 
 # ---- fuzz: one leaf of the shipped config replaced by a value of another kind ----------------------
-def _leaves(node, prefix=()):
-    for k, v in node.items():
-        if isinstance(v, dict):
-            yield from _leaves(v, prefix + (k,))
-        else:
-            yield prefix + (k,)
-
-
-_LEAVES = sorted(_leaves(default_data()))
+_LEAVES = sorted(config_leaves(default_data()))
 _VALUES = [-1, 0, 10**9, -1e300, 1.5, float("nan"), float("inf"), "", "s99.98", "u1.0", "s24", "floor", [],
            [1, 2], [[1.0]], True, {"x": 1}]
 
@@ -134,22 +123,15 @@ _VALUES = [-1, 0, 10**9, -1e300, 1.5, float("nan"), float("inf"), "", "s99.98", 
 def test_fuzz_one_bad_leaf_is_one_line_or_a_working_config(leaf, value):
     from fxdsp.config import dumps
 
-    data = copy.deepcopy(default_data())
-    node = data
-    for part in leaf[:-1]:
-        node = node[part]
-    node[leaf[-1]] = value
+    data = edited_data(**{".".join(leaf): value})
     with tempfile.TemporaryDirectory() as tmp:
         cfg = Path(tmp) / "c.toml"
         try:
             cfg.write_text(dumps(data))
         except (ValueError, TypeError):
             return   # not expressible in TOML (e.g. nan in some writers): nothing to feed the CLI
-        err = io.StringIO()
-        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-            rc = main(["hdl-gen", "--config", str(cfg), "--out", str(Path(tmp) / "gen")])
-        assert rc in (0, 2), err.getvalue()
+        rc, err = run_cli(["hdl-gen", "--config", str(cfg), "--out", str(Path(tmp) / "gen")])
+        assert rc in (0, 2), err
         if rc == 2:
-            lines = err.getvalue().strip().splitlines()
-            assert len(lines) == 1 and "Traceback" not in err.getvalue()
+            assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
             assert not (Path(tmp) / "gen").exists()

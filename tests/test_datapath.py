@@ -18,7 +18,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from conftest import default_data
+from conftest import config_leaves, default_data
 from fxdsp.chains import build
 from fxdsp.config import Config
 
@@ -111,20 +111,12 @@ def test_stated_wired_format_that_agrees_is_accepted():
 
 
 # ---- code defaults ------------------------------------------------------------------------------
-def _leaves(node, prefix=()):
-    for k, v in node.items():
-        if isinstance(v, dict):
-            yield from _leaves(v, prefix + (k,))
-        else:
-            yield prefix + (k,)
-
-
 def _fingerprint(design):
     return {n: b.parameters() for n, b in design.all.items()} | {
         "_": (design.seed, design.samples, design.fs_hz, design.rate_full_scale_dps)}
 
 
-@pytest.mark.parametrize("path", [".".join(p) for p in _leaves(default_data())])
+@pytest.mark.parametrize("path", [".".join(p) for p in config_leaves(default_data())])
 def test_no_code_default_shadows_the_shipped_config(path):
     data = copy.deepcopy(default_data())
     *parents, key = path.split(".")

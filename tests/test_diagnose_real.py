@@ -6,7 +6,6 @@ from __future__ import annotations
 from conftest import SHARED, needs_shared
 
 import json
-from pathlib import Path
 
 import jsonschema
 import numpy as np

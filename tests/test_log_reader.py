@@ -5,8 +5,6 @@ not with fxdsp's own writer."""
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import math
 
@@ -14,6 +12,7 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
+from conftest import run_cli
 from fxdsp.cli import main
 
 
@@ -154,14 +153,11 @@ def test_fuzz_damaged_logs_give_a_result_or_one_line(tmp_path_factory, text, com
     out = tmp / "r.json"
     argv = ["diagnose", str(path), "--json", str(out)] if command == "diagnose" else \
         ["calibrate", "--paper", "002", str(path), "--json", str(out)]
-    err = io.StringIO()
-    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-        rc = main(argv)
-    lines = err.getvalue().strip().splitlines()
+    rc, err = run_cli(argv)
     event(f"{command} exit {rc}")
     assert rc in (0, 2)
     if rc == 2:
-        assert len(lines) == 1 and "Traceback" not in err.getvalue()
+        assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
         assert not out.exists()
     else:
         json.loads(out.read_text(), parse_constant=lambda c: pytest.fail(f"{c} in the JSON"))
@@ -187,12 +183,7 @@ def test_fuzz_bad_numbers_are_one_line(tmp_path_factory, case, value):
     tmp = tmp_path_factory.mktemp("opt")
     argv, option = case
     full = [a.format(tmp=tmp) for a in argv] + [f"{option}={value}"]
-    err = io.StringIO()
-    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-        try:
-            rc = main(full)
-        except SystemExit as exc:   # argparse (type=int) refuses before main's handler
-            rc = exc.code
-    assert "Traceback" not in err.getvalue()
+    rc, err = run_cli(full)   # argparse's own refusals (type=int) included
+    assert "Traceback" not in err
     if rc != 0:
-        assert rc == 2 and len(err.getvalue().strip().splitlines()) == 1, (full, err.getvalue())
+        assert rc == 2 and len(err.strip().splitlines()) == 1, (full, err)

@@ -6,13 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import design_with
+from conftest import OLD_NCO, design_with
 
 # requirement, not a reading of the code: a reference phase bias phi turns the quadrature (here 5 %
 # of full scale, as in the chain's nominal stimulus) into a rate bias quad * phi; 0.05 deg/h at
 # 200 deg/s full scale allows phi <= 0.05 / 720000 / 0.05 rad
 MAX_PHASE_BIAS_RAD = 0.05 / (200.0 * 3600.0) / 0.05
-OLD_NCO = {"demod.phase_bits": 32, "demod.lut_bits": 12, "demod.interp_bits": 0, "demod.lut_format": "s16.15"}
 N = 1 << 15
 
 

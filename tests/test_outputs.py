@@ -7,9 +7,8 @@ and must then fail: that is how the tests show they can catch the loss they guar
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
-import io
+import importlib
 import os
 import signal
 import subprocess
@@ -22,7 +21,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from fxdsp.cli import main
+from conftest import failing_writes, run_cli
+from fxdsp.cli import COMMANDS, main
 from fxdsp.outputs import DIRECT_ENV
 from fxdsp.sim import generate_log, write_log
 
@@ -82,34 +82,24 @@ def _probes(tmp: Path, log: Path) -> list[tuple[list[str], str]]:
     ]
 
 
-def test_bad_output_paths_refused_before_any_work(tmp_path, log, capsys):
+def test_bad_output_paths_refused_before_any_work(tmp_path, log, capsys, monkeypatch):
     (tmp_path / "a_file.txt").write_text("keep me\n")
     (tmp_path / "a_dir").mkdir()
     (tmp_path / "a_dir" / "inside.txt").write_text("keep me too\n")
     before = snapshot(tmp_path)
+
+    def work_started(args):
+        raise AssertionError(f"{args.command}: the work started before its paths were refused")
+
     for argv, option in _probes(tmp_path, log):
-        t0 = time.perf_counter()
+        # the command's own work must never begin: refused by the path check alone
+        monkeypatch.setattr(importlib.import_module(COMMANDS[argv[0]][0]), "run", work_started)
         assert main(argv) == 2, argv
         assert option in one_line_error(capsys), argv
         assert snapshot(tmp_path) == before, f"{argv} touched the tree"
-        assert time.perf_counter() - t0 < 5.0, f"{argv}: refused only after doing the work"
 
 
 # ---- a late failure: staged outputs dropped, previous ones whole ----------------------------------
-def _fail_on_call(monkeypatch, target, name: str, k: int, exc: type[BaseException]):
-    """Make ``target.name`` raise ``exc`` on its k-th call (a full disk or a Ctrl-C mid-write)."""
-    original = getattr(target, name)
-    calls = {"n": 0}
-
-    def wrapper(*a, **kw):
-        calls["n"] += 1
-        if calls["n"] == k:
-            raise exc("injected mid-write")
-        return original(*a, **kw)
-
-    monkeypatch.setattr(target, name, wrapper)
-
-
 def _interrupted_vectors(tmp_path, monkeypatch, capsys, exc) -> tuple[int, dict, dict]:
     """A previous vector set that differs from the new one in every file (or a mix could not be
     seen), then ``fxdsp vectors`` again with ``exc`` raised at its 20th file write: (status, tree
@@ -121,8 +111,8 @@ def _interrupted_vectors(tmp_path, monkeypatch, capsys, exc) -> tuple[int, dict,
         p.write_text("0\n")
     before = snapshot(out)
     capsys.readouterr()
-    _fail_on_call(monkeypatch, Path, "write_text", 20, exc)
-    status = main(["vectors", "--out", str(out)])
+    with failing_writes(20, exc):
+        status = main(["vectors", "--out", str(out)])
     return status, before, snapshot(out)
 
 
@@ -194,13 +184,6 @@ def _path(tmp: Path, kind: str, name: str) -> Path:
             "same_as_config": tmp / "cfg.toml"}[kind]
 
 
-def _main_quiet(argv) -> tuple[int, str]:
-    err, out = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(out):
-        rc = main(argv)
-    return rc, err.getvalue()
-
-
 @settings(max_examples=30, deadline=None, derandomize=True, database=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(command=st.sampled_from(["hdl-gen", "vectors", "hdl-gen --check", "vectors --check"]),
        kind=st.sampled_from(KINDS), second=st.sampled_from(["", "--config-is-out"]),
@@ -221,23 +204,15 @@ def test_fuzz_paths_exit_0_or_2_and_outputs_whole_or_untouched(tmp_path_factory,
     config = target if second else tmp / "cfg.toml"
     argv = [name, "--config", str(config), "--out", str(target), *flags]
     before = snapshot(tmp)
-    original, calls = Path.write_text, {"n": 0}
-
-    def write_text(self, *a, **kw):
-        calls["n"] += 1
-        if calls["n"] == fail_at:
-            raise fail("injected mid-write")
-        return original(self, *a, **kw)
-
-    with mock.patch.object(Path, "write_text", write_text):
-        rc, err = _main_quiet(argv)
+    with failing_writes(fail_at, fail):
+        rc, err = run_cli(argv)
     assert rc in (0, 1, 2, 130), err
     assert "Traceback" not in err
     if rc in (2, 130):
         assert len(err.strip().splitlines()) == 1, err
         assert snapshot(tmp) == before
     elif rc == 0 and not flags:
-        assert _main_quiet([name, "--config", str(config), "--out", str(target), "--check"])[0] == 0  # complete
+        assert run_cli([name, "--config", str(config), "--out", str(target), "--check"])[0] == 0  # complete
     assert not list(tmp.rglob(".fxdsp-staging-*"))
 
 

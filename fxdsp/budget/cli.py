@@ -6,7 +6,6 @@ deviation of the paper 002 rate error, and a drive-frequency sweep."""
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from functools import partial
@@ -18,7 +17,7 @@ from tqdm import tqdm as _tqdm
 from ..chains import build
 from ..config import dumps, load_config
 from ..hdl.hwreport import hw_report_path, synthesised_cost
-from ..outputs import IN, OUT_DIR, OUT_FILE, staged
+from ..outputs import IN, OUT_DIR, OUT_FILE, json_text, staged
 from . import optimise as opt
 from .attribution import ADDITIVITY_DB, THEORY_DB, Attribution, attribute
 from .floor import (DOMINANT_FACTOR, FLICKER_FACTOR, WITHIN_DB, Allan, DriveSweep, Floor, allan_chain_paper002,
@@ -271,7 +270,7 @@ def _run(args, stage) -> int:
         _report(stage.dir(args.report), design, cfg, rows, attrs, st, target, result, args, floors, allan, sweep)
         print(f"\nreport written to {args.report}/budget.md")
     if args.json:  # no wall-clock time in it: the same config and seed give the same bytes
-        stage.write_text(args.json, json.dumps(_finite(out), indent=1, default=_jsonable, allow_nan=False))
+        stage.write_text(args.json, json_text(_finite(out), "--json", indent=1, default=_jsonable))
     print(f"\n({time.time() - t0:.1f} s)")
     return status
 
@@ -290,13 +289,8 @@ def _finite(v):
 
 
 def _jsonable(v):
-    if isinstance(v, (np.floating, np.integer)):
-        return v.item()
-    if isinstance(v, np.ndarray):
-        return v.tolist()
-    if isinstance(v, float) and not math.isfinite(v):
-        return str(v)
-    return str(v)
+    """What json cannot write by itself (after :func:`_finite`): numpy integers, else the text."""
+    return v.item() if isinstance(v, np.integer) else str(v)
 
 
 def _report(out: Path, design, cfg, rows, attrs, st, target, result, args, floors, allan, sweep) -> None:
