@@ -12,6 +12,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from fxdsp.ramps import derivative, read_ramps
+
 # cause name -> parameter names, in the contract's order and units
 CAUSES: dict[str, tuple[str, ...]] = {
     "none": (),
@@ -49,16 +51,6 @@ def _as_1d(name: str, values) -> np.ndarray:
     if arr.ndim != 1:
         raise ValueError(f"{name}: expected a 1-D array, got shape {arr.shape}")
     return arr
-
-
-def sample_interval(time_s) -> float:
-    """The log's sampling interval: the median step between *distinct* time stamps (the contract
-    allows repeated stamps, whose zero steps would make a plain median of the steps 0)."""
-    steps = np.diff(np.asarray(time_s, float))
-    steps = steps[steps > 0]
-    if steps.size == 0:
-        raise ValueError("time_s: the log has no two distinct time stamps")
-    return float(np.median(steps))
 
 
 def first_order_lag(time_s, temp_c, tau_s: float, initial: float | None = None) -> np.ndarray:
@@ -102,48 +94,14 @@ _lag_recursion = njit(cache=True)(_lag_recursion)  # compiled: 1M rows in millis
 
 def rate_of_change(time_s, temp_c) -> np.ndarray:
     """d(temp_c)/dt in C/s by central differences on the (possibly irregular) time grid."""
-    t = _as_1d("time_s", time_s)
-    u = _as_1d("temp_c", temp_c)
-    if u.size < 2:
-        return np.zeros_like(u)
-    if np.all(np.diff(t) > 0):
-        return np.gradient(u, t)
-    # repeated time stamps (the contract allows them): one derivative per distinct time, taken on
-    # the mean reading at that time, shared by all its rows (no division by a zero interval)
-    tu, inverse = np.unique(t, return_inverse=True)
-    if tu.size < 2:
-        return np.zeros_like(u)
-    uu = np.bincount(inverse, weights=u) / np.bincount(inverse)
-    return np.gradient(uu, tu)[inverse]
+    return derivative(_as_1d("time_s", time_s), _as_1d("temp_c", temp_c))
 
 
-def ramp_direction(time_s, temp_c, min_rate_c_per_s: float = 2e-4, min_duration_s: float = 600.0,
-                   ) -> np.ndarray:
+def ramp_direction(time_s, temp_c) -> np.ndarray:
     """s of the hysteresis cause: +1 after the last heating ramp, -1 after the last cooling ramp,
-    0 before the first ramp; it persists through dwells.
-
-    A ramp is a stretch of at least ``min_duration_s`` during which |dT/dt| exceeds
-    ``min_rate_c_per_s`` (default 0.72 C/h) with one sign; shorter excursions (noise, controller
-    overshoot) do not flip the state.
-    """
-    t = _as_1d("time_s", time_s)
-    rate = rate_of_change(t, temp_c)
-    sign = np.where(rate > min_rate_c_per_s, 1, np.where(rate < -min_rate_c_per_s, -1, 0)).astype(np.int64)
-    return _ramp_state(t, sign, float(min_duration_s))
-
-
-@njit(cache=True)
-def _ramp_state(t, sign, min_duration_s):
-    state = np.zeros(t.size)
-    current = 0.0
-    run_sign, run_start = 0, 0
-    for i in range(t.size):
-        if sign[i] != run_sign:
-            run_sign, run_start = sign[i], i
-        if run_sign != 0 and t[i] - t[run_start] >= min_duration_s:
-            current = float(run_sign)
-        state[i] = current
-    return state
+    0 before the first ramp; it persists through dwells and takes the ramp's sign from the ramp's
+    start, however short (the ramp rules, which scale with the log's noise, are in fxdsp.ramps)."""
+    return read_ramps(_as_1d("time_s", time_s), _as_1d("temp_c", temp_c)).state
 
 
 def warmup(time_s, a: float, tau_s: float) -> np.ndarray:

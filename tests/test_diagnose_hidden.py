@@ -10,6 +10,7 @@ cause: ``.venv/bin/fxdsp diagnose-hidden --per-cause 20``, or the slow test belo
 
 from __future__ import annotations
 
+import json
 import os
 
 import numpy as np
@@ -19,6 +20,9 @@ from fxdsp import mechanisms as mech
 from fxdsp.diagnose.api import diagnose_log
 from fxdsp.diagnose.hidden import ALL_CAUSES, diagnose_case, make_case, parameters_within
 from fxdsp.diagnose.logio import Log
+from fxdsp.diagnose.report import report_dict
+
+from independent.confusion import plain_numbers_of_unidentified
 
 SEEDS = (1, 2, 3, 4)
 
@@ -33,6 +37,7 @@ def test_hidden_cause_is_named_with_its_parameters(cause, seed):
     case = make_case(cause, seed)
     diag = diagnose_case(case)
     where = f"{case.scenario} {case.columns} snr={case.snr:.1f} truth={case.effects} noise={case.noise}"
+    assert plain_numbers_of_unidentified(json.loads(json.dumps(report_dict(diag)))) == [], where
     if cause == "none":
         assert diag.causes == [], where
         return

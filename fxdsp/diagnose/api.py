@@ -38,7 +38,7 @@ def diagnose_log(log: Log) -> Diagnosis:
     diag = diagnose_series(series)
     diag.rows = {"used": series.n, "dropped": log.dropped + n_spikes,
                  "dropped_invalid": log.dropped, "dropped_spikes": n_spikes}
-    diag.notes = list(log.notes)
+    diag.notes = list(log.notes) + list(diag.notes)
     if n_spikes:
         diag.notes.append(f"{n_spikes} isolated spike row(s) (non-physical one-sample readings) set aside")
     return diag

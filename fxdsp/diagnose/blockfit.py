@@ -118,10 +118,15 @@ class SegmentNormals:
             held[f] = self._sse(beta, *h)
         return train * self.weight, held * self.weight
 
-    def jackknife(self) -> tuple[np.ndarray, np.ndarray]:
-        """Delete-one-group fits: (coefficients [n_groups, p_all], training SSE [n_groups])."""
-        group = self.blocks.group()
-        s = self.blocks.n_groups
+    def jackknife(self, by: str = "group") -> tuple[np.ndarray, np.ndarray]:
+        """Delete-one-group fits: (coefficients [n_groups, p_all], training SSE [n_groups]); with
+        ``by="fold"`` the groups are the cross-validation folds (interleaved, not contiguous)."""
+        if by == "fold":
+            group, s = self.blocks.fold, self.blocks.n_folds
+        elif by == "group":
+            group, s = self.blocks.group(), self.blocks.n_groups
+        else:
+            raise ValueError(f"by: expected 'group' or 'fold', got {by!r}")
         coefs, sse = np.empty((s, self.alive.size)), np.empty(s)
         for k in range(s):
             m = group == k

@@ -9,7 +9,12 @@ from scipy.optimize import minimize_scalar
 from fxdsp.diagnose import model as M
 from fxdsp.diagnose.blockfit import jackknife_sd, parabolic_argmin
 from fxdsp.diagnose.context import MIN_GAIN, Candidate, Context
-from fxdsp.mechanisms import sample_interval
+from fxdsp.diagnose.identify import judge
+from fxdsp.ramps import sample_interval
+
+
+# causes that live at the start of the log rather than throughout it
+TRANSIENT = ("warmup",)
 
 
 def affected_channels(ctx: Context, cause: str) -> list[str]:
@@ -81,6 +86,7 @@ def evaluate(ctx: Context, state: dict, cause: str, base_held: dict) -> Candidat
         res = _evaluate_state(ctx, {**state, cause: {}}, channels)
         held = {ch: res[ch][1] for ch in channels}
         nonlinear, nonlinear_sd = {}, {}
+        at_bound = False
     else:
         pname = M.NONLINEAR[cause]
         values = grid(ctx, cause)
@@ -100,11 +106,19 @@ def evaluate(ctx: Context, state: dict, cause: str, base_held: dict) -> Candidat
         held = {ch: held_g[ch][pick, np.arange(pick.size)] for ch in channels}
         axis = np.log(values) if _log_axis(cause) else values
         best = _refine(ctx, state, cause, channels, values, full, axis)
-        per_group = np.array([parabolic_argmin(axis, jk[:, k]) for k in range(jk.shape[1])])
+        if cause in TRANSIENT:
+            # a settling lives in the first few time constants of the log: deleting one of the 20
+            # contiguous groups can delete most of it and throw the estimate to the grid's end.
+            # Its uncertainty comes from the interleaved cross-validation folds instead, each of
+            # which keeps 80 % of every part of the log (a delete-a-fold jackknife)
+            per_group = np.array([parabolic_argmin(axis, train[:, f]) for f in range(train.shape[1])])
+        else:
+            per_group = np.array([parabolic_argmin(axis, jk[:, k]) for k in range(jk.shape[1])])
         if _log_axis(cause):
             per_group = np.exp(per_group)
         nonlinear = {pname: best}
         nonlinear_sd = {pname: jackknife_sd(per_group)}
+        at_bound = int(np.argmin(full)) in (0, values.size - 1)
     evidence = 0.0
     ratios, before_after = {}, {}
     for ch in channels:
@@ -121,7 +135,9 @@ def evaluate(ctx: Context, state: dict, cause: str, base_held: dict) -> Candidat
         main = "output"  # the contract's channel for a lag, whenever it shows there
     return Candidate(cause=cause, channel=main, evidence=float(evidence), ratio=float(ratios[main]),
                      rms_before=float(before_after[main][0]), rms_after=float(before_after[main][1]),
-                     nonlinear=nonlinear, nonlinear_sd=nonlinear_sd, ratios=ratios)
+                     nonlinear=nonlinear, nonlinear_sd=nonlinear_sd, ratios=ratios, at_bound=at_bound,
+                     verdicts={k: judge(k, v, nonlinear_sd[k], ctx.series.duration, at_bound)
+                               for k, v in nonlinear.items()})
 
 
 def _refine(ctx, state, cause, channels, values, full, axis) -> float:

@@ -28,10 +28,22 @@ class Candidate:
     nonlinear: dict = field(default_factory=dict)  # the state entry (e.g. {"tau_s": 3000.0})
     nonlinear_sd: dict = field(default_factory=dict)
     ratios: dict = field(default_factory=dict)  # per affected channel
+    at_bound: bool = False  # the grid search's minimum is at an end of its range
+    verdicts: dict = field(default_factory=dict)  # nonlinear parameter -> identify.Verdict
+
+    @property
+    def failed(self) -> bool:
+        """A fit worse than the baseline on held-out data: a failure, not a result."""
+        return not self.ratio >= 1.0
+
+    @property
+    def identified(self) -> bool:
+        return all(v.identified for v in self.verdicts.values())
 
     @property
     def accepted_by_rule(self) -> bool:
-        return self.ratio >= MIN_GAIN and self.evidence >= MIN_EVIDENCE
+        return (not self.failed and self.identified and self.ratio >= MIN_GAIN
+                and self.evidence >= MIN_EVIDENCE)
 
 
 @dataclass
@@ -46,6 +58,9 @@ class Diagnosis:
     context: "Context"
     state: dict
     rows: dict = field(default_factory=dict)  # used / dropped, filled in by the caller that read the log
+    # causes whose fit helped but whose parameters the log does not determine: cause -> parameter
+    # -> identify.described(...) (never named, never written as a plain number)
+    unidentified: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)  # what the reader set aside, in words
 
 
@@ -113,12 +128,13 @@ def choose_orders(ctx: Context, state: dict) -> tuple[int, int | None]:
     return best
 
 
-def sf_estimate(ctx: Context) -> np.ndarray | None:
-    """S(Te) of the baseline fit, in output units per rate unit (None without a rate column)."""
+def sf_estimate(ctx: Context, state: dict | None = None) -> np.ndarray | None:
+    """S(Te) of the fit of ``state`` (default: the baseline), in output units per rate unit (None
+    without a rate column)."""
     pb, ps = ctx.orders
     if ps is None or not ctx.has_rate:
         return None
-    normals, names = ctx.normals("output", {})
+    normals, names = ctx.normals("output", state or {})
     coef, _ = normals.fit_all()
     x = ctx.scales["output"](ctx.series.temp)
     sd = ctx.norm["output"][1]

@@ -12,9 +12,13 @@
    frequency when it is logged, a ramp-rate term or hysteresis must not touch it.
 3. Selection (selection.py): the best candidate with a held-out rms ratio >= MIN_GAIN and an
    evidence >= MIN_EVIDENCE joins the model (earlier nonlinear parameters are re-fitted with it),
-   and the rest are tried again on top, up to MAX_CAUSES. Then time-like causes (aging, warm-up,
-   hysteresis) are re-tested on random-walk innovations if the final residual still wanders, and
-   every cause must still pass when it is the last one added. Nothing left means `none`.
+   and the rest are tried again on top, up to MAX_CAUSES; the same forward selection also starts
+   from the best pair of causes (two causes can hide each other) and the better model is kept.
+   Then time-like causes (aging, warm-up, hysteresis, quadrature) are re-tested against a random-
+   walk bias if the residual without them wanders, and every cause must still pass when it is the
+   last one added. A cause whose parameters the log does not determine (identify.py) is set aside,
+   not named, and reported as unidentified. Nothing left means `none`; `causes` are ordered by
+   held-out gain.
 4. Calibration and numbers (results.py): the orders of B and S (0..3) are chosen by held-out
    error with the causes in place; parameters come from the full-data fit (nonlinear ones refined
    by Brent's method), uncertainties are delete-one-group jackknife standard deviations (20
@@ -32,9 +36,10 @@ import numpy as np
 from fxdsp import mechanisms as mech
 from fxdsp.diagnose import model as M
 from fxdsp.diagnose.candidates import affected_channels, refit_nonlinear
-from fxdsp.diagnose.context import ORDER_CHOICES, Context, Diagnosis, choose_orders, set_noise_weights, sf_estimate
+from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, ORDER_CHOICES, Context, Diagnosis, choose_orders, set_noise_weights, sf_estimate
+from fxdsp.diagnose.identify import described, judge
 from fxdsp.diagnose.results import baseline_coefficients, channel_gain, linear_parameters
-from fxdsp.diagnose.selection import check_against_wander, greedy_search, prune
+from fxdsp.diagnose.selection import check_against_wander, greedy_search, order_by_gain, prune
 
 MAX_SEARCH_ROWS = 100_000
 
@@ -46,11 +51,12 @@ def diagnose_series(series: M.Series, n_segments: int = 200, n_folds: int = 5) -
     ctx.orders = (max(ORDER_CHOICES), max(ORDER_CHOICES) if ctx.has_rate else None)
     set_noise_weights(ctx)
     series.sf_estimate = sf_estimate(ctx)
-    if series.n > MAX_SEARCH_ROWS:
+    step = -(-series.n // MAX_SEARCH_ROWS)
+    if step > 1:
         # a million rows carry no more shape information than a hundred thousand: search on every
         # k-th row (lags and derivatives were computed on the full log), then fit the found
         # model on all rows
-        search = Context(series.decimated(-(-series.n // MAX_SEARCH_ROWS)), n_segments, n_folds)
+        search = Context(series.decimated(step), n_segments, n_folds)
         search.orders = ctx.orders
         set_noise_weights(search)
     else:
@@ -60,16 +66,37 @@ def diagnose_series(series: M.Series, n_segments: int = 200, n_folds: int = 5) -
     state, accepted = check_against_wander(search, state, accepted)
     state, accepted = prune(search, state, accepted)
     refit_nonlinear(search, state, accepted)  # the causes that were removed may have biased them
+    if "sf_nonlinearity" in state:
+        _converge_scale_factor(ctx, search, state, step)
 
-    ctx.orders = choose_orders(search, state)
-    linear, linear_sd = linear_parameters(ctx, state)
-    parameters, uncertainty = {}, {}
-    for cand in accepted:
-        p = {**linear.get(cand.cause, {}), **cand.nonlinear}
-        u = {**linear_sd.get(cand.cause, {}), **cand.nonlinear_sd}
-        names = mech.CAUSES[cand.cause]
-        parameters[cand.cause] = {k: float(p[k]) for k in names}
-        uncertainty[cand.cause] = {k: float(u[k]) for k in names if np.isfinite(u.get(k, np.nan))}
+    unidentified: dict = {}
+    notes: list[str] = []
+    while True:
+        ctx.orders = choose_orders(search, state)
+        parameters, uncertainty, verdicts = _final_parameters(ctx, state, accepted)
+        doubtful = [c for c in accepted if not all(v.identified for v in verdicts[c.cause].values())]
+        if not doubtful:
+            break
+        # a cause whose numbers the log cannot determine is not named: set it aside, say why,
+        # and fit the rest again without it
+        for cand in doubtful:
+            _set_aside(unidentified, notes, cand.cause,
+                       {k: described(parameters[cand.cause][k], uncertainty[cand.cause].get(k), verdicts[cand.cause][k])
+                        for k in mech.CAUSES[cand.cause]})
+        accepted = [c for c in accepted if c not in doubtful]
+        state = {k: v for k, v in state.items() if k in {c.cause for c in accepted}}
+        refit_nonlinear(search, state, accepted)
+    named = {c.cause for c in accepted}
+    for cand in first_round:
+        # a candidate that passed the evidence rule on its numbers alone but was never accepted
+        # because its parameter is not determined: say so rather than stay silent (unless it was
+        # named after all, its parameter determined once the other causes were in the model)
+        if (not cand.identified and cand.cause not in (set(unidentified) | named) and cand.ratio >= MIN_GAIN
+                and cand.evidence >= MIN_EVIDENCE):
+            _set_aside(unidentified, notes, cand.cause,
+                       {k: described(cand.nonlinear[k], cand.nonlinear_sd.get(k), v) for k, v in cand.verdicts.items()})
+    accepted = order_by_gain(search, state, accepted)  # `causes` in order of held-out gain
+    parameters = {c.cause: parameters[c.cause] for c in accepted}
     if accepted:
         primary = accepted[0]
         channel_state = {c: state[c] for c in state if primary.channel in affected_channels(ctx, c)}
@@ -78,5 +105,44 @@ def diagnose_series(series: M.Series, n_segments: int = 200, n_folds: int = 5) -
         gain = channel_gain(ctx, {}, "output")
     diag = Diagnosis(causes=[c.cause for c in accepted], parameters=parameters, uncertainty=uncertainty,
                      gain=gain, candidates=first_round, orders=ctx.orders,
-                     baseline=baseline_coefficients(ctx, state), context=ctx, state=state)
+                     baseline=baseline_coefficients(ctx, state), context=ctx, state=state,
+                     unidentified=unidentified, notes=notes)
     return diag
+
+
+def _set_aside(unidentified: dict, notes: list, cause: str, params: dict) -> None:
+    """Record a cause that is not named because the log does not determine its parameters."""
+    unidentified[cause] = params
+    reasons = "; ".join(p["why"] for p in params.values() if not p["identified"])
+    notes.append(f"{cause} lowered the held-out error but is not named: {reasons}")
+
+
+def _converge_scale_factor(ctx: Context, search: Context, state: dict, step: int) -> None:
+    """S k3 rate^3 is bilinear: the rate^3 column is built on an estimate of S, and the baseline's
+    estimate has absorbed part of k3 rate^3 (rate^3 correlates with rate), which biases k3 by
+    1/(1 + k3 E[rate^4]/E[rate^2]). Re-estimate S with the cubic term in the model until it
+    settles (alternating least squares)."""
+    for _ in range(20):
+        new = sf_estimate(ctx, state)
+        settled = np.allclose(new, ctx.series.sf_estimate, rtol=1e-9, atol=0.0)
+        ctx.series.sf_estimate = new
+        if search is not ctx:
+            search.series.sf_estimate = np.ascontiguousarray(new[::step])
+        if settled:
+            return
+
+
+def _final_parameters(ctx: Context, state: dict, accepted: list):
+    """Parameters (contract units), jackknife sds and identification verdicts of the named causes."""
+    linear, linear_sd = linear_parameters(ctx, state)
+    parameters, uncertainty, verdicts = {}, {}, {}
+    for cand in accepted:
+        p = {**linear.get(cand.cause, {}), **cand.nonlinear}
+        u = {**linear_sd.get(cand.cause, {}), **cand.nonlinear_sd}
+        names = mech.CAUSES[cand.cause]
+        parameters[cand.cause] = {k: float(p[k]) for k in names}
+        uncertainty[cand.cause] = {k: float(u[k]) for k in names if np.isfinite(u.get(k, np.nan))}
+        verdicts[cand.cause] = {k: judge(k, parameters[cand.cause][k], uncertainty[cand.cause].get(k),
+                                         ctx.series.duration, cand.at_bound and k in cand.nonlinear)
+                                for k in names}
+    return parameters, uncertainty, verdicts

@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from fxdsp.diagnose.context import Diagnosis
-from fxdsp.mechanisms import sample_interval
+from fxdsp.ramps import sample_interval
 
 
 def _heldout_rms(y: np.ndarray, temp: np.ndarray, rate: np.ndarray | None, folds: np.ndarray,

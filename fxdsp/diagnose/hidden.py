@@ -71,6 +71,7 @@ class Case:
     snr: float
     log: dict
     truth: dict
+    causes: tuple = ()  # every hidden cause ((cause,) for one, two for a pair, () for none)
 
 
 def _rms(x: np.ndarray) -> float:
@@ -92,12 +93,19 @@ def _effective_noise(truth: dict, levels: dict, columns) -> dict[str, float]:
             "freq_hz": float(np.hypot(levels["freq_hz"], base["k_hz_per_c"] * thermometer))}
 
 
-def make_case(cause: str, seed: int, scenario: str | None = None, snr_range=SNR_RANGE) -> Case:
+def make_case(cause: str, seed: int, scenario: str | None = None, snr_range=SNR_RANGE,
+              second: str | None = None) -> Case:
+    """One simulated log with ``cause`` (and ``second``, for a pair) hidden in it."""
     from fxdsp.sim import generate_log  # the colleague's simulator: the ground truth of these tests
 
-    rng = np.random.default_rng([seed, ALL_CAUSES.index(cause)])
-    scenario = scenario or str(rng.choice(SCENARIOS_FOR.get(cause, DEFAULT_SCENARIOS)))
-    if cause == "sf_nonlinearity" and scenario == "random":
+    causes = (cause,) if second is None else (cause, second)
+    if second is not None and (second == cause or "none" in causes):
+        raise ValueError(f"second: a pair needs two different causes other than none, got {causes}")
+    key = [seed, ALL_CAUSES.index(cause)] + ([ALL_CAUSES.index(second)] if second else [])
+    rng = np.random.default_rng(key)
+    allowed = [s for s in DEFAULT_SCENARIOS if all(s in SCENARIOS_FOR.get(c, DEFAULT_SCENARIOS) for c in causes)]
+    scenario = scenario or str(rng.choice(allowed))
+    if "sf_nonlinearity" in causes and scenario == "random":
         # a random programme may draw no rate table: move to the next seed that has one
         sub = 0
         while True:
@@ -110,21 +118,40 @@ def make_case(cause: str, seed: int, scenario: str | None = None, snr_range=SNR_
     else:
         sim_seed = seed
     extra = [c for c in OPTIONAL if rng.random() < 0.5]
-    needed = NEEDS.get(cause, ())
+    needed = tuple(n for c in causes for n in NEEDS.get(c, ()))
     probe = generate_log(scenario, {}, seed=sim_seed, columns=("rate_dps",), duration_scale=DURATION_SCALE,
                          noise="off")
     if np.ptp(probe["rate_dps"]) > 0:
         needed = needed + ("rate_dps",)  # without it the rate table is an unexplained output
     columns = tuple(c for c in OPTIONAL if c in extra or c in needed)
-    snr = float(rng.uniform(*snr_range))
-    sign = 1.0 if rng.random() < 0.5 else -1.0
     kw = dict(seed=sim_seed, duration_scale=DURATION_SCALE)
     clean, truth0 = generate_log(scenario, {}, columns=OPTIONAL, noise="off", return_truth=True, **kw)
     from fxdsp.sim.noise import default_noise
     levels = default_noise(truth0["baseline"]["sf_poly"][0])
-    noise: dict = {}
-    t = clean["time_s"]
     sigma = _effective_noise(truth0, levels, columns)
+    effects: dict = {}
+    noise: dict = {}
+    snrs = []
+    for c in causes:
+        snr = float(rng.uniform(*snr_range))
+        sign = 1.0 if rng.random() < 0.5 else -1.0
+        e, n = _draw_effect(c, rng, snr, sign, scenario, kw, clean, truth0, levels, sigma)
+        effects.update(e)
+        noise.update(n)
+        snrs.append(snr)
+    log, truth = generate_log(scenario, effects, columns=columns, noise=noise or None,
+                              return_truth=True, **kw)
+    case = Case(cause, seed, scenario, columns, effects, noise, snrs[0], log, truth)
+    case.causes = causes if cause != "none" else ()
+    return case
+
+
+def _draw_effect(cause, rng, snr, sign, scenario, kw, clean, truth0, levels, sigma):
+    """(effects, noise) of one cause, sized to ``snr`` x the channel's effective white noise."""
+    from fxdsp.sim import generate_log
+
+    t = clean["time_s"]
+    noise: dict = {}
     effects: dict = {}
     if cause == "thermal_lag":
         tau = float(np.exp(rng.uniform(*np.log(TAU_LAG_RANGE))))
@@ -167,9 +194,7 @@ def make_case(cause: str, seed: int, scenario: str | None = None, snr_range=SNR_
             # look-alike of aging, warm-up and hysteresis
             wander = float(rng.uniform(*WANDER_RANGE))
             noise["rate_random_walk"] = wander * sigma["output"] / np.sqrt(t[-1] - t[0])
-    log, truth = generate_log(scenario, effects, columns=columns, noise=noise or None,
-                              return_truth=True, **kw)
-    return Case(cause, seed, scenario, columns, effects, noise, snr, log, truth)
+    return effects, noise
 
 
 def diagnose_case(case: Case):
@@ -201,6 +226,39 @@ class Confusion:
     seconds: float
 
 
+def case_outcome(case: Case, diag) -> dict:
+    """What one case's diagnosis found, as plain data (JSON-able): the record the confusion tally
+    reads, here and in `fxdsp sweep hidden`."""
+    cause = case.cause
+    got = diag.causes[0] if diag.causes else "none"
+    found = diag.parameters.get(cause)
+    return {"scenario": case.scenario, "columns": list(case.columns), "snr": case.snr, "found": list(diag.causes),
+            "first": got,
+            "params_ok": bool(got == cause and parameters_within(case, diag.parameters.get(cause, {}))),
+            "gain_ok": bool(cause == "none" or diag.gain["ratio"] > 1.3), "gain_ratio": float(diag.gain["ratio"]),
+            "parameters": found, "truth": case.effects.get(cause)}
+
+
+def tally(per_cause: int, causes, outcomes, seconds: float = 0.0) -> Confusion:
+    """The confusion of ``outcomes``: (cause, case seed, case_outcome record) per case."""
+    causes = tuple(causes)
+    index = {c: i for i, c in enumerate(ALL_CAUSES)}
+    matrix = np.zeros((len(ALL_CAUSES), len(ALL_CAUSES)), dtype=int)
+    params_ok = {c: 0 for c in causes}
+    gain_ok = {c: 0 for c in causes}
+    extra = {c: 0 for c in causes}
+    failures = []
+    for cause, seed, r in outcomes:
+        matrix[index[cause], index[r["first"]]] += 1
+        params_ok[cause] += r["params_ok"]
+        gain_ok[cause] += r["gain_ok"]
+        extra[cause] += len(r["found"]) > 1
+        if r["first"] != cause or not r["params_ok"] or not r["gain_ok"] or len(r["found"]) > 1:
+            failures.append((cause, seed, r["scenario"], tuple(r["columns"]), round(r["snr"], 1), r["found"],
+                             r["parameters"], r["truth"], round(r["gain_ratio"], 2)))
+    return Confusion(per_cause, causes, matrix, params_ok, gain_ok, extra, failures, seconds)
+
+
 def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, snr_range=SNR_RANGE) -> Confusion:
     """Run ``per_cause`` cases per cause and tally what the diagnosis names."""
     unknown = [c for c in causes if c not in ALL_CAUSES]
@@ -208,30 +266,13 @@ def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, snr_ran
         raise ValueError(f"causes: unknown cause {unknown[0]!r}; expected some of {', '.join(ALL_CAUSES)}")
     if per_cause < 1:
         raise ValueError(f"per_cause: need at least 1 case per cause, got {per_cause}")
-    index = {c: i for i, c in enumerate(ALL_CAUSES)}
-    matrix = np.zeros((len(ALL_CAUSES), len(ALL_CAUSES)), dtype=int)
-    params_ok = {c: 0 for c in causes}
-    extra = {c: 0 for c in causes}
-    gain_ok = {c: 0 for c in causes}
-    failures = []
     start = time.perf_counter()
+    outcomes = []
     for cause in causes:
         for k in range(per_cause):
             case = make_case(cause, first_seed + k, snr_range=snr_range)
-            diag = diagnose_case(case)
-            got = diag.causes[0] if diag.causes else "none"
-            matrix[index[cause], index[got]] += 1
-            ok_p = got == cause and parameters_within(case, diag.parameters.get(cause, {}))
-            ok_g = cause == "none" or diag.gain["ratio"] > 1.3
-            params_ok[cause] += ok_p
-            extra[cause] += len(diag.causes) > 1
-            gain_ok[cause] += ok_g
-            if got != cause or not ok_p or not ok_g or len(diag.causes) > 1:
-                failures.append((cause, case.seed, case.scenario, case.columns, round(case.snr, 1),
-                                 diag.causes, diag.parameters.get(cause), case.effects.get(cause),
-                                 round(diag.gain["ratio"], 2)))
-    return Confusion(per_cause, tuple(causes), matrix, params_ok, gain_ok, extra, failures,
-                     time.perf_counter() - start)
+            outcomes.append((cause, case.seed, case_outcome(case, diagnose_case(case))))
+    return tally(per_cause, causes, outcomes, time.perf_counter() - start)
 
 
 def format_confusion(res: Confusion) -> str:

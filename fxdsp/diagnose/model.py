@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fxdsp import mechanisms as mech
+from fxdsp.ramps import quantisation_step, read_ramps
 
 T_REF_C = mech.T_CURVE_C
 
@@ -40,16 +41,11 @@ class Series:
     hyst: np.ndarray = field(init=False)
 
     def __post_init__(self):
-        # the derivative of a noisy reading is mostly noise at a 1..10 s log interval; the physics
-        # (and the simulator) respond to the true temperature change, so differentiate a reading
-        # smoothed over about a minute (short against any ramp, long against the ADC noise)
-        smooth, spread_s, k = smoothed(self.t, self.temp, 60.0)
-        self.dtdt = mech.rate_of_change(self.t, smooth)
-        # smoothing starts a ramp half a window early and stretches it by a window: ask for that
-        # much more duration (a ramp just too short to flip the state still does not flip it),
-        # then move the flips back by half a window to where the unsmoothed ramp puts them
-        hyst = mech.ramp_direction(self.t, smooth, min_duration_s=600.0 + spread_s)
-        self.hyst = np.concatenate([hyst[k:], np.full(k, hyst[-1])]) if 0 < k < hyst.size else hyst
+        # ramps, hysteresis state and a derivative smoothed just enough for the log's own noise
+        # and ramp rates (fxdsp.ramps states the rules; the report repeats what they found)
+        self.ramps = read_ramps(self.t, self.temp)
+        self.dtdt = self.ramps.dtdt
+        self.hyst = self.ramps.state
         self._freq_thermometer = None
         # S(Te) of the calibrated baseline (output unit per rate unit), set by the engine: with it
         # the cubic rate term S k3 rate^3 is one linear column whose coefficient is k3 itself
@@ -98,19 +94,6 @@ class Series:
         return out
 
 
-def smoothed(t: np.ndarray, values: np.ndarray, window_s: float) -> tuple[np.ndarray, float, int]:
-    """Centred moving average over about ``window_s`` (2 k + 1 samples, edges shrink), the time by
-    which it widens a ramp (2 k dt) and k."""
-    dt = mech.sample_interval(t) if np.ptp(t) > 0 else window_s
-    k = int(window_s / dt) // 2 if dt > 0 else 0
-    if k < 1 or values.size < 2 * k + 1:
-        return np.asarray(values, dtype=float), 0.0, 0
-    c = np.concatenate([[0.0], np.cumsum(values - values[0])])
-    i = np.arange(values.size)
-    lo, hi = np.maximum(i - k, 0), np.minimum(i + k + 1, values.size)
-    return values[0] + (c[hi] - c[lo]) / (hi - lo), 2.0 * k * dt, k
-
-
 def spike_rows(values: np.ndarray, threshold: float = 25.0) -> np.ndarray:
     """Isolated one-sample spikes: a reading far from the line through its two neighbours while
     the neighbours agree with each other.
@@ -132,6 +115,9 @@ def spike_rows(values: np.ndarray, threshold: float = 25.0) -> np.ndarray:
     dev[0], gap[0] = y[0] - (2 * y[1] - y[2]), np.abs(y[1] - y[2])  # end rows: extrapolate
     dev[-1], gap[-1] = y[-1] - (2 * y[-2] - y[-3]), np.abs(y[-2] - y[-3])
     spread = 1.4826 * np.median(np.abs(dev[1:-1] - np.median(dev[1:-1])))
+    # a quantised reading whose noise is below its step toggles by one step now and then: that is
+    # the reading's resolution, not a spike (its MAD can be 0)
+    spread = max(spread, quantisation_step(y) / np.sqrt(12.0))
     if not spread > 0:
         spread = float(np.std(dev[1:-1]))
     if not spread > 0:
@@ -202,10 +188,22 @@ def output_design(series: Series, state: dict, orders: tuple[int, int | None], s
         if cause in state:
             cols.append(make())
             names.append(cause)
-    if "thermal_lag" in state:
+    if "thermal_lag" in state and has_lag_start(series, state["thermal_lag"]["tau_s"]):
         cols.append(lag_start(series, state["thermal_lag"]["tau_s"]))
         names.append("lag_start")
     return np.column_stack(cols), names
+
+
+# the share of the log by which a lag's start transient must still be alive to get a column
+START_SUPPORT = 0.02
+
+
+def has_lag_start(series: Series, tau_s: float) -> bool:
+    """Whether the lag's start transient outlives the first START_SUPPORT of the log (to 5 %). A
+    shorter one dies inside the first held-out segment: its column would be fitted, in the folds
+    without that segment, to nothing, and its held-out prediction would be noise amplified."""
+    t = series.t
+    return bool(np.exp(-(START_SUPPORT * (t[-1] - t[0])) / tau_s) > 0.05)
 
 
 def lag_start(series: Series, tau_s: float) -> np.ndarray:
@@ -225,7 +223,7 @@ def freq_design(series: Series, state: dict, scale: Scaling) -> tuple[np.ndarray
     if "frequency_nonlinearity" in state:
         cols.append(x * x)
         names.append("frequency_nonlinearity")
-    if "thermal_lag" in state:
+    if "thermal_lag" in state and has_lag_start(series, state["thermal_lag"]["tau_s"]):
         cols.append(lag_start(series, state["thermal_lag"]["tau_s"]))
         names.append("lag_start")
     return np.column_stack(cols), names

@@ -8,6 +8,8 @@ import numpy as np
 
 from fxdsp import mechanisms as mech
 from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, Diagnosis
+from fxdsp.diagnose.identify import TAU_LENGTHS, Verdict, described
+from fxdsp.diagnose.selection import NULL_DRAWS, NULL_QUANTILE, WANDER_GAIN
 from fxdsp.diagnose.results import heldout_residuals
 
 _EXPLAIN = {
@@ -33,11 +35,13 @@ _EXPLAIN = {
 
 
 def explanation(diag: Diagnosis) -> str:
+    unnamed = "".join(f" {_UNNAMED.format(cause=c, why=_reasons(p))}" for c, p in diag.unidentified.items())
     if not diag.causes:
         g = diag.gain
         return ("Nothing beyond the baseline (B and S polynomials in temp_c, linear thermometers) and the "
                 f"noise: no candidate cause lowers the held-out rms of its channel by {100 * (MIN_GAIN - 1):.0f} % "
-                f"or more (output held-out rms {g['rms_before']:.4g}).")
+                f"or more with parameters the log determines (output held-out rms {g['rms_before']:.4g})."
+                + unnamed)
     parts = []
     for cause in diag.causes:
         params = dict(diag.parameters[cause])
@@ -47,17 +51,45 @@ def explanation(diag: Diagnosis) -> str:
     g = diag.gain
     parts.append(f"Held-out rms of {g['channel']}: {g['rms_before']:.4g} -> {g['rms_after']:.4g} "
                  f"({g['ratio']:.2f}x).")
-    return " ".join(parts)
+    return " ".join(parts) + unnamed
+
+
+_UNNAMED = "{cause} is not named although it lowers the held-out error: {why}."
+
+
+def _reasons(described_params: dict) -> str:
+    return "; ".join(p["why"] for p in described_params.values() if not p["identified"])
+
+
+def _candidate_entry(diag: Diagnosis, c) -> dict:
+    """One candidate of the first round: its held-out figures and its parameters with their
+    identified flags, or, when its fit is worse than the baseline, a failed fit and no numbers."""
+    entry = {"cause": c.cause, "channel": c.channel, "accepted": c.cause in diag.causes}
+    if c.failed:
+        return {**entry, "fit": "failed",
+                "why": "the fitted model predicts held-out data worse than the baseline"}
+    entry.update({"fit": "ok", "score": round(float(c.evidence), 3), "rms_after": float(c.rms_after),
+                  "rms_before": float(c.rms_before), "ratio": float(c.ratio)})
+    if c.nonlinear:
+        entry["parameters"] = {k: described(v, c.nonlinear_sd.get(k), c.verdicts[k]) for k, v in c.nonlinear.items()}
+    return entry
+
+
+def parameters_by_cause(diag: Diagnosis) -> dict:
+    """Every named cause's parameters with uncertainty and identified flag (all identified: a
+    cause is not named on an undetermined number)."""
+    out = {}
+    for cause in diag.causes:
+        unc = diag.uncertainty.get(cause, {})
+        out[cause] = {k: described(v, unc.get(k), Verdict(True)) for k, v in diag.parameters[cause].items()}
+    return out
 
 
 def report_dict(diag: Diagnosis) -> dict:
     from fxdsp.diagnose.extension import fpga_extensions
 
     cause = diag.causes[0] if diag.causes else "none"
-    candidates = [{"cause": c.cause, "score": round(float(c.evidence), 3), "rms_after": float(c.rms_after),
-                   "rms_before": float(c.rms_before), "ratio": float(c.ratio), "channel": c.channel,
-                   "accepted": c.cause in diag.causes, **({"nonlinear": c.nonlinear} if c.nonlinear else {})}
-                  for c in diag.candidates]
+    candidates = [_candidate_entry(diag, c) for c in diag.candidates]
     return {
         "cause": cause,
         "causes": list(diag.causes),
@@ -69,13 +101,22 @@ def report_dict(diag: Diagnosis) -> dict:
         "rows": dict(diag.rows or {"used": diag.context.series.n, "dropped": 0}),
         "notes": list(diag.notes),
         "fpga_extension": fpga_extensions(diag),
-        "all_parameters": diag.parameters,
-        "all_uncertainty": diag.uncertainty,
+        "parameters_by_cause": parameters_by_cause(diag),
+        "not_identified": diag.unidentified,
+        "detection": diag.context.series.ramps.describe(),
         "baseline": {"bias_order": diag.orders[0], "sf_order": diag.orders[1], **diag.baseline},
         "method": ("blocked cross-validation: 5 folds of interleaved contiguous segments; score = held-out "
                    "SSE drop in units of the channel's white-noise variance; a cause needs a held-out rms "
-                   f"ratio >= {MIN_GAIN} and a score >= {MIN_EVIDENCE:g}; time-like causes re-tested against a "
-                   "random-walk bias; uncertainties: delete-one-group jackknife (20 contiguous groups)"),
+                   f"ratio >= {MIN_GAIN} and a score >= {MIN_EVIDENCE:g}; forward selection, also started from "
+                   "the best pair of causes (two causes can hide each other); time-like causes (aging, warm-up, "
+                   "hysteresis, quadrature) re-tested on random-walk innovations when the residual without them "
+                   f"wanders, or kept when their held-out rms ratio >= {WANDER_GAIN} and their evidence exceeds "
+                   f"the {100 * NULL_QUANTILE:g} % point of {NULL_DRAWS} random walks at the level of the residual "
+                   "without them; "
+                   "uncertainties: delete-one-group jackknife (20 contiguous groups; a warm-up: the 5 "
+                   "interleaved folds); a parameter is identified when finite, not at the end of its search "
+                   f"range, its uncertainty below its value, and (a time constant) at most 1/{TAU_LENGTHS:g} of "
+                   "the log; a cause is named only with identified parameters"),
     }
 
 
@@ -92,10 +133,6 @@ def write_json(path, data: dict) -> None:
 
 
 # -- human report --------------------------------------------------------------------------------
-def _phase(dtdt: np.ndarray, threshold: float = 2e-4) -> np.ndarray:
-    return np.where(dtdt > threshold, 1, np.where(dtdt < -threshold, -1, 0))
-
-
 def write_report(diag: Diagnosis, directory) -> Path:
     """Markdown report plus PNG plots (residual vs temperature / dT/dt / time) in ``directory``."""
     import matplotlib
@@ -110,7 +147,7 @@ def write_report(diag: Diagnosis, directory) -> Path:
     base_res = heldout_residuals(ctx, {}, "output")
     ext_state = {c: diag.state[c] for c in diag.state if c in _OUTPUT_CAUSES}
     ext_res = heldout_residuals(ctx, ext_state, "output") if ext_state else None
-    phase = _phase(s.dtdt)
+    phase = s.ramps.phase()
     styles = {1: ("heating", "tab:red"), -1: ("cooling", "tab:blue"), 0: ("dwell", "0.6")}
     step = max(1, s.n // 20000)  # a million points make an unreadable, slow scatter
     idx = np.arange(0, s.n, step)
@@ -172,8 +209,18 @@ def write_report(diag: Diagnosis, directory) -> Path:
               "| cause | channel | score (noise variances) | held-out rms before | after | ratio | accepted |",
               "|---|---|---|---|---|---|---|"]
     for c in data["candidates"]:
+        if c["fit"] == "failed":
+            lines.append(f"| {c['cause']} | {c['channel']} | failed fit: {c['why']} | | | | |")
+            continue
         lines.append(f"| {c['cause']} | {c['channel']} | {c['score']:.1f} | {c['rms_before']:.4g} | "
                      f"{c['rms_after']:.4g} | {c['ratio']:.3f} | {'yes' if c['accepted'] else ''} |")
+    if diag.unidentified:
+        lines += ["", "## Not identified (not named, no number given)", "", "| cause | parameter | why |",
+                  "|---|---|---|"]
+        for cause, params in diag.unidentified.items():
+            for name, p in params.items():
+                lines.append(f"| {cause} | {name} | {p.get('why', 'determined, but another of its parameters is not')} |")
+    lines += ["", "## How ramps were read", "", data["detection"], ""]
     lines += ["", "## Plots", ""] + [f"![{name}]({name})" for name in images] + ["", "## Method", "",
                                                                                data["method"], ""]
     path = out / "report.md"

@@ -8,6 +8,7 @@ import numpy as np
 from fxdsp import mechanisms as mech
 from fxdsp.diagnose import model as M
 from fxdsp.diagnose.blockfit import SegmentNormals, jackknife_sd
+from fxdsp.diagnose.candidates import TRANSIENT
 from fxdsp.diagnose.context import Context
 
 def linear_parameters(ctx: Context, state: dict):
@@ -23,7 +24,10 @@ def linear_parameters(ctx: Context, state: dict):
                 continue
             pname, fn = conv
             params.setdefault(cause, {})[pname] = fn(coef)
-            sds.setdefault(cause, {})[pname] = jackknife_sd(np.array([fn(c) for c in jk]))
+            # a settling's amplitude, like its time constant, from the interleaved folds: one
+            # contiguous group can hold the whole transient (see candidates.TRANSIENT)
+            samples = normals.jackknife("fold")[0] if cause in TRANSIENT else jk
+            sds.setdefault(cause, {})[pname] = jackknife_sd(np.array([fn(c) for c in samples]))
     return params, sds
 
 

@@ -13,18 +13,41 @@ from fxdsp.diagnose.context import (MAX_CAUSES, MIN_EVIDENCE, MIN_GAIN, Candidat
 # causes whose regressor is slow in time, so a bias random walk can imitate them: a drift, a
 # settling, a level that changes a few times, a quadrature level wandering over hours
 TIME_TIED = ("aging_drift", "warmup", "hysteresis", "quadrature_leak")
+# the re-test of a time-like cause in a wandering log: its held-out evidence must exceed the
+# NULL_QUANTILE of NULL_DRAWS random walks at the residual's level (fixed seed: reproducible), and
+# pass on innovations unless its held-out rms ratio is at least WANDER_GAIN
+WANDER_GAIN = 1.3
+NULL_DRAWS = 40
+NULL_QUANTILE = 0.99
+NULL_SEED = 20261123
 
 
 def greedy_search(ctx: Context) -> tuple[dict, list[Candidate], list[Candidate]]:
-    """Forward selection on held-out evidence: (state, accepted candidates, first-round candidates)."""
-    series = ctx.series
-    state: dict = {}
-    accepted: list[Candidate] = []
-    first_round: list[Candidate] = []
+    """Forward selection on held-out evidence, also started from the best pair of causes:
+    (state, accepted candidates, first-round candidates).
+
+    Two causes can hide each other (a hysteresis step and an aging drift of opposite sign: each
+    alone explains little, together nearly everything), which one-at-a-time selection never
+    finds. So every pair of candidates is also scored together, and the forward selection is run
+    again from the best pair that passes; the model with the lower held-out error wins."""
     causes = [c for c in mech.CAUSES if available(ctx, c)]
-    for _ in range(MAX_CAUSES):
+    state, accepted, first_round = _forward(ctx, causes, {}, [])
+    pair = _best_pair(ctx, causes, first_round)
+    if pair is not None and {c.cause for c in pair} != set(state):
+        start = {c.cause: dict(c.nonlinear) for c in pair}
+        refit_nonlinear(ctx, start, list(pair))
+        p_state, p_accepted, _ = _forward(ctx, causes, start, list(pair))
+        if _total_held(ctx, p_state) < _total_held(ctx, state) - MIN_EVIDENCE:
+            state, accepted = p_state, p_accepted
+    return state, accepted, first_round
+
+
+def _forward(ctx: Context, causes: list[str], state: dict, accepted: list[Candidate]):
+    state, accepted = dict(state), list(accepted)
+    first_round: list[Candidate] = []
+    while len(accepted) < MAX_CAUSES:
         set_noise_weights(ctx, state)
-        base_held = {ch: ctx.normals(ch, state)[0].folds()[1] for ch in series.channels()}
+        base_held = {ch: ctx.normals(ch, state)[0].folds()[1] for ch in ctx.series.channels()}
         results = [evaluate(ctx, state, c, base_held) for c in causes if c not in state]
         if not first_round:
             first_round = sorted(results, key=lambda c: -c.evidence)
@@ -37,6 +60,41 @@ def greedy_search(ctx: Context) -> tuple[dict, list[Candidate], list[Candidate]]
         if len(accepted) > 1:
             refit_nonlinear(ctx, state, accepted)
     return state, accepted, first_round
+
+
+def _total_held(ctx: Context, state: dict) -> float:
+    """Held-out SSE over every channel, in units of the baseline's white-noise variances (one
+    yardstick for models with different causes)."""
+    set_noise_weights(ctx, {})
+    return float(sum(ctx.normals(ch, state)[0].folds()[1].sum() for ch in ctx.series.channels()))
+
+
+def _best_pair(ctx: Context, causes: list[str], first_round: list[Candidate]):
+    """The pair of causes with the lowest held-out error together (nonlinear parameters from the
+    first round), as two candidates each scored on top of the other; None unless both pass."""
+    first = {c.cause: c for c in first_round}
+    best, best_sse = None, np.inf
+    for i, a in enumerate(causes):
+        for b in causes[i + 1:]:
+            # a linear cause that fails alone may succeed beside another; a grid-searched one
+            # carries a usable parameter only when its own fit worked
+            if any(c.nonlinear and (c.failed or not c.identified) for c in (first[a], first[b])):
+                continue
+            sse = _total_held(ctx, {a: dict(first[a].nonlinear), b: dict(first[b].nonlinear)})
+            if sse < best_sse:
+                best, best_sse = (a, b), sse
+    if best is None:
+        return None
+    pair = []
+    for cause, other in (best, best[::-1]):
+        on_top = {other: dict(first[other].nonlinear)}
+        set_noise_weights(ctx, on_top)
+        base_held = {ch: ctx.normals(ch, on_top)[0].folds()[1] for ch in ctx.series.channels()}
+        cand = evaluate(ctx, on_top, cause, base_held)
+        if not cand.accepted_by_rule:
+            return None
+        pair.append(cand)
+    return sorted(pair, key=lambda c: -c.evidence)
 
 
 def variogram(residual: np.ndarray, lag: int) -> float:
@@ -63,45 +121,74 @@ def wander(residual: np.ndarray) -> tuple[float, float, float]:
     white = max((g1 - q) / 2.0, 1e-300)
     lam = q / white
     p = 0.5 * (lam + np.sqrt(lam * lam + 4.0 * lam))
-    return float(ratio), float(threshold), float(p / (p + 1.0))
+    gain = p / (p + 1.0) if np.isfinite(p) else 1.0  # a residual that is all random walk: difference it
+    return float(ratio), float(threshold), float(gain)
+
+
+def null_evidence(ctx: Context, channel: str, state: dict, without: dict, resid: np.ndarray) -> float:
+    """The held-out evidence for the columns ``state`` adds to ``without`` that noise alone gives,
+    at NULL_QUANTILE: white noise plus a random walk at the levels ``resid`` shows (its variogram
+    at 1 and n/5 rows), drawn NULL_DRAWS times from a fixed seed (reproducible)."""
+    from fxdsp.diagnose.blockfit import SegmentNormals
+
+    n = resid.size
+    m = max(2, n // 5)
+    g1, gm = variogram(resid, 1), variogram(resid, m)
+    q = max((gm - g1) / (m - 1), 0.0)
+    white = max((g1 - q) / 2.0, 0.0)
+    x_with, _ = ctx.design(channel, state)
+    x_without, _ = ctx.design(channel, without)
+    w = ctx.weights[channel]
+    rng = np.random.default_rng(NULL_SEED)
+    found = []
+    for _ in range(NULL_DRAWS):
+        y = rng.normal(0.0, np.sqrt(white), n) + np.cumsum(rng.normal(0.0, np.sqrt(q), n))
+        found.append(SegmentNormals(x_without, y, ctx.blocks, w).folds()[1].sum()
+                     - SegmentNormals(x_with, y, ctx.blocks, w).folds()[1].sum())
+    return float(np.quantile(found, NULL_QUANTILE))
 
 
 def check_against_wander(ctx: Context, state: dict, accepted: list[Candidate]):
-    """Re-test the accepted time-like causes when the final residual still wanders.
+    """Re-test the accepted time-like causes when the residual without them wanders.
 
     A bias random walk drifts; over one run it can look like an aging slope, a warm-up or a
     hysteresis step (a level that changes a few times), and the white-noise held-out test cannot
     tell. Causes tied to the temperature ramps themselves (lag, ramp rate) or to other channels
     are not time-like: a random walk does not repeat with the programme. If the residual of the
-    final model is not white, each time-like cause is tested again (dropped from the final model,
-    held-out folds) on innovations of the white-plus-random-walk noise that the residual shows,
-    and the weakest cause that no longer passes is removed, until all pass or the residual is
-    white.
+    model without the time-like causes is not white (once a warm-up has soaked up a random walk,
+    the rest looks white), each of them is tested again, dropped from the final model: held-out
+    evidence >= MIN_EVIDENCE on innovations of the white-plus-random-walk noise of the final
+    residual (its level taken with the causes in place, so a real drift is not taken for a walk),
+    and the held-out rms ratio of the data as logged >= MIN_GAIN (innovations are dominated by the
+    white steps of every row). Differencing also discards what separates two causes whose steps
+    fall on the same rows (a hysteresis flip at a ramp reversal, where the ramp-rate term flips
+    too): a cause that fails on innovations is kept when it is large (ratio >= WANDER_GAIN) and
+    its evidence is beyond what random walks give at the level the residual *without* it shows
+    (null_evidence; the walk as large as the data allow without the cause). The weakest failure
+    is removed, until all pass.
     """
     ch = "output"
     while True:
         out_causes = [c for c in accepted if c.cause in TIME_TIED]
         if not out_causes:
             return state, accepted
-        ratio, threshold, gain = wander(residual(ctx, state, ch))
+        others = {k: x for k, x in state.items() if k not in TIME_TIED}
+        ratio, threshold, _ = wander(residual(ctx, others, ch))
         if ratio <= threshold:
             return state, accepted
-        ctx.innovation_gain[ch] = gain
-        e = innovations(residual(ctx, state, ch), gain)
-        saved_weight = ctx.weights[ch]
-        ctx.weights[ch] = 1.0 / white_noise_variance(e)
-        try:
-            full = ctx.normals(ch, state)[0].folds()[1].sum()
-            verdicts = []
-            for cand in out_causes:
-                without = {k: v for k, v in state.items() if k != cand.cause}
-                held = ctx.normals(ch, without)[0].folds()[1].sum()
-                evidence = held - full
-                rms_ratio = float(np.sqrt(held / full)) if full > 0 else np.inf
-                verdicts.append((evidence, rms_ratio, cand))
-        finally:
-            ctx.innovation_gain.pop(ch, None)
-            ctx.weights[ch] = saved_weight
+        resid = residual(ctx, state, ch)
+        gain = wander(resid)[2]
+        full_raw = ctx.normals(ch, state)[0].folds()[1].sum()
+        verdicts = []
+        for cand in out_causes:
+            without = {k: v for k, v in state.items() if k != cand.cause}
+            held_raw = ctx.normals(ch, without)[0].folds()[1].sum()
+            ratio_raw = float(np.sqrt(held_raw / full_raw)) if full_raw > 0 else np.inf
+            evidence = _innovation_evidence(ctx, ch, state, without, gain)
+            if (evidence < MIN_EVIDENCE and ratio_raw >= WANDER_GAIN
+                    and held_raw - full_raw > null_evidence(ctx, ch, state, without, residual(ctx, without, ch))):
+                evidence = MIN_EVIDENCE
+            verdicts.append((evidence, ratio_raw, cand))
         failing = [v for v in verdicts if v[1] < MIN_GAIN or v[0] < MIN_EVIDENCE]
         if not failing:
             return state, accepted
@@ -110,21 +197,45 @@ def check_against_wander(ctx: Context, state: dict, accepted: list[Candidate]):
         state = {k: v for k, v in state.items() if k != weakest.cause}
 
 
+def _innovation_evidence(ctx: Context, ch: str, state: dict, without: dict, gain: float) -> float:
+    """Held-out evidence of ``state`` over ``without`` on innovations of gain ``gain``, in units of
+    the innovations' white variance."""
+    saved_weight = ctx.weights[ch]
+    ctx.innovation_gain[ch] = gain
+    try:
+        ctx.weights[ch] = 1.0 / white_noise_variance(innovations(residual(ctx, state, ch), gain))
+        full = ctx.normals(ch, state)[0].folds()[1].sum()
+        return float(ctx.normals(ch, without)[0].folds()[1].sum() - full)
+    finally:
+        ctx.innovation_gain.pop(ch, None)
+        ctx.weights[ch] = saved_weight
+
+
+def last_added_gain(ctx: Context, state: dict, cand: Candidate) -> tuple[float, float]:
+    """(held-out evidence, held-out rms ratio) of one cause as the last one added to ``state``,
+    over the channels it affects (the ratio: its best channel)."""
+    without = {k: v for k, v in state.items() if k != cand.cause}
+    evidence, ratio = 0.0, 0.0
+    for ch in affected_channels(ctx, cand.cause):
+        full = ctx.normals(ch, state)[0].folds()[1].sum()
+        held = ctx.normals(ch, without)[0].folds()[1].sum()
+        evidence += held - full
+        ratio = max(ratio, float(np.sqrt(held / full)) if full > 0 else np.inf)
+    return evidence, ratio
+
+
+def order_by_gain(ctx: Context, state: dict, accepted: list[Candidate]) -> list[Candidate]:
+    """The named causes, largest held-out gain (as the last one added) first."""
+    gains = {id(c): last_added_gain(ctx, state, c) for c in accepted}
+    return sorted(accepted, key=lambda c: (-gains[id(c)][1], -gains[id(c)][0]))
+
+
 def prune(ctx: Context, state: dict, accepted: list[Candidate]):
     """Backward check of the final model: every cause must still pass the acceptance rule when it
     is the last one added (a cause accepted early can become redundant after a later one, or after
     a time-like cause was removed by the wander check). The weakest failure goes first."""
     while accepted:
-        verdicts = []
-        for cand in accepted:
-            without = {k: v for k, v in state.items() if k != cand.cause}
-            evidence, ratio = 0.0, 0.0
-            for ch in affected_channels(ctx, cand.cause):
-                full = ctx.normals(ch, state)[0].folds()[1].sum()
-                held = ctx.normals(ch, without)[0].folds()[1].sum()
-                evidence += held - full
-                ratio = max(ratio, float(np.sqrt(held / full)) if full > 0 else np.inf)
-            verdicts.append((evidence, ratio, cand))
+        verdicts = [(*last_added_gain(ctx, state, cand), cand) for cand in accepted]
         failing = [v for v in verdicts if v[1] < MIN_GAIN or v[0] < MIN_EVIDENCE]
         if not failing:
             break

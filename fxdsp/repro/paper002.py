@@ -25,19 +25,33 @@ reading through the ``lag`` block (first-order die-temperature estimate, bit-exa
 constant is identified on the calibration run (against the drive-frequency thermometer). A
 continuous ramp run (the ``ramp`` scenario, 0.5 C/min) shows what the plateau figures cannot: errors
 between calibration temperatures and during ramps.
+
+Two devices. The *repeatable* device (every run of it identical up to noise) isolates each method's
+own error: :func:`reproduce`'s ``methods`` and the ramp run. The paper's figures are a run-to-run
+matter: its calibration run and its test run are two temperature runs of a device that does not
+repeat exactly, so they are also computed with the device's repeatability
+(:data:`fxdsp.sim.repeatability.PAPER002_REPEATABILITY`, the magnitudes and their derivation are
+there) over ``N_PAIRS`` calibration/verification run pairs (:func:`seed_pairs`: seeds (1, 2),
+(3, 4), ...), and reported as the median with the 10th..90th percentiles - on the quick
+verification run above (every method) and on a paper-length one (``verify_scale=1``: the paper's
+"after stabilisation" test, where the repeatability arithmetic holds as derived).
 """
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from fxdsp.chains import build
-from fxdsp.mechanisms import first_order_lag, sample_interval
+from fxdsp.mechanisms import first_order_lag
+from fxdsp.ramps import sample_interval
 from fxdsp.repro.bitexact import Compensator002
 from fxdsp.repro.calconfig import config_from_text, config_text, lag_table, paper002_tables
 from fxdsp.repro.calibrate import calibrate002, frequency_thermometer
 from fxdsp.repro.points import rate_table_points, tempco
 from fxdsp.sim import ThermalChain, generate_log
+from fxdsp.sim.repeatability import PAPER002_REPEATABILITY, Repeatability
 
 PAPER = {"sf_before_ppm": 316.66, "bias_before": 366.22, "sf_after_ppm": 69.67, "bias_after": 115.25,
          "sf_external_ppm": 154.97, "bias_external": 172.67}
@@ -45,6 +59,17 @@ TAU_PACKAGE_S = 2700.0
 TAU_DIE_S = 60.0
 VERIFY_SCALE = 1.0 / 3.0
 NODES = {"integrated": "die", "package": "package", "external": "air"}
+# the statistics over run pairs with the device's repeatability (fxdsp.sim.repeatability)
+N_PAIRS = 50
+STAT_METHODS = ("integrated, linear x4 (paper)", "package, linear x4 (paper)", "external, linear x4 (paper)",
+                "frequency thermometer, linear x4", "external + identified lag, linear x4")
+PAPER_LENGTH_METHODS = ("integrated, linear x4 (paper)", "external, linear x4 (paper)")
+TURN_ON_METHODS = ("integrated, linear x4 (paper)",)
+
+
+def turn_on_only(rep: Repeatability) -> Repeatability:
+    """``rep`` without its per-temperature-point component."""
+    return dataclasses.replace(rep, temp_bias_sigma=0.0, temp_sf_sigma=0.0)
 
 
 def figures(log: dict, rate_dps=None, sf25=None) -> dict:
@@ -74,30 +99,103 @@ def _ramp_error(rate_dps, time_s, window_s: float = 100.0) -> float:
     return float(np.abs(rate_dps[:m].reshape(-1, n).mean(axis=1)).max() * 3600.0)
 
 
-def reproduce(seed_cal: int = 1, seed_verify: int = 2, verify_scale: float = VERIFY_SCALE,
-              ramp: bool = True) -> dict:
-    res = {"paper": PAPER, "params": {"tau_package_s": TAU_PACKAGE_S, "tau_die_s": TAU_DIE_S,
-                                      "verify_scale": verify_scale}, "methods": {}}
-    rows = res["methods"]
+def _variants(label: str) -> dict:
+    """Compensation variants evaluated for an RTD node: name -> (segment order, thermometer)."""
+    variants = {f"{label}, linear x4 (paper)": (1, None), f"{label}, quadratic x2": (2, None)}
+    if label == "external":
+        # frequency thermometer: the die's own drive frequency (calibrated against the sensor)
+        variants["frequency thermometer, linear x4"] = (1, "freq")
+        variants["frequency thermometer, quadratic x2"] = (2, "freq")
+        variants["external + identified lag, linear x4"] = (1, "lag")
+    return variants
+
+
+METHODS = tuple(name for label in NODES for name in _variants(label))
+
+
+def run_pair(seed_cal: int = 1, seed_verify: int = 2, verify_scale: float = VERIFY_SCALE,
+             repeatability: Repeatability | None = None, methods=None, ramp: bool = False) -> dict:
+    """One calibration run and one verification run of the device per RTD node, every method in
+    ``methods`` (default all) calibrated on the first and figured on the second.
+
+    ``repeatability``: the device's run-to-run repeatability (``None``: it repeats exactly); the
+    same seed gives the same device run at every node, only the thermometer differs. The ramp run
+    (``ramp=True``) is always of the repeatable device: it compares methods, not runs."""
+    methods = METHODS if methods is None else tuple(methods)
+    unknown = [m for m in methods if m not in METHODS]
+    if unknown:
+        raise ValueError(f"methods: unknown method {unknown[0]!r}; expected some of {', '.join(METHODS)}")
+    if not verify_scale > 0:
+        raise ValueError(f"verify_scale: must be > 0, got {verify_scale!r}")
+    res = {"methods": {}}
     for label, node in NODES.items():
+        variants = {n: v for n, v in _variants(label).items() if n in methods}
+        if not variants and label != "integrated":
+            continue
         chain = ThermalChain(tau_package_s=TAU_PACKAGE_S, tau_die_s=TAU_DIE_S, rtd_node=node)
-        cal_log = generate_log("paper002", effects={}, seed=seed_cal, thermal=chain)
-        ver_log = generate_log("paper002", effects={}, seed=seed_verify, thermal=chain, duration_scale=verify_scale)
+        cal_log = generate_log("paper002", effects={}, seed=seed_cal, thermal=chain, repeatability=repeatability)
+        ver_log = generate_log("paper002", effects={}, seed=seed_verify, thermal=chain, duration_scale=verify_scale,
+                               repeatability=repeatability)
         ramp_log = generate_log("ramp", effects={}, seed=seed_verify, thermal=chain) if ramp else None
         if label == "integrated":
             res["before"] = figures(cal_log)
             res["before_verify"] = figures(ver_log)
             res["cal_log"], res["verify_log"] = cal_log, ver_log
-        variants = {f"{label}, linear x4 (paper)": (1, None), f"{label}, quadratic x2": (2, None)}
-        if label == "external":
-            # frequency thermometer: the die's own drive frequency (calibrated against the sensor)
-            variants["frequency thermometer, linear x4"] = (1, "freq")
-            variants["frequency thermometer, quadratic x2"] = (2, "freq")
-            variants["external + identified lag, linear x4"] = (1, "lag")
         for name, (order, thermo) in variants.items():
-            rows[name] = _method(cal_log, ver_log, ramp_log, order, thermo)
+            res["methods"][name] = _method(cal_log, ver_log, ramp_log, order, thermo)
         if label == "external":
             res["external_logs"] = (cal_log, ver_log)
+    return res
+
+
+def seed_pairs(n_pairs: int) -> list[tuple[int, int]]:
+    """The (calibration, verification) seeds of the statistics: (1, 2), (3, 4), ..."""
+    if isinstance(n_pairs, bool) or not isinstance(n_pairs, (int, np.integer)) or n_pairs < 1:
+        raise ValueError(f"n_pairs: must be a positive integer, got {n_pairs!r}")
+    return [(2 * k + 1, 2 * k + 2) for k in range(int(n_pairs))]
+
+
+def _stat(values) -> dict:
+    v = np.asarray(values, float)
+    return {"median": float(np.median(v)), "p10": float(np.percentile(v, 10)), "p90": float(np.percentile(v, 90)),
+            "min": float(v.min()), "max": float(v.max())}
+
+
+def over_seeds(n_pairs: int = N_PAIRS, verify_scale: float = VERIFY_SCALE,
+               repeatability: Repeatability | None = PAPER002_REPEATABILITY, methods=STAT_METHODS) -> dict:
+    """The paper's figures over ``n_pairs`` calibration/verification run pairs (:func:`seed_pairs`):
+    per method the SF (ppm/C) and bias (deg/h/C) tempco of every pair, and their median, 10th and
+    90th percentiles, min and max. ``"before"`` is the uncompensated calibration run."""
+    values = {name: {"sf_ppm": [], "bias": []} for name in ("before", *methods)}
+    for sc, sv in seed_pairs(n_pairs):
+        r = run_pair(sc, sv, verify_scale, repeatability, methods)
+        for name, row in (("before", r["before"]), *((m, r["methods"][m]) for m in methods)):
+            values[name]["sf_ppm"].append(row["sf_ppm"])
+            values[name]["bias"].append(row["bias"])
+    values = {n: {k: np.asarray(v) for k, v in d.items()} for n, d in values.items()}
+    return {"pairs": seed_pairs(n_pairs), "verify_scale": verify_scale,
+            "repeatability": None if repeatability is None else repeatability.as_dict(),
+            "values": values, "stats": {n: {k: _stat(v) for k, v in d.items()} for n, d in values.items()}}
+
+
+def reproduce(seed_cal: int = 1, seed_verify: int = 2, verify_scale: float = VERIFY_SCALE,
+              ramp: bool = True, repeatability: Repeatability | None = PAPER002_REPEATABILITY,
+              n_pairs: int = N_PAIRS) -> dict:
+    """Every method on the repeatable device (one run pair, with the ramp run), and - unless
+    ``repeatability`` is None - the paper's figures with the device's run-to-run repeatability over
+    ``n_pairs`` run pairs, on the quick verification run and on a paper-length one."""
+    res = run_pair(seed_cal, seed_verify, verify_scale, None, ramp=ramp)
+    res["paper"] = PAPER
+    res["params"] = {"tau_package_s": TAU_PACKAGE_S, "tau_die_s": TAU_DIE_S, "verify_scale": verify_scale}
+    if repeatability is not None:
+        res["repeatability"] = {
+            "model": repeatability.as_dict(),
+            "quick": over_seeds(n_pairs, verify_scale, repeatability),
+            "paper_length": over_seeds(n_pairs, 1.0, repeatability, PAPER_LENGTH_METHODS),
+            "paper_length_repeatable": run_pair(seed_cal, seed_verify, 1.0, None, PAPER_LENGTH_METHODS)["methods"],
+            # the turn-on component alone (per-point sigmas zero): a constant per run, cancels in max - min
+            "turn_on_only": over_seeds(n_pairs, verify_scale, turn_on_only(repeatability), TURN_ON_METHODS),
+        }
     return res
 
 

@@ -37,6 +37,11 @@ def run_all(papers=PAPERS, n_freqs: int = 41, progress: bool = True) -> dict:
     return out
 
 
+def _med(stat: dict) -> str:
+    """A statistic over run pairs as the reports print it: median [10th..90th percentile]."""
+    return f"{stat['median']:.1f} [{stat['p10']:.0f}..{stat['p90']:.0f}]"
+
+
 def summary_rows(res: dict) -> list[tuple[str, str, str, str]]:
     """(paper, figure, paper's value, reproduced value [; improved]) for the stdout table."""
     rows = []
@@ -44,14 +49,30 @@ def summary_rows(res: dict) -> list[tuple[str, str, str, str]]:
         r = res["002"]
         m = r["methods"]
         b = r["before"]
-        rows += [("002", "SF tempco before (ppm/C)", "316.66", f"{b['sf_ppm']:.2f}"),
-                 ("002", "bias tempco before (deg/h/C)", "366.22", f"{b['bias']:.2f}"),
-                 ("002", "SF after, integrated RTD", "69.67", f"{m['integrated, linear x4 (paper)']['sf_ppm']:.2f}"),
-                 ("002", "bias after, integrated RTD", "115.25", f"{m['integrated, linear x4 (paper)']['bias']:.2f}"),
-                 ("002", "SF after, external sensor", "154.97", f"{m['external, linear x4 (paper)']['sf_ppm']:.2f}"),
-                 ("002", "bias after, external sensor", "172.67", f"{m['external, linear x4 (paper)']['bias']:.2f}"),
-                 ("002", "SF/bias after, frequency thermometer", "-",
-                  f"{m['frequency thermometer, linear x4']['sf_ppm']:.2f} / {m['frequency thermometer, linear x4']['bias']:.2f}")]
+        integ, ext, freq = ("integrated, linear x4 (paper)", "external, linear x4 (paper)",
+                            "frequency thermometer, linear x4")
+        rep = r.get("repeatability")
+        if rep:  # the paper's figures on the device with its repeatability: median [p10..p90]
+            st = rep["quick"]["stats"]
+            rows += [("002", "SF tempco before (ppm/C)", "316.66", _med(st["before"]["sf_ppm"])),
+                     ("002", "bias tempco before (deg/h/C)", "366.22", _med(st["before"]["bias"])),
+                     ("002", "SF after, integrated RTD", "69.67", _med(st[integ]["sf_ppm"])),
+                     ("002", "bias after, integrated RTD", "115.25", _med(st[integ]["bias"])),
+                     ("002", "SF after, external sensor", "154.97", _med(st[ext]["sf_ppm"])),
+                     ("002", "bias after, external sensor", "172.67", _med(st[ext]["bias"])),
+                     ("002", "SF/bias after, frequency thermometer", "-",
+                      f"{st[freq]['sf_ppm']['median']:.1f} / {st[freq]['bias']['median']:.1f}"),
+                     ("002", "SF/bias after, integrated RTD, repeatable device", "-",
+                      f"{m[integ]['sf_ppm']:.2f} / {m[integ]['bias']:.2f}")]
+        else:
+            rows += [("002", "SF tempco before (ppm/C)", "316.66", f"{b['sf_ppm']:.2f}"),
+                     ("002", "bias tempco before (deg/h/C)", "366.22", f"{b['bias']:.2f}"),
+                     ("002", "SF after, integrated RTD", "69.67", f"{m[integ]['sf_ppm']:.2f}"),
+                     ("002", "bias after, integrated RTD", "115.25", f"{m[integ]['bias']:.2f}"),
+                     ("002", "SF after, external sensor", "154.97", f"{m[ext]['sf_ppm']:.2f}"),
+                     ("002", "bias after, external sensor", "172.67", f"{m[ext]['bias']:.2f}"),
+                     ("002", "SF/bias after, frequency thermometer", "-",
+                      f"{m[freq]['sf_ppm']:.2f} / {m[freq]['bias']:.2f}")]
     if "001" in res:
         r = res["001"]
         c = r["cal"]
@@ -70,6 +91,12 @@ def summary_rows(res: dict) -> list[tuple[str, str, str, str]]:
                  ("003", "cxy (N s/m)", "-6.96e-8", f"{r['filtered']['cxy']:.4g} ({100 * r['filtered']['err']['cxy']:.1f} %)"),
                  ("003", "lambda_yx", "-0.000374", f"{r['filtered']['lambda_yx']:.4g}"),
                  ("003", "cxy error without low-pass", "> 1000 %", f"{100 * r['raw']['err']['cxy']:.0f} %")]
+        if "mismatch" in r:
+            mm = r["mismatch"]["phase"]
+            rows.append(("003", f"cxy error, {np.degrees(mm['phase_offset_rad']):.1f} deg channel mismatch: "
+                         "uncorrected / corrected", "- / 6.09 %",
+                         f"{100 * mm['filtered, uncorrected']['err']['cxy']:.1f} % / "
+                         f"{100 * mm['filtered, corrected']['err']['cxy']:.1f} %"))
     return rows
 
 
@@ -124,7 +151,30 @@ def _plot002(r: dict, img: Path) -> list[str]:
     fig.tight_layout()
     fig.savefig(img / "paper002_ramp.png", dpi=110)
     plt.close(fig)
-    return ["paper002_points.png", "paper002_ramp.png"]
+    names = ["paper002_points.png", "paper002_ramp.png"]
+    rep = r.get("repeatability")
+    if rep:
+        vals = rep["quick"]["values"]
+        p = r["paper"]
+        fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+        for a, key, unit, paper_int, paper_ext in ((ax[0], "sf_ppm", "SF tempco (ppm/C)", p["sf_after_ppm"], p["sf_external_ppm"]),
+                                                   (ax[1], "bias", "bias tempco (deg/h/C)", p["bias_after"], p["bias_external"])):
+            hi = max(vals["integrated, linear x4 (paper)"][key].max(), vals["external, linear x4 (paper)"][key].max(),
+                     paper_ext) * 1.05
+            bins = np.linspace(0.0, hi, 25)
+            a.hist(vals["integrated, linear x4 (paper)"][key], bins, color="b", alpha=0.5, label="integrated RTD")
+            a.hist(vals["external, linear x4 (paper)"][key], bins, color="r", alpha=0.4, label="external sensor")
+            a.axvline(paper_int, color="b", ls="--", label="paper, integrated")
+            a.axvline(paper_ext, color="r", ls="--", label="paper, external")
+            a.set(xlabel=unit, ylabel="run pairs",
+                  title=f"paper 002 with repeatability: {len(rep['quick']['pairs'])} run pairs (quick verification)")
+            a.grid(alpha=0.3)
+        ax[0].legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(img / "paper002_repeatability.png", dpi=110)
+        plt.close(fig)
+        names.append("paper002_repeatability.png")
+    return names
 
 
 def _plot001(r: dict, img: Path) -> list[str]:
@@ -232,19 +282,88 @@ def _md002(r: dict) -> str:
         "an average, a 24-bit word, LSB 0.18 deg/h); SF(T) normalised to the calibrated SF at 25 C "
         "(`u24.22`); bias table in FS units after division; `[system].rate_full_scale_dps` = 4096 mV / SF(25 C).",
         "",
-        "| figure | paper | reproduced (this sim) |",
-        "|---|---|---|",
-        f"| SF tempco before (ppm/C), calibration run | {p['sf_before_ppm']} | {b['sf_ppm']:.2f} |",
-        f"| bias tempco before (deg/h/C), calibration run | {p['bias_before']} | {b['bias']:.2f} |",
-        f"| (same, quick verification run) | | {bv['sf_ppm']:.2f} / {bv['bias']:.2f} |",
-        f"| SF tempco after, integrated RTD | {p['sf_after_ppm']} | {m['integrated, linear x4 (paper)']['sf_ppm']:.2f} |",
-        f"| bias tempco after, integrated RTD | {p['bias_after']} | {m['integrated, linear x4 (paper)']['bias']:.2f} |",
-        f"| SF tempco after, external sensor | {p['sf_external_ppm']} | {m['external, linear x4 (paper)']['sf_ppm']:.2f} |",
-        f"| bias tempco after, external sensor | {p['bias_external']} | {m['external, linear x4 (paper)']['bias']:.2f} |",
-        "",
-        "All compensation variants on the same device (bit-exact; plateau figures on the verification run, "
-        "ramp figure = worst 100-s mean of the compensated zero-rate output on a continuous "
-        "`ramp` run at 0.5 C/min, which also visits temperatures between the calibration points):",
+    ]
+    rep = r.get("repeatability")
+    integ, ext = "integrated, linear x4 (paper)", "external, linear x4 (paper)"
+    if rep:
+        mod = rep["model"]
+        st, pl = rep["quick"]["stats"], rep["paper_length"]["stats"]
+        npairs = len(rep["quick"]["pairs"])
+        plr = rep["paper_length_repeatable"]
+        ton = rep["turn_on_only"]["stats"][integ]
+
+        def cell(stats, name, key):
+            return _med(stats[name][key]) if name in stats else "-"
+
+        lines += [
+            "**Run-to-run repeatability** (`fxdsp.sim.repeatability.PAPER002_REPEATABILITY`, the only "
+            "assumption added for the paper's compensated figures). The paper calibrates on one temperature "
+            "run and tests the compensation on another; a real device does not repeat between them. Each "
+            "simulated run draws (from its own seeded stream): a turn-on bias and SF offset, constant over the "
+            "run, and for every temperature point it visits an offset of the bias and of the SF it settles to "
+            f"(hysteresis of packaging stress and front-end phase). 1 sigma: bias {mod['temp_bias_sigma']:.2f} deg/s "
+            f"({mod['temp_bias_sigma'] * 3600:.0f} deg/h), SF {mod['temp_sf_sigma'] * 100:.3f} % per point; turn-on "
+            f"{mod['turn_on_bias_sigma']:.2f} deg/s and {mod['turn_on_sf_sigma'] * 100:.3f} %. **Where they come "
+            "from:** a tempco is (max - min) / 80 C of five points, so the paper's compensated figures are ranges "
+            "of 115.25 x 80 = 9220 deg/h and 69.67 x 80 = 5574 ppm; after compensation each point keeps the "
+            "difference of two runs' offsets, N(0, 2 sigma^2), and the range of five normal draws has median "
+            "2.254; taking the paper's run as a median one, sigma = range / (2.254 sqrt 2): 2892 deg/h = 0.80 "
+            "deg/s and 1748 ppm = 0.175 %. On this device 0.80 deg/s is a demodulation phase that repeats "
+            "within 0.78 deg (0.80 deg/s of its 58.6 deg/s quadrature) and 0.175 % a 10 Hz mode split "
+            "repeating within 17.5 mHz; 0.175 % lies inside the 0.1..1 % SF accuracy of rate-grade MEMS gyros, "
+            "and 0.80 deg/s is 10 % of the device's own 8.1 deg/s bias swing over -20..60 C, several times "
+            "the ~0.1 deg/s hysteresis of factory-trimmed IMUs whose quadrature is nulled. The paper gives no "
+            "turn-on figure; the same sigmas are used, and they are inert for every figure here: a constant "
+            "per run cancels in max - min (turn-on component alone, integrated RTD: "
+            f"median {ton['sf_ppm']['median']:.2f} ppm/C and {ton['bias']['median']:.2f} deg/h/C, as the repeatable "
+            "device's).",
+            "",
+            f"The paper's figures, median [10th..90th percentile] over {npairs} calibration/verification run "
+            f"pairs (seeds (1, 2) .. ({2 * npairs - 1}, {2 * npairs})) of the device with its repeatability; "
+            "uncompensated figures from the calibration runs. Last column: the repeatable device (one pair, "
+            "seeds 1/2), as the model stood before the repeatability was added:",
+            "",
+            "| figure | paper | quick verification run | paper-length verification run | repeatable device, quick run |",
+            "|---|---|---|---|---|",
+            f"| SF tempco before (ppm/C) | {p['sf_before_ppm']} | {cell(st, 'before', 'sf_ppm')} | "
+            f"{cell(pl, 'before', 'sf_ppm')} | {b['sf_ppm']:.2f} |",
+            f"| bias tempco before (deg/h/C) | {p['bias_before']} | {cell(st, 'before', 'bias')} | "
+            f"{cell(pl, 'before', 'bias')} | {b['bias']:.2f} |",
+        ]
+        for name, label, ksf, kb in ((integ, "integrated RTD", "sf_after_ppm", "bias_after"),
+                                     (ext, "external sensor", "sf_external_ppm", "bias_external")):
+            lines += [f"| SF tempco after, {label} | {p[ksf]} | {cell(st, name, 'sf_ppm')} | "
+                      f"{cell(pl, name, 'sf_ppm')} | {m[name]['sf_ppm']:.2f} |",
+                      f"| bias tempco after, {label} | {p[kb]} | {cell(st, name, 'bias')} | "
+                      f"{cell(pl, name, 'bias')} | {m[name]['bias']:.2f} |"]
+        for name in st:
+            if name not in ("before", integ, ext):
+                lines.append(f"| SF / bias after, {name} | - | {cell(st, name, 'sf_ppm')} / {cell(st, name, 'bias')} "
+                             f"| - | {m[name]['sf_ppm']:.2f} / {m[name]['bias']:.2f} |")
+        lines += [
+            f"| (repeatable device on the paper-length run, seeds 1/2) | | | integrated {plr[integ]['sf_ppm']:.2f} ppm/C, "
+            f"{plr[integ]['bias']:.2f} deg/h/C; external {plr[ext]['sf_ppm']:.2f}, {plr[ext]['bias']:.2f} | |",
+            "",
+        ]
+    else:
+        lines += [
+            "| figure | paper | reproduced (this sim) |",
+            "|---|---|---|",
+            f"| SF tempco before (ppm/C), calibration run | {p['sf_before_ppm']} | {b['sf_ppm']:.2f} |",
+            f"| bias tempco before (deg/h/C), calibration run | {p['bias_before']} | {b['bias']:.2f} |",
+            f"| (same, quick verification run) | | {bv['sf_ppm']:.2f} / {bv['bias']:.2f} |",
+            f"| SF tempco after, integrated RTD | {p['sf_after_ppm']} | {m[integ]['sf_ppm']:.2f} |",
+            f"| bias tempco after, integrated RTD | {p['bias_after']} | {m[integ]['bias']:.2f} |",
+            f"| SF tempco after, external sensor | {p['sf_external_ppm']} | {m[ext]['sf_ppm']:.2f} |",
+            f"| bias tempco after, external sensor | {p['bias_external']} | {m[ext]['bias']:.2f} |",
+            "",
+        ]
+    lines += [
+        "All compensation variants on the **repeatable** device, i.e. each method's own error (bit-exact; "
+        "one run pair, seeds 1/2; plateau figures on the verification run, ramp figure = worst 100-s mean "
+        "of the compensated zero-rate output on a continuous `ramp` run at 0.5 C/min, which also visits "
+        "temperatures between the calibration points; the ramp run is always of the repeatable device, "
+        "so that column compares methods, not runs):",
         "",
         "| method | SF tempco (ppm/C) | bias tempco (deg/h/C) | ramp: worst bias (deg/h) |",
         "|---|---|---|---|",
@@ -252,20 +371,51 @@ def _md002(r: dict) -> str:
     for name, row in m.items():
         extra = f" (tau = {row['tau_s']:.0f} s)" if "tau_s" in row else ""
         lines.append(f"| {name}{extra} | {row['sf_ppm']:.2f} | {row['bias']:.2f} | {row['ramp_max_deg_h']:.0f} |")
+    lines += ["", "**Reading.** The uncompensated figures match the paper (the simulated gyro was built to)"]
+    if rep:
+        qi, pi_, qe = st[integ], pl[integ], st[ext]
+
+        def dev(v, ref):
+            return f"{100 * (v / ref - 1):+.0f} %"
+
+        ratios = [x[k][q] / p[ref] for x in (qi, pi_) for k, ref in (("sf_ppm", "sf_after_ppm"), ("bias", "bias_after"))
+                  for q in ("p10", "p90")]
+        lo, hi = min(ratios), max(ratios)
+
+        lines[-1] += (
+            f"; with the repeatability they spread over run pairs ({_med(st['before']['sf_ppm'])} ppm/C, "
+            f"{_med(st['before']['bias'])} deg/h/C against {b['sf_ppm']:.2f} and {b['bias']:.2f} for the "
+            "repeatable device): the paper's single uncompensated run is one draw of that spread. "
+            "**The integrated-RTD figures come out of the model**: with the repeatable device the compensation "
+            f"leaves {m[integ]['sf_ppm']:.2f} ppm/C and {m[integ]['bias']:.2f} deg/h/C (noise and the unsettled "
+            "bias drifting during the short rate-table sequence), far better than the paper; with the "
+            f"repeatability the median is {qi['sf_ppm']['median']:.1f} ppm/C ({dev(qi['sf_ppm']['median'], p['sf_after_ppm'])}) "
+            f"and {qi['bias']['median']:.1f} deg/h/C ({dev(qi['bias']['median'], p['bias_after'])}) on the quick "
+            f"verification run, and {pi_['sf_ppm']['median']:.1f} ppm/C ({dev(pi_['sf_ppm']['median'], p['sf_after_ppm'])}) "
+            f"and {pi_['bias']['median']:.1f} deg/h/C ({dev(pi_['bias']['median'], p['bias_after'])}) on a "
+            "paper-length one, where the test points sit at the calibration temperatures and the arithmetic "
+            "above holds as derived. The quick run comes out lower because its points are measured while the "
+            "die is still 3..13 C short of the setpoint: there the calibrated table interpolates two "
+            "calibration points' offsets, whose blend varies less than one. Single run pairs spread widely "
+            "(10th..90th percentile above): a range of five draws is a noisy statistic, so one device test "
+            f"lands anywhere from {lo:.1f} to {hi:.1f} times the paper's figure (integrated RTD, both runs, 10th "
+            "and 90th percentiles). "
+            "**The external sensor** loses to the integrated RTD for the paper's reason, the thermal path: "
+            "during the quick run the air-side sensor is minutes ahead of the die (on the paper-length run, "
+            "where the package has settled, external and integrated come out alike). With the repeatability "
+            f"its figures move from {m[ext]['sf_ppm']:.1f} to {qe['sf_ppm']['median']:.1f} ppm/C "
+            f"({dev(qe['sf_ppm']['median'], p['sf_external_ppm'])} from the paper's) and from {m[ext]['bias']:.1f} "
+            f"to {qe['bias']['median']:.1f} deg/h/C ({dev(qe['bias']['median'], p['bias_external'])}): "
+            "the run-to-run offsets add to the thermal-path error. The SF figure stays below the paper's "
+            "because in this model the SF error of a wrong temperature is only the SF slope times the "
+            "temperature error. The frequency thermometer reads the die like the integrated RTD and gives "
+            "the same figures; no thermometer can compensate what does not repeat.")
+    else:
+        lines[-1] += (
+            ". The external sensor loses to the integrated RTD for the paper's reason, the thermal path. "
+            "Without the repeatability model the integrated-RTD compensation is limited by noise, far better "
+            "than the paper's figures.")
     lines += [
-        "",
-        "**Reading.** The uncompensated figures match the paper (the simulated gyro was built to). The "
-        "external sensor loses to the integrated RTD for the paper's reason, the thermal path: during the "
-        "quick run the air-side sensor is minutes ahead of the die. The bias figure of the external case "
-        "lands close to the paper's; its SF figure is lower than the paper's because in this model the SF "
-        "error of a wrong temperature is only the SF slope times the temperature error. "
-        "**The paper's integrated-RTD figures (69.67 ppm/C, 115.25 deg/h/C) cannot be reached by this "
-        "model**: with the RTD on the die and a repeatable device, the compensation at the calibration "
-        "temperatures is limited by noise and by the unsettled bias drifting during the short rate-table "
-        "sequence (which leaks into the SF slope), a few ppm/C and deg/h/C. The paper's residual is "
-        "therefore most likely run-to-run non-repeatability of its device (turn-on bias and SF, "
-        "hysteresis), which the simulator does not contain; the tests assert that the reproduction is "
-        "at least as good as the paper, not equal.",
         "",
         "**This project's choices.** The drive frequency as thermometer (`freq2temp` on the 8 kHz drive "
         "frequency word) measures the die itself: with it the external-sensor device does as well as the "
@@ -284,12 +434,13 @@ def _md002(r: dict) -> str:
         "![paper 002 ramp](img/paper002_ramp.png)",
         "",
     ]
+    if rep:
+        lines += ["![paper 002 repeatability](img/paper002_repeatability.png)", ""]
     return "\n".join(lines)
 
 
 def _md001(r: dict) -> str:
     c = r["cal"]
-    p = r["paper"]
     ck, ckr = r["thermometer_check"], r["thermometer_check_rounded"]
     q = c["bias_poly"]
     lines = [
@@ -423,11 +574,54 @@ def _md003(r: dict) -> str:
         "(2 % even without it). The "
         "paper's ppm-level figures for kxy and lambda_yx are theoretical bounds we do not reach with "
         "0.01 rad of phase noise per sample; lambda_yx, which only shows near the drive resonance, is "
-        "the most noise-sensitive of the three here. The two channels here share one NCO and have no "
-        "phase-offset mismatch; the test suite shows that an uncorrected 0.5 deg mismatch alone pushes "
-        "the cxy error past 20 % (kxy stays within 1 %), which is why the paper forces the measured "
-        "resonance phase to -90 deg. That correction step is not implemented here.",
+        "the most noise-sensitive of the three here. The table above is for matched channels (one NCO, no "
+        "phase-offset or gain mismatch between the drive and sense pick-off channels).",
         "",
+    ]
+    mm = r.get("mismatch")
+    if mm:
+        ph, pg = mm["phase"], mm["phase_gain"]
+        deg = np.degrees(ph["phase_offset_rad"])
+        c = ph["correction"]
+        lines += [
+            "**Channel mismatch and the paper's correction** (`fxdsp.repro.paper003.channel_correction`, "
+            "`correct`). A phase offset of the sense channel against the drive channel rotates every "
+            "measured S; the damping coupling, in quadrature with the 30x larger stiffness term, takes "
+            "the rotated part. The paper's correction, as implemented: two modal tests through the same "
+            "channels and bit-exact demodulator - the drive mode forced alone at its resonance, then the "
+            f"sense mode alone at its own (excitation word {r['params']['excitation_ratio']} of the drive's, a known "
+            "ratio) - with phases read against the force (the NCO that generates it). At resonance a mode "
+            "lags its force by exactly 90 deg, so each channel's phase offset is its measured resonance "
+            "phase + 90 deg (the paper: the correction is the difference between the theoretical -90 deg "
+            "and the measured resonance phase); with the identified modal parameters a mode's "
+            "displacement per unit force at resonance is Q/w^2, so the amplitudes give the channels' "
+            "conversion-gain ratio k_SF. The sweep's S is rotated by the difference of the two phase offsets "
+            f"and divided by k_SF. With a {deg:.1f} deg sense-channel offset the modal tests read "
+            f"{c['resonance_phase_x_deg']:.3f} deg (drive) and {c['resonance_phase_y_deg']:.3f} deg (sense), "
+            f"i.e. a mismatch of {np.degrees(c['phase_y_rad'] - c['phase_x_rad']):.3f} deg, and a gain ratio "
+            f"{c['gain_ratio']:.4f} of nominal (with the added 2 % gain error: {pg['correction']['gain_ratio']:.4f}).",
+            "",
+            "| channel mismatch | S read | kxy error | cxy error (paper: 6.09 %) | lambda_yx error |",
+            "|---|---|---|---|---|",
+        ]
+        for case, label in ((ph, f"{deg:.1f} deg"),
+                            (pg, f"{deg:.1f} deg + {100 * pg['sense_gain_error']:.0f} % sense gain")):
+            for key, read in (("filtered", "low-pass snapshot"), ("averaged", "low-pass + 25 ms mean")):
+                for corr in ("uncorrected", "corrected"):
+                    e = case[f"{key}, {corr}"]["err"]
+                    lines.append(f"| {label} | {read}, {corr} | {100 * e['kxy']:.2f} % | {100 * e['cxy']:.2f} % | "
+                                 f"{100 * e['lambda_yx']:.2f} % |")
+        pf = ph["filtered, uncorrected"]["err"]["cxy"]
+        pc = ph["filtered, corrected"]["err"]["cxy"]
+        lines += [
+            "",
+            f"Uncorrected, the {deg:.1f} deg mismatch alone puts the cxy error at {100 * pf:.0f} % (kxy stays "
+            f"within 1 %); the corrected snapshot is back at {100 * pc:.1f} %, under the paper's 6.09 % and "
+            f"at the matched-channel level ({100 * r['filtered']['err']['cxy']:.1f} %); a 2 % gain error "
+            "alone would move every coefficient by 2 %, and the measured k_SF removes it.",
+            "",
+        ]
+    lines += [
         "![paper 003](img/paper003.png)",
         "",
     ]
@@ -458,6 +652,11 @@ def write_report(res: dict, out_dir, command: str = "fxdsp repro --paper all --r
     ]
     parts += [f"| {a} | {b} | {c} | {d} |" for a, b, c, d in summary_rows(res)]
     parts.append("")
+    rep = res.get("002", {}).get("repeatability")
+    if rep:
+        parts += [f"Paper 002 values: median [10th..90th percentile] over {len(rep['quick']['pairs'])} "
+                  "calibration/verification run pairs of the device with its run-to-run repeatability "
+                  "(`fxdsp.sim.repeatability`; see the paper 002 section).", ""]
     writers = {"002": (_md002, _plot002), "001": (_md001, _plot001), "000": (_md000, _plot000),
                "003": (_md003, _plot003)}
     for p in PAPERS:

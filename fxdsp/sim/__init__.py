@@ -12,7 +12,8 @@ Modules: :mod:`~fxdsp.sim.programmes` (chamber programmes), :mod:`~fxdsp.sim.the
 package -> die), :mod:`~fxdsp.sim.model` (baselines and the replay JSON), :mod:`~fxdsp.sim.noise`,
 :mod:`~fxdsp.sim.generate` (the log), :mod:`~fxdsp.sim.logio` (CSV), :mod:`~fxdsp.sim.gyro`
 (two-mode vibratory gyro, paper 003/002/001), :mod:`~fxdsp.sim.qvba` (quartz beam pair, paper
-000), :mod:`~fxdsp.sim.calibration` (the papers' calibration fits).
+000), :mod:`~fxdsp.sim.calibration` (the papers' calibration fits), :mod:`~fxdsp.sim.repeatability`
+(run-to-run repeatability of a device: ``generate_log(..., repeatability=...)``).
 """
 
 from fxdsp.sim.generate import OPTIONAL_COLUMNS, SCENARIOS, generate_log

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
-from fxdsp.mechanisms import sample_interval
+from fxdsp.ramps import sample_interval
 
 G = 1.0  # the tumble's input unit: accelerations in g, so K1 is per g and K0/K1 is in g
 

@@ -7,7 +7,8 @@ The log is built in the order the physics happens:
    temperatures; the RTD readout is linear (offset, gain) unless ``rtd_nonlinearity`` bends it;
 3. Te, the temperature of the sensing element on the RTD's linear scale, equals the noise-free
    ``temp_c`` in the baseline; ``thermal_lag`` delays it by the contract's first-order lag;
-4. output = B(Te) + S(Te) * rate, then the output causes; freq_hz = f0 + k Te (+ turnover);
+4. output = B(Te) + S(Te) * rate (+ this run's repeatability offsets, :mod:`fxdsp.sim.repeatability`,
+   when asked), then the output causes; freq_hz = f0 + k Te (+ turnover);
 5. independent noise per channel, each from its own random stream so that requesting one more
    column never changes the noise of the others.
 
@@ -26,6 +27,7 @@ from fxdsp import mechanisms as mech
 from fxdsp.sim import noise as noise_mod
 from fxdsp.sim.model import Baseline, as_model, scenario_baseline, validate_effects
 from fxdsp.sim.programmes import PROGRAMMES, programme, sample
+from fxdsp.sim.repeatability import Repeatability
 from fxdsp.sim.thermal import ThermalChain
 
 SCENARIOS: tuple[str, ...] = tuple(PROGRAMMES)
@@ -38,7 +40,8 @@ DEFAULT_TIME_STEP_S = 10.0
 QUAD_MEAN_PER_SF = 2.0
 QUAD_SWING_PER_SF = 0.5
 
-_STREAMS = ("programme", "quad", "output", "temp_c", "ref_temp_c", "freq_hz", "quad_noise")
+# appending a stream leaves the others unchanged (SeedSequence.spawn: child i depends on i only)
+_STREAMS = ("programme", "quad", "output", "temp_c", "ref_temp_c", "freq_hz", "quad_noise", "repeatability")
 
 
 def _parse_columns(columns) -> tuple[str, ...]:
@@ -92,7 +95,7 @@ def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: 
                  columns=OPTIONAL_COLUMNS, *, return_truth: bool = False,
                  time_step_s: float = DEFAULT_TIME_STEP_S, duration_scale: float = 1.0,
                  noise: dict | str | None = None, model=None, thermal: ThermalChain | None = None,
-                 rtd_element: str = "ideal"):
+                 rtd_element: str = "ideal", repeatability: Repeatability | None = None):
     """Simulate one chamber run and return its canonical log.
 
     Parameters
@@ -120,6 +123,9 @@ def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: 
         (:class:`fxdsp.blocks.rtd.RtdPhysics`), read out with the linear law RT = R0 (1 + A T) as
         paper 002 does: the readout then bends by about B/A (T - 25)^2, -0.5 C at 60 C, which is
         what ``rtd_nonlinearity`` describes.
+    repeatability : an optional :class:`fxdsp.sim.repeatability.Repeatability`: this run's turn-on
+        and per-temperature-point bias and SF offsets, drawn from the run's own stream (``None``, the
+        default: the device repeats exactly, as the contract's baseline does).
 
     Returns
     -------
@@ -161,6 +167,12 @@ def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: 
     if "sf_nonlinearity" in causes:
         effective_rate = rate + causes["sf_nonlinearity"]["k3"] * rate ** 3
     output = baseline.bias(te) + baseline.sf(te) * effective_rate
+    rep_draw = None
+    if repeatability is not None:
+        if not isinstance(repeatability, Repeatability):
+            raise ValueError(f"repeatability: expected a Repeatability, got {type(repeatability).__name__}")
+        rep_bias, rep_sf, rep_draw = repeatability.offsets(streams["repeatability"], t, segments, start_c)
+        output = output + baseline.sf_poly[0] * rep_bias + baseline.sf(te) * rep_sf * effective_rate
     quad = _quadrature(streams["quad"], t, baseline.sf_poly[0])
     if "ramp_rate" in causes:
         output = output + causes["ramp_rate"]["k_per_c_per_s"] * mech.rate_of_change(t, temp_clean)
@@ -202,4 +214,6 @@ def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: 
         "baseline": baseline.as_dict(), "effects": {k: dict(v) for k, v in causes.items()},
         "noise": levels, "thermal": thermal,
     }
+    if rep_draw is not None:
+        truth["repeatability"] = rep_draw
     return log, truth

@@ -1,0 +1,249 @@
+"""Chamber ramps read off a thermometer log: its noise, the ramps' starts and signs, and the
+smoothing a derivative of it needs. No fixed rates, durations or windows: every rule scales with
+the log's own sampling interval, noise and quantisation step, and the rules are reported
+(`RampReading.describe`) so a user can see why a ramp was, or was not, counted.
+
+Rules
+-----
+* Noise. The white noise sigma of the reading comes from its second differences (a ramp's slope
+  cancels in them, so ramps do not inflate it): sigma = 1.4826 MAD(d2) / sqrt(6). The quantisation
+  step q is the most common non-zero step between consecutive distinct readings. The reading's
+  resolution is sigma_eff = sqrt(sigma^2 + q^2 / 12).
+* Ramp threshold. A move counts as a ramp once the reading has left its last extreme by more than
+  delta = max(NOISE_MULTIPLE x sigma_eff + q, SPAN_FRACTION x span of the log): far beyond what the
+  noise does over a whole log (the largest excursion of white noise over 1e6 samples is ~5 sigma),
+  and above a chamber's control wobble during a dwell, which scales with the programme (a few
+  tenths of a degree in a 100 C programme).
+* Ramp start. Once confirmed, a ramp is dated back to its start: the knee of the best hinge (a
+  level, then a straight ramp) fitted by least squares to the readings between the extreme the
+  move left and the confirmation. So the hysteresis state of the contract (``s``) takes the ramp's
+  sign from its start, however short or fast the ramp, a reversal mid-ramp flips it where the
+  temperature turned, and a dwell's wobble before the ramp does not pull the start back.
+* Derivative smoothing. d(temp_c)/dt is taken on a moving average of W seconds; the derivative's
+  noise is then sigma_eff / (sqrt(2) W). W is the shortest window (from one sample up) for which
+  that noise is at most DERIVATIVE_NOISE_FRACTION of the median |dT/dt| of the ramp rows, so a
+  ramp-rate term is not attenuated by its regressor's noise, and ramps are not smeared more than
+  that requires.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+# a move this many noise sigmas (plus a quantisation step) beyond the last extreme is a ramp
+NOISE_MULTIPLE = 10.0
+# ... and it must exceed this fraction of the log's temperature span (chamber wobble in a dwell)
+SPAN_FRACTION = 0.01
+# noise of the derivative allowed, as a fraction of the typical ramp rate
+DERIVATIVE_NOISE_FRACTION = 0.1
+
+
+def _distinct_steps(t: np.ndarray) -> np.ndarray:
+    steps = np.diff(t)
+    return steps[steps > 0]
+
+
+def sample_interval(time_s) -> float:
+    """Median step between distinct time stamps (repeated stamps would make a plain median 0)."""
+    steps = _distinct_steps(np.asarray(time_s, float))
+    if steps.size == 0:
+        raise ValueError("time_s: the log has no two distinct time stamps")
+    return float(np.median(steps))
+
+
+def white_sigma(values) -> float:
+    """White-noise sigma of a reading from its second differences (insensitive to ramps)."""
+    y = np.asarray(values, float)
+    if y.size < 5:
+        return 0.0
+    d2 = y[2:] - 2.0 * y[1:-1] + y[:-2]
+    return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / np.sqrt(6.0))
+
+
+def quantisation_step(values) -> float:
+    """Most common non-zero step between consecutive readings, when the readings sit on a grid
+    (0 when they do not: a float reading has no common step)."""
+    d = np.abs(np.diff(np.asarray(values, float)))
+    d = d[d > 0]
+    if d.size < 10:
+        return 0.0
+    q = float(np.min(d))
+    # on a grid every step is a multiple of the smallest one
+    multiples = d / q
+    on_grid = np.abs(multiples - np.round(multiples)) < 1e-6 * np.maximum(multiples, 1.0)
+    return q if on_grid.mean() > 0.99 else 0.0
+
+
+def moving_average(t: np.ndarray, values: np.ndarray, window_s: float) -> tuple[np.ndarray, int]:
+    """Centred moving average over about ``window_s`` (2 k + 1 rows; ends shrink) and k."""
+    values = np.asarray(values, float)
+    dt = sample_interval(t) if np.ptp(t) > 0 else window_s
+    k = int(window_s / dt) // 2 if dt > 0 else 0
+    if k < 1 or values.size < 2 * k + 1:
+        return values.copy(), 0
+    c = np.concatenate([[0.0], np.cumsum(values - values[0])])
+    i = np.arange(values.size)
+    lo, hi = np.maximum(i - k, 0), np.minimum(i + k + 1, values.size)
+    return values[0] + (c[hi] - c[lo]) / (hi - lo), k
+
+
+def derivative(t: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """dy/dt by central differences on a possibly irregular grid; rows with a repeated stamp share
+    the derivative of the mean reading at that stamp."""
+    t = np.asarray(t, float)
+    u = np.asarray(values, float)
+    if u.size < 2:
+        return np.zeros_like(u)
+    if np.all(np.diff(t) > 0):
+        return np.gradient(u, t)
+    tu, inverse = np.unique(t, return_inverse=True)
+    if tu.size < 2:
+        return np.zeros_like(u)
+    uu = np.bincount(inverse, weights=u) / np.bincount(inverse)
+    return np.gradient(uu, tu)[inverse]
+
+
+@dataclass
+class RampReading:
+    """What the ramp rules found in one thermometer log (see the module docstring)."""
+
+    sigma: float  # white noise of the reading, C
+    quant_step: float  # quantisation step, C (0: none found)
+    threshold: float  # delta: the move that makes a ramp, C
+    starts: np.ndarray  # row index where each ramp starts
+    signs: np.ndarray  # +1 heating, -1 cooling
+    window_s: float  # derivative smoothing window
+    dtdt: np.ndarray  # smoothed d(temp)/dt per row, C/s
+    state: np.ndarray  # the contract's hysteresis s per row
+
+    @property
+    def sigma_eff(self) -> float:
+        return float(np.hypot(self.sigma, self.quant_step / np.sqrt(12.0)))
+
+    def phase(self) -> np.ndarray:
+        """+1 heating, -1 cooling, 0 dwell per row: |dT/dt| above 5 sigmas of its own noise."""
+        noise = self.sigma_eff / (np.sqrt(2.0) * self.window_s)
+        return np.where(self.dtdt > 5 * noise, 1, np.where(self.dtdt < -5 * noise, -1, 0))
+
+    def describe(self) -> str:
+        q = f"{self.quant_step:.3g} C" if self.quant_step > 0 else "none found"
+        heat, cool = int(np.sum(self.signs > 0)), int(np.sum(self.signs < 0))  # changes of direction
+        return (f"ramps read off temp_c: white noise {self.sigma:.3g} C (second differences), quantisation "
+                f"step {q}; a ramp is a move of more than {self.threshold:.3g} C from the last extreme "
+                f"(max of {NOISE_MULTIPLE:g} noise sigmas + one step, and {100 * SPAN_FRACTION:g} % of the "
+                f"span), dated back to its knee (hinge fit): the state turned to heating {heat} and to "
+                f"cooling {cool} times; d(temp_c)/dt on a {self.window_s:.3g} s moving average (its noise at most "
+                f"{100 * DERIVATIVE_NOISE_FRACTION:g} % of the median ramp rate)")
+
+
+def read_ramps(time_s, temp_c) -> RampReading:
+    """Noise, ramps, hysteresis state and smoothed derivative of a thermometer log."""
+    t = np.asarray(time_s, float)
+    y = np.asarray(temp_c, float)
+    if t.shape != y.shape or t.ndim != 1:
+        raise ValueError("time_s and temp_c must be 1-D arrays of the same length")
+    sigma = white_sigma(y)
+    q = quantisation_step(y)
+    sigma_eff = float(np.hypot(sigma, q / np.sqrt(12.0)))
+    span = float(np.ptp(y)) if y.size else 0.0
+    threshold = max(NOISE_MULTIPLE * sigma_eff + q, SPAN_FRACTION * span)
+    dt = sample_interval(t) if y.size > 1 and np.ptp(t) > 0 else 1.0
+    window = _derivative_window(t, y, dt, sigma_eff)
+    smooth, k = moving_average(t, y, window)
+    dtdt = derivative(t, smooth)
+    if threshold > 0 and y.size > 1:
+        left, confirmed, signs = _zigzag(smooth, threshold)
+        # date each ramp back to its knee between the extreme it left and its confirmation
+        starts = np.array([_knee(t, y, a, b) for a, b in zip(left, confirmed)], dtype=np.int64)
+    else:
+        starts, signs = np.zeros(0, np.int64), np.zeros(0, np.int64)
+    state = np.zeros(y.size)
+    for start, sign in zip(starts, signs):
+        state[start:] = sign
+    return RampReading(sigma=sigma, quant_step=q, threshold=threshold, starts=starts, signs=signs,
+                       window_s=float((2 * k + 1) * dt), dtdt=dtdt, state=state)
+
+
+def _derivative_window(t, y, dt, sigma_eff) -> float:
+    """Shortest window whose derivative noise is at most DERIVATIVE_NOISE_FRACTION of the median
+    rate of the rows that are clearly ramping at that window."""
+    duration = float(np.ptp(t)) if t.size else 0.0
+    if sigma_eff <= 0 or duration <= 0:
+        return dt
+    window = dt
+    while window <= duration / 20.0:
+        smooth, k = moving_average(t, y, window)
+        w = (2 * k + 1) * dt
+        noise = sigma_eff / (np.sqrt(2.0) * w)
+        rate = np.abs(derivative(t, smooth))
+        ramping = rate[rate > 5.0 * noise]
+        if ramping.size >= 3 and np.median(ramping) * DERIVATIVE_NOISE_FRACTION >= noise:
+            return w
+        window = max(w, window) * 1.5
+    return window
+
+
+@njit(cache=True)
+def _zigzag(y, threshold):
+    """Ramps as (extreme left, row of confirmation, sign): a move of more than ``threshold`` from
+    the extreme reached since the last ramp started."""
+    n = y.size
+    left = np.zeros(n, np.int64)
+    confirmed = np.zeros(n, np.int64)
+    signs = np.zeros(n, np.int64)
+    count = 0
+    direction = 0  # 0 before the first ramp, else the sign of the last one
+    lo_i, hi_i = 0, 0  # extremes since the last ramp start (both tracked before the first)
+    for i in range(1, n):
+        if y[i] < y[lo_i]:
+            lo_i = i
+        if y[i] > y[hi_i]:
+            hi_i = i
+        if direction <= 0 and y[i] - y[lo_i] > threshold:
+            left[count], confirmed[count], signs[count] = lo_i, i, 1
+            count += 1
+            direction, hi_i = 1, i
+        elif direction >= 0 and y[hi_i] - y[i] > threshold:
+            left[count], confirmed[count], signs[count] = hi_i, i, -1
+            count += 1
+            direction, lo_i = -1, i
+    return left[:count], confirmed[:count], signs[:count]
+
+
+@njit(cache=True)
+def _knee(t, y, a, b):
+    """Row k in [a, b) of the best hinge y ~ c0 + c1 max(0, t - t_k) over rows a..b: where a ramp
+    leaves the level it started from. Least squares over every k in one pass of suffix sums."""
+    m = b - a + 1
+    if m < 3:
+        return a
+    t0 = t[a]
+    ybar = 0.0
+    for j in range(a, b + 1):
+        ybar += y[j]
+    ybar /= m
+    # suffix sums over rows j > k of t, t^2, y, t*y
+    s1 = 0.0
+    s2 = 0.0
+    sy = 0.0
+    sty = 0.0
+    best_k, best_gain = a, -1.0
+    for k in range(b - 1, a - 1, -1):
+        tj, yj = t[k + 1] - t0, y[k + 1] - ybar
+        s1 += tj
+        s2 += tj * tj
+        sy += yj
+        sty += tj * yj
+        tk = t[k] - t0
+        cnt = b - k
+        sx = s1 - tk * cnt
+        sxx = s2 - 2.0 * tk * s1 + tk * tk * cnt - sx * sx / m
+        sxy = sty - tk * sy  # y is centred, so no mean correction is needed
+        if sxx > 0.0:
+            gain = sxy * sxy / sxx
+            if gain > best_gain:
+                best_gain, best_k = gain, k
+    return best_k

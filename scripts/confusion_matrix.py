@@ -1,0 +1,50 @@
+#!/usr/bin/env python3
+"""Confusion matrix of `fxdsp diagnose` on both log generators: the independent one written from the
+contract (tests/independent/chamber_logs.py, no fxdsp imports) and the project's own simulator
+(fxdsp.diagnose.hidden). Every cause including none, and the independent generator's PAIRS.
+
+    .venv/bin/python scripts/confusion_matrix.py --per-label 20 [--generator independent|project|both]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+
+from tqdm import tqdm  # noqa: E402
+
+from independent.confusion import labels, score, table  # noqa: E402
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--per-label", type=int, default=20)
+    p.add_argument("--first-seed", type=int, default=5000)
+    p.add_argument("--generator", choices=("independent", "project", "both"), default="both")
+    p.add_argument("--no-pairs", action="store_true")
+    args = p.parse_args()
+    gens = ("independent", "project") if args.generator == "both" else (args.generator,)
+    for gen in gens:
+        labs = labels(not args.no_pairs)
+        outcomes = []
+        with tqdm(total=len(labs) * args.per_label, desc=gen, file=sys.stderr) as bar:
+            for lab in labs:
+                for k in range(args.per_label):
+                    outcomes.append(score(lab, args.first_seed + k, gen))
+                    bar.update()
+        print(f"## {gen} generator, {args.per_label} logs per label\n")
+        print(table(outcomes))
+        misses = [o for o in outcomes if not (o.named_exactly and o.params_ok and o.gain_ok)]
+        if misses:
+            print("\nMisses:\n")
+            for o in misses:
+                print(f"- {o.brief}: found {o.found or ['none']}; {'; '.join(o.misses)}; gain {o.gain_ratio:.2f}")
+        print()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Independent test material for ``fxdsp diagnose``: logs generated from the contract alone."""

@@ -1,0 +1,103 @@
+"""`fxdsp diagnose` on logs it was not built from: tests/independent/chamber_logs.py writes chamber
+logs from the contract alone (its own programmes, lags, noise with flicker and random walk,
+quantised thermometers, missing rows, repeated stamps) and imports nothing from fxdsp.
+
+Every cause and every pair of the generator's PAIRS must be named exactly, with its parameters
+within 25 % and a held-out gain above 1.3; `none` must come back `none`; no report may carry an
+unidentified parameter as a plain number. The full confusion matrix (>= 20 logs per label):
+``.venv/bin/python scripts/confusion_matrix.py --per-label 20``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numba import njit
+
+from fxdsp.diagnose.api import series_from_log
+from fxdsp.diagnose.engine import diagnose_series
+from fxdsp.diagnose.logio import Log
+from fxdsp.ramps import derivative
+
+from independent.chamber_logs import CAUSES, PAIRS, fast_ramp_logs
+from independent.confusion import score
+
+SEEDS = (7001, 7002)
+LABELS = [() if c == "none" else (c,) for c in CAUSES] + list(PAIRS)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("truth", LABELS, ids=lambda lab: "+".join(lab) or "none")
+def test_independent_log_is_diagnosed(truth, seed):
+    o = score(truth, seed)
+    where = f"{o.brief}: found {o.found}"
+    assert o.named_exactly, where
+    assert o.params_ok, f"{where}; {o.misses}"
+    assert o.gain_ok, f"{where}; gain {o.gain_ratio:.2f}"
+    assert o.plain_unidentified == [], where
+
+
+# -- the rule this replaced: a ramp counted only after 600 s beyond 2e-4 C/s ---------------------------
+def old_ramp_direction(time_s, temp_c, min_rate=2e-4, min_duration=600.0):
+    """The pre-issue-13 rule, kept here verbatim in effect: the state flips only once |dT/dt| has
+    exceeded ``min_rate`` with one sign for ``min_duration`` seconds (on a one-minute smoothed
+    reading, as the old Series did)."""
+    t = np.asarray(time_s, float)
+    y = np.asarray(temp_c, float)
+    dt = np.median(np.diff(t)[np.diff(t) > 0])
+    k = max(int(60.0 / dt) // 2, 0)
+    if k:
+        c = np.concatenate([[0.0], np.cumsum(y - y[0])])
+        i = np.arange(y.size)
+        lo, hi = np.maximum(i - k, 0), np.minimum(i + k + 1, y.size)
+        y = y[0] + (c[hi] - c[lo]) / (hi - lo)
+    rate = derivative(t, y)
+    sign = np.where(rate > min_rate, 1, np.where(rate < -min_rate, -1, 0)).astype(np.int64)
+    return _old_state(t, sign, min_duration)
+
+
+@njit(cache=True)
+def _old_state(t, sign, min_duration):
+    state = np.zeros(t.size)
+    current = 0.0
+    run_sign, run_start = 0, 0
+    for i in range(t.size):
+        if sign[i] != run_sign:
+            run_sign, run_start = sign[i], i
+        if run_sign != 0 and t[i] - t[run_start] >= min_duration:
+            current = float(run_sign)
+        state[i] = current
+    return state
+
+
+FAST = fast_ramp_logs(6, seed=31)
+
+
+def _series(log):
+    series, _ = series_from_log(Log(columns={k: np.asarray(v, float) for k, v in log.columns.items()},
+                                    source="independent"))
+    return series
+
+
+@pytest.mark.parametrize("index", range(len(FAST)))
+def test_old_ramp_rule_fails_on_fast_short_ramps_and_the_new_one_holds(index):
+    log = FAST[index]
+    truth = log.hidden["hyst_state"]
+    t = log.columns["time_s"]
+    old = old_ramp_direction(t, log.columns["temp_c"])
+    new = _series(log).hyst  # the diagnosis's own state, from fxdsp.ramps
+    old_wrong, new_wrong = np.mean(old != truth), np.mean(new != truth)
+    assert old_wrong > 0.1, f"{log.brief()}: the old rule was right on {1 - old_wrong:.0%} of rows"
+    assert new_wrong < 0.02, f"{log.brief()}: the new state is wrong on {new_wrong:.1%} of rows"
+
+
+def test_old_ramp_rule_makes_the_diagnosis_miss_hysteresis():
+    # the same fast-ramp logs diagnosed with the old state in place of the new one: hysteresis is
+    # lost (the failure the issue reported: named ramp_rate, or nothing); with the new state it is named
+    missed = 0
+    for log in FAST[:4]:
+        series = _series(log)
+        assert diagnose_series(series).causes[:1] == ["hysteresis"], log.brief()
+        series = _series(log)
+        series.hyst = old_ramp_direction(series.t, series.temp)
+        missed += diagnose_series(series).causes[:1] != ["hysteresis"]
+    assert missed >= 3, f"the old rule still found hysteresis in {4 - missed} of 4 fast-ramp logs"
