@@ -37,6 +37,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
                         "confusion matrix of the diagnosis on simulated logs with a random hidden cause"),
     "diagnose-rtd": ("fxdsp.commands.diagnose_rtd",
                      "linear RTD law vs Callendar-Van Dusen on a resistance table, and its diagnosis"),
+    "sweep": ("fxdsp.sweep.cli", "Monte-Carlo budget, word-length search, confusion matrix, RTL regressions "
+                                 "on Dask workers"),
 }
 
 

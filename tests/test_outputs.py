@@ -78,6 +78,11 @@ def _probes(tmp: Path, log: Path) -> list[tuple[list[str], str]]:
         (["diagnose-rtd", str(adir)], "table"),
         (["vectors", "--config", str(afile), "--out", str(afile)], "--out"),
         (["budget", "--json", str(afile) + "/."], "--json"),             # pathlib would read it as a_file.txt
+        (["sweep", "montecarlo", "--out", str(afile)], "--out"),
+        (["sweep", "hidden", "--out", str(tmp / "missing" / "s")], "--out"),
+        (["sweep", "wordlength", "--target", "1deg/h", "--config", str(adir), "--out", str(tmp / "s")], "--config"),
+        (["sweep", "rtl", "--rtl", str(afile), "--out", str(tmp / "s")], "--rtl"),
+        (["sweep", "rtl", "--build-dir", str(afile), "--out", str(tmp / "s")], "--build-dir"),
         (["diagnose", str(log), "--model-out", str(adir) + "/"], "--model-out"),
     ]
 

@@ -237,10 +237,14 @@ class OptResult:
 
 def optimise(config: Config, target: Target, metric: str = "rms", margin: float = 0.02, samples: int | None = None,
              progress=None, cost_model: str = "total_bits", max_mean: Target | None = None,
-             frequencies: tuple = ()) -> OptResult:
+             frequencies: tuple = (), prefetch=None) -> OptResult:
     """``cost_model``: "total_bits" (registers, coefficients and memory) or "register_bits" (memory free).
     ``max_mean``: a limit on |mean| (a bias) of the same port, met together with the target;
-    ``frequencies``: drive frequencies (chain_paper002) at which both must hold as well."""
+    ``frequencies``: drive frequencies (chain_paper002) at which both must hold as well.
+    ``prefetch(evaluator, candidates, seed_offset)``: called with every batch of candidates the search
+    is about to read (independent of each other) so that they can be evaluated in parallel into
+    ``evaluator.cache`` (``fxdsp sweep wordlength``); the search reads the same values either way, so
+    the result does not depend on it. Only stage 4 asks speculatively (the rest of a pass)."""
     if cost_model not in ("total_bits", "register_bits"):
         raise ValueError(f"--cost: unknown cost model {cost_model!r}; expected total_bits or register_bits")
     chain = target.chain
@@ -256,6 +260,16 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
     knobs = KNOBS[chain]
     goal = target.value * (1.0 - margin)
     default = {k.name: knob_value(ev.base, k) for k in knobs}
+
+    def ask(candidates, seed_offset: int = 1000) -> None:
+        if prefetch is not None:
+            prefetch(ev, list(candidates), seed_offset)
+
+    def top_of(k: Knob) -> int:
+        return min(k.hi, default[k.name] + HEADROOM + (8 if k.kind == "int" else 0)) if k.kind == "int" \
+            else default[k.name] + HEADROOM
+
+    ask([default] + [{**default, k.name: top_of(k)} for k in knobs])
     e_default = ev.error(default)
     log = [f"default: {target.port} {metric} error {e_default:.4g} {target.unit}; goal {goal:.4g} {target.unit} "
            f"(target {target.value:.4g} less a {margin * 100:.0f} % margin)"]
@@ -269,9 +283,7 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
     # 1. reachable maxima
     hi = {}
     for k in knobs:
-        top = min(k.hi, default[k.name] + HEADROOM + (8 if k.kind == "int" else 0)) if k.kind == "int" \
-            else default[k.name] + HEADROOM
-        v = top
+        v = top_of(k)
         while v > default[k.name] and math.isinf(ev.error({**default, k.name: v})):
             v -= 1
         hi[k.name] = v
@@ -285,20 +297,25 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
                          f"length at its maximum the {metric} error is {e_hi:.4g} {target.unit}")
 
     bar = progress(total=len(knobs) * 2, desc="word-length search", unit="knob") if progress else None
-    # 2. per-knob minimum with the others at their maximum (binary search, error ~ monotone in width)
-    minimum, sweeps = {}, {}
+    # 2. per-knob minimum with the others at their maximum (binary search, error ~ monotone in width);
+    # the knobs' searches are independent, so they step together, one batch of midpoints at a time
+    sweeps = {}
+    bounds = {k.name: [lo_of(k), values_hi[k.name]] for k in knobs}
+    ask([{**values_hi, k.name: bounds[k.name][0]} for k in knobs])
     for k in knobs:
-        lo, up = lo_of(k), values_hi[k.name]
-        if ev.error({**values_hi, k.name: lo}) <= goal:
-            up = lo
-        while up - lo > 1:
-            mid = (lo + up) // 2
-            if ev.error({**values_hi, k.name: mid}) <= goal:
-                up = mid
-            else:
-                lo = mid
-        minimum[k.name] = up
-        bar and bar.update(1)
+        if ev.error({**values_hi, k.name: bounds[k.name][0]}) <= goal:
+            bounds[k.name][1] = bounds[k.name][0]
+    active = [k for k in knobs if bounds[k.name][1] - bounds[k.name][0] > 1]
+    bar and bar.update(len(knobs) - len(active))
+    while active:
+        mids = {k.name: sum(bounds[k.name]) // 2 for k in active}
+        ask([{**values_hi, k.name: mids[k.name]} for k in active])
+        for k in active:
+            bounds[k.name][1 if ev.error({**values_hi, k.name: mids[k.name]}) <= goal else 0] = mids[k.name]
+        done = [k for k in active if bounds[k.name][1] - bounds[k.name][0] <= 1]
+        active = [k for k in active if k not in done]
+        bar and bar.update(len(done))
+    minimum = {k.name: bounds[k.name][1] for k in knobs}
 
     # 3. greedy addition from the minima
     values = dict(minimum)
@@ -307,6 +324,7 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
     steps = 0
     while not e <= goal:
         best = None
+        ask([{**values, k.name: values[k.name] + 1} for k in knobs if values[k.name] < values_hi[k.name]])
         for k in knobs:
             if values[k.name] >= values_hi[k.name]:
                 continue
@@ -337,17 +355,22 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
         order = sorted(knobs, key=lambda k: -((_instances(k, ev.data(values))[0] or 1)
                                               if cost_model == "total_bits" or not _instances(k, ev.data(values))[1]
                                               else 0))
-        for k in order:
+        ahead = True   # ask for the rest of the pass from the current values (again after a change)
+        for i, k in enumerate(order):
+            if ahead:
+                ask([{**values, q.name: values[q.name] - 1} for q in order[i:] if values[q.name] > lo_of(q)])
+                ahead = False
             if values[k.name] <= lo_of(k):
                 continue
             trial = {**values, k.name: values[k.name] - 1}
             et = ev.error(trial)
             if et <= goal:
-                values, e, changed = trial, et, True
+                values, e, changed, ahead = trial, et, True, True
                 log.append(f"-1 bit {k.name} -> {values[k.name]}: error {e:.4g}")
     if bar:
         bar.close()
     data = ev.data(values)
+    ask([values], 4242)
     independent = ev.error(values, seed_offset=4242)
     return OptResult(target, metric, default, values, e_default, e, independent, cost(ev.base, chain), cost(data, chain),
                      ev.evaluations, data, sweeps, log)

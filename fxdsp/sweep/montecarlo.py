@@ -1,0 +1,252 @@
+"""Monte-Carlo error budget of the paper 002 rate output over seeds x chamber temperatures x drive
+frequencies, with percentiles and their confidence intervals.
+
+Why: ``fxdsp budget`` measures one stimulus per question; a user's question is "what error will 99 %
+of my parts see?", which needs the distribution over many noise realisations and operating points.
+
+One task is one seed (a Monte-Carlo sample): for every drive frequency f (the design rebuilt with
+demod.f_hz = f, as the budget's drive-frequency sweep does: the band the -40..85 C silicon resonator
+covers, and f0) and every held chamber temperature T, a record of ``settle + samples`` samples at T
+with a rate drawn uniformly in +-RATE_FS, the nominal quadrature and white sensor noise goes through
+the ADCs; the error is bit-exact minus float on the same ADC codes (the design's own error, as in
+``fxdsp budget``), in deg/h, measured after the filters have settled (floor.settling_samples). The
+rate and noise of (seed, T) are drawn from the task's seed and T's index only, so every drive
+frequency sees the same realisation (the frequencies differ by the design alone). The grid of
+frequencies is crossed with the temperatures: a superset of the physical pairing f(T), so the figures
+bound it.
+
+Percentiles are order statistics (the ceil(p n)-th smallest value) with a distribution-free
+confidence interval from the binomial law of the count below the true quantile (Conover); an upper
+end beyond the largest sample is None (too few seeds for that confidence). Pooled figures treat the
+grid points as draws from the grid's mixture.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+from functools import lru_cache, partial
+
+import numpy as np
+from scipy.stats import binom
+
+RATE_FS = 0.3          # rates drawn uniformly in +-0.3 FS: the nominal stimulus' steps span this
+QUAD_FS = 0.05         # nominal stimulus quadrature
+NOISE_FS = 1e-3        # nominal white sensor noise (dithers the ADCs)
+TEMP_RANGE_C = (-20.0, 60.0)   # the paper 002 calibration range
+PERCENTILES = (0.5, 0.9, 0.99)
+LEVEL = 0.95
+
+
+# ----------------------------------------------------------------------------------------------
+# Settings and the grid
+# ----------------------------------------------------------------------------------------------
+def grid(config_data: dict, temps: int = 16, freqs: int = 2, temp_range=TEMP_RANGE_C) -> tuple[list, list]:
+    """(temperatures C, drive frequencies Hz): ``temps`` evenly over ``temp_range`` (ends included);
+    ``freqs`` = 1: the config's demod.f_hz alone, else ``freqs`` evenly across the drive band and f0."""
+    from ..budget.floor import drive_frequencies
+
+    if temps < 1:
+        raise ValueError(f"--temps: need at least 1 temperature, got {temps}")
+    if freqs < 1:
+        raise ValueError(f"--freqs: need at least 1 drive frequency, got {freqs}")
+    lo, hi = (float(x) for x in temp_range)
+    if not lo <= hi:
+        raise ValueError(f"--temp-range: LO must not exceed HI, got {lo} {hi}")
+    t = [lo] if temps == 1 else [float(x) for x in np.linspace(lo, hi, temps)]
+    f0 = float(config_data["demod"]["f_hz"])
+    f = [f0] if freqs == 1 else [float(x) for x in drive_frequencies(f0, freqs)]
+    return t, f
+
+
+def settings(config_data: dict, seeds: int, temps: list, freqs: list, samples: int) -> dict:
+    if seeds < 1:
+        raise ValueError(f"--seeds: need at least 1 seed, got {seeds}")
+    if samples < 16:
+        raise ValueError(f"--samples: need at least 16 measured samples per point, got {samples}")
+    return {"config": copy.deepcopy(config_data), "seeds": int(seeds), "temps_c": list(temps),
+            "freqs_hz": list(freqs), "samples": int(samples), "rate_fs": RATE_FS, "quad_fs": QUAD_FS,
+            "noise_fs": NOISE_FS}
+
+
+# ----------------------------------------------------------------------------------------------
+# One task (runs on a worker)
+# ----------------------------------------------------------------------------------------------
+@lru_cache(maxsize=32)
+def _design(config_json: str, f_hz: float):
+    """The design at one drive frequency and its settling length, kept per worker process."""
+    from ..budget.floor import settling_samples
+    from ..chains import build
+    from ..config import Config
+
+    data = json.loads(config_json)
+    data["demod"]["f_hz"] = float(f_hz)
+    design = build(Config(data, source="<sweep montecarlo>"))
+    return design, settling_samples(design.chains["chain_paper002"])
+
+
+def point_errors(settings: dict, seed: int) -> dict:
+    """One seed: rms and mean error (deg/h) at every (frequency, temperature), and the overflows."""
+    config_json = json.dumps(settings["config"], sort_keys=True)
+    temps, freqs, m = settings["temps_c"], settings["freqs_hz"], settings["samples"]
+    rates = [float(np.random.default_rng([seed, k]).uniform(-settings["rate_fs"], settings["rate_fs"]))
+             for k in range(len(temps))]
+    rms = [[0.0] * len(temps) for _ in freqs]
+    mean = [[0.0] * len(temps) for _ in freqs]
+    overflows = 0
+    for j, f in enumerate(freqs):
+        design, settle = _design(config_json, float(f))
+        chain = design.chains["chain_paper002"]
+        scale = design.rate_full_scale_dps * 3600.0
+        n = settle + m
+        for k, t in enumerate(temps):
+            # the operating point of (seed, T), the same at every frequency: rate first, then the noise
+            rng = np.random.default_rng([seed, k])
+            rate = float(rng.uniform(-settings["rate_fs"], settings["rate_fs"]))
+            stim = chain.sensor_inputs(np.full(n, float(t)), np.full(n, rate), quad_fs=settings["quad_fs"], rng=rng,
+                                       noise_fs=settings["noise_fs"])
+            res = chain.run(**stim)
+            e = (chain.real_outputs(res)["rate"] - chain.run_float(**stim)["rate"])[settle:] * scale
+            rms[j][k] = float(np.sqrt(np.mean(e ** 2)))
+            mean[j][k] = float(e.mean())
+            overflows += int(res.overflows.total)
+    return {"rate": rates, "rms": rms, "mean": mean, "overflows": overflows}
+
+
+def task_function(settings: dict):
+    """The picklable function a worker runs for task params ``{"seed_index": i}``."""
+    return partial(_task, settings)
+
+
+def _task(settings: dict, params: dict, seed: int) -> dict:
+    return point_errors(settings, seed)
+
+
+def task_params(settings: dict) -> list[dict]:
+    return [{"seed_index": i} for i in range(settings["seeds"])]
+
+
+# ----------------------------------------------------------------------------------------------
+# Statistics
+# ----------------------------------------------------------------------------------------------
+def quantile_ci(values, p: float, level: float = LEVEL) -> dict:
+    """p-quantile of ``values`` as the ceil(p n)-th order statistic, and a distribution-free
+    ``level`` confidence interval [x_(l), x_(u)] (1-based ranks) with B ~ Binomial(n, p) the count
+    below the true quantile: l the largest rank with P(B <= l - 1) <= (1 - level) / 2, u the
+    smallest with P(B <= u - 1) >= (1 + level) / 2. An end outside 1..n is None."""
+    x = np.sort(np.asarray(values, dtype=float))
+    n = x.size
+    if n == 0:
+        raise ValueError("values: empty")
+    if not 0 < p < 1:
+        raise ValueError(f"p: must be within (0, 1), got {p}")
+    if not 0 < level < 1:
+        raise ValueError(f"level: must be within (0, 1), got {level}")
+    k = max(1, math.ceil(p * n - 1e-9))
+    a = (1 - level) / 2
+    cdf = binom.cdf(np.arange(n + 1), n, p)          # cdf[r] = P(B <= r)
+    below = np.nonzero(cdf <= a)[0]
+    lo_rank = int(below[-1]) + 1 if below.size else 0       # l - 1 = the largest r with P(B <= r) <= a
+    above = np.nonzero(cdf >= 1 - a)[0]
+    hi_rank = int(above[0]) + 1 if above.size else n + 1
+    return {"p": p, "n": int(n), "value": float(x[k - 1]),
+            "ci": [float(x[lo_rank - 1]) if lo_rank >= 1 else None,
+                   float(x[hi_rank - 1]) if hi_rank <= n else None],
+            "ci_ranks": [lo_rank if lo_rank >= 1 else None, hi_rank if hi_rank <= n else None],
+            "level": level}
+
+
+def _figures(rms: np.ndarray, mean: np.ndarray) -> dict:
+    return {"n": int(rms.size),
+            "rms": {f"p{round(p * 100, 1):g}": quantile_ci(rms.ravel(), p) for p in PERCENTILES},
+            "rms_max": float(rms.max()), "rms_mean": float(rms.mean()),
+            "abs_mean_p99": quantile_ci(np.abs(mean).ravel(), 0.99)}
+
+
+def summarise(settings: dict, records: list[dict]) -> dict:
+    """Percentile figures per (frequency, temperature) cell, per temperature, per frequency, pooled;
+    the failed tasks (by index and params) are left out and listed."""
+    good = [r for r in records if "result" in r]
+    failed = [{"index": r["index"], "params": r["params"], "error": r["error"]} for r in records if "error" in r]
+    temps, freqs = settings["temps_c"], settings["freqs_hz"]
+    out = {"chain": "chain_paper002", "port": "rate", "unit": "deg/h", "measure": "bit-exact minus float on the "
+           "same ADC codes, after settling", "seeds": settings["seeds"], "seeds_ok": len(good),
+           "temps_c": temps, "freqs_hz": freqs, "samples_per_point": settings["samples"],
+           "rate_fs_range": [-settings["rate_fs"], settings["rate_fs"]], "failed": failed}
+    if not good:
+        return out
+    rms = np.array([r["result"]["rms"] for r in good], dtype=float)      # seeds x freqs x temps
+    mean = np.array([r["result"]["mean"] for r in good], dtype=float)
+    out["overflows"] = int(sum(r["result"]["overflows"] for r in good))
+    out["pooled"] = _figures(rms, mean)
+    out["by_temp"] = [{"temp_c": t, **_figures(rms[:, :, k], mean[:, :, k])} for k, t in enumerate(temps)]
+    out["by_freq"] = [{"f_hz": f, **_figures(rms[:, j, :], mean[:, j, :])} for j, f in enumerate(freqs)]
+    cells = [{"f_hz": f, "temp_c": t, **_figures(rms[:, j, k], mean[:, j, k])}
+             for j, f in enumerate(freqs) for k, t in enumerate(temps)]
+    out["cells"] = cells
+    worst = max(cells, key=lambda c: c["rms"]["p99"]["value"])
+    out["worst_cell_p99"] = {"f_hz": worst["f_hz"], "temp_c": worst["temp_c"], **worst["rms"]["p99"]}
+    return out
+
+
+def _q(q: dict) -> str:
+    lo, hi = q["ci"]
+    return f"{q['value']:.4g} [{'-' if lo is None else f'{lo:.4g}'}, {'-' if hi is None else f'{hi:.4g}'}]"
+
+
+def format_summary(s: dict) -> str:
+    """The budget table: per temperature (pooled over the drive frequencies), per frequency, pooled."""
+    head = (f"chain_paper002.rate error ({s['unit']} rms per point; {s['measure']}), {s['seeds_ok']} of "
+            f"{s['seeds']} seeds x {len(s['temps_c'])} temperatures x {len(s['freqs_hz'])} drive frequencies, "
+            f"{s['samples_per_point']} samples per point; percentile [95 % CI]")
+    lines = [head]
+    if "pooled" not in s:
+        return "\n".join(lines + ["  no results"])
+    cols = f"{'p50':>10s} {'p90':>10s} {'p99 [95 % CI]':>28s} {'max':>10s} {'p99 |mean|':>11s}"
+
+    def row(label, fig):
+        r = fig["rms"]
+        return (f"  {label:>14s} {r['p50']['value']:10.4g} {r['p90']['value']:10.4g} {_q(r['p99']):>28s} "
+                f"{fig['rms_max']:10.4g} {fig['abs_mean_p99']['value']:11.4g}")
+
+    lines.append(f"  {'T C':>14s} " + cols)
+    lines += [row(f"{b['temp_c']:.1f}", b) for b in s["by_temp"]]
+    lines.append(f"  {'f Hz':>14s} " + cols)
+    lines += [row(f"{b['f_hz']:.2f}", b) for b in s["by_freq"]]
+    lines.append(row("all", s["pooled"]))
+    w = s["worst_cell_p99"]
+    lines.append(f"  worst cell: p99 {_q(w)} at {w['temp_c']:.1f} C, {w['f_hz']:.2f} Hz; overflows "
+                 f"{s['overflows']}")
+    if s["failed"]:
+        lines.append(f"  {len(s['failed'])} failed seeds left out (see results.jsonl)")
+    return "\n".join(lines)
+
+
+def plot(s: dict, path) -> None:
+    """p50 and p99 (with its CI) of the rms error vs temperature, one colour per drive frequency."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.5, 4.5))
+    if "cells" in s:
+        for j, f in enumerate(s["freqs_hz"]):
+            cells = [c for c in s["cells"] if c["f_hz"] == f]
+            t = [c["temp_c"] for c in cells]
+            p99 = [c["rms"]["p99"] for c in cells]
+            line, = ax.plot(t, [q["value"] for q in p99], marker="o", ms=3, label=f"p99, {f:.2f} Hz")
+            lo = [q["ci"][0] if q["ci"][0] is not None else q["value"] for q in p99]
+            hi = [q["ci"][1] if q["ci"][1] is not None else q["value"] for q in p99]
+            ax.fill_between(t, lo, hi, color=line.get_color(), alpha=0.15, lw=0)
+            ax.plot(t, [c["rms"]["p50"]["value"] for c in cells], ls="--", color=line.get_color(), lw=1,
+                    label=f"p50, {f:.2f} Hz")
+    ax.set_xlabel("chamber temperature (C)")
+    ax.set_ylabel("rate error rms (deg/h)")
+    ax.set_title(f"chain_paper002.rate: {s['seeds_ok']} seeds per point (band: 95 % CI of p99)", fontsize=9)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110, metadata={"Software": None})
+    plt.close(fig)
