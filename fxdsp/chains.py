@@ -1,7 +1,10 @@
 """The signal chains of the papers, composed from the blocks, and the design built from one config.
 
 * paper 002 (RTD path, its figure 4): RTD code -> temperature -> SF(T) -> sense / SF(T) -> demod (I)
-  -> I - bias(T) -> final low-pass -> rate.
+  -> I - bias(T) -> final low-pass -> rate. Optional stages, chosen by the config (absent = the
+  paper's chain, bit for bit): ``[chain_paper002] stages = ["lag"]`` puts the ``lag`` block between
+  the RTD readout and the SF/bias engines (they see the die-temperature estimate Te; the ``temp``
+  port stays the thermometer's reading), and ``[demod] phase_trim_rad`` rotates the NCO reference.
 * paper 001 (frequency path): frequency word -> T = (f - f0)/k -> q(T) quadratic -> rate - q(T).
 * paper 000 (QVBA): K0(t), K1(t) cubic in t = T - 25 C are configurations of the same piecewise
   engine (``piecewise.k0``, ``piecewise.k1``).
@@ -32,47 +35,70 @@ from .fixed import Format, OverflowLog, Rules, quantize
 class Paper002Chain(Block):
     name = "chain_paper002"
 
-    # members in the order of the chain's ovf vector (bit 0 first), by instance name
+    # members in the order of the chain's ovf vector (bit 0 first), by instance name; a chain with the
+    # lag stage has "lag" after "rtd" (its instance attribute MEMBERS)
     MEMBERS = ("rtd", "piecewise_sf", "piecewise_bias", "sf_divide", "demod", "bias_subtract", "iir")
+    STAGES = ("lag",)   # the optional stages a config may choose ([chain_paper002] stages)
 
     def __init__(self, rtd: Rtd, sf: Piecewise, divide: SfDivide, demod: Demod, bias: Piecewise,
-                 subtract: BiasSubtract, lpf: Iir):
+                 subtract: BiasSubtract, lpf: Iir, lag: Lag | None = None):
         """The blocks must already be connected wire to wire (``build`` derives each input format from
-        the output it is wired to)."""
+        the output it is wired to). ``lag``: the optional thermal-lag stage between the RTD readout
+        and the SF / bias engines, run once per chain sample (its rate is the chain's sample rate)."""
         self.rtd, self.sf, self.divide, self.demod = rtd, sf, divide, demod
         self.bias, self.subtract, self.lpf = bias, subtract, lpf
+        self.lag = lag
+        if lag is not None:
+            if lag.temp_format != rtd.temp_format:
+                raise ValueError(f"{self.name}: lag.temp_format {lag.temp_format} must be rtd.temp_format "
+                                 f"{rtd.temp_format}")
+            self.MEMBERS = ("rtd", "lag", *type(self).MEMBERS[1:])
+        self.stages = ("lag",) if lag is not None else ()
         self.inputs = {"vsa": divide.in_format, "rtd_code": rtd.adc_format}
         self.outputs = {"temp": rtd.temp_format, "rate": lpf.data_format}
 
     def reset(self) -> None:
         self.demod.reset()
         self.lpf.reset()
+        if self.lag is not None:
+            self.lag.reset()
+
+    def _state_keys(self) -> set[str]:
+        return {"demod", "iir"} | ({"lag"} if self.lag is not None else set())
 
     def get_state(self) -> dict:
-        return {"demod": self.demod.get_state(), "iir": self.lpf.get_state()}
+        state = {"demod": self.demod.get_state(), "iir": self.lpf.get_state()}
+        if self.lag is not None:
+            state["lag"] = self.lag.get_state()
+        return state
 
     def set_state(self, state) -> None:
-        if not isinstance(state, dict) or set(state) != {"demod", "iir"}:
-            raise ValueError(f"{self.name}: state: expected a previous result's state {{'demod', 'iir'}}")
+        keys = self._state_keys()
+        if not isinstance(state, dict) or set(state) != keys:
+            raise ValueError(f"{self.name}: state: expected a previous result's state {{{', '.join(sorted(keys))}}}")
         self.demod.set_state(state["demod"])
         self.lpf.set_state(state["iir"])
+        if self.lag is not None:
+            self.lag.set_state(state["lag"])
 
     def stream(self, log: OverflowLog, vsa: np.ndarray, rtd_code: np.ndarray) -> dict[str, np.ndarray]:
         temp = self.rtd.stream(log, code=rtd_code)["temp"]
-        sf = self.sf.stream(log, temp=temp)["y"]
+        te = self.lag.stream(log, temp=temp)["te"] if self.lag is not None else temp  # what the engines see
+        sf = self.sf.stream(log, temp=te)["y"]
         v = self.divide.stream(log, x=vsa, sf=sf)["y"]
         i, _ = self.demod.iq(log, v)
-        b = self.bias.stream(log, temp=temp)["y"]
+        b = self.bias.stream(log, temp=te)["y"]
         r = self.subtract.stream(log, x=i, bias=b)["y"]
         rate = self.lpf.stream(log, x=r)["y"]
         return {"temp": temp, "rate": rate}
 
     def reference(self, vsa: np.ndarray, rtd_code: np.ndarray) -> dict[str, np.ndarray]:
         temp = self.rtd.reference(code=rtd_code)["temp"]
-        sf = self.sf.reference(temp=temp)["y"]
+        te = self.lag.reference(temp=temp)["te"] if self.lag is not None else temp
+        sf = self.sf.reference(temp=te)["y"]
         v = self.divide.reference(x=vsa, sf=sf)["y"]
         i = self.demod.reference(x=v)["i"]
-        b = self.bias.reference(temp=temp)["y"]
+        b = self.bias.reference(temp=te)["y"]
         r = self.subtract.reference(x=i, bias=b)["y"]
         return {"temp": temp, "rate": self.lpf.reference(x=r)["y"]}
 
@@ -123,8 +149,21 @@ class Paper002Chain(Block):
         return {"vsa": np.concatenate([nom["vsa"], full]), "rtd_code": np.concatenate([nom["rtd_code"], hot])}
 
     def parameters(self) -> dict:
-        return {"blocks": [b.name for b in (self.rtd, self.sf, self.divide, self.demod, self.bias, self.subtract,
-                                            self.lpf)]}
+        out = {"blocks": [b.name for b in (self.rtd, self.sf, self.divide, self.demod, self.bias, self.subtract,
+                                           self.lpf)]}
+        if self.stages:  # only when chosen: a config without them records what it always did
+            out["stages"] = list(self.stages)
+        return out
+
+
+def paper002_stages(cfg: Config) -> tuple[str, ...]:
+    """The optional stages ``[chain_paper002] stages`` chooses, in chain order (absent table or key:
+    none, the paper's chain)."""
+    sec = cfg.optional_section("chain_paper002")
+    if sec is None:
+        return ()
+    chosen = sec.names("stages", Paper002Chain.STAGES, [])
+    return tuple(s for s in Paper002Chain.STAGES if s in chosen)
 
 
 class Paper001Chain(Block):
@@ -310,7 +349,10 @@ def build(config: Config | str | None = None, chains: bool = True) -> Design:
     sub001_sec = cfg.section("bias_subtract001")
     subtract001 = BiasSubtract.from_config(sub001_sec, sub001_sec.format("in_format"), bias001.out_format)
 
-    lag = Lag.from_config(cfg.section("lag"), rtd.temp_format)
+    stages = paper002_stages(cfg)
+    # the chain's lag stage is the [lag] block, run once per chain sample (its rate is fs)
+    wired = (fs, "system.fs_hz", chains) if "lag" in stages else ()
+    lag = Lag.from_config(cfg.section("lag"), rtd.temp_format, *wired)
 
     qvba_temp = cfg.section("piecewise").format("qvba_temp_format")
     k0 = Piecewise.from_config(cfg.section("piecewise.k0"), qvba_temp)
@@ -321,7 +363,8 @@ def build(config: Config | str | None = None, chains: bool = True) -> Design:
                      "bias_subtract": subtract, "bias_subtract001": subtract001, "freq2temp": f2t,
                      "lag": lag}
     if chains:
-        design.chains = {"chain_paper002": Paper002Chain(rtd, sf, divide, demod, bias, subtract, lpf),
+        design.chains = {"chain_paper002": Paper002Chain(rtd, sf, divide, demod, bias, subtract, lpf,
+                                                         lag if "lag" in stages else None),
                          "chain_paper001": Paper001Chain(f2t, bias001, subtract001)}
     design.instances = _instance_table(design)
     cfg.check_all_read()

@@ -109,6 +109,18 @@ class Section:
             raise ValueError(f"{self.field(key)}: {value!r} is not one of {', '.join(choices)}")
         return value
 
+    def names(self, key: str, choices: tuple[str, ...], default: Any = None) -> list[str]:
+        """A list of distinct names, each one of ``choices`` (e.g. the optional stages of a chain)."""
+        value = self._get(key, _REQUIRED if default is None else default)
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise TypeError(f"{self.field(key)}: expected a list of names, got {value!r}")
+        for v in value:
+            if v not in choices:
+                raise ValueError(f"{self.field(key)}: {v!r} is not one of {', '.join(choices)}")
+        if len(set(value)) != len(value):
+            raise ValueError(f"{self.field(key)}: a name is listed twice in {value!r}")
+        return list(value)
+
     def number(self, key: str, default: Any = None, *, low: float | None = None, high: float | None = None,
                low_open: bool = False) -> float:
         value = self._get(key, _REQUIRED if default is None else default)

@@ -3,10 +3,16 @@
 
 * NCO: ``phase[n] = (n * ftw + phase0) mod 2**phase_bits`` with ``ftw = f_hz / fs_hz * 2**phase_bits``
   quantised half_up (an open-loop frequency error of up to half a tuning-word LSB: its phase drift is
-  why the default accumulator is 48 bits). One quarter-wave sine table, ``qsin[k] = sin((k + 1/2)
-  (pi/2) / 2**(lut_bits-2))`` (bin centres, ``lut_format``, half_up, saturated), serves cos and -sin
-  over the whole turn by quadrant symmetry: the top ``lut_bits`` phase bits are the bin (quadrant,
-  index), the two reads are ``qsin[k]`` and ``qsin[~k]``. First-order (Taylor) interpolation removes
+  why the default accumulator is 48 bits). Phase trim (``phase_trim_rad``, optional, 0 = none): a
+  constant added to the accumulator word before the table is read, ``ref[n] = (phase[n] + trim) mod
+  2**phase_bits`` with ``trim = phase_trim_rad / (2 pi) * 2**phase_bits`` quantised half_up, wrapped
+  (LSB 2 pi / 2**phase_bits: 2.2e-14 rad at 48 bits). It rotates the demodulator's reference, not
+  the drive (``carrier`` and the accumulator state are unchanged): a sense signal ``cos(w t + phi)``
+  (a pick-off phase error phi, quadrature leaking into I by c = -tan phi) demodulates to
+  ``I = cos(phi - trim)``, so ``trim = phi = -atan(c)`` (what ``fxdsp diagnose`` proposes) removes it.
+  One quarter-wave sine table, ``qsin[k] = sin((k + 1/2) (pi/2) / 2**(lut_bits-2))`` (bin centres,
+  ``lut_format``, half_up, saturated), serves cos and -sin over the whole turn by quadrant symmetry:
+  the top ``lut_bits`` phase bits are the bin (quadrant, index), the two reads are ``qsin[k]`` and ``qsin[~k]``. First-order (Taylor) interpolation removes
   the phase-truncation error: the next ``interp_bits`` phase bits give the offset from the bin centre,
   ``delta = (2 r + 1 - 2**interp_bits) / 2**(interp_bits+1)`` bins (the centre of each sub-bin, so the
   offset itself has no truncation bias), ``d = delta_code * two_pi`` (2 pi on TWO_PI_FORMAT), and
@@ -24,8 +30,8 @@
   ``angle_format`` (radians). Amplitude = x * (1/K) with 1/K quantised in s18.17, rounded by
   ``rounding`` into data_format; phase = the angle accumulator.
 
-Float reference: exact cos/sin of the exact phase, float mixers, scipy sosfilt with the float
-design, hypot and arctan2.
+Float reference: exact cos/sin of the exact phase (drive phase + the unquantised trim), float
+mixers, scipy sosfilt with the float design, hypot and arctan2.
 """
 
 from __future__ import annotations
@@ -79,16 +85,18 @@ def _nco_waves(phases, addr_shift, lut_bits, interp_bits, qsin, two_pi, corr_shi
 
 
 @njit(cache=True)
-def _mix_kernel(x, phase0, ftw, phase_mask, addr_shift, lut_bits, interp_bits, qsin, two_pi, corr_shift,
+def _mix_kernel(x, phase0, ftw, trim, phase_mask, addr_shift, lut_bits, interp_bits, qsin, two_pi, corr_shift,
                 shift, rounding, lo, hi, overflow, counts):
     """NCO + both mixers. phase = (phase0 + n ftw) mod 2**phase_bits accumulated sample by sample
-    (masking after each add keeps it within 49 bits); counts += (I fits, Q fits)."""
+    (masking after each add keeps it within 49 bits), the table read at (phase + trim) mod
+    2**phase_bits (both < 2**48: the sum fits 49 bits); counts += (I fits, Q fits)."""
     n = x.shape[0]
     i_out = np.empty(n, dtype=np.int64)
     q_out = np.empty(n, dtype=np.int64)
     phase = phase0
     for k in range(n):
-        c, m = _nco_wave(phase, addr_shift, lut_bits, interp_bits, qsin, two_pi, corr_shift, rounding)
+        c, m = _nco_wave((phase + trim) & phase_mask, addr_shift, lut_bits, interp_bits, qsin, two_pi, corr_shift,
+                         rounding)
         v, o = convert(x[k] * c, shift, rounding, lo, hi, overflow)
         i_out[k] = v
         counts[0] += o
@@ -132,10 +140,12 @@ TWO_PI_FORMAT = Format(True, 16, 12)   # 2 pi of the interpolation step: relativ
 
 
 class Nco:
-    """Phase accumulator, quarter-wave sine table and first-order interpolation (cos, -sin)."""
+    """Phase accumulator, quarter-wave sine table and first-order interpolation (cos, -sin), read
+    at the accumulator plus a constant phase trim (the reference's rotation, 0 = none)."""
 
     def __init__(self, fs_hz: float, f_hz: float, phase_bits: int, lut_bits: int, lut_format: Format,
-                 phase_offset_turns: float = 0.0, interp_bits: int = 0, rules: Rules = Rules("half_up", "saturate")):
+                 phase_offset_turns: float = 0.0, interp_bits: int = 0, rules: Rules = Rules("half_up", "saturate"),
+                 phase_trim_rad: float = 0.0):
         if not 0 < f_hz < fs_hz / 2:
             raise ValueError(f"demod.f_hz: must be within (0, fs/2 = {fs_hz / 2}), got {f_hz}")
         if not 4 <= lut_bits <= phase_bits <= 48:
@@ -156,6 +166,12 @@ class Nco:
         self.ftw = int(quantize([f_hz / fs_hz], self.phase_format, Rules("half_up", "saturate"))[0])
         self.phase0 = int(quantize([phase_offset_turns % 1.0], self.phase_format, Rules("half_up", "wrap"))[0])
         self.phase_offset_turns = phase_offset_turns
+        if not abs(phase_trim_rad) <= np.pi:
+            raise ValueError(f"demod.phase_trim_rad: must be within [-pi, pi], got {phase_trim_rad}")
+        # the trim word: turns * 2**phase_bits, nearest (half_up), modulo one turn
+        self.phase_trim_rad = phase_trim_rad
+        turns = (phase_trim_rad / (2 * np.pi)) % 1.0
+        self.trim = int(quantize([turns], self.phase_format, Rules("half_up", "wrap"))[0])
         quarter = 2 ** (lut_bits - 2)
         self.qsin = self.lut_quantize(np.sin(0.5 * np.pi * (np.arange(quarter) + 0.5) / quarter))
         self.two_pi = int(quantize([2 * np.pi], TWO_PI_FORMAT, Rules("half_up", "saturate"))[0])
@@ -177,15 +193,23 @@ class Nco:
     def reset(self) -> None:
         self.phase = self.phase0  # the accumulator
 
-    def reference_phase(self, count: int, start: int = 0) -> np.ndarray:
+    def drive_phase(self, count: int, start: int = 0) -> np.ndarray:
+        """The exact drive phase (radians) of samples start.. (what ``carrier`` follows; no trim)."""
         n = np.arange(start, start + count, dtype=float)
         return 2 * np.pi * (self.phase_offset_turns + n * self.f_hz / self.fs_hz)
 
+    def reference_phase(self, count: int, start: int = 0) -> np.ndarray:
+        """The exact phase (radians) the NCO's cos / -sin represent: the drive phase plus the
+        unquantised trim."""
+        return self.drive_phase(count, start) + self.phase_trim_rad
+
     def phases(self, count: int) -> np.ndarray:
-        """The accumulator words of the first ``count`` samples after reset."""
+        """The words the table is read at for the first ``count`` samples after reset: the
+        accumulator plus the trim, modulo 2**phase_bits."""
         # uint64 wraps modulo 2**64, a multiple of 2**phase_bits: the low phase_bits bits are exact
         n = np.arange(count, dtype=np.uint64)
-        return ((np.uint64(self.phase0) + n * np.uint64(self.ftw)) & np.uint64(self.phase_mask)).astype(np.int64)
+        start = np.uint64((self.phase0 + self.trim) & self.phase_mask)
+        return ((start + n * np.uint64(self.ftw)) & np.uint64(self.phase_mask)).astype(np.int64)
 
     def wave(self, phases: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(cos, -sin) stored on nco_format for each accumulator word (the RTL's nco outputs)."""
@@ -231,6 +255,8 @@ class DemodDatapath(Datapath):
     nco_w: int               # NCO output: lut_w + 1 (the interpolated value cannot overflow it)
     ftw: int = const()       # phase increment per sample (turns * 2**phase_bits)
     phase0: int = const()
+    phase_trim: int = const()   # reference rotation, added to the accumulator before the table (the RTL
+                                # folds it into its reset phase: the same words modulo 2**phase_bits)
     mix_shift: int           # exact x * nco product, read as 2 x nco, -> data_format
     rules: Rules
     lpf: IirDatapath = nested("LPF_")   # both channels' low-pass (one design)
@@ -280,7 +306,8 @@ class Demod(Block):
         self.datapath = DemodDatapath(
             in_w=in_format.wl, data_w=data_format.wl, phase_bits=nco.phase_bits, lut_bits=nco.lut_bits,
             lut_w=nco.lut_format.wl, interp_bits=nco.interp_bits, two_pi=nco.two_pi, two_pi_w=TWO_PI_FORMAT.wl,
-            corr_shift=nco.corr_shift, nco_w=nco.nco_format.wl, ftw=nco.ftw, phase0=nco.phase0, mix_shift=self.mix_format.fl - data_format.fl,
+            corr_shift=nco.corr_shift, nco_w=nco.nco_format.wl, ftw=nco.ftw, phase0=nco.phase0,
+            phase_trim=nco.trim, mix_shift=self.mix_format.fl - data_format.fl,
             rules=rules, lpf=lpf, iterations=cordic_iterations, angle_w=angle_format.wl,
             half_pi=int(quantize([np.pi / 2], angle_format, exact)[0]), inv_k=self.inv_k, inv_k_w=INV_K_FORMAT.wl,
             amp_shift=amp_format.fl - data_format.fl, qsin=Rom(nco.qsin, nco.lut_format.wl),
@@ -297,7 +324,8 @@ class Demod(Block):
     def from_config(cls, sec: Section, fs_hz: float, in_format: Format, connect: bool = True) -> "Demod":
         nco = Nco(fs_hz, sec.number("f_hz", low=0, low_open=True), sec.integer("phase_bits", low=4, high=48),
                   sec.integer("lut_bits", low=4, high=20), sec.format("lut_format"),
-                  sec.number("phase_offset_turns", 0.0), sec.integer("interp_bits", low=0, high=24), sec.rules())
+                  sec.number("phase_offset_turns", 0.0), sec.integer("interp_bits", low=0, high=24), sec.rules(),
+                  sec.number("phase_trim_rad", 0.0, low=-np.pi, high=np.pi))
         data_format = sec.format("data_format")
         lpf_sec = sec.sub("lpf")
         lpf_format = lpf_sec.wired_format("data_format", data_format, sec.field("data_format"), connect)
@@ -325,9 +353,9 @@ class Demod(Block):
 
     def mix(self, log: OverflowLog, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         dp, counts = self.datapath, np.zeros(2, dtype=np.int64)
-        i, q, self.nco.phase = _mix_kernel(x, self.nco.phase, dp.ftw, dp.phase_mask, dp.addr_shift, dp.lut_bits,
-                                           dp.interp_bits, dp.qsin.words, dp.two_pi, dp.corr_shift, dp.mix_shift,
-                                           dp.rules.rounding_code,
+        i, q, self.nco.phase = _mix_kernel(x, self.nco.phase, dp.ftw, dp.phase_trim, dp.phase_mask, dp.addr_shift,
+                                           dp.lut_bits, dp.interp_bits, dp.qsin.words, dp.two_pi, dp.corr_shift,
+                                           dp.mix_shift, dp.rules.rounding_code,
                                            dp.data_format.min_int, dp.data_format.max_int, dp.rules.overflow_code,
                                            counts)
         log.add(f"{self.name}.{dp.ovf[0].counter}", int(counts[0]))
@@ -360,8 +388,9 @@ class Demod(Block):
         return {"i": i, "q": q, "amp": np.hypot(i, q), "phase": np.arctan2(q, i)}
 
     def carrier(self, amplitude, phase_rad, count: int, start: int = 0) -> np.ndarray:
-        """A sense-pick-off-like input: amplitude * cos(drive phase + phase_rad), real valued."""
-        return np.asarray(amplitude) * np.cos(self.nco.reference_phase(count, start) + np.asarray(phase_rad))
+        """A sense-pick-off-like input: amplitude * cos(drive phase + phase_rad), real valued (the
+        drive, not the trimmed reference)."""
+        return np.asarray(amplitude) * np.cos(self.nco.drive_phase(count, start) + np.asarray(phase_rad))
 
     def nominal_stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
         """A carrier at 0.5 FS whose phase steps through the four quadrants, plus noise."""
@@ -385,4 +414,7 @@ class Demod(Block):
                 "in_format": str(self.in_format), "data_format": str(self.data_format),
                 "angle_format": str(self.angle_format), "cordic_iterations": self.iterations, "inv_k": self.inv_k,
                 "rounding": self.rules.rounding, "overflow": self.rules.overflow,
-                "lpf": self.lpf_i.parameters()}
+                "lpf": self.lpf_i.parameters(),
+                # only when set: a config without the trim records what it always did
+                **({"phase_trim_rad": self.nco.phase_trim_rad, "phase_trim": self.nco.trim}
+                   if self.nco.phase_trim_rad else {})}

@@ -91,6 +91,21 @@ class Switch:
 # IIR (direct form I, error feedback) in float, or the block's own integer kernel
 # --------------------------------------------------------------------------------------------
 @njit(cache=True)
+def _rounded(x, q, rounding, mode, u):
+    """x on a grid of step q: mode 0 unrounded, 1 rounded by ``rounding`` as the integer kernels do,
+    2 by the textbook model (an independent uniform u in [0, 1) shaped by the rounding)."""
+    if mode == 1:
+        return round_float(x / q, rounding) * q
+    if mode == 2:
+        if rounding == FLOOR:
+            return x - u * q
+        if rounding == TOWARD_ZERO:
+            return x - np.sign(x) * u * q
+        return x + u * q - 0.5 * q  # (as written, so q = 1 is bit for bit the unscaled model)
+    return x
+
+
+@njit(cache=True)
 def _df1_float(x, b, a, c, mode, rounding, lo, hi, noise, resid):
     """DF-I cascade in units of the output LSB. mode 0: no rounding; 1: rounding by ``rounding``
     with error feedback c (as the integer kernel); 2: the rounding replaced by its textbook model,
@@ -112,16 +127,7 @@ def _df1_float(x, b, a, c, mode, rounding, lo, hi, noise, resid):
                 e = 0.0
             else:
                 acc += c[s, 0] * e1 + c[s, 1] * e2
-                if mode == 1:
-                    r = round_float(acc, rounding)
-                else:  # textbook model: independent uniform u in [0, 1) shaped by the mode
-                    u = noise[s, i]
-                    if rounding == FLOOR:
-                        r = acc - u
-                    elif rounding == TOWARD_ZERO:
-                        r = acc - np.sign(acc) * u
-                    else:
-                        r = acc + u - 0.5
+                r = _rounded(acc, 1.0, rounding, mode, noise[s, i])
                 e = acc - r
                 resid[s, i] = -e
                 if r > hi:
@@ -173,6 +179,53 @@ def iir_hybrid(block, x: np.ndarray, coef: str, rnd: str, sw: Switch) -> np.ndar
         for s in range(b.shape[0]):
             sw.record(rnd, f"section{s}", resid[s] * lsb)
     return y * lsb
+
+
+# --------------------------------------------------------------------------------------------
+# thermal lag (first order, the paper 002 chain's optional stage) in float, or its integer kernel
+# --------------------------------------------------------------------------------------------
+@njit(cache=True)
+def _lag_float(x, alpha, q_state, q_out, mode, rounding, lo, hi, noise, resid):
+    """Te += alpha (T - Te), started settled on x[0], in real units. mode 0: exact; 1: the state
+    step rounded to q_state and the output to q_out by ``rounding`` (as the integer kernel), the
+    output saturated to [lo, hi]; 2: both roundings replaced by their textbook model drawn from
+    ``noise`` (uniform in [0, 1), rows: state, output). resid rows: state and output r - x."""
+    n = x.shape[0]
+    y = np.empty(n)
+    te = x[0] if n else 0.0
+    for i in range(n):
+        step = alpha * (x[i] - te)
+        r_step = _rounded(step, q_state, rounding, mode, noise[0, i])
+        resid[0, i] = r_step - step
+        te += r_step
+        r = _rounded(te, q_out, rounding, mode, noise[1, i])
+        resid[1, i] = r - te
+        if mode != 0:
+            r = min(max(r, lo), hi)
+        y[i] = r
+    return y
+
+
+def lag_hybrid(block, temp: np.ndarray, sw: Switch) -> np.ndarray:
+    """The lag block; sources lag.alpha (alpha as mantissa x 2**-shift) and lag.round (the state
+    step at state_format's LSB and the output at temp_format's; in the loop: the state keeps its
+    own rounding errors)."""
+    tf = block.temp_format
+    x = np.asarray(temp, dtype=float)
+    scaled = x / tf.lsb
+    if "lag.alpha" in sw and "lag.round" in sw and np.array_equal(np.floor(scaled), scaled):
+        # all of this block on and its input on the temperature grid: the block's own kernel
+        return block.run(temp=scaled.astype(np.int64)).outputs["te"].astype(float) * tf.lsb
+    alpha = block.m * 2.0**-block.s if "lag.alpha" in sw else block.alpha
+    mode = 1 if "lag.round" in sw else 2 if "lag.round" in sw.inject else 0
+    noise = sw.rng.uniform(0.0, 1.0, (2, x.size)) if mode == 2 else np.zeros((2, x.size))
+    resid = np.zeros((2, x.size))
+    y = _lag_float(x, alpha, block.state_format.lsb, tf.lsb, mode, block.rules.rounding_code, tf.min_value,
+                   tf.max_value, noise, resid)
+    if mode == 1:
+        sw.record("lag.round", "state", resid[0])
+        sw.record("lag.round", "out", resid[1])
+    return y
 
 
 # --------------------------------------------------------------------------------------------
@@ -307,6 +360,11 @@ def sources_paper002(chain: Paper002Chain) -> list[Source]:
          Source("rtd.lut_coef", COEF, "rtd", "temp", note=f"LUT entries in {rtd.lut_format}")]
     if rtd.datapath.shift > 0:
         s.append(Source("rtd.round", ROUND, "rtd", "temp", rtd.temp_format.lsb, rtd.rules.rounding))
+    if chain.lag is not None:
+        lag = chain.lag
+        s += [Source("lag.alpha", COEF, "lag", "te", note=f"alpha = {lag.m} x 2**-{lag.s}"),
+              Source("lag.round", ROUND, "lag", "te", lag.temp_format.lsb, lag.rules.rounding,
+                     f"state step at {lag.state_format}, output")]
     s += [Source("piecewise_sf.coef", COEF, "piecewise_sf", "sf"),
           Source("piecewise_sf.round", ROUND, "piecewise_sf", "sf", sf.out_format.lsb, sf.rules.rounding),
           Source("sf_divide.trunc", DIVIDER, "sf_divide", "v", div.out_format.lsb, div.rules.rounding,
@@ -350,14 +408,15 @@ def run_paper002(chain: Paper002Chain, analog: dict, sw: Switch) -> dict[str, np
     af = chain.rtd.adc_format
     frac = sw.round("adc.rtd", frac, af, Rules("half_up", "saturate"))
     temp = rtd_hybrid(chain.rtd, frac, sw)
-    sf = piecewise_hybrid(chain.sf, temp, "piecewise_sf", sw)
+    te = lag_hybrid(chain.lag, temp, sw) if chain.lag is not None else temp   # what the engines see
+    sf = piecewise_hybrid(chain.sf, te, "piecewise_sf", sw)
     v = divide_hybrid(chain.divide, x, sf, sw)
     mix, i = demod_hybrid(dem, v, sw)
-    b = piecewise_hybrid(chain.bias, temp, "piecewise_bias", sw)
+    b = piecewise_hybrid(chain.bias, te, "piecewise_bias", sw)
     r = subtract_hybrid(chain.subtract, i, b, "bias_subtract.round", sw)
     rate = iir_hybrid(chain.lpf, r, "iir.coef", "iir.round", sw)
-    return {"vsa": x, "rtd_frac": frac, "temp": temp, "sf": sf, "v": v, "mix": mix, "i": i, "bias": b, "r": r,
-            "rate": rate}
+    return {"vsa": x, "rtd_frac": frac, "temp": temp, "te": te, "sf": sf, "v": v, "mix": mix, "i": i, "bias": b,
+            "r": r, "rate": rate}
 
 
 def run_paper001(chain: Paper001Chain, analog: dict, sw: Switch) -> dict[str, np.ndarray]:

@@ -8,7 +8,8 @@ design as
 
 * ``<inst>_params.vh``: the parameter override list (``.NAME(value), ...``) that the chain tops
   ``include`` inside ``module #( ... )``;
-* ``chain_paper002_params.vh`` / ``chain_paper001_params.vh``: the port and ovf widths of the tops;
+* ``chain_paper002_params.vh`` / ``chain_paper001_params.vh``: the port and ovf widths of the tops
+  and the enables of their optional stages (``LAG_EN``: the chain's ``stages``, 0 = absent);
 * the ROM files (``rtd_lut.hex``, ``iir_coef.hex``, ``demod_cos.hex``, ...).
 
 The only checks here are the RTL's own limits (signed temperature wires, 4-bit error-feedback
@@ -67,7 +68,8 @@ def instances(design: Design) -> dict[str, Instance]:
 
 
 def chain_params(design: Design) -> dict[str, dict[str, int]]:
-    """Port widths of the tops and the ovf widths of their members, from the instance table."""
+    """Port widths of the tops, the ovf widths of their members (from the instance table) and the
+    enables of their optional stages (1 when the chain has the stage)."""
     out = {}
     for name, inst in design.instances.items():
         if not inst.members:
@@ -76,6 +78,8 @@ def chain_params(design: Design) -> dict[str, dict[str, int]]:
         p = {k: _wire(design, w).wl for k, w in spec["wires"].items()}
         p.update({k: design.ovf_width(member) for k, member in spec["ovf"].items()})
         p["N_OVF"] = design.ovf_width(name)
+        stages = getattr(inst.block, "stages", ())
+        p.update({k: int(stage in stages) for k, stage in spec.get("stages", {}).items()})
         out[name] = p
     return out
 
@@ -85,15 +89,16 @@ def _wire(design: Design, wire: str):
     return design.instances[inst].ports[port].format
 
 
-# the tops' parameter names -> the wire (instance.port) whose width they are, and the member
-# instances whose ovf width they are, in the order of the generated header
+# the tops' parameter names -> the wire (instance.port) whose width they are, the member instances
+# whose ovf width they are, and the optional stages they enable, in the order of the generated header
 CHAIN_PORTS = {
     "chain_paper002": {
         "wires": {"VSA_W": "chain_paper002.vsa", "CODE_W": "chain_paper002.rtd_code", "TEMP_W": "rtd.temp",
                   "SF_W": "piecewise_sf.y", "BIAS_W": "piecewise_bias.y", "DIV_W": "sf_divide.y",
                   "DATA_W": "demod.i", "ANGLE_W": "demod.phase", "SUB_W": "bias_subtract.y", "RATE_W": "iir.y"},
         "ovf": {"SF_OVF_W": "piecewise_sf", "B_OVF_W": "piecewise_bias", "DEMOD_OVF_W": "demod",
-                "IIR_OVF_W": "iir"}},
+                "IIR_OVF_W": "iir"},
+        "stages": {"LAG_EN": "lag"}},
     "chain_paper001": {
         "wires": {"FREQ_W": "chain_paper001.f", "RATE_W": "chain_paper001.rate_in", "TEMP_W": "freq2temp.temp",
                   "BIAS_W": "piecewise_bias001.y", "OUT_W": "bias_subtract001.y"},

@@ -13,4 +13,5 @@
     parameter integer B_OVF_W = 4,
     parameter integer DEMOD_OVF_W = 5,
     parameter integer IIR_OVF_W = 1,
-    parameter integer N_OVF = 18
+    parameter integer N_OVF = 18,
+    parameter integer LAG_EN = 0

@@ -1,17 +1,21 @@
 // chain_paper002: the paper 002 RTD path (fxdsp.chains.Paper002Chain), top level.
 //   rtd_code -> rtd -> temp -> piecewise_sf -> SF ; vsa / SF -> sf_divide -> demod (I)
 //   temp -> piecewise_bias -> bias ; I - bias -> bias_subtract -> iir -> rate
+// Optional stages, chosen by the config through the generated header (absent = the above, and the
+// disabled stage is not elaborated): LAG_EN = 1 puts lag (lag_params.vh) between rtd and the two
+// coefficient engines (SF and bias see the die-temperature estimate te; the temp output stays the
+// thermometer's); the NCO reference's phase trim is demod's PHASE_TRIM (demod_params.vh, 0 = none).
 // Every block's parameters come from the generated headers (`fxdsp hdl-gen`), i.e. from the one
 // config; roundings (floor / half_up / half_even / toward_zero) and overflows (wrap / saturate)
 // are those of each block. The demodulator's Q channel runs as in the model (its filter state is
 // part of the reference) but only I is used; amp and phase are left unconnected.
 // Interface: valid/ready with one sample in flight: in_ready is high when the chain is idle; a
 // sample is accepted on in_valid && in_ready and leaves (temp, rate) with out_valid
-// ceil((VSA_W + sf.fl + guard_bits) / DIV_UNROLL) + 7 cycles later (55 at DIV_UNROLL = 1 on the
-// default config: 16 + 22 + 10 = 48 divider steps); in_ready is high again from the cycle after
-// out_valid, so one sample takes latency + 1 cycles.
+// ceil((VSA_W + sf.fl + guard_bits) / DIV_UNROLL) + 7 + LAG_EN cycles later (55 at DIV_UNROLL = 1
+// on the default config: 16 + 22 + 10 = 48 divider steps); in_ready is high again from the cycle
+// after out_valid, so one sample takes latency + 1 cycles.
 // ovf: every block's overflow flags of the sample, valid with out_valid:
-// {iir, bias_subtract, demod, sf_divide (zero, out), piecewise_bias, piecewise_sf, rtd}.
+// {iir, bias_subtract, demod, sf_divide (zero, out), piecewise_bias, piecewise_sf, [lag,] rtd}.
 `default_nettype none
 
 module chain_paper002 #(
@@ -44,6 +48,10 @@ module chain_paper002 #(
     ) u_rtd (.clk(clk), .rst(rst), .in_valid(accept), .code(rtd_code), .out_valid(t_v), .temp(t_w),
              .ovf(ovf_rtd));
 
+    // ---- the temperature the coefficient engines see: t_w, or the lag's te (generate below) ----
+    wire              ce_v;
+    wire [TEMP_W-1:0] ce_w;
+
     // ---- SF(T) and bias(T) ----
     wire                sf_v, b_v;
     wire [SF_W-1:0]     sf_w;
@@ -52,10 +60,10 @@ module chain_paper002 #(
     wire [B_OVF_W-1:0]  ovf_b;
     piecewise #(
 `include "piecewise_sf_params.vh"
-    ) u_sf (.clk(clk), .rst(rst), .in_valid(t_v), .temp(t_w), .out_valid(sf_v), .y(sf_w), .ovf(ovf_sf));
+    ) u_sf (.clk(clk), .rst(rst), .in_valid(ce_v), .temp(ce_w), .out_valid(sf_v), .y(sf_w), .ovf(ovf_sf));
     piecewise #(
 `include "piecewise_bias_params.vh"
-    ) u_bias (.clk(clk), .rst(rst), .in_valid(t_v), .temp(t_w), .out_valid(b_v), .y(b_w), .ovf(ovf_b));
+    ) u_bias (.clk(clk), .rst(rst), .in_valid(ce_v), .temp(ce_w), .out_valid(b_v), .y(b_w), .ovf(ovf_b));
 
     // ---- sense / SF ----
     wire             d_v;
@@ -117,6 +125,28 @@ module chain_paper002 #(
         if (s_v) ovf_sub_r <= ovf_sub;
     end
 
+    // ---- optional stages and the ovf vector they extend ----
+    wire [N_OVF-1:0] ovf_n;
+    generate
+        if (LAG_EN != 0) begin : g_lag
+            wire lag_v, ovf_lag;
+            wire [TEMP_W-1:0] te_w;
+            lag #(
+`include "lag_params.vh"
+            ) u_lag (.clk(clk), .rst(rst), .in_valid(t_v), .temp(t_w), .out_valid(lag_v), .te(te_w),
+                     .ovf(ovf_lag));
+            reg ovf_lag_r;
+            always @(posedge clk) if (lag_v) ovf_lag_r <= ovf_lag;
+            assign ce_v  = lag_v;
+            assign ce_w  = te_w;
+            assign ovf_n = {ovf_iir, ovf_sub_r, ovf_dm_r, ovf_div_r, ovf_b_r, ovf_sf_r, ovf_lag_r, ovf_rtd_r};
+        end else begin : g_direct
+            assign ce_v  = t_v;
+            assign ce_w  = t_w;
+            assign ovf_n = {ovf_iir, ovf_sub_r, ovf_dm_r, ovf_div_r, ovf_b_r, ovf_sf_r, ovf_rtd_r};
+        end
+    endgenerate
+
     always @(posedge clk) begin
         if (rst) begin
             busy      <= 1'b0;
@@ -131,7 +161,7 @@ module chain_paper002 #(
                 busy <= 1'b0;
                 temp <= temp_r;
                 rate <= r_w;
-                ovf  <= {ovf_iir, ovf_sub_r, ovf_dm_r, ovf_div_r, ovf_b_r, ovf_sf_r, ovf_rtd_r};
+                ovf  <= ovf_n;
             end
         end
     end

@@ -10,6 +10,7 @@
 //   amp = fit(round(x_K * INV_K >> AMP_SHIFT)) into DATA_W bits; phase = the angle accumulator.
 // Every rounding by ROUNDING (floor / half_up / half_even / toward_zero), every fit by OVERFLOW
 // (wrap / saturate), flagged in ovf = {amp, lpf_q[LPF_SECTIONS], lpf_i[LPF_SECTIONS], mix_q, mix_i}.
+// PHASE_TRIM: the NCO reference's rotation (nco.v), 0 = none.
 // Interface: in_valid / out_valid, one sample per cycle; the NCO and filter states advance only on
 // in_valid, rst returns them to reset. Latency: 2 cycles (i, q delayed to align with amp, phase).
 `default_nettype none
@@ -27,6 +28,7 @@ module demod #(
     parameter integer NCO_W         = 23,
     parameter [63:0]  FTW           = 64'd23456248059221,
     parameter [63:0]  PHASE0        = 64'd0,
+    parameter [63:0]  PHASE_TRIM    = 64'd0,
     parameter integer MIX_SHIFT     = 14,
     parameter integer ROUNDING      = 1,
     parameter integer OVERFLOW      = 1,
@@ -68,7 +70,7 @@ module demod #(
     wire [NCO_W-1:0] cos_w, msin_w;
     nco #(.PHASE_BITS(PHASE_BITS), .LUT_BITS(LUT_BITS), .LUT_W(LUT_W), .INTERP_BITS(INTERP_BITS),
           .TWO_PI(TWO_PI), .TWO_PI_W(TWO_PI_W), .CORR_SHIFT(CORR_SHIFT), .NCO_W(NCO_W), .FTW(FTW),
-          .PHASE0(PHASE0), .ROUNDING(ROUNDING), .QSIN_FILE(QSIN_FILE)) u_nco
+          .PHASE0(PHASE0), .PHASE_TRIM(PHASE_TRIM), .ROUNDING(ROUNDING), .QSIN_FILE(QSIN_FILE)) u_nco
         (.clk(clk), .rst(rst), .step(in_valid), .cos_o(cos_w), .msin_o(msin_w));
 
     wire signed [MW-1:0] pi_ = $signed(x) * $signed(cos_w);

@@ -1,5 +1,9 @@
 // nco: numerically controlled oscillator of the demodulator (fxdsp.blocks.demod.Nco).
-// phase[n] = (PHASE0 + n FTW) mod 2**PHASE_BITS. The top LUT_BITS phase bits are the bin: the
+// phase[n] = (PHASE0 + PHASE_TRIM + n FTW) mod 2**PHASE_BITS: the model's accumulator
+// (PHASE0 + n FTW) plus the phase trim, which rotates the reference by PHASE_TRIM / 2**PHASE_BITS
+// turns without touching the frequency. Adding a constant commutes with the accumulation modulo
+// 2**PHASE_BITS, so the trim is folded into the reset value (a constant: no adder; PHASE_TRIM = 0
+// is the untrimmed NCO). The top LUT_BITS phase bits are the bin: the
 // quadrant (2 bits) and the index k of a quarter-wave sine table (QSIN_FILE: 2**(LUT_BITS-2) words
 // of LUT_W bits, sin at the bin centres, quantised half_up / saturate by the generator). cos and -sin
 // of the bin centre are +-qsin[k], +-qsin[~k] by quadrant (cb, mb). First-order interpolation
@@ -9,7 +13,8 @@
 // (d cos = -sin d phase, d(-sin) = -cos d phase). The outputs are NCO_W = LUT_W + 1 bits, which
 // the model proves they never exceed: no fit point. INTERP_BITS = 0: the plain truncating table.
 // cos_o / msin_o show the current phase (combinational); the phase advances by FTW on each `step`;
-// rst returns it to PHASE0. FTW, PHASE0, TWO_PI: 64-bit constants. Latency: combinational read.
+// rst returns it to PHASE0 + PHASE_TRIM. FTW, PHASE0, PHASE_TRIM, TWO_PI: 64-bit constants. Latency:
+// combinational read.
 `default_nettype none
 
 module nco #(
@@ -23,6 +28,7 @@ module nco #(
     parameter integer NCO_W       = 23,   // output word: LUT_W + 1
     parameter [63:0]  FTW         = 64'd23456248059221,
     parameter [63:0]  PHASE0      = 64'd0,
+    parameter [63:0]  PHASE_TRIM  = 64'd0,  // reference rotation (turns * 2**PHASE_BITS)
     parameter integer ROUNDING    = 1,    // of the correction: 0 floor, 1 half_up, 2 half_even, 3 toward_zero
     parameter         QSIN_FILE   = "demod_qsin.hex"
 ) (
@@ -35,6 +41,8 @@ module nco #(
     localparam integer QBITS = LUT_BITS - 2;
     localparam [PHASE_BITS-1:0] FTW_C    = FTW[PHASE_BITS-1:0];
     localparam [PHASE_BITS-1:0] PHASE0_C = PHASE0[PHASE_BITS-1:0];
+    localparam [PHASE_BITS-1:0] TRIM_C   = PHASE_TRIM[PHASE_BITS-1:0];
+    localparam [PHASE_BITS-1:0] START_C  = PHASE0_C + TRIM_C;   // modulo 2**PHASE_BITS
     localparam [TWO_PI_W-1:0]   TWO_PI_C = TWO_PI[TWO_PI_W-1:0];
     localparam integer DLW = INTERP_BITS + 2;           // delta: odd, |delta| < 2**INTERP_BITS
     localparam integer DW  = DLW + TWO_PI_W + 1;        // d = delta * TWO_PI (TWO_PI > 0)
@@ -47,7 +55,7 @@ module nco #(
 
     reg [PHASE_BITS-1:0] phase;
     always @(posedge clk) begin
-        if (rst) phase <= PHASE0_C;
+        if (rst) phase <= START_C;
         else if (step) phase <= phase + FTW_C;
     end
 

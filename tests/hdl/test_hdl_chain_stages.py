@@ -1,0 +1,133 @@
+"""The optional stages of chain_paper002 on the RTL (issue 14, item 2): the lag between the RTD
+readout and the coefficient engines (``[chain_paper002] stages = ["lag"]`` -> LAG_EN = 1) and the
+phase trim of the NCO reference (``[demod] phase_trim_rad`` -> demod's PHASE_TRIM), each alone and
+together. Golden vectors of each extended config are made here from the model (not committed) and
+streamed through the chain with cocotb on Icarus: every output word and the overflow-flag count
+must match the model. The checks must be able to fail: the same run on a mutated RTL copy (the lag
+bypassed, the trim's sign inverted, the trim not passed to the NCO) fails. The chain with the lag is
+also linted (its default-parameter lint, LAG_EN = 0, is test_hdl_lint.py's).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+import hdl_util
+from hdl_util import build_dir, default_data, design_of, generate_into, require_iverilog, rtl_sources, run_cocotb, \
+    segment
+
+CHAIN = "chain_paper002"
+FS = default_data()["system"]["fs_hz"]
+# the chain runs its lag once per sample: rate_hz is the chain's sample rate. tau of a few ms makes
+# Te trail the swept temperature by ~1 C within the streamed prefix (a large, visible effect)
+LAG = {"chain_paper002": {"stages": ["lag"]}, "lag": {"rate_hz": FS, "tau_s": 0.002}}
+TRIM = {"demod": {"phase_trim_rad": 0.3}}
+# both, with another lag rounding and few guard bits (the state rounding shows), a trim across a
+# quadrant boundary (negative: the word wraps modulo 2**phase_bits)
+BOTH = {"chain_paper002": {"stages": ["lag"]}, "demod": {"phase_trim_rad": -2.2},
+        "lag": {"rate_hz": FS, "tau_s": 0.005, "state_guard_bits": 6, "rounding": "floor"}}
+CONFIGS = {"lag": LAG, "trim": TRIM, "both": BOTH}
+EXTRA = {"DIV_UNROLL": 7}   # 7 quotient bits per cycle: the Python-driven run stays fast
+HEAD, TAIL = 2000, 300      # samples of the nominal sweep and of the saturating hot tail
+
+
+def stimulus(design) -> dict[str, np.ndarray]:
+    """The chain's own vector stimulus, shortened: the start of the temperature sweep with rate steps
+    and quadrature, and the end of the full-scale (saturating) segment at 60 C, which the lag reaches
+    by slewing from -18 C."""
+    full = design.chains[CHAIN].stimulus(np.random.default_rng([design.seed, 14]), design.samples)
+    return {k: np.concatenate([v[:HEAD], v[-TAIL:]]) for k, v in full.items()}
+
+
+@pytest.fixture(scope="module")
+def designs():
+    return {k: design_of(v) for k, v in CONFIGS.items()}
+
+
+@pytest.fixture(scope="module")
+def baseline():
+    return design_of()
+
+
+def _segment(design, ins):
+    return segment(design, CHAIN, ins)
+
+
+def test_configs_have_the_stages_and_change_the_outputs(designs, baseline):
+    """Each config really enables its stage (and nothing else), and on this stimulus the model's rate
+    differs from the chain without it: a matching RTL run below is evidence about the stage."""
+    ins = stimulus(baseline)
+    plain = baseline.chains[CHAIN].run(**ins).outputs
+    for key, d in designs.items():
+        chain = d.chains[CHAIN]
+        assert chain.stages == (() if key == "trim" else ("lag",)), key
+        assert (chain.demod.nco.trim != 0) == (key != "lag"), key
+        out = chain.run(**ins).outputs
+        assert np.array_equal(out["temp"], plain["temp"]), f"{key}: the temp port stays the thermometer's"
+        changed = np.count_nonzero(out["rate"] != plain["rate"])
+        assert changed > 0.9 * len(plain["rate"]), f"{key}: only {changed} rate words changed"
+
+
+@pytest.mark.hdl
+@pytest.mark.parametrize("key", sorted(CONFIGS))
+def test_chain_with_stages_matches_the_model_on_the_rtl(designs, key):
+    d = designs[key]
+    assert d.ovf_width(CHAIN) == 18 + (key != "trim"), "the lag adds one ovf bit (lag.te), after rtd"
+    run_cocotb(d, CHAIN, [_segment(d, stimulus(d))], f"stages_{key}", extra_params=EXTRA)
+
+
+# single-point RTL mutations of the stages, each with the config whose check must catch it
+MUTATIONS = {
+    "lag_bypassed": ("chain_paper002.v", "assign ce_w  = te_w;", "assign ce_w  = t_w;", "lag"),
+    "trim_sign_inverted": ("nco.v", "START_C  = PHASE0_C + TRIM_C;", "START_C  = PHASE0_C - TRIM_C;", "trim"),
+    "trim_not_passed": ("demod.v", ".PHASE_TRIM(PHASE_TRIM), ", "", "trim"),
+}
+
+
+@pytest.mark.hdl
+@pytest.mark.parametrize("key", sorted(MUTATIONS))
+def test_a_stage_mutation_fails_the_check(designs, key, tmp_path, monkeypatch):
+    file, old, new, config = MUTATIONS[key]
+    rtl = tmp_path / "rtl"
+    shutil.copytree(hdl_util.RTL, rtl)
+    text = (rtl / file).read_text()
+    assert text.count(old) == 1, f"{key}: mutation site not found exactly once in {file}"
+    (rtl / file).write_text(text.replace(old, new))
+    d = designs[config]
+    seg = _segment(d, stimulus(d))
+    monkeypatch.setattr(hdl_util, "RTL", rtl)   # run_cocotb compiles hdl_util.rtl_sources()
+    tag = f"stages_mut_{key}"
+    # a failed cocotb test ends run_cocotb with pytest.fail, or with the runner's SystemExit
+    with pytest.raises((pytest.fail.Exception, SystemExit)):
+        run_cocotb(d, CHAIN, [seg], tag, extra_params=EXTRA)
+    # ... and it failed on the outputs (the mutant compiled and ran): the driver's own summary
+    errors = json.loads((hdl_util.SIM_BUILD / tag / "summary.json").read_text())["errors"]
+    assert any("port rate" in e and "mismatch" in e for e in errors), errors
+
+
+def _verdict(proc) -> str:
+    out = (proc.stdout + proc.stderr).strip()
+    return f"exit status {proc.returncode}\n{out}" if proc.returncode else out
+
+
+@pytest.mark.hdl
+def test_chain_with_the_lag_lints_clean(designs):
+    """LAG_EN = 1 with the headers generated from a lag config: iverilog -Wall and verilator -Wall."""
+    require_iverilog()
+    d = build_dir("stages_lint")
+    generate_into(designs["both"], d)
+    assert "parameter integer LAG_EN = 1" in (d / "chain_paper002_params.vh").read_text()
+    srcs = [str(p) for p in rtl_sources()]
+    proc = subprocess.run(["iverilog", "-g2005", "-Wall", "-I", str(d), "-o", str(d / "lint.vvp"), "-s", CHAIN,
+                           *srcs], capture_output=True, text=True)
+    assert _verdict(proc) == ""
+    if shutil.which("verilator") is None:
+        pytest.skip("verilator is not installed (lint only)")
+    proc = subprocess.run(["verilator", "--lint-only", "-Wall", f"-I{d}", "--top-module", CHAIN, *srcs],
+                          capture_output=True, text=True)
+    assert _verdict(proc) == ""
