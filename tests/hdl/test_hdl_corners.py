@@ -2,7 +2,7 @@
 reset in mid-stream with samples in flight, then the corner list back to back, then again with
 gapped valid. Two designs with narrowed formats force saturation / wrap and rounding ties:
 full scale, minimum negative, rounding ties, saturation, SF at and near zero, temperatures
-exactly on (and next to) breakpoints, frequencies at f0."""
+exactly on (and next to) breakpoints, frequencies at f0. On Icarus and on Verilator."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from fxdsp.blocks.base import corner_codes, tie_codes
-from hdl_util import design_of, run_cocotb, segment
+from hdl_util import SIMULATORS, design_of, run_cocotb, segment
 
 _NARROW = {
     "rtd": {"temp_format": "s14.7"},                        # +-64 C: the LUT range saturates
@@ -121,7 +121,8 @@ def corners(d, name, rng) -> dict[str, np.ndarray]:
 @pytest.mark.hdl
 @pytest.mark.parametrize("key", sorted(DESIGNS))
 @pytest.mark.parametrize("name", BLOCKS)
-def test_corners_reset_gaps(key, name):
+@pytest.mark.parametrize("sim", SIMULATORS)
+def test_corners_reset_gaps(key, name, sim):
     d = design(key)
     rng = np.random.default_rng(3)
     stim = corners(d, name, rng)
@@ -130,4 +131,4 @@ def test_corners_reset_gaps(key, name):
     segs = [segment(d, name, first, abort_after=max(4, n // 4)),  # reset with samples in flight
             segment(d, name, stim, gap=0.0),                      # back to back from reset
             segment(d, name, stim, gap=0.5)]                      # gapped valid from reset
-    run_cocotb(d, name, segs, f"corner_{key}_{name}", seed=11, extra_params=EXTRA.get(name))
+    run_cocotb(d, name, segs, f"corner_{key}_{name}", seed=11, extra_params=EXTRA.get(name), sim=sim)

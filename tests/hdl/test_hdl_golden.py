@@ -1,5 +1,6 @@
-"""(a) The committed golden vectors, bit for bit, through every RTL block and both tops (cocotb on
-Icarus, Python-driven), with the model's overflow count matched by the RTL's overflow flags."""
+"""(a) The committed golden vectors, bit for bit, through every RTL block and both tops (cocotb,
+Python-driven, on Icarus and on Verilator), with the model's overflow count matched by the RTL's
+overflow flags."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import json
 import pytest
 
 from fxdsp.vectors import load
-from hdl_util import VECTORS, design_of, record_throughput, run_cocotb, segment
+from hdl_util import SIMULATORS, VECTORS, design_of, record_throughput, run_cocotb, segment
 
 # every instance of the design has an RTL module; the manifest must list them all
 NAMES = sorted(json.loads((VECTORS / "manifest.json").read_text())["blocks"])
@@ -23,11 +24,12 @@ def design():
 
 
 @pytest.mark.hdl
+@pytest.mark.parametrize("sim", SIMULATORS)
 @pytest.mark.parametrize("name", NAMES)
-def test_golden_vectors(design, name):
+def test_golden_vectors(design, name, sim):
     ins, outs, entry = load(VECTORS, name)
     total = sum(entry["overflows"].values())
     # the committed vectors are the model's: the design built here must reproduce them
     seg = segment(design, name, ins, outs, total)
-    summary = run_cocotb(design, name, [seg], f"golden_{name}", extra_params=EXTRA.get(name))
-    record_throughput("cocotb", name, summary["cycles"], summary["seconds"])
+    summary = run_cocotb(design, name, [seg], f"golden_{name}", extra_params=EXTRA.get(name), sim=sim)
+    record_throughput("cocotb", name, summary["cycles"], summary["seconds"], sim=sim)

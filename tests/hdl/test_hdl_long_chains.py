@@ -1,6 +1,8 @@
 """(d) Long file-driven streams, >= 100k samples, for the demodulator and both tops; and the
 committed chain_paper002 vectors with the hardware divider setting (one quotient bit per cycle),
-timed against a latency computed here from the config, not copied from the RTL."""
+timed against a latency computed here from the config, not copied from the RTL.
+On Verilator; chain_paper001 and the 64-sample latency checks on Icarus as well (the demodulator
+and the paper 002 chain take 10-115 s each on Icarus)."""
 
 import math
 import shutil
@@ -10,8 +12,8 @@ import pytest
 
 from fxdsp.fixed import Format
 from fxdsp.vectors import load
-from hdl_util import RTL, VECTORS, default_data, run_harness
-from long_common import default_design, long_stream
+from hdl_util import RTL, SIMULATORS, VECTORS, default_data, run_harness
+from long_common import default_design, long_stream, on_simulators
 
 # Per-block latencies of the spec (hdl/README.md, "latency (cycles)"), in chain_paper002's order
 # rtd -> piecewise (SF and bias in parallel) -> sf_divide -> demod -> bias_subtract -> iir.
@@ -42,20 +44,21 @@ def assert_chain002_cycles(cycles: int, n: int, unroll: int) -> None:
 
 
 @pytest.mark.hdl
-@pytest.mark.parametrize("name", ["demod", "chain_paper001"])
-def test_long_stream(name):
-    long_stream(name)
+@pytest.mark.parametrize("name, sim", on_simulators(["demod", "chain_paper001"], icarus_too=["chain_paper001"]))
+def test_long_stream(name, sim):
+    long_stream(name, sim=sim)
 
 
 @pytest.mark.hdl
 def test_long_stream_chain_paper002():
-    long_stream("chain_paper002", unroll=2)
+    long_stream("chain_paper002", unroll=2, sim="verilator")
 
 
 @pytest.mark.hdl
 def test_golden_chain_paper002_hardware_divider():
     ins, outs, _ = load(VECTORS, "chain_paper002")
-    got, _, cycles, _ = run_harness(default_design(), "chain_paper002", ins, "golden_file_chain_paper002", unroll=1)
+    got, _, cycles, _ = run_harness(default_design(), "chain_paper002", ins, "golden_file_chain_paper002", unroll=1,
+                                    sim="verilator")
     for port, want in outs.items():
         assert np.array_equal(got[port], want), port
     assert_chain002_cycles(cycles, len(ins["vsa"]), unroll=1)
@@ -67,19 +70,21 @@ def _prefix(n: int):
 
 
 @pytest.mark.hdl
+@pytest.mark.parametrize("sim", SIMULATORS)
 @pytest.mark.parametrize("unroll", [7, 48])
-def test_chain_paper002_latency_follows_the_divider_unroll(unroll):
+def test_chain_paper002_latency_follows_the_divider_unroll(unroll, sim):
     """Other divider settings on a short prefix: the latency formula holds for each UNROLL."""
     ins, outs = _prefix(64)
     got, _, cycles, _ = run_harness(default_design(), "chain_paper002", ins, f"latency_chain002_u{unroll}",
-                                    unroll=unroll)
+                                    unroll=unroll, sim=sim)
     for port, want in outs.items():
         assert np.array_equal(got[port], want), port
     assert_chain002_cycles(cycles, 64, unroll)
 
 
 @pytest.mark.hdl
-def test_latency_check_catches_one_extra_cycle_per_sample(tmp_path):
+@pytest.mark.parametrize("sim", SIMULATORS)
+def test_latency_check_catches_one_extra_cycle_per_sample(tmp_path, sim):
     """An RTL latency regression (the chain stays busy one more cycle after out_valid): outputs still
     bit-exact, only the cycle count shows it, and the check must fail."""
     rtl = tmp_path / "rtl"
@@ -92,7 +97,7 @@ def test_latency_check_catches_one_extra_cycle_per_sample(tmp_path):
     top.write_text(text)
     ins, outs = _prefix(64)
     got, _, cycles, _ = run_harness(default_design(), "chain_paper002", ins, "latency_chain002_slow", unroll=7,
-                                    rtl=rtl)
+                                    rtl=rtl, sim=sim)
     for port, want in outs.items():
         assert np.array_equal(got[port], want), port
     with pytest.raises(AssertionError, match="per sample"):
