@@ -71,7 +71,7 @@ def test_a_lag_the_log_resolves_is_named_with_identified_numbers():
     (1000.0, 50.0, False, True),
     (1000.0, 1500.0, False, False),  # uncertainty larger than the value
     (1000.0, 50.0, True, False),  # fit at its bound
-    (1e4 * TAU_LENGTHS, 50.0, False, False),  # tau beyond a third of a 1e4 s log
+    (1e4 * TAU_LENGTHS, 50.0, False, False),  # tau beyond a quarter of a 1e4 s log
     (float("nan"), 1.0, False, False),
     (1000.0, None, False, False),
 ])

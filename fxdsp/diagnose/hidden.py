@@ -132,13 +132,16 @@ def make_case(cause: str, seed: int, scenario: str | None = None, snr_range=SNR_
     effects: dict = {}
     noise: dict = {}
     snrs = []
-    for c in causes:
+    # a lag sets the channel noise itself (its size is set by scaling the noise): draw it first,
+    # and size the other cause against the noise the log will really have
+    for c in sorted(causes, key=lambda c: c != "thermal_lag"):
         snr = float(rng.uniform(*snr_range))
         sign = 1.0 if rng.random() < 0.5 else -1.0
         e, n = _draw_effect(c, rng, snr, sign, scenario, kw, clean, truth0, levels, sigma)
         effects.update(e)
         noise.update(n)
         snrs.append(snr)
+        sigma = _effective_noise(truth0, {**levels, **{k: v for k, v in noise.items() if k in levels}}, columns)
     log, truth = generate_log(scenario, effects, columns=columns, noise=noise or None,
                               return_truth=True, **kw)
     case = Case(cause, seed, scenario, columns, effects, noise, snrs[0], log, truth)

@@ -5,7 +5,7 @@ Rules (each in the report's words):
 * the value must be finite;
 * its jackknife uncertainty must be finite and smaller than the value itself;
 * a time constant must leave at least TAU_LENGTHS of itself in the log: a lag or settling whose
-  tau is a third of the log or longer shows as a near-straight drift that an aging slope, a
+  tau is a quarter of the log or longer shows as a near-straight drift that an aging slope, a
   random walk or a polynomial explains as well;
 * a grid-searched parameter must not sit at either end of its search range (a fit at its bound
   is the edge of the search, not a measurement).
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-TAU_LENGTHS = 3.0  # a time constant needs the log to last this many of it
+TAU_LENGTHS = 4.0  # a time constant needs the log to last this many of it (98 % of its settling seen)
 TIME_CONSTANTS = ("tau_s",)
 
 
