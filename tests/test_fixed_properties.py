@@ -8,14 +8,12 @@ Deterministic: ``derandomize=True`` and no example database.
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fixed_oracles import (ALL_RULES, MODES_ROUNDING, check_binary, check_quantize, check_resize,
-                           check_shift_round, exact_requantize, exact_value, int_range)
-from fxdsp.fixed import Rules, kernels
+                           check_shift_round, int_range)
 
 
 def fast(n):

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from fxdsp.hdl import hwreport
 from fxdsp.hdl.hwreport import hw_report_path, load_hw_report, report_json, synthesised_cost
-from fxdsp.hdl.report_cli import UP5K, markdown
+from fxdsp.hdl.report_cli import UP5K, XC7A35T, markdown
 
 ROOT = Path(__file__).parents[1]
 
@@ -30,9 +30,34 @@ def test_json_is_written_from_the_rows_hw_report_collects(tmp_path):
     path.write_text(report_json(rows, 40.0, UP5K))
     got = load_hw_report(path)["rows"]
     assert got[0] == {"name": "rtd", "module": "rtd", "LUT": 301, "MAC16": 2, "FF": 20, "BRAM": 0, "fmax": 21.83,
-                      "note": ""}
+                      "note": "", "xc7": {"LUT": None, "DSP48E1": None, "FF": None, "BRAM36": None, "BRAM18": None,
+                                          "LUTRAM": None, "SRL": None, "note": ""}}
     assert got[1]["LUT"] is None and got[1]["fmax"] is None and got[1]["note"].startswith("timed out")
+    rows[0]["xc7"] = {"LUT": 150, "DSP48E1": 2, "FF": 20, "BRAM36": 0, "BRAM18": 1, "LUTRAM": 0, "SRL": 0,
+                      "seconds": 2.5}
+    path.write_text(report_json(rows, 40.0, UP5K, "", XC7A35T))
+    data = load_hw_report(path)
+    assert data["device_xc7"]["DSP48E1"] == 90
+    assert data["rows"][0]["xc7"] == {"LUT": 150, "DSP48E1": 2, "FF": 20, "BRAM36": 0, "BRAM18": 1, "LUTRAM": 0,
+                                      "SRL": 0, "note": ""}
+    assert "| 150 | 2 | 20 | 0/1 |" in markdown(data["rows"], 40.0)
     assert load_hw_report(tmp_path / "absent.json") is None
+
+
+def test_committed_report_has_the_xc7_columns_for_every_row():
+    """Every row of the committed report carries the yosys synth_xilinx (Artix-7) estimate: integer
+    LUT, DSP48E1, FF and block-RAM counts (a failed or timed-out xc7 run would leave them null)."""
+    report = load_hw_report()
+    assert report.get("device_xc7", {}).get("name") == XC7A35T["name"]
+    assert report["rows"]
+    for row in report["rows"]:
+        xc7 = row.get("xc7")
+        assert isinstance(xc7, dict), f"{row['name']}: no xc7 columns (run make hw-report)"
+        for key in ("LUT", "DSP48E1", "FF", "BRAM36", "BRAM18"):
+            assert isinstance(xc7.get(key), int) and xc7[key] >= 0, f"{row['name']}: xc7 {key} = {xc7.get(key)!r}"
+        assert xc7["LUT"] > 0, row["name"]
+    md = (ROOT / "hdl" / "HW_REPORT.md").read_text()
+    assert "synth_xilinx -family xc7" in md and "not Vivado results" in md and "| xc7 DSP48E1 |" in md
 
 
 def test_budget_reads_the_json_through_the_locator(tmp_path, monkeypatch):

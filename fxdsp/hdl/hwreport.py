@@ -4,7 +4,12 @@ synthesised cost (``fxdsp budget --optimise``) without parsing Markdown.
 
 Each row: ``name`` (block instance or top), ``module``, ``LUT`` (SB_LUT4), ``MAC16`` (SB_MAC16),
 ``FF``, ``BRAM`` (SB_RAM40_4K), ``fmax`` (MHz after place and route) and ``note``; a count is
-null when its tool run failed, ``fmax`` when the design does not place.
+null when its tool run failed, ``fmax`` when the design does not place. ``xc7`` (nested) holds the
+yosys ``synth_xilinx -family xc7`` estimate of the same bare module for an Artix-7 (synthesis only,
+not Vivado, no timing): ``LUT`` (LUT1..LUT6), ``DSP48E1``, ``FF`` (FDRE/FDSE/FDCE/FDPE), ``BRAM36``
+(RAMB36E1), ``BRAM18`` (RAMB18E1), ``LUTRAM`` (distributed-RAM cells), ``SRL`` and ``note``; a
+count is null when that run failed or timed out. ``device_xc7`` names the part the counts are read
+against.
 
 ``source_sha256`` identifies what was synthesised: the RTL sources and the generated parameter
 headers and ROMs of the config (:func:`source_hash`). A report whose hash differs from the current
@@ -21,6 +26,7 @@ from pathlib import Path
 HDL_DIR = Path(__file__).resolve().parents[2] / "hdl"
 REPORT_NAME = "HW_REPORT.json"
 COLUMNS = ("name", "module", "LUT", "MAC16", "FF", "BRAM", "fmax", "note")
+XC7_COLUMNS = ("LUT", "DSP48E1", "FF", "BRAM36", "BRAM18", "LUTRAM", "SRL", "note")
 
 
 def hw_report_path() -> Path:
@@ -43,12 +49,20 @@ def source_hash(design) -> str:
     return h.hexdigest()
 
 
-def report_json(rows: list[dict], freq_mhz: float, device: dict[str, int], source_sha256: str = "") -> str:
-    """The report's JSON text: the table's columns of every row, the target clock, the device and the
-    hash of the sources synthesised."""
+def _row(row: dict) -> dict:
+    out = {c: row.get(c, "" if c == "note" else None) for c in COLUMNS}
+    xc7 = row.get("xc7") or {}
+    out["xc7"] = {c: xc7.get(c, "" if c == "note" else None) for c in XC7_COLUMNS}
+    return out
+
+
+def report_json(rows: list[dict], freq_mhz: float, device: dict[str, int], source_sha256: str = "",
+                device_xc7: dict | None = None) -> str:
+    """The report's JSON text: the table's columns of every row (with its nested ``xc7`` estimate),
+    the target clock, the devices and the hash of the sources synthesised."""
     data = {"generator": "fxdsp hw-report", "device": {"name": "iCE40UP5K", **device},
-            "target_mhz": freq_mhz, "source_sha256": source_sha256,
-            "rows": [{c: row.get(c, "" if c == "note" else None) for c in COLUMNS} for row in rows]}
+            "device_xc7": device_xc7, "target_mhz": freq_mhz, "source_sha256": source_sha256,
+            "rows": [_row(row) for row in rows]}
     return json.dumps(data, indent=1, allow_nan=False) + "\n"   # strict JSON: a failed count is null
 
 

@@ -3,6 +3,12 @@
 SB_MAC16, flip-flops, block RAMs and Fmax to ``hdl/HW_REPORT.md``, and the same rows as data to
 ``hdl/HW_REPORT.json`` beside it (:mod:`fxdsp.hdl.hwreport`).
 
+A second column set estimates the cost on a larger part users also target, a Xilinx 7-series
+(Artix-7): yosys ``synth_xilinx -family xc7 -flatten -noiopad`` on the same bare module with the
+same parameters, synthesis only (no vendor tools, no place and route, no timing): LUT1..LUT6,
+DSP48E1, FDRE/FDSE/FDCE/FDPE and RAMB36E1/RAMB18E1 counts (distributed-RAM and SRL cells are in the
+JSON only). These are yosys estimates, not Vivado results.
+
 Resources are those of the bare module (its parameters from the same config as the models).
 Fmax comes from placing and routing the module inside a serial wrapper (one input pin, one
 output pin, shift registers around the module's ports) because the tops have more port bits than
@@ -27,6 +33,9 @@ from .params import generate, instance, literal
 
 RTL = HDL_DIR / "rtl"
 UP5K = {"LUT": 5280, "MAC16": 8, "FF": 5280, "BRAM": 30}
+# the Artix-7 the xc7 columns are read against (a common small one); yosys estimates, not Vivado
+XC7A35T = {"name": "XC7A35T", "LUT": 20800, "DSP48E1": 90, "FF": 41600, "BRAM36": 50}
+XC7_SYNTH = "synth_xilinx -family xc7 -flatten -noiopad"
 BUDGET = {"LUT": 2640, "MAC16": 8, "MHz": 40.0}
 
 
@@ -37,6 +46,9 @@ def configure(parser) -> None:
     parser.add_argument("--only", nargs="*", help="subset of the design's instances (default: every block and chain)")
     parser.add_argument("--freq", type=float, default=40.0, help="nextpnr target clock in MHz (default 40)")
     parser.add_argument("--timeout", type=int, default=1200, help="seconds per tool run")
+    parser.add_argument("--xc7-timeout", type=int, default=900,
+                        help="seconds for the xc7 (synth_xilinx) synthesis of one block (default 900)")
+    parser.add_argument("--no-xc7", action="store_true", help="skip the xc7 (synth_xilinx) columns")
 
 
 def _dut_params(design, name) -> str:
@@ -90,7 +102,17 @@ def _sources():
     return " ".join(str(p) for p in sorted(RTL.glob("*.v")))
 
 
-def synth(design, name: str, work: Path, timeout: int) -> dict:
+def _xc7_stat(text: str) -> dict:
+    def cells(pattern):
+        return sum(int(m) for m in re.findall(rf"^\s+{pattern}\s+(\d+)\s*$", text, re.M))
+    return {"LUT": cells("LUT[1-6]"), "DSP48E1": cells("DSP48E1"), "FF": cells("FD[RSCP]E"),
+            "BRAM36": cells("RAMB36E1"), "BRAM18": cells("RAMB18E1"), "LUTRAM": cells(r"RAM\d+\w*"),
+            "SRL": cells(r"SRL\w+")}
+
+
+def _read_and_chparam(design, name: str, work: Path) -> str:
+    """The yosys commands that read the RTL and set the bare module's parameters from the config
+    (a top takes its parameters from the generated headers)."""
     module = design.instances[name].module
     chparams = ""
     if not design.instances[name].members:
@@ -98,11 +120,32 @@ def synth(design, name: str, work: Path, timeout: int) -> dict:
         chparams = " ".join(f"-set {k} {literal(inst, k, v)}" if not isinstance(v, str)
                             else f'-set {k} "{v}"' for k, v in inst.params.items())
         chparams = f"chparam {chparams} {module};"
-    script = (f"read_verilog -I{work} {_sources()}; {chparams} synth_ice40 -dsp -top {module}; "
+    return f"read_verilog -I{work} {_sources()}; {chparams}"
+
+
+def synth(design, name: str, work: Path, timeout: int) -> dict:
+    module = design.instances[name].module
+    script = (f"{_read_and_chparam(design, name, work)} synth_ice40 -dsp -top {module}; "
               f"tee -o {work / (name + '_stat.txt')} stat")
     subprocess.run(["yosys", "-q", "-p", script], cwd=work, check=True, capture_output=True, text=True,
                    timeout=timeout)
     return _stat((work / f"{name}_stat.txt").read_text())
+
+
+def synth_xc7(design, name: str, work: Path, timeout: int) -> dict:
+    """yosys ``synth_xilinx -family xc7`` cell counts of the same bare module with the same
+    parameters (synthesis only: no place and route, no timing)."""
+    module = design.instances[name].module
+    script = (f"{_read_and_chparam(design, name, work)} {XC7_SYNTH} -top {module}; "
+              f"tee -o {work / (name + '_xc7_stat.txt')} stat")
+    subprocess.run(["yosys", "-q", "-p", script], cwd=work, check=True, capture_output=True, text=True,
+                   timeout=timeout)
+    return _xc7_stat((work / f"{name}_xc7_stat.txt").read_text())
+
+
+def _failure(exc: subprocess.CalledProcessError) -> str:
+    err = (exc.stderr or "").strip()
+    return "synthesis failed: " + err.splitlines()[-1] if err else "synthesis failed"
 
 
 def place_route(design, name: str, work: Path, freq: float, timeout: int) -> tuple[float | None, str]:
@@ -153,16 +196,28 @@ def run(args) -> int:
             except subprocess.TimeoutExpired:
                 row["note"] = f"timed out after {args.timeout} s"
             except subprocess.CalledProcessError as exc:
-                row["note"] = "synthesis failed: " + (exc.stderr or "").strip().splitlines()[-1:][0] \
-                    if (exc.stderr or "").strip() else "synthesis failed"
+                row["note"] = _failure(exc)
             row["seconds"] = round(time.perf_counter() - t0, 1)
+            t1 = time.perf_counter()
+            xc7: dict = {}
+            if args.no_xc7:
+                xc7["note"] = "not run (--no-xc7)"
+            else:
+                try:
+                    xc7.update(synth_xc7(design, name, work, args.xc7_timeout))
+                except subprocess.TimeoutExpired:
+                    xc7["note"] = f"xc7 synthesis timed out after {args.xc7_timeout} s"
+                except subprocess.CalledProcessError as exc:
+                    xc7["note"] = "xc7 " + _failure(exc)
+            xc7["seconds"] = round(time.perf_counter() - t1, 1)
+            row["xc7"] = xc7
             rows.append(row)
             print(f"{name}: {row}", file=sys.stderr)
     out = Path(args.out)
     with staged() as stage:  # the Markdown table and its JSON twin land together
         digest = source_hash(design)
         stage.write_text(out, markdown(rows, args.freq, digest))
-        stage.write_text(out.with_suffix(".json"), report_json(rows, args.freq, UP5K, digest))
+        stage.write_text(out.with_suffix(".json"), report_json(rows, args.freq, UP5K, digest, XC7A35T))
     print(f"wrote {out} and {out.with_suffix('.json')}")
     return 0
 
@@ -171,19 +226,37 @@ def _fmt(v, suffix=""):
     return "-" if v is None else f"{v}{suffix}"
 
 
+def _xc7_cells(r) -> str:
+    x = r.get("xc7") or {}
+    bram = None if x.get("BRAM36") is None else f"{x['BRAM36']}/{_fmt(x.get('BRAM18'))}"
+    return f"{_fmt(x.get('LUT'))} | {_fmt(x.get('DSP48E1'))} | {_fmt(x.get('FF'))} | {_fmt(bram)}"
+
+
+def _note(r) -> str:
+    return "; ".join(n for n in (r.get("note", ""), (r.get("xc7") or {}).get("note", "")) if n)
+
+
 def markdown(rows, freq, source_sha256: str = "") -> str:
-    lines = ["# Hardware report: iCE40UP5K", "",
+    lines = ["# Hardware report: iCE40UP5K (and a yosys estimate for an Artix-7)", "",
              "Generated by `fxdsp hw-report` (`make hw-report`): yosys `synth_ice40 -dsp` on each bare module "
              "(parameters from the default config), nextpnr-ice40 `--up5k --package sg48` "
              f"at a {freq:g} MHz target on the module inside a serial I/O wrapper for Fmax. "
              f"Device: {UP5K['LUT']} LUT4, {UP5K['MAC16']} SB_MAC16, {UP5K['BRAM']} SB_RAM40_4K. "
              f"Sources (RTL and generated parameters) sha256 `{source_sha256 or 'unknown'}`.", "",
-             "| block | module | LUT4 | SB_MAC16 | FF | BRAM | Fmax (MHz) | note |",
-             "|---|---|---:|---:|---:|---:|---:|---|"]
+             f"The xc7 columns are yosys `{XC7_SYNTH}` estimates of the same bare module with the same "
+             "parameters for a Xilinx 7-series part such as an Artix-7 (e.g. "
+             f"{XC7A35T['name']}: {XC7A35T['LUT']:,} LUT6, {XC7A35T['DSP48E1']} DSP48E1, "
+             f"{XC7A35T['FF']:,} FF, {XC7A35T['BRAM36']} RAMB36): synthesis only, not Vivado results, "
+             "no place and route and no timing. LUT is LUT1..LUT6 (distributed-RAM and SRL cells are in the "
+             "JSON only), FF is FDRE/FDSE/FDCE/FDPE, BRAM is RAMB36E1/RAMB18E1.", "",
+             "| block | module | LUT4 | SB_MAC16 | FF | BRAM | Fmax (MHz) | xc7 LUT | xc7 DSP48E1 | xc7 FF "
+             "| xc7 RAMB36/18 | note |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
     for r in rows:
         lines.append(f"| {r['name']} | {r['module']} | {_fmt(r.get('LUT'))} | {_fmt(r.get('MAC16'))} | "
                      f"{_fmt(r.get('FF'))} | {_fmt(r.get('BRAM'))} | "
-                     f"{_fmt(None if r.get('fmax') is None else round(r['fmax'], 1))} | {r.get('note', '')} |")
+                     f"{_fmt(None if r.get('fmax') is None else round(r['fmax'], 1))} | {_xc7_cells(r)} | "
+                     f"{_note(r)} |")
     chain = next((r for r in rows if r["name"] == "chain_paper002"), None)
     if chain and chain.get("LUT") is not None:
         ok_lut = chain["LUT"] <= BUDGET["LUT"]
