@@ -17,9 +17,8 @@ import numpy as np
 import pytest
 
 from fxdsp import mechanisms as mech
-from fxdsp.diagnose.api import diagnose_log
+from fxdsp.diagnose.api import diagnose_columns
 from fxdsp.diagnose.hidden import ALL_CAUSES, diagnose_case, make_case, parameters_within
-from fxdsp.diagnose.logio import Log
 from fxdsp.diagnose.report import report_dict
 
 from independent.confusion import plain_numbers_of_unidentified
@@ -28,7 +27,7 @@ SEEDS = (1, 2, 3, 4)
 
 
 def _diagnose(log: dict):
-    return diagnose_log(Log(columns={k: np.asarray(v, float) for k, v in log.items()}, source="sim"))
+    return diagnose_columns(log, source="sim")
 
 
 @pytest.mark.parametrize("seed", SEEDS)

@@ -10,10 +10,9 @@ import json
 import numpy as np
 import pytest
 
-from fxdsp.diagnose.api import diagnose_log
+from fxdsp.diagnose.api import diagnose_columns
 from fxdsp.diagnose.context import Candidate
 from fxdsp.diagnose.identify import TAU_LENGTHS, judge
-from fxdsp.diagnose.logio import Log
 from fxdsp.diagnose.report import _candidate_entry, report_dict
 
 from independent.confusion import plain_numbers_of_unidentified
@@ -40,7 +39,7 @@ def lag_log(tau_s: float, hours: float, seed: int, dt: float = 20.0) -> dict:
 
 
 def _report(log: dict) -> dict:
-    diag = diagnose_log(Log(columns=log, source="test"))
+    diag = diagnose_columns(log, source="test")
     return json.loads(json.dumps(report_dict(diag)))
 
 

@@ -16,7 +16,7 @@ from numba import njit
 from fxdsp.diagnose.api import series_from_log
 from fxdsp.diagnose.engine import diagnose_series
 from fxdsp.diagnose.logio import Log
-from fxdsp.ramps import derivative
+from fxdsp.ramps import derivative, moving_average
 
 from independent.chamber_logs import CAUSES, PAIRS, fast_ramp_logs
 from independent.confusion import score
@@ -42,14 +42,7 @@ def old_ramp_direction(time_s, temp_c, min_rate=2e-4, min_duration=600.0):
     exceeded ``min_rate`` with one sign for ``min_duration`` seconds (on a one-minute smoothed
     reading, as the old Series did)."""
     t = np.asarray(time_s, float)
-    y = np.asarray(temp_c, float)
-    dt = np.median(np.diff(t)[np.diff(t) > 0])
-    k = max(int(60.0 / dt) // 2, 0)
-    if k:
-        c = np.concatenate([[0.0], np.cumsum(y - y[0])])
-        i = np.arange(y.size)
-        lo, hi = np.maximum(i - k, 0), np.minimum(i + k + 1, y.size)
-        y = y[0] + (c[hi] - c[lo]) / (hi - lo)
+    y, _ = moving_average(t, np.asarray(temp_c, float), 60.0)
     rate = derivative(t, y)
     sign = np.where(rate > min_rate, 1, np.where(rate < -min_rate, -1, 0)).astype(np.int64)
     return _old_state(t, sign, min_duration)

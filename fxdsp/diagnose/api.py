@@ -44,5 +44,10 @@ def diagnose_log(log: Log) -> Diagnosis:
     return diag
 
 
+def diagnose_columns(columns: dict, source: str) -> Diagnosis:
+    """A diagnosis of logged columns held in memory (contract names -> arrays)."""
+    return diagnose_log(Log(columns={k: np.asarray(v, float) for k, v in columns.items()}, source=source))
+
+
 def diagnose_file(path, mapping=None, delimiter=",", time_format=None) -> Diagnosis:
     return diagnose_log(read_log(path, mapping, delimiter, time_format))

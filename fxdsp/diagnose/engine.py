@@ -37,7 +37,7 @@ from fxdsp import mechanisms as mech
 from fxdsp.diagnose import model as M
 from fxdsp.diagnose.candidates import affected_channels, refit_nonlinear
 from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, ORDER_CHOICES, Context, Diagnosis, choose_orders, set_noise_weights, sf_estimate
-from fxdsp.diagnose.identify import described, judge
+from fxdsp.diagnose.identify import described, judge, reasons
 from fxdsp.diagnose.results import baseline_coefficients, channel_gain, linear_parameters
 from fxdsp.diagnose.selection import check_against_wander, greedy_search, order_by_gain, prune
 
@@ -113,8 +113,7 @@ def diagnose_series(series: M.Series, n_segments: int = 200, n_folds: int = 5) -
 def _set_aside(unidentified: dict, notes: list, cause: str, params: dict) -> None:
     """Record a cause that is not named because the log does not determine its parameters."""
     unidentified[cause] = params
-    reasons = "; ".join(p["why"] for p in params.values() if not p["identified"])
-    notes.append(f"{cause} lowered the held-out error but is not named: {reasons}")
+    notes.append(f"{cause} lowered the held-out error but is not named: {reasons(params)}")
 
 
 def _converge_scale_factor(ctx: Context, search: Context, state: dict, step: int) -> None:

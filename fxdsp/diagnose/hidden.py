@@ -201,10 +201,9 @@ def _draw_effect(cause, rng, snr, sign, scenario, kw, clean, truth0, levels, sig
 
 
 def diagnose_case(case: Case):
-    from fxdsp.diagnose.api import diagnose_log
-    from fxdsp.diagnose.logio import Log
+    from fxdsp.diagnose.api import diagnose_columns
 
-    return diagnose_log(Log(columns={k: np.asarray(v, float) for k, v in case.log.items()}, source="sim"))
+    return diagnose_columns(case.log, source="sim")
 
 
 def parameters_within(case: Case, found: dict, tolerance: float = 0.25) -> bool:

@@ -51,3 +51,8 @@ def described(value: float, sd: float | None, verdict: Verdict) -> dict:
     if not verdict.identified:
         out["why"] = verdict.why
     return out
+
+
+def reasons(described_params: dict) -> str:
+    """Why a cause's described parameters are not determined, in words (for notes and reports)."""
+    return "; ".join(p["why"] for p in described_params.values() if not p["identified"])

@@ -8,7 +8,7 @@ import numpy as np
 
 from fxdsp import mechanisms as mech
 from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, Diagnosis
-from fxdsp.diagnose.identify import TAU_LENGTHS, Verdict, described
+from fxdsp.diagnose.identify import TAU_LENGTHS, Verdict, described, reasons
 from fxdsp.diagnose.selection import NULL_DRAWS, NULL_QUANTILE, WANDER_GAIN
 from fxdsp.diagnose.results import heldout_residuals
 
@@ -35,7 +35,7 @@ _EXPLAIN = {
 
 
 def explanation(diag: Diagnosis) -> str:
-    unnamed = "".join(f" {_UNNAMED.format(cause=c, why=_reasons(p))}" for c, p in diag.unidentified.items())
+    unnamed = "".join(f" {_UNNAMED.format(cause=c, why=reasons(p))}" for c, p in diag.unidentified.items())
     if not diag.causes:
         g = diag.gain
         return ("Nothing beyond the baseline (B and S polynomials in temp_c, linear thermometers) and the "
@@ -55,10 +55,6 @@ def explanation(diag: Diagnosis) -> str:
 
 
 _UNNAMED = "{cause} is not named although it lowers the held-out error: {why}."
-
-
-def _reasons(described_params: dict) -> str:
-    return "; ".join(p["why"] for p in described_params.values() if not p["identified"])
 
 
 def _candidate_entry(diag: Diagnosis, c) -> dict:

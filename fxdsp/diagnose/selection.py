@@ -104,6 +104,15 @@ def variogram(residual: np.ndarray, lag: int) -> float:
     return float(np.median(d * d)) / 0.4549
 
 
+def walk_levels(residual: np.ndarray) -> tuple[float, float, float, float]:
+    """(gamma(1), gamma(n/5), random-walk variance per row, white variance) of a residual, from its
+    robust variogram at one row and at a fifth of the log."""
+    m = max(2, residual.size // 5)
+    g1, gm = variogram(residual, 1), variogram(residual, m)
+    q = max((gm - g1) / (m - 1), 0.0)
+    return g1, gm, q, max((g1 - q) / 2.0, 0.0)
+
+
 def wander(residual: np.ndarray) -> tuple[float, float, float]:
     """(variogram ratio gamma(M)/gamma(1), the ratio white noise stays below, Kalman gain).
 
@@ -111,15 +120,12 @@ def wander(residual: np.ndarray) -> tuple[float, float, float]:
     the log; the threshold is 1 + 4 standard deviations of the ratio for white noise, which is
     3.2 / sqrt(n) (simulated for n = 1e3 .. 1e5)."""
     n = residual.size
-    m = max(2, n // 5)
     if n < 50:
         return 1.0, np.inf, 0.0
-    g1, gm = variogram(residual, 1), variogram(residual, m)
+    g1, gm, q, white = walk_levels(residual)
     ratio = gm / g1 if g1 > 0 else 1.0
     threshold = 1.0 + 4.0 * 3.2 / np.sqrt(n)
-    q = max((gm - g1) / (m - 1), 0.0)
-    white = max((g1 - q) / 2.0, 1e-300)
-    lam = q / white
+    lam = q / max(white, 1e-300)
     p = 0.5 * (lam + np.sqrt(lam * lam + 4.0 * lam))
     gain = p / (p + 1.0) if np.isfinite(p) else 1.0  # a residual that is all random walk: difference it
     return float(ratio), float(threshold), float(gain)
@@ -132,10 +138,7 @@ def null_evidence(ctx: Context, channel: str, state: dict, without: dict, resid:
     from fxdsp.diagnose.blockfit import SegmentNormals
 
     n = resid.size
-    m = max(2, n // 5)
-    g1, gm = variogram(resid, 1), variogram(resid, m)
-    q = max((gm - g1) / (m - 1), 0.0)
-    white = max((g1 - q) / 2.0, 0.0)
+    _, _, q, white = walk_levels(resid)
     x_with, _ = ctx.design(channel, state)
     x_without, _ = ctx.design(channel, without)
     w = ctx.weights[channel]

@@ -314,6 +314,11 @@ class _Builder:
         dur = max(MIN_RAMP_S, span / rate_cpm * 60.0)
         self.ramp(dur, self.T + (span if up else -span), tag, planned)
 
+    def plain_ramp(self, need, rate_lo, rate_hi):
+        """A ramp of at least ``need`` C (as far as the room allows) at a log-uniform rate."""
+        up = self.direction(need=need)
+        self.ramp_span(up, self.rng.uniform(need, max(need, self.room(up))), _logu(self.rng, rate_lo, rate_hi))
+
     def _cut_leg(self, rate_lo, rate_hi, frac_lo, frac_hi):
         """A planned ramp and the part of it that will be run: (up, room, planned span, rate,
         planned duration, run duration)."""
@@ -401,15 +406,13 @@ def _build_programme(kind: str, rng, t_cover: float, duration: float) -> Program
             b.ramp(dur, b.T + (1 if up else -1) * rate * dur / 60.0)
             b.dwell_drawn(MIN_DWELL_S, 3600.0)
         elif kind == "slow":
-            up = b.direction(need=10.0)
-            b.ramp_span(up, rng.uniform(10.0, max(10.0, b.room(up))), _logu(rng, 0.2, 1.0))
+            b.plain_ramp(10.0, 0.2, 1.0)
             b.dwell_drawn(1800.0, MAX_DWELL_S)
         elif kind == "reversal":
             if n <= 2 or rng.random() < 0.5:
                 b.reversal_group(0.5, 5.0)
             else:
-                up = b.direction(need=10.0)
-                b.ramp_span(up, rng.uniform(10.0, max(10.0, b.room(up))), _logu(rng, 0.5, 5.0))
+                b.plain_ramp(10.0, 0.5, 5.0)
             b.dwell_drawn()
         elif kind == "clipped":
             r = rng.random()
@@ -418,14 +421,12 @@ def _build_programme(kind: str, rng, t_cover: float, duration: float) -> Program
             elif n == 2 or r < 0.7:
                 b.early_stop(0.5, 5.0)
             else:
-                up = b.direction(need=10.0)
-                b.ramp_span(up, rng.uniform(10.0, max(10.0, b.room(up))), _logu(rng, 0.5, 5.0))
+                b.plain_ramp(10.0, 0.5, 5.0)
             b.dwell_drawn()
         elif kind == "mixed":
             r = rng.random()
             if r < 0.55:
-                up = b.direction(need=5.0)
-                b.ramp_span(up, rng.uniform(5.0, max(5.0, b.room(up))), _logu(rng, 0.2, 5.0))
+                b.plain_ramp(5.0, 0.2, 5.0)
             elif r < 0.75:
                 b.reversal_group(0.2, 5.0)
             elif r < 0.9:

@@ -13,8 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fxdsp.diagnose.api import diagnose_log
-from fxdsp.diagnose.logio import Log
+from fxdsp.diagnose.api import diagnose_columns
 from fxdsp.diagnose.report import report_dict
 
 try:  # run as part of the tests package, or from scripts/ with tests/ on sys.path
@@ -76,8 +75,7 @@ def plain_numbers_of_unidentified(report: dict) -> list[str]:
 
 
 def diagnose_independent(log: IndependentLog):
-    columns = {k: np.asarray(v, float) for k, v in log.columns.items()}
-    return diagnose_log(Log(columns=columns, source="independent"))
+    return diagnose_columns(log.columns, source="independent")
 
 
 class ProjectLog:
