@@ -13,8 +13,7 @@ import pytest
 
 from fxdsp.repro import paper002, paper003
 from fxdsp.sim import generate_log
-from fxdsp.sim.repeatability import (MEDIAN_RANGE_OF_5, PAPER002_BIAS_RANGE_DEG_H, PAPER002_REPEATABILITY,
-                                     PAPER002_SF_RANGE, Repeatability)
+from fxdsp.sim.repeatability import PAPER002_REPEATABILITY, Repeatability
 
 SF_AFTER, BIAS_AFTER = 69.67, 115.25
 CXY, KXY = -6.96e-8, 0.103
@@ -32,10 +31,12 @@ def with_rep():
 def test_magnitudes_follow_from_the_papers_figures():
     """sigma = range / (median range of 5 normals x sqrt 2), in the units of the dataclass."""
     z = np.random.default_rng(0).standard_normal((200_000, 5))
-    assert np.median(z.max(axis=1) - z.min(axis=1)) == pytest.approx(MEDIAN_RANGE_OF_5, abs=0.01)
-    k = MEDIAN_RANGE_OF_5 * np.sqrt(2)
-    assert PAPER002_REPEATABILITY.temp_bias_sigma * 3600 == pytest.approx(PAPER002_BIAS_RANGE_DEG_H / k, rel=0.02)
-    assert PAPER002_REPEATABILITY.temp_sf_sigma == pytest.approx(PAPER002_SF_RANGE / k, rel=0.02)
+    median_range_of_5 = np.median(z.max(axis=1) - z.min(axis=1))  # 2.254 (tables of the range)
+    assert median_range_of_5 == pytest.approx(2.254, abs=0.01)
+    k = median_range_of_5 * np.sqrt(2)
+    span_c = 80.0  # the paper's test span, -20..60 C
+    assert PAPER002_REPEATABILITY.temp_bias_sigma * 3600 == pytest.approx(BIAS_AFTER * span_c / k, rel=0.02)
+    assert PAPER002_REPEATABILITY.temp_sf_sigma == pytest.approx(SF_AFTER * 1e-6 * span_c / k, rel=0.02)
 
 
 def test_off_by_default_and_zero_sigmas_change_nothing():

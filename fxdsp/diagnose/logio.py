@@ -155,15 +155,22 @@ def _fast_numeric(body: list[str], delimiter: str, usecols: list[int]) -> np.nda
     return data if data.shape == (len(body), len(usecols)) else None
 
 
+def lines_and_header(path, delimiter: str = ",") -> tuple[list[str], list[str]]:
+    """The non-blank, non-``#`` lines of a text table (UTF-8, BOM allowed) and its header's names
+    (stripped, quotes removed; [] for an empty file)."""
+    with open(path, encoding="utf-8-sig") as handle:
+        lines = [ln.rstrip("\r\n") for ln in handle if ln.strip() and not ln.lstrip().startswith("#")]
+    header = [h.strip().strip('"') for h in lines[0].split(delimiter)] if lines else []
+    return lines, header
+
+
 def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
              time_format: str | None = None) -> Log:
     """Read ``path``; ``mapping`` is canonical -> source column name (see parse_mapping)."""
     mapping = dict(mapping or {})
-    with open(path, encoding="utf-8-sig") as handle:
-        lines = [ln.rstrip("\r\n") for ln in handle if ln.strip() and not ln.lstrip().startswith("#")]
+    lines, header = lines_and_header(path, delimiter)
     if not lines:
         raise InputError(f"{path}: empty file (no header row)")
-    header = [h.strip().strip('"') for h in lines[0].split(delimiter)]
     twice = sorted({h for h in header if h and header.count(h) > 1})
     if twice:  # which of the two would be read is a guess: refuse rather than pick one
         raise InputError(f"{path}: column {twice[0]!r} appears more than once in the header")

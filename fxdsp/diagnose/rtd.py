@@ -14,11 +14,11 @@ Callendar-Van Dusen least-squares fit and the IEC 60751 constants, with their te
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from fxdsp.blocks.rtd import RtdPhysics
+from fxdsp.diagnose.logio import lines_and_header
 
 IEC60751 = {"R0": 100.0, "A": 3.9083e-3, "B": -5.775e-7, "C": -4.183e-12}
 
@@ -37,9 +37,7 @@ class ErrorStats:
 def load_table(path) -> tuple[np.ndarray, np.ndarray]:
     """(temperature_c, resistance_ohm) from a CSV with a header row naming those two columns (any
     other table, e.g. a chamber log, is refused by name rather than read as one)."""
-    text = Path(path).read_text(encoding="utf-8-sig")
-    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
-    header = [h.strip().strip('"') for h in (lines[0].split(",") if lines else [])]
+    lines, header = lines_and_header(path)
     missing = [c for c in ("temperature_c", "resistance_ohm") if c not in header]
     if missing:
         raise ValueError(f"{path}: expected columns temperature_c,resistance_ohm; the header has "

@@ -25,6 +25,8 @@ onward (the bias tables') are the default config's, which sit below the rate wor
 
 from __future__ import annotations
 
+import functools
+
 import math
 import re
 import tomllib
@@ -97,8 +99,14 @@ def _range(coefficients, breakpoints, t0_c: float) -> float:
     return float(np.abs(vals).max())
 
 
+@functools.cache
+def _default_data() -> dict:
+    return tomllib.loads(default_config_text())
+
+
 def _default(table: str, key: str):
-    node = tomllib.loads(default_config_text())
+    """A value of the default config (parsed once: calibrations ask for it hundreds of times)."""
+    node = _default_data()
     for part in table.split("."):
         node = node[part]
     return node[key]
@@ -110,7 +118,7 @@ def acc_width(temp_format: str) -> int:
 
 
 def piecewise_table(coefficients, breakpoints=(), t0_c: float = 0.0, out_signed: bool = True,
-                    out_wl: int = 24, acc_wl: int = 43, name: str = "piecewise") -> dict:
+                    out_wl: int = 24, *, acc_wl: int, name: str = "piecewise") -> dict:
     """Keys of a ``[piecewise.*]`` table with formats chosen for these coefficients."""
     coef = np.atleast_2d(np.asarray(coefficients, float))
     if coef.shape[1] < 2 or coef.shape[1] > 4:

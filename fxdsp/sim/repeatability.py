@@ -116,11 +116,6 @@ class Repeatability:
         return asdict(self)
 
 
-NONE = Repeatability()
-
 # paper 002's device: derivation in the module docstring (range of 5 normals, sqrt 2 for two runs)
-PAPER002_BIAS_RANGE_DEG_H = 115.25 * 80.0
-PAPER002_SF_RANGE = 69.67e-6 * 80.0
-MEDIAN_RANGE_OF_5 = 2.254
 PAPER002_REPEATABILITY = Repeatability(temp_bias_sigma=0.80, temp_sf_sigma=1.75e-3,
                                        turn_on_bias_sigma=0.80, turn_on_sf_sigma=1.75e-3)
