@@ -21,7 +21,6 @@ hdl-tools:
 	command -v iverilog >/dev/null 2>&1 || missing="$$missing iverilog"; \
 	command -v verilator >/dev/null 2>&1 || missing="$$missing verilator"; \
 	command -v g++ >/dev/null 2>&1 || missing="$$missing g++"; \
-	command -v make >/dev/null 2>&1 || missing="$$missing make"; \
 	perl -MPod::Usage -MFindBin -e1 >/dev/null 2>&1 || missing="$$missing perl"; \
 	[ -z "$$missing" ] || { \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \

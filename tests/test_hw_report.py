@@ -19,7 +19,6 @@ def test_committed_json_holds_the_markdown_table():
     # the Markdown written from the JSON's rows is the committed Markdown, byte for byte
     assert markdown(report["rows"], report["target_mhz"], report.get("source_sha256", "")) == \
         (ROOT / "hdl" / "HW_REPORT.md").read_text()
-    assert report["device"]["MAC16"] == UP5K["MAC16"]
 
 
 def test_json_is_written_from_the_rows_hw_report_collects(tmp_path):
@@ -56,8 +55,6 @@ def test_committed_report_has_the_xc7_columns_for_every_row():
         for key in ("LUT", "DSP48E1", "FF", "BRAM36", "BRAM18"):
             assert isinstance(xc7.get(key), int) and xc7[key] >= 0, f"{row['name']}: xc7 {key} = {xc7.get(key)!r}"
         assert xc7["LUT"] > 0, row["name"]
-    md = (ROOT / "hdl" / "HW_REPORT.md").read_text()
-    assert "synth_xilinx -family xc7" in md and "not Vivado results" in md and "| xc7 DSP48E1 |" in md
 
 
 def test_budget_reads_the_json_through_the_locator(tmp_path, monkeypatch):

@@ -29,7 +29,7 @@ from pathlib import Path
 from ..chains import build
 from ..outputs import IN, OUT_FILE, check_output, staged
 from .hwreport import HDL_DIR, report_json, source_hash
-from .params import generate, instance, literal
+from .params import generate, instance, iverilog_params
 
 RTL = HDL_DIR / "rtl"
 UP5K = {"LUT": 5280, "MAC16": 8, "FF": 5280, "BRAM": 30}
@@ -51,14 +51,28 @@ def configure(parser) -> None:
     parser.add_argument("--no-xc7", action="store_true", help="skip the xc7 (synth_xilinx) columns")
 
 
-def _dut_params(design, name) -> str:
+def module_params(design, name: str) -> dict[str, str] | None:
+    """The bare module's parameters from the config as Verilog literals (``iverilog_params``), or
+    None for a top (it takes its parameters from the generated headers)."""
     if design.instances[name].members:
+        return None
+    return iverilog_params(instance(design, name))
+
+
+def _chparam(module: str, params: dict[str, str] | None) -> str:
+    """The yosys ``chparam`` command setting ``params`` on ``module`` ('' for a top)."""
+    if params is None:
+        return ""
+    return f"chparam {' '.join(f'-set {k} {v}' for k, v in params.items())} {module};"
+
+
+def _dut_params(params: dict[str, str] | None) -> str:
+    if params is None:
         return ""  # a top takes its parameters from the generated headers
-    inst = instance(design, name)
-    return "#(" + ", ".join(f".{k}({literal(inst, k, v)})" for k, v in inst.params.items()) + ")"
+    return "#(" + ", ".join(f".{k}({v})" for k, v in params.items()) + ")"
 
 
-def wrapper(design, name: str) -> str:
+def wrapper(design, name: str, params: dict[str, str] | None) -> str:
     inst = design.instances[name]
     module, ready = inst.module, inst.has_ready
     ins, outs = [p.name for p in inst.inputs], [p.name for p in inst.outputs]
@@ -85,17 +99,20 @@ def wrapper(design, name: str) -> str:
         L.append("    wire rdy;")
         conns.append(".in_ready(rdy)")
         cat.append("rdy")
-    L.append(f"    {module} {_dut_params(design, name)} dut ({', '.join(conns)});")
+    L.append(f"    {module} {_dut_params(params)} dut ({', '.join(conns)});")
     L.append(f"    always @(posedge clk) so <= ov ? {{{', '.join(cat)}}} : {{1'b0, so[{out_bits - 1}:1]}};")
     L += ["    assign sout = so[0];", "endmodule", "`default_nettype wire", ""]
     return "\n".join(L)
 
 
+def _cells(text: str, pattern: str) -> int:
+    """The total count of the cells matching ``pattern`` in a yosys ``stat`` listing."""
+    return sum(int(m) for m in re.findall(rf"^\s+{pattern}\s+(\d+)\s*$", text, re.M))
+
+
 def _stat(text: str) -> dict:
-    def cells(pattern):
-        return sum(int(m) for m in re.findall(rf"^\s+{pattern}\s+(\d+)\s*$", text, re.M))
-    return {"LUT": cells("SB_LUT4"), "MAC16": cells("SB_MAC16"), "FF": cells(r"SB_DFF\w*"),
-            "BRAM": cells(r"SB_RAM40_4K\w*"), "CARRY": cells("SB_CARRY")}
+    return {"LUT": _cells(text, "SB_LUT4"), "MAC16": _cells(text, "SB_MAC16"), "FF": _cells(text, r"SB_DFF\w*"),
+            "BRAM": _cells(text, r"SB_RAM40_4K\w*"), "CARRY": _cells(text, "SB_CARRY")}
 
 
 def _sources():
@@ -103,44 +120,37 @@ def _sources():
 
 
 def _xc7_stat(text: str) -> dict:
-    def cells(pattern):
-        return sum(int(m) for m in re.findall(rf"^\s+{pattern}\s+(\d+)\s*$", text, re.M))
-    return {"LUT": cells("LUT[1-6]"), "DSP48E1": cells("DSP48E1"), "FF": cells("FD[RSCP]E"),
-            "BRAM36": cells("RAMB36E1"), "BRAM18": cells("RAMB18E1"), "LUTRAM": cells(r"RAM\d+\w*"),
-            "SRL": cells(r"SRL\w+")}
+    return {"LUT": _cells(text, "LUT[1-6]"), "DSP48E1": _cells(text, "DSP48E1"), "FF": _cells(text, "FD[RSCP]E"),
+            "BRAM36": _cells(text, "RAMB36E1"), "BRAM18": _cells(text, "RAMB18E1"),
+            "LUTRAM": _cells(text, r"RAM\d+\w*"), "SRL": _cells(text, r"SRL\w+")}
 
 
-def _read_and_chparam(design, name: str, work: Path) -> str:
-    """The yosys commands that read the RTL and set the bare module's parameters from the config
-    (a top takes its parameters from the generated headers)."""
+def _read_and_chparam(work: Path, chparam: str) -> str:
+    """The yosys commands that read the RTL and set the bare module's parameters (``chparam``, from
+    :func:`_chparam`; '' for a top, which takes its parameters from the generated headers)."""
+    return f"read_verilog -I{work} {_sources()}; {chparam}"
+
+
+def _yosys_stat(design, name: str, work: Path, timeout: int, synth_cmd: str, suffix: str, parse,
+                chparam: str) -> dict:
+    """Synthesise the bare module with yosys ``synth_cmd`` and ``parse`` its ``stat`` (written to
+    ``<name><suffix>`` in ``work``)."""
     module = design.instances[name].module
-    chparams = ""
-    if not design.instances[name].members:
-        inst = instance(design, name)
-        chparams = " ".join(f"-set {k} {literal(inst, k, v)}" if not isinstance(v, str)
-                            else f'-set {k} "{v}"' for k, v in inst.params.items())
-        chparams = f"chparam {chparams} {module};"
-    return f"read_verilog -I{work} {_sources()}; {chparams}"
-
-
-def synth(design, name: str, work: Path, timeout: int) -> dict:
-    module = design.instances[name].module
-    script = (f"{_read_and_chparam(design, name, work)} synth_ice40 -dsp -top {module}; "
-              f"tee -o {work / (name + '_stat.txt')} stat")
+    stat = work / f"{name}{suffix}"
+    script = f"{_read_and_chparam(work, chparam)} {synth_cmd} -top {module}; tee -o {stat} stat"
     subprocess.run(["yosys", "-q", "-p", script], cwd=work, check=True, capture_output=True, text=True,
                    timeout=timeout)
-    return _stat((work / f"{name}_stat.txt").read_text())
+    return parse(stat.read_text())
 
 
-def synth_xc7(design, name: str, work: Path, timeout: int) -> dict:
+def synth(design, name: str, work: Path, timeout: int, chparam: str) -> dict:
+    return _yosys_stat(design, name, work, timeout, "synth_ice40 -dsp", "_stat.txt", _stat, chparam)
+
+
+def synth_xc7(design, name: str, work: Path, timeout: int, chparam: str) -> dict:
     """yosys ``synth_xilinx -family xc7`` cell counts of the same bare module with the same
     parameters (synthesis only: no place and route, no timing)."""
-    module = design.instances[name].module
-    script = (f"{_read_and_chparam(design, name, work)} {XC7_SYNTH} -top {module}; "
-              f"tee -o {work / (name + '_xc7_stat.txt')} stat")
-    subprocess.run(["yosys", "-q", "-p", script], cwd=work, check=True, capture_output=True, text=True,
-                   timeout=timeout)
-    return _xc7_stat((work / f"{name}_xc7_stat.txt").read_text())
+    return _yosys_stat(design, name, work, timeout, XC7_SYNTH, "_xc7_stat.txt", _xc7_stat, chparam)
 
 
 def _failure(exc: subprocess.CalledProcessError) -> str:
@@ -148,8 +158,9 @@ def _failure(exc: subprocess.CalledProcessError) -> str:
     return "synthesis failed: " + err.splitlines()[-1] if err else "synthesis failed"
 
 
-def place_route(design, name: str, work: Path, freq: float, timeout: int) -> tuple[float | None, str]:
-    (work / f"{name}_wrap.v").write_text(wrapper(design, name))
+def place_route(design, name: str, work: Path, freq: float, timeout: int,
+                params: dict[str, str] | None) -> tuple[float | None, str]:
+    (work / f"{name}_wrap.v").write_text(wrapper(design, name, params))
     js = work / f"{name}_wrap.json"
     script = (f"read_verilog -I{work} {_sources()} {work / (name + '_wrap.v')}; "
               f"synth_ice40 -dsp -top hw_wrap -json {js}")
@@ -183,14 +194,19 @@ def run(args) -> int:
     rows = []
     with tempfile.TemporaryDirectory(prefix="fxdsp_hw_") as tmp:
         work = Path(tmp)
-        for rel, text in generate(design).items():
+        files = generate(design)
+        for rel, text in files.items():
             (work / rel).write_text(text)
+        digest = source_hash(design, files)  # what is synthesised: the RTL and these files, as read now
         for name in targets:
             t0 = time.perf_counter()
-            row = {"name": name, "module": design.instances[name].module}
+            module = design.instances[name].module
+            params = module_params(design, name)
+            chparam = _chparam(module, params)
+            row = {"name": name, "module": module}
             try:
-                row.update(synth(design, name, work, args.timeout))
-                row["fmax"], row["note"] = place_route(design, name, work, args.freq, args.timeout)
+                row.update(synth(design, name, work, args.timeout, chparam))
+                row["fmax"], row["note"] = place_route(design, name, work, args.freq, args.timeout, params)
                 if row["fmax"] is None and "no BELs remaining" in row["note"] and "DSP" in row["note"]:
                     row["note"] = f"does not place: {row['MAC16']} SB_MAC16 > {UP5K['MAC16']} on the device"
             except subprocess.TimeoutExpired:
@@ -204,7 +220,7 @@ def run(args) -> int:
                 xc7["note"] = "not run (--no-xc7)"
             else:
                 try:
-                    xc7.update(synth_xc7(design, name, work, args.xc7_timeout))
+                    xc7.update(synth_xc7(design, name, work, args.xc7_timeout, chparam))
                 except subprocess.TimeoutExpired:
                     xc7["note"] = f"xc7 synthesis timed out after {args.xc7_timeout} s"
                 except subprocess.CalledProcessError as exc:
@@ -215,7 +231,6 @@ def run(args) -> int:
             print(f"{name}: {row}", file=sys.stderr)
     out = Path(args.out)
     with staged() as stage:  # the Markdown table and its JSON twin land together
-        digest = source_hash(design)
         stage.write_text(out, markdown(rows, args.freq, digest))
         stage.write_text(out.with_suffix(".json"), report_json(rows, args.freq, UP5K, digest, XC7A35T))
     print(f"wrote {out} and {out.with_suffix('.json')}")

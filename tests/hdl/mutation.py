@@ -23,7 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from fxdsp.vectors import load
-from hdl_util import RTL, VECTORS, build_dir, design_of, generate_into, model_run, rtl_sources, run_harness
+from hdl_util import RTL, VECTORS, build_dir, design_of, generate_into, model_run, mutated_rtl, rtl_sources, \
+    run_harness
 
 
 class MutantBroken(RuntimeError):
@@ -140,14 +141,11 @@ def _check(rtl: Path, overrides, name: str, gapped: bool, tag: str) -> tuple[boo
     return False, "all outputs and flags match"
 
 
-def precompile(rtl: Path, key: str, headers: Path | None = None) -> None:
-    """Compile every source of ``rtl`` (all root modules at their defaults, with the default design's
-    generated headers) in its own build directory; raise MutantBroken with the compiler's words if
-    it fails."""
+def precompile(rtl: Path, key: str, headers: Path) -> None:
+    """Compile every source of ``rtl`` (all root modules at their defaults, with the generated headers
+    in ``headers``: the default design's) in its own build directory; raise MutantBroken with the
+    compiler's words if it fails."""
     d = build_dir(f"mut_{key}_compile")
-    if headers is None:
-        generate_into(design_of(), d)
-        headers = d
     cmd = ["iverilog", "-g2005", "-I", str(headers), "-o", str(d / "mutant.vvp"), *map(str, rtl_sources(rtl))]
     proc = subprocess.run(cmd, cwd=d, capture_output=True, text=True)
     if proc.returncode != 0:
@@ -161,12 +159,10 @@ def run(mutations=MUTATIONS, baseline: bool = True) -> list[dict]:
         todo = []
         for m in ([None] if baseline else []) + list(mutations):
             rtl = Path(tmp) / (m.key if m else "baseline")
-            shutil.copytree(RTL, rtl)
-            if m is not None:
-                path = rtl / m.file
-                text = path.read_text()
-                assert text.count(m.old) == 1, f"{m.key}: mutation site not found exactly once in {m.file}"
-                path.write_text(text.replace(m.old, m.new))
+            if m is None:
+                shutil.copytree(RTL, rtl)
+            else:
+                mutated_rtl(rtl, m.file, [(m.old, m.new)])
             todo.append((m, rtl))
         # every mutant must compile before any check may count it as caught
         broken = []

@@ -11,15 +11,12 @@ also linted (its default-parameter lint, LAG_EN = 0, is test_hdl_lint.py's).
 from __future__ import annotations
 
 import json
-import shutil
-import subprocess
 
 import numpy as np
 import pytest
 
-import hdl_util
-from hdl_util import build_dir, default_data, design_of, generate_into, require_iverilog, rtl_sources, run_cocotb, \
-    segment
+from hdl_util import SIM_BUILD, build_dir, default_data, design_of, generate_into, lint_iverilog, lint_verilator, \
+    mutated_rtl, require_iverilog, run_cocotb, segment
 
 CHAIN = "chain_paper002"
 FS = default_data()["system"]["fs_hz"]
@@ -54,10 +51,6 @@ def baseline():
     return design_of()
 
 
-def _segment(design, ins):
-    return segment(design, CHAIN, ins)
-
-
 def test_configs_have_the_stages_and_change_the_outputs(designs, baseline):
     """Each config really enables its stage (and nothing else), and on this stimulus the model's rate
     differs from the chain without it: a matching RTL run below is evidence about the stage."""
@@ -75,10 +68,11 @@ def test_configs_have_the_stages_and_change_the_outputs(designs, baseline):
 
 @pytest.mark.hdl
 @pytest.mark.parametrize("key", sorted(CONFIGS))
-def test_chain_with_stages_matches_the_model_on_the_rtl(designs, key):
+def test_chain_with_stages_matches_the_model_on_the_rtl(designs, baseline, key):
     d = designs[key]
-    assert d.ovf_width(CHAIN) == 18 + (key != "trim"), "the lag adds one ovf bit (lag.te), after rtd"
-    run_cocotb(d, CHAIN, [_segment(d, stimulus(d))], f"stages_{key}", extra_params=EXTRA)
+    assert d.ovf_width(CHAIN) == baseline.ovf_width(CHAIN) + (key != "trim"), \
+        "the lag adds one ovf bit (lag.te), after rtd"
+    run_cocotb(d, CHAIN, [segment(d, CHAIN, stimulus(d))], f"stages_{key}", extra_params=EXTRA)
 
 
 # single-point RTL mutations of the stages, each with the config whose check must catch it
@@ -91,28 +85,18 @@ MUTATIONS = {
 
 @pytest.mark.hdl
 @pytest.mark.parametrize("key", sorted(MUTATIONS))
-def test_a_stage_mutation_fails_the_check(designs, key, tmp_path, monkeypatch):
+def test_a_stage_mutation_fails_the_check(designs, key, tmp_path):
     file, old, new, config = MUTATIONS[key]
-    rtl = tmp_path / "rtl"
-    shutil.copytree(hdl_util.RTL, rtl)
-    text = (rtl / file).read_text()
-    assert text.count(old) == 1, f"{key}: mutation site not found exactly once in {file}"
-    (rtl / file).write_text(text.replace(old, new))
+    rtl = mutated_rtl(tmp_path / "rtl", file, [(old, new)])
     d = designs[config]
-    seg = _segment(d, stimulus(d))
-    monkeypatch.setattr(hdl_util, "RTL", rtl)   # run_cocotb compiles hdl_util.rtl_sources()
+    seg = segment(d, CHAIN, stimulus(d))
     tag = f"stages_mut_{key}"
     # a failed cocotb test ends run_cocotb with pytest.fail, or with the runner's SystemExit
     with pytest.raises((pytest.fail.Exception, SystemExit)):
-        run_cocotb(d, CHAIN, [seg], tag, extra_params=EXTRA)
+        run_cocotb(d, CHAIN, [seg], tag, extra_params=EXTRA, rtl=rtl)
     # ... and it failed on the outputs (the mutant compiled and ran): the driver's own summary
-    errors = json.loads((hdl_util.SIM_BUILD / tag / "summary.json").read_text())["errors"]
+    errors = json.loads((SIM_BUILD / tag / "summary.json").read_text())["errors"]
     assert any("port rate" in e and "mismatch" in e for e in errors), errors
-
-
-def _verdict(proc) -> str:
-    out = (proc.stdout + proc.stderr).strip()
-    return f"exit status {proc.returncode}\n{out}" if proc.returncode else out
 
 
 @pytest.mark.hdl
@@ -122,12 +106,5 @@ def test_chain_with_the_lag_lints_clean(designs):
     d = build_dir("stages_lint")
     generate_into(designs["both"], d)
     assert "parameter integer LAG_EN = 1" in (d / "chain_paper002_params.vh").read_text()
-    srcs = [str(p) for p in rtl_sources()]
-    proc = subprocess.run(["iverilog", "-g2005", "-Wall", "-I", str(d), "-o", str(d / "lint.vvp"), "-s", CHAIN,
-                           *srcs], capture_output=True, text=True)
-    assert _verdict(proc) == ""
-    if shutil.which("verilator") is None:
-        pytest.skip("verilator is not installed (lint only)")
-    proc = subprocess.run(["verilator", "--lint-only", "-Wall", f"-I{d}", "--top-module", CHAIN, *srcs],
-                          capture_output=True, text=True)
-    assert _verdict(proc) == ""
+    assert lint_iverilog(CHAIN, include=d) == ""
+    assert lint_verilator(CHAIN, include=d) == ""

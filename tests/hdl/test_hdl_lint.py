@@ -6,16 +6,14 @@ no module but fx_round rounds, checked on the parsed Verilog and proven on injec
 from __future__ import annotations
 
 import os
-import shutil
 import subprocess
 import sys
 
 import pytest
 
 import rtl_rules
-from hdl_util import ROOT, RTL, rtl_sources
+from hdl_util import GEN, ROOT, RTL, lint_iverilog, lint_verilator, mutated_rtl
 
-GEN = ROOT / "hdl" / "gen"
 MODULES = sorted(p.stem for p in RTL.glob("*.v"))
 # (module, {param: value}) beyond the defaults: other orders, section counts, modes, signedness
 VARIANTS = [
@@ -34,48 +32,23 @@ VARIANTS = [
 ]
 
 
-def _verdict(proc) -> str:
-    """'' only for a clean run: exit status 0 and nothing printed. Anything else is the problem:
-    a failure with no output (a crash, a killed tool) fails as surely as a warning."""
-    out = (proc.stdout + proc.stderr).strip()
-    if proc.returncode != 0:
-        return f"exit status {proc.returncode}" + (f"\n{out}" if out else " with no output")
-    return out
-
-
-def _iverilog(top: str, params: dict) -> str:
-    if shutil.which("iverilog") is None:
-        pytest.skip("iverilog is not installed")
-    cmd = ["iverilog", "-g2005", "-Wall", "-I", str(GEN), "-o", os.devnull, "-s", top]
-    cmd += [f"-P{top}.{k}={v}" for k, v in params.items()]
-    return _verdict(subprocess.run(cmd + [str(p) for p in rtl_sources()], capture_output=True, text=True))
-
-
-def _verilator(top: str, params: dict) -> str:
-    if shutil.which("verilator") is None:
-        pytest.skip("verilator is not installed (lint only)")
-    cmd = ["verilator", "--lint-only", "-Wall", f"-I{GEN}", "--top-module", top]
-    cmd += [f"-G{k}={v}" for k, v in params.items()]
-    return _verdict(subprocess.run(cmd + [str(p) for p in rtl_sources()], capture_output=True, text=True))
-
-
 @pytest.mark.parametrize("top", MODULES)
 def test_iverilog_wall(top):
-    out = _iverilog(top, {})
+    out = lint_iverilog(top, {})
     assert out == "", out
 
 
 @pytest.mark.parametrize("top", MODULES)
 def test_verilator_wall(top):
-    out = _verilator(top, {})
+    out = lint_verilator(top, {})
     assert out == "", out
 
 
 @pytest.mark.parametrize("top,params", VARIANTS, ids=[f"{m}-{i}" for i, (m, _) in enumerate(VARIANTS)])
 def test_lint_variants(top, params):
-    out = _iverilog(top, params)
+    out = lint_iverilog(top, params)
     assert out == "", out
-    out = _verilator(top, params)
+    out = lint_verilator(top, params)
     assert out == "", out
 
 
@@ -88,7 +61,7 @@ def test_lint_runner_fails_on_any_exit_status_or_output(tool, rc, output, tmp_pa
     fake.write_text(f"#!/bin/sh\n{'echo ' + repr(output) + ' >&2' if output else ''}\nexit {rc}\n")
     fake.chmod(0o755)
     monkeypatch.setenv("PATH", f"{tmp_path}{os.pathsep}{os.environ.get('PATH', '')}")
-    run = _iverilog if tool == "iverilog" else _verilator
+    run = lint_iverilog if tool == "iverilog" else lint_verilator
     verdict = run("fx_round", {})
     assert verdict != ""
     if rc:
@@ -156,22 +129,10 @@ INJECTIONS = {
 }
 
 
-def _inject(tmp_path, file, edits):
-    rtl = tmp_path / "rtl"
-    shutil.copytree(RTL, rtl)
-    path = rtl / file
-    text = path.read_text()
-    for old, new in edits:
-        assert text.count(old) == 1, f"injection site {old!r} not found exactly once in {file}"
-        text = text.replace(old, new)
-    path.write_text(text)
-    return rtl
-
-
 @pytest.mark.parametrize("key", sorted(INJECTIONS))
 def test_rounding_rule_flags_an_injected_hand_written_rounding(key, tmp_path):
     file, edits, expect = INJECTIONS[key]
-    problems = rtl_rules.check(_inject(tmp_path, file, edits))
+    problems = rtl_rules.check(mutated_rtl(tmp_path / "rtl", file, edits))
     assert problems, f"{key}: hand-written rounding in {file} not flagged"
     assert all(p.startswith(file) for p in problems), problems
     assert any(expect in p for p in problems), problems
@@ -179,19 +140,13 @@ def test_rounding_rule_flags_an_injected_hand_written_rounding(key, tmp_path):
 
 def test_injected_half_up_compiles_so_only_the_rule_can_see_it(tmp_path):
     """The correct hand-written half_up above is real Verilog (compiles), not a strawman."""
-    if shutil.which("iverilog") is None:
-        pytest.skip("iverilog is not installed")
     file, edits, _ = INJECTIONS["half_up_by_shift"]
-    rtl = _inject(tmp_path, file, edits)
-    proc = subprocess.run(["iverilog", "-g2005", "-Wall", "-I", str(GEN), "-o", os.devnull, "-s", "freq2temp",
-                           *map(str, rtl_sources(rtl))],
-                          capture_output=True, text=True)
-    assert _verdict(proc) == ""
+    assert lint_iverilog("freq2temp", rtl=mutated_rtl(tmp_path / "rtl", file, edits)) == ""
 
 
 def test_rounding_rule_reads_code_not_comments(tmp_path):
     """A rounding written in a comment or a string is not code: no finding."""
-    rtl = _inject(tmp_path, "bias_subtract.v", [(
+    rtl = mutated_rtl(tmp_path / "rtl", "bias_subtract.v", [(
         "    fx_convert_reg #(",
         "    // wire h = 1 << (SHIFT - 1); y = (d + h) >>> SHIFT; d[DW-1:SHIFT] + {15'd0, d[SHIFT]}\n"
         "    /* {S{1'b1}} |d[SHIFT-1:0] */\n    fx_convert_reg #(")])
