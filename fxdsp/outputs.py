@@ -22,6 +22,7 @@ tests use it to show that they fail without the staging.
 from __future__ import annotations
 
 import json
+import math
 import os
 import shutil
 import signal
@@ -29,6 +30,8 @@ import tempfile
 import threading
 from contextlib import contextmanager
 from pathlib import Path
+
+import numpy as np
 
 IN, IN_DIR, OUT_FILE, OUT_DIR = "in", "in-dir", "out-file", "out-dir"
 DIRECT_ENV = "FXDSP_UNSAFE_DIRECT_WRITES"
@@ -97,6 +100,24 @@ def check_paths(args, paths) -> None:
                 what = "an input" if kind in inputs or other_kind in inputs else "another output"
                 raise ValueError(f"{option}: {path} is also {other}: an output must not overwrite {what}")
         seen[key] = (option, kind)
+
+
+def plain(value):
+    """``value`` as plain JSON data: numpy scalars and arrays made Python, tuples lists, keys text,
+    non-finite floats None (strict JSON has no inf or nan; a task that needs them says so itself)."""
+    if isinstance(value, dict):
+        return {str(k): plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return plain(value.tolist())
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    return value
 
 
 def json_text(data, what: str, **kw) -> str:

@@ -11,13 +11,12 @@ import time
 from functools import partial
 from pathlib import Path
 
-import numpy as np
 from tqdm import tqdm as _tqdm
 
 from ..chains import build
 from ..config import dumps, load_config
 from ..hdl.hwreport import hw_report_path, synthesised_cost
-from ..outputs import IN, OUT_DIR, OUT_FILE, json_text, staged
+from ..outputs import IN, OUT_DIR, OUT_FILE, json_text, plain, staged
 from . import optimise as opt
 from .attribution import ADDITIVITY_DB, THEORY_DB, Attribution, attribute
 from .floor import (DOMINANT_FACTOR, FLICKER_FACTOR, WITHIN_DB, Allan, DriveSweep, Floor, allan_chain_paper002,
@@ -163,16 +162,17 @@ def _run(args, stage) -> int:
         raise ValueError("--config-out: only with --optimise")
     if args.optimise and not args.target:
         raise ValueError("--optimise: needs --target <value><unit>")
-    if args.chain not in design.chains:
-        raise ValueError(f"--chain: unknown chain {args.chain!r}; expected one of {', '.join(design.chains)}")
-    if not 0 <= args.margin < 0.5:
-        raise ValueError(f"--margin: must be within [0, 0.5), got {args.margin}")
+    opt.check_search(args.chain, args.margin, chains=design.chains, search=args.optimise, cost_model=args.cost,
+                     drive_band=args.optimise and args.drive_band)
     for opt_only in ("max_mean", "drive_band"):
         if getattr(args, opt_only) and not args.optimise:
             raise ValueError(f"--{opt_only.replace('_', '-')}: only with --optimise")
     attrs = {(c, p): attribute(design, c, p) for c, p in ATTRIBUTED}
     noise = {p: attrs[(args.chain, p)].sensor_noise_rms for c, p in ATTRIBUTED if c == args.chain}
     target = parse_target(args.target, design, args.chain, noise) if args.target else None
+    max_mean = parse_target(args.max_mean, design, args.chain, noise, "--max-mean") if args.max_mean else None
+    if args.optimise:
+        opt.check_search(args.chain, target=target, max_mean=max_mean)
 
     print(f"fxdsp budget: config {cfg.source}, seed {design.seed}")
     print("\n1. bit-exact vs float reference (float fed with the same stored inputs), nominal stimulus:")
@@ -227,19 +227,12 @@ def _run(args, stage) -> int:
         out["target"] = {"text": args.target, "value": target.value, "unit": target.unit, "chain": target.chain,
                          "port": target.port, "metric": args.metric, "measured": measured, "met": meets}
         if args.optimise:
-            max_mean = parse_target(args.max_mean, design, args.chain, noise, "--max-mean") if args.max_mean else None
             freqs = tuple(drive_frequencies(float(cfg.data["demod"]["f_hz"]))) if args.drive_band else ()
             result = opt.optimise(cfg, target, args.metric, args.margin, progress=tqdm, cost_model=args.cost,
                                   max_mean=max_mean, frequencies=freqs)
             print(f"\n6. word-length search ({result.evaluations} evaluations, greedy min+b):")
-            for k in result.values:
-                mark = "" if result.values[k] == result.default_values[k] else "  *"
-                print(f"  {k:30s} {result.default_values[k]:3d} -> {result.values[k]:3d}{mark}")
-            print(f"  error {result.default_error:.4g} -> {result.error:.4g} {target.unit} (target {target.value:.4g}; "
-                  f"independent seed {result.independent_error:.4g})")
+            print(opt.format_result(result))
             dc, nc = result.default_cost, result.cost
-            print(f"  cost: register/coefficient bits {dc['register_bits']} -> {nc['register_bits']}, memory bits "
-                  f"{dc['memory_bits']} -> {nc['memory_bits']}, total {dc['total_bits']} -> {nc['total_bits']}")
             synth = opt.synth_estimate(synthesised_cost(), design.instances[target.chain].members,
                                        dc["register_bits"], nc["register_bits"])
             if synth:
@@ -248,21 +241,12 @@ def _run(args, stage) -> int:
             else:
                 print(f"  synthesised cost: {hw_report_path()} not found (bits only)")
             if args.config_out:
-                changed = [f"{k}: {result.default_values[k]} -> {v}" for k, v in result.values.items()
-                           if v != result.default_values[k]]
-                header = (f"fxdsp budget --optimise --target {args.target} --chain {target.chain} --metric {args.metric}\n"
-                          f"from {cfg.source}; {target.port} {args.metric} error {result.error:.4g} {target.unit} "
-                          f"(default {result.default_error:.4g}); total bits {nc['total_bits']} "
-                          f"(default {dc['total_bits']})\nchanged word lengths:\n" + "\n".join("  " + c for c in changed))
+                header = opt.config_header(result, "fxdsp budget --optimise", cfg.source)
                 written = stage.path(args.config_out)
                 written.write_text(dumps(result.data, header), encoding="utf-8")
                 build(str(written))  # must load
                 print(f"  wrote {args.config_out}")
-            out["optimise"] = {"values": result.values, "default_values": result.default_values,
-                               "error": result.error, "default_error": result.default_error,
-                               "independent_seed_error": result.independent_error, "cost": result.cost,
-                               "default_cost": result.default_cost, "evaluations": result.evaluations,
-                               "synth": synth, "log": result.log}
+            out["optimise"] = result.as_dict(synth=synth)
         elif not meets:
             status = 1
 
@@ -270,27 +254,9 @@ def _run(args, stage) -> int:
         _report(stage.dir(args.report), design, cfg, rows, attrs, st, target, result, args, floors, allan, sweep)
         print(f"\nreport written to {args.report}/budget.md")
     if args.json:  # no wall-clock time in it: the same config and seed give the same bytes
-        stage.write_text(args.json, json_text(_finite(out), "--json", indent=1, default=_jsonable))
+        stage.write_text(args.json, json_text(plain(out), "--json", indent=1))
     print(f"\n({time.time() - t0:.1f} s)")
     return status
-
-
-def _finite(v):
-    """``v`` with every non-finite float replaced by None (strict JSON has no inf or nan)."""
-    if isinstance(v, dict):
-        return {k: _finite(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [_finite(x) for x in v]
-    if isinstance(v, np.ndarray):
-        return _finite(v.tolist())
-    if isinstance(v, (float, np.floating)):
-        return float(v) if math.isfinite(v) else None
-    return v
-
-
-def _jsonable(v):
-    """What json cannot write by itself (after :func:`_finite`): numpy integers, else the text."""
-    return v.item() if isinstance(v, np.integer) else str(v)
 
 
 def _report(out: Path, design, cfg, rows, attrs, st, target, result, args, floors, allan, sweep) -> None:

@@ -179,11 +179,16 @@ class Evaluator:
                 set_knob(d, knob, values[knob.name], self.defaults)
         return d
 
+    @staticmethod
+    def key(values: dict[str, int], seed_offset: int = 1000) -> tuple:
+        """The cache key of an evaluation."""
+        return tuple(sorted(values.items())), seed_offset
+
     def error(self, values: dict[str, int], seed_offset: int = 1000) -> float:
         """The chain port's error in physical units (inf if the config does not build): the larger of
         the metric and ``mean_weight`` x |mean|, at the config's drive frequency and at each of
         ``frequencies``."""
-        key = (tuple(sorted(values.items())), seed_offset)
+        key = self.key(values, seed_offset)
         if key in self.cache:
             return self.cache[key]
         self.evaluations += 1
@@ -231,8 +236,70 @@ class OptResult:
     cost: dict[str, int]
     evaluations: int
     data: dict
-    sweeps: dict[str, list[tuple[int, float]]] = field(default_factory=dict)
     log: list[str] = field(default_factory=list)
+
+    def as_dict(self, **extra) -> dict:
+        """The result as JSON data (``extra``, such as the budget's synthesis estimate, before the log)."""
+        return {"values": self.values, "default_values": self.default_values, "error": self.error,
+                "default_error": self.default_error, "independent_seed_error": self.independent_error,
+                "cost": self.cost, "default_cost": self.default_cost, "evaluations": self.evaluations,
+                **extra, "log": self.log}
+
+
+def format_result(result: OptResult, brief: bool = False) -> str:
+    """Every knob's default -> new width (``*``: changed) and the error; then the cost in full, or
+    (``brief``) the total bits on the error line."""
+    t, dc, nc = result.target, result.default_cost, result.cost
+    lines = [f"  {k:30s} {result.default_values[k]:3d} -> {v:3d}{'' if v == result.default_values[k] else '  *'}"
+             for k, v in result.values.items()]
+    if brief:
+        lines.append(f"  error {result.default_error:.4g} -> {result.error:.4g} {t.unit} (independent seed "
+                     f"{result.independent_error:.4g}); total bits {dc['total_bits']} -> {nc['total_bits']}")
+    else:
+        lines.append(f"  error {result.default_error:.4g} -> {result.error:.4g} {t.unit} (target {t.value:.4g}; "
+                     f"independent seed {result.independent_error:.4g})")
+        lines.append(f"  cost: register/coefficient bits {dc['register_bits']} -> {nc['register_bits']}, memory bits "
+                     f"{dc['memory_bits']} -> {nc['memory_bits']}, total {dc['total_bits']} -> {nc['total_bits']}")
+    return "\n".join(lines)
+
+
+def config_header(result: OptResult, cmd: str, source: str, changes: bool = True) -> str:
+    """The header of an optimised config: the command (``cmd`` and the search's options), where it
+    started (``source``), the error and bits reached and (``changes``) the word lengths changed."""
+    t = result.target
+    header = (f"{cmd} --target {t.text} --chain {t.chain} --metric {result.metric}\n"
+              f"from {source}; {t.port} {result.metric} error {result.error:.4g} {t.unit} "
+              f"(default {result.default_error:.4g}); total bits {result.cost['total_bits']} "
+              f"(default {result.default_cost['total_bits']})")
+    if changes:
+        header += "\nchanged word lengths:\n" + "\n".join(
+            f"  {k}: {result.default_values[k]} -> {v}" for k, v in result.values.items()
+            if v != result.default_values[k])
+    return header
+
+
+def check_search(chain: str, margin: float | None = None, *, chains=None, search: bool = True,
+                 cost_model: str = "total_bits", target: Target | None = None, max_mean: Target | None = None,
+                 drive_band: bool = False) -> None:
+    """ValueError naming the option when a word-length search cannot run as asked: ``chain`` not one of
+    ``chains`` (the design's, when given), ``margin`` outside [0, 0.5) (when given); with ``search``:
+    an unknown cost model, a chain without knobs, a ``max_mean`` not on ``target``'s output, a drive
+    band on a chain without a drive frequency. The CLIs call it before any work, :func:`optimise` again."""
+    if chains is not None and chain not in chains:
+        raise ValueError(f"--chain: unknown chain {chain!r}; expected one of {', '.join(chains)}")
+    if margin is not None and not 0 <= margin < 0.5:
+        raise ValueError(f"--margin: must be within [0, 0.5), got {margin}")
+    if not search:
+        return
+    if cost_model not in ("total_bits", "register_bits"):
+        raise ValueError(f"--cost: unknown cost model {cost_model!r}; expected total_bits or register_bits")
+    if chain not in KNOBS:
+        raise ValueError(f"--chain: no word-length knobs for {chain}")
+    if max_mean is not None and target is not None and (max_mean.port != target.port or max_mean.chain != chain):
+        raise ValueError(f"--max-mean: must be on {chain}.{target.port}, like --target, got "
+                         f"{max_mean.chain}.{max_mean.port}")
+    if drive_band and chain != "chain_paper002":
+        raise ValueError(f"--drive-band: only chain_paper002 has a drive frequency, not {chain}")
 
 
 def optimise(config: Config, target: Target, metric: str = "rms", margin: float = 0.02, samples: int | None = None,
@@ -245,16 +312,8 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
     is about to read (independent of each other) so that they can be evaluated in parallel into
     ``evaluator.cache`` (``fxdsp sweep wordlength``); the search reads the same values either way, so
     the result does not depend on it. Only stage 4 asks speculatively (the rest of a pass)."""
-    if cost_model not in ("total_bits", "register_bits"):
-        raise ValueError(f"--cost: unknown cost model {cost_model!r}; expected total_bits or register_bits")
     chain = target.chain
-    if chain not in KNOBS:
-        raise ValueError(f"--chain: no word-length knobs for {chain}")
-    if max_mean is not None and (max_mean.port != target.port or max_mean.chain != chain):
-        raise ValueError(f"--max-mean: must be on {chain}.{target.port}, like --target, got "
-                         f"{max_mean.chain}.{max_mean.port}")
-    if frequencies and chain != "chain_paper002":
-        raise ValueError(f"--drive-band: only chain_paper002 has a drive frequency, not {chain}")
+    check_search(chain, cost_model=cost_model, target=target, max_mean=max_mean, drive_band=bool(frequencies))
     weight = target.value / max_mean.value if max_mean is not None else 0.0
     ev = Evaluator(copy.deepcopy(config.data), chain, target.port, metric, samples, weight, tuple(frequencies))
     knobs = KNOBS[chain]
@@ -284,12 +343,17 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
     hi = {}
     for k in knobs:
         v = top_of(k)
-        while v > default[k.name] and math.isinf(ev.error({**default, k.name: v})):
+        while v > default[k.name]:
+            ask([{**default, k.name: v}])   # the top was asked above: a step down only when it does not build
+            if not math.isinf(ev.error({**default, k.name: v})):
+                break
             v -= 1
         hi[k.name] = v
     values_hi = dict(hi)
+    ask([values_hi])
     while math.isinf(ev.error(values_hi)) and any(values_hi[n] > default[n] for n in values_hi):
         values_hi = {n: max(default[n], v - 1) for n, v in values_hi.items()}
+        ask([values_hi])
     e_hi = ev.error(values_hi)
     log.append(f"every knob at its maximum: {e_hi:.4g} {target.unit}")
     if not e_hi <= goal:
@@ -299,7 +363,6 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
     bar = progress(total=len(knobs) * 2, desc="word-length search", unit="knob") if progress else None
     # 2. per-knob minimum with the others at their maximum (binary search, error ~ monotone in width);
     # the knobs' searches are independent, so they step together, one batch of midpoints at a time
-    sweeps = {}
     bounds = {k.name: [lo_of(k), values_hi[k.name]] for k in knobs}
     ask([{**values_hi, k.name: bounds[k.name][0]} for k in knobs])
     for k in knobs:
@@ -319,6 +382,7 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
 
     # 3. greedy addition from the minima
     values = dict(minimum)
+    ask([values])
     e = ev.error(values)
     c_now = cost(ev.data(values), chain)[cost_model]
     steps = 0
@@ -373,7 +437,7 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
     ask([values], 4242)
     independent = ev.error(values, seed_offset=4242)
     return OptResult(target, metric, default, values, e_default, e, independent, cost(ev.base, chain), cost(data, chain),
-                     ev.evaluations, data, sweeps, log)
+                     ev.evaluations, data, log)
 
 
 def sweep(config: Config, chain: str, port: str, metric: str = "rms", span: int = 8, step: int = 2,

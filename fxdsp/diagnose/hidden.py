@@ -277,14 +277,16 @@ def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, snr_ran
     return tally(per_cause, causes, outcomes, time.perf_counter() - start)
 
 
-def format_confusion(res: Confusion) -> str:
-    """The matrix (rows: truth, columns: found, causes abbreviated), the per-cause checks and the misses."""
+def format_confusion(res: Confusion, timing: bool = True) -> str:
+    """The matrix (rows: truth, columns: found, causes abbreviated), the per-cause checks, the timing
+    line (unless ``timing`` is False: files keep no wall-clock time) and the misses."""
     n = res.per_cause
     lines = [f"{'truth / found':24s}" + "".join(f"{c[:6]:>7s}" for c in ALL_CAUSES)
              + "   params<=25%  gain>1.3  extra causes"]
     for c in res.causes:
         lines.append(f"{c:24s}" + "".join(f"{v:7d}" for v in res.matrix[ALL_CAUSES.index(c)]) +
                      f"   {res.params_ok[c]:5d}/{n:<5d} {res.gain_ok[c]:5d}/{n:<5d} {res.extra[c]:5d}")
-    lines.append(f"{len(res.causes) * n} cases in {res.seconds:.0f} s")
+    if timing:
+        lines.append(f"{len(res.causes) * n} cases in {res.seconds:.0f} s")
     lines += [" ".join(["miss:", *map(str, f)]) for f in res.failures]
     return "\n".join(lines)

@@ -50,6 +50,7 @@ def _common(p, config: bool = True, seed: bool = True) -> None:
 
 def configure(parser) -> None:
     from ..diagnose.hidden import ALL_CAUSES, SNR_RANGE
+    from .montecarlo import TEMP_RANGE_C
 
     sub = parser.add_subparsers(dest="kind", metavar="KIND", required=True)
     mc = sub.add_parser("montecarlo", help="error budget over seeds x temperatures x drive frequencies",
@@ -58,7 +59,7 @@ def configure(parser) -> None:
     _common(mc)
     mc.add_argument("--seeds", type=int, default=1000, metavar="N", help="Monte-Carlo samples (default 1000)")
     mc.add_argument("--temps", type=int, default=16, metavar="N", help="chamber temperatures (default 16)")
-    mc.add_argument("--temp-range", type=float, nargs=2, default=[-20.0, 60.0], metavar=("LO", "HI"),
+    mc.add_argument("--temp-range", type=float, nargs=2, default=list(TEMP_RANGE_C), metavar=("LO", "HI"),
                     help="range of the temperatures, C (default -20 60)")
     mc.add_argument("--freqs", type=int, default=2, metavar="N",
                     help="drive frequencies evenly across the drive band, plus demod.f_hz (default 2; 1: "
@@ -105,7 +106,7 @@ def _progress():
 
 def run(args) -> int:
     from ..outputs import staged
-    from .engine import Executor, Sweep, task_seed
+    from .engine import Executor, Sweep
 
     t0 = time.perf_counter()
     if args.scheduler is not None and args.workers is not None:
@@ -114,7 +115,6 @@ def run(args) -> int:
     prepare = {"montecarlo": _prepare_montecarlo, "wordlength": _prepare_wordlength, "hidden": _prepare_hidden,
                "rtl": _prepare_rtl}[args.kind]
     job = prepare(args)   # every check of the input before anything is created or started
-    task_seed(job["seed"], 0)
     out = Path(args.out)
     executor = Executor(workers, args.scheduler, args.retries)
     with staged() as stage:
@@ -140,8 +140,7 @@ def run(args) -> int:
 
 
 def _write(stage, out: Path, sweep, summary: dict, report: str) -> None:
-    from ..outputs import json_text
-    from .engine import plain
+    from ..outputs import json_text, plain
 
     stage.write_text(out / "results.jsonl", sweep.results_text())
     stage.write_text(out / "summary.json", json_text(plain(summary), "summary.json", indent=1, sort_keys=True))
@@ -175,6 +174,7 @@ def _prepare_montecarlo(args) -> dict:
 
 def _prepare_wordlength(args) -> dict:
     from ..budget.floor import drive_frequencies
+    from ..budget.optimise import check_search, config_header
     from ..budget.units import parse_target
     from ..chains import build
     from ..config import dumps, load_config
@@ -182,10 +182,7 @@ def _prepare_wordlength(args) -> dict:
 
     cfg = load_config(args.config)
     design = build(cfg)
-    if args.chain not in design.chains:
-        raise ValueError(f"--chain: unknown chain {args.chain!r}; expected one of {', '.join(design.chains)}")
-    if not 0 <= args.margin < 0.5:
-        raise ValueError(f"--margin: must be within [0, 0.5), got {args.margin}")
+    check_search(args.chain, args.margin, chains=design.chains, cost_model=args.cost, drive_band=args.drive_band)
     noise = {}
     if "noise" in args.target or (args.max_mean and "noise" in args.max_mean):
         from ..budget.attribution import attribute
@@ -193,8 +190,7 @@ def _prepare_wordlength(args) -> dict:
         noise = {"rate": attribute(design, args.chain, "rate").sensor_noise_rms}
     target = parse_target(args.target, design, args.chain, noise)
     max_mean = parse_target(args.max_mean, design, args.chain, noise, "--max-mean") if args.max_mean else None
-    if args.drive_band and args.chain != "chain_paper002":
-        raise ValueError(f"--drive-band: only chain_paper002 has a drive frequency, not {args.chain}")
+    check_search(args.chain, target=target, max_mean=max_mean)
     freqs = tuple(drive_frequencies(float(cfg.data["demod"]["f_hz"]))) if args.drive_band else ()
     settings = wl.settings(cfg.data, target, args.metric, args.margin, args.cost, max_mean, freqs)
 
@@ -207,10 +203,7 @@ def _prepare_wordlength(args) -> dict:
         print(text)
         summary = {"kind": "wordlength", "config": cfg.name, **wl.summary(result, settings)}
         _write(stage, out, sweep, summary, f"# Word-length search\n\nConfig `{cfg.name}`.\n\n```\n{text}\n```\n")
-        header = (f"fxdsp sweep wordlength --target {args.target} --chain {target.chain} --metric {args.metric}\n"
-                  f"from {cfg.name}; {target.port} {args.metric} error {result.error:.4g} {target.unit} "
-                  f"(default {result.default_error:.4g}); total bits {result.cost['total_bits']} "
-                  f"(default {result.default_cost['total_bits']})")
+        header = config_header(result, "fxdsp sweep wordlength", cfg.name, changes=False)
         stage.write_text(out / "optimised.toml", dumps(result.data, header))
         return 0
 

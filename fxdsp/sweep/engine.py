@@ -32,7 +32,6 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import math
 import os
 import uuid
 from collections.abc import Callable, Iterable, Iterator
@@ -40,6 +39,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from ..outputs import plain
 
 JOURNAL = "journal.jsonl"
 JOURNAL_VERSION = 1
@@ -52,24 +53,6 @@ def task_seed(sweep_seed: int, index: int) -> int:
         raise ValueError(f"--seed: must be an integer >= 0, got {sweep_seed!r}")
     a, b = np.random.SeedSequence([int(sweep_seed), int(index)]).generate_state(2)
     return int(a) | (int(b) << 32)
-
-
-def plain(value):
-    """``value`` as plain JSON data: numpy scalars and arrays made Python, tuples lists, keys text,
-    non-finite floats None (strict JSON has no inf or nan; a task that needs them says so itself)."""
-    if isinstance(value, dict):
-        return {str(k): plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [plain(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return plain(value.tolist())
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else None
-    return value
 
 
 def canonical(value) -> str:
@@ -332,6 +315,11 @@ class Sweep:
     def close(self) -> None:
         if self.journal:
             self.journal.close()
+
+
+def failed_records(records: Iterable[dict]) -> list[dict]:
+    """The failed tasks of ``records`` as a summary lists them: index, params and error."""
+    return [{"index": r["index"], "params": r["params"], "error": r["error"]} for r in records if "error" in r]
 
 
 def failure_line(rec: dict) -> str:

@@ -59,6 +59,7 @@ def confusion_of(settings: dict, records: list[dict], seconds: float = 0.0):
 
 def summarise(settings: dict, records: list[dict]) -> dict:
     from ..diagnose.hidden import ALL_CAUSES
+    from .engine import failed_records
 
     c = confusion_of(settings, records)
     return {"per_cause": settings["per_cause"], "first_seed": settings["first_seed"], "snr": settings["snr"],
@@ -66,8 +67,7 @@ def summarise(settings: dict, records: list[dict]) -> dict:
             "matrix": [[int(v) for v in row] for row in c.matrix],
             "params_ok": c.params_ok, "gain_ok": c.gain_ok, "extra_causes": c.extra,
             "misses": [{"cause": f[0], "case_seed": f[1], "scenario": f[2], "found": f[5]} for f in c.failures],
-            "failed": [{"index": r["index"], "params": r["params"], "error": r["error"]}
-                       for r in records if "error" in r]}
+            "failed": failed_records(records)}
 
 
 def format_report(settings: dict, records: list[dict], seconds: float | None = None) -> str:
@@ -75,9 +75,7 @@ def format_report(settings: dict, records: list[dict], seconds: float | None = N
     from ..diagnose.hidden import format_confusion
 
     c = confusion_of(settings, records, seconds or 0.0)
-    lines = format_confusion(c).splitlines()
-    if seconds is None:
-        lines = [line for line in lines if not (line.endswith(" s") and " cases in " in line)]
+    lines = format_confusion(c, timing=seconds is not None).splitlines()
     failed = [r for r in records if "error" in r]
     if failed:
         lines.append(f"{len(failed)} cases failed (left out; see results.jsonl)")

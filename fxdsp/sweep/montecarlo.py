@@ -31,6 +31,8 @@ from functools import lru_cache, partial
 import numpy as np
 from scipy.stats import binom
 
+from .engine import failed_records
+
 RATE_FS = 0.3          # rates drawn uniformly in +-0.3 FS: the nominal stimulus' steps span this
 QUAD_FS = 0.05         # nominal stimulus quadrature
 NOISE_FS = 1e-3        # nominal white sensor noise (dithers the ADCs)
@@ -168,7 +170,7 @@ def summarise(settings: dict, records: list[dict]) -> dict:
     """Percentile figures per (frequency, temperature) cell, per temperature, per frequency, pooled;
     the failed tasks (by index and params) are left out and listed."""
     good = [r for r in records if "result" in r]
-    failed = [{"index": r["index"], "params": r["params"], "error": r["error"]} for r in records if "error" in r]
+    failed = failed_records(records)
     temps, freqs = settings["temps_c"], settings["freqs_hz"]
     out = {"chain": "chain_paper002", "port": "rate", "unit": "deg/h", "measure": "bit-exact minus float on the "
            "same ADC codes, after settling", "seeds": settings["seeds"], "seeds_ok": len(good),

@@ -102,8 +102,9 @@ def _leaves(node, path=""):
 
 
 def draw(base: dict, seed: int):
-    """(config data, design, changes from ``base`` as {dotted path: value}, draws needed) of a random
-    parameter set that builds and that the RTL generator accepts."""
+    """(config data, design, its generated RTL files {relative path: text}, changes from ``base`` as
+    {dotted path: value}, draws needed) of a random parameter set that builds and that the RTL
+    generator accepts."""
     from ..budget.optimise import KNOBS, _field_defaults, knob_value, set_knob
     from ..chains import build
     from ..config import Config
@@ -130,12 +131,12 @@ def draw(base: dict, seed: int):
                     set_knob(data, knob, value, defaults)
         try:
             design = build(Config(data, source="<sweep rtl>"))
-            hp.generate(design)
+            files = hp.generate(design)
         except (ValueError, TypeError, AssertionError, OverflowError, ZeroDivisionError):
             continue
         before = dict(_leaves(base))
         changes = {k: v for k, v in _leaves(data) if before.get(k) != v}
-        return data, design, changes, attempt
+        return data, design, files, changes, attempt
     raise ValueError(f"rtl: no parameter set that builds in {MAX_DRAWS} draws (seed {seed})")
 
 
@@ -160,8 +161,9 @@ def _unsigned(values, wl: int) -> list[int]:
     return [int(v) & mask for v in np.asarray(values, dtype=np.int64)]
 
 
-def run_block(design, name: str, build: Path, rtl_dir: Path, seed: int) -> dict:
-    """Stream the block's stimulus through its RTL in ``build``; pass/fail, cycles, first errors."""
+def run_block(design, files: dict, name: str, build: Path, rtl_dir: Path, seed: int) -> dict:
+    """Stream the block's stimulus through its RTL in ``build`` (``files``: the design's generated
+    RTL files, as :func:`draw` returns them); pass/fail, cycles, first errors."""
     from cocotb_tools.runner import get_runner
 
     from ..hdl import params as hp
@@ -174,7 +176,7 @@ def run_block(design, name: str, build: Path, rtl_dir: Path, seed: int) -> dict:
            "outputs": {p: _unsigned(res.outputs[p], block.outputs[p].wl) for p in block.outputs},
            "ovf_total": int(res.overflows.total)}
     build.mkdir(parents=True, exist_ok=True)
-    for rel, text in hp.generate(design).items():
+    for rel, text in files.items():
         (build / rel).write_text(text, encoding="ascii")
     # the paper 002 top raises the demod's amp flags; the model never computes amp there
     ignore = (1 << design.ovf_bit(name, "demod.amp")) if name == "chain_paper002" else 0
@@ -227,7 +229,7 @@ def _first_error(log: Path, rtl_dir, build: Path) -> str:
 
 def _task(settings: dict, rtl_dir: str, build_root: str | None, params: dict, seed: int) -> dict:
     """One shard: draw its parameter set, run every block of ``settings["blocks"]``."""
-    data, design, changes, draws = draw(settings["config"], seed)
+    data, design, files, changes, draws = draw(settings["config"], seed)
     shard = f"shard_{params['shard']:04d}"
     if build_root is None:
         root = Path(tempfile.mkdtemp(prefix=f"fxdsp-rtl-{shard}-"))
@@ -239,8 +241,8 @@ def _task(settings: dict, rtl_dir: str, build_root: str | None, params: dict, se
             d = root / name
             if d.exists():
                 shutil.rmtree(d)
-            blocks[name] = run_block(design, name, d, Path(rtl_dir), int(np.random.SeedSequence([seed, b + 1])
-                                                                             .generate_state(1)[0]))
+            block_seed = int(np.random.SeedSequence([seed, b + 1]).generate_state(1)[0])
+            blocks[name] = run_block(design, files, name, d, Path(rtl_dir), block_seed)
     finally:
         if build_root is None:
             shutil.rmtree(root, ignore_errors=True)
@@ -248,14 +250,15 @@ def _task(settings: dict, rtl_dir: str, build_root: str | None, params: dict, se
 
 
 def summarise(settings: dict, records: list[dict]) -> dict:
+    from .engine import failed_records
+
     good = [r for r in records if "result" in r]
     return {"shards": settings["shards"], "blocks": settings["blocks"],
             "passed": sum(r["result"]["passed"] for r in good),
             "failed_shards": [{"index": r["index"], "shard": r["params"]["shard"], "changes": r["result"]["changes"],
                                "blocks": {k: v["errors"] for k, v in r["result"]["blocks"].items() if not v["ok"]}}
                               for r in good if not r["result"]["passed"]],
-            "failed": [{"index": r["index"], "params": r["params"], "error": r["error"]}
-                       for r in records if "error" in r]}
+            "failed": failed_records(records)}
 
 
 def format_summary(s: dict) -> str:

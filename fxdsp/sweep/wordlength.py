@@ -41,9 +41,9 @@ def _evaluate(spec: dict, params: dict, seed: int) -> dict:
 
     ev = Evaluator(spec["base"], spec["chain"], spec["port"], spec["metric"], spec["samples"], spec["mean_weight"],
                    tuple(spec["frequencies"]))
-    errors = [ev.error({k: int(v) for k, v in values.items()}, seed_offset=int(params["seed_offset"]))
-              for values in params["candidates"]]
-    return {"errors": [e if math.isfinite(e) else None for e in errors]}
+    # an infinite error (None in JSON, as the engine makes every result) is a config that does not build
+    return {"errors": [ev.error({k: int(v) for k, v in values.items()}, seed_offset=int(params["seed_offset"]))
+                       for values in params["candidates"]]}
 
 
 def prefetcher(sweep):
@@ -53,7 +53,7 @@ def prefetcher(sweep):
                 "mean_weight": ev.mean_weight, "frequencies": list(ev.frequencies)}
         new, seen = [], set()
         for values in candidates:
-            key = (tuple(sorted(values.items())), seed_offset)
+            key = ev.key(values, seed_offset)
             if key not in ev.cache and key not in seen:
                 seen.add(key)
                 new.append((key, values))
@@ -85,20 +85,12 @@ def search(sweep, config, target, metric: str, margin: float, cost_model: str, m
 def summary(result, settings: dict) -> dict:
     return {"chain": result.target.chain, "port": result.target.port, "target": settings["target"],
             "metric": result.metric, "margin": settings["margin"], "cost_model": settings["cost"],
-            "values": result.values, "default_values": result.default_values, "error": result.error,
-            "default_error": result.default_error, "independent_seed_error": result.independent_error,
-            "cost": result.cost, "default_cost": result.default_cost, "evaluations": result.evaluations,
-            "log": result.log}
+            **result.as_dict()}
 
 
 def format_summary(result) -> str:
+    from ..budget.optimise import format_result
+
     t = result.target
-    lines = [f"word-length search on {t.chain}.{t.port} ({result.metric}), target {t.value:.4g} {t.unit}: "
-             f"{result.evaluations} evaluations"]
-    for k in result.values:
-        mark = "" if result.values[k] == result.default_values[k] else "  *"
-        lines.append(f"  {k:30s} {result.default_values[k]:3d} -> {result.values[k]:3d}{mark}")
-    lines.append(f"  error {result.default_error:.4g} -> {result.error:.4g} {t.unit} (independent seed "
-                 f"{result.independent_error:.4g}); total bits {result.default_cost['total_bits']} -> "
-                 f"{result.cost['total_bits']}")
-    return "\n".join(lines)
+    return (f"word-length search on {t.chain}.{t.port} ({result.metric}), target {t.value:.4g} {t.unit}: "
+            f"{result.evaluations} evaluations\n" + format_result(result, brief=True))
