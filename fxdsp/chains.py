@@ -54,32 +54,24 @@ class Paper002Chain(Block):
                                  f"{rtd.temp_format}")
             self.MEMBERS = ("rtd", "lag", *type(self).MEMBERS[1:])
         self.stages = ("lag",) if lag is not None else ()
+        # the blocks that carry state across calls, by their key in get_state / set_state
+        self._stateful: dict[str, Block] = {"demod": demod, "iir": lpf, **({"lag": lag} if lag is not None else {})}
         self.inputs = {"vsa": divide.in_format, "rtd_code": rtd.adc_format}
         self.outputs = {"temp": rtd.temp_format, "rate": lpf.data_format}
 
     def reset(self) -> None:
-        self.demod.reset()
-        self.lpf.reset()
-        if self.lag is not None:
-            self.lag.reset()
-
-    def _state_keys(self) -> set[str]:
-        return {"demod", "iir"} | ({"lag"} if self.lag is not None else set())
+        for block in self._stateful.values():
+            block.reset()
 
     def get_state(self) -> dict:
-        state = {"demod": self.demod.get_state(), "iir": self.lpf.get_state()}
-        if self.lag is not None:
-            state["lag"] = self.lag.get_state()
-        return state
+        return {key: block.get_state() for key, block in self._stateful.items()}
 
     def set_state(self, state) -> None:
-        keys = self._state_keys()
+        keys = set(self._stateful)
         if not isinstance(state, dict) or set(state) != keys:
             raise ValueError(f"{self.name}: state: expected a previous result's state {{{', '.join(sorted(keys))}}}")
-        self.demod.set_state(state["demod"])
-        self.lpf.set_state(state["iir"])
-        if self.lag is not None:
-            self.lag.set_state(state["lag"])
+        for key, block in self._stateful.items():
+            block.set_state(state[key])
 
     def stream(self, log: OverflowLog, vsa: np.ndarray, rtd_code: np.ndarray) -> dict[str, np.ndarray]:
         temp = self.rtd.stream(log, code=rtd_code)["temp"]

@@ -50,6 +50,13 @@ def edited_data(**edits) -> dict:
     return data
 
 
+def coarse_subtract(rounding: str) -> Config:
+    """The default config with a bias_subtract that drops 4 fraction bits (by ``rounding``) after the
+    subtraction, and the final low-pass on that wire."""
+    return Config(edited_data(**{"bias_subtract.out_format": "s20.18", "bias_subtract.rounding": rounding,
+                                 "iir.data_format": "s20.18"}), source="<test>")
+
+
 def design_with(chains: bool = False, **edits):
     """Build the design from the default config with dotted-path edits (see :func:`edited_data`;
     blocks only unless ``chains``)."""

@@ -2,17 +2,16 @@
 
 from __future__ import annotations
 
-import copy
 import tomllib
 
 import numpy as np
 import pytest
 
-from conftest import OLD_NCO, design_with, edited_data
+from conftest import OLD_NCO, coarse_subtract, design_with, edited_data
 from fxdsp.budget.attribution import attribute, check_rounding
 from fxdsp.chains import build
 from fxdsp.cli import main
-from fxdsp.config import Config, load_config
+from fxdsp.config import load_config
 from fxdsp.errors_table import block_errors
 
 
@@ -91,18 +90,9 @@ def test_theory_check_on_synthetic_rounding():
     assert reasons and "mean" in reasons[0]
 
 
-def _coarse_subtract(rounding: str) -> Config:
-    cfg = load_config()
-    data = copy.deepcopy(cfg.data)
-    data["bias_subtract"]["out_format"] = "s20.18"   # 4 fraction bits dropped after the subtraction
-    data["bias_subtract"]["rounding"] = rounding
-    data["iir"]["data_format"] = "s20.18"
-    return Config(data)
-
-
 @pytest.mark.parametrize("rounding", ["half_up", "floor"])
 def test_theory_check_on_a_stage(rounding):
-    d = build(_coarse_subtract(rounding))
+    d = build(coarse_subtract(rounding))
     a = attribute(d, "chain_paper002", "rate", n=8192)
     t = next(t for t in a.theory if t.source == "bias_subtract.round")
     assert t.q == 2.0**-18

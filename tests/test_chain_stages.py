@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import default_data
+from conftest import default_data, design_with
 from fxdsp.budget.attribution import attribute
 from fxdsp.chains import build
 from fxdsp.config import Config
@@ -24,19 +24,9 @@ CHAIN = "chain_paper002"
 FS = default_data()["system"]["fs_hz"]
 
 
-def design(**tables):
-    """The default config with whole keys of tables replaced (``lag={"tau_s": 1.0}``)."""
-    data = copy.deepcopy(default_data())
-    for table, values in tables.items():
-        node = data
-        for part in table.split("."):
-            node = node.setdefault(part, {})
-        node.update(values)
-    return build(Config(data, source="<test>"))
-
-
 def with_lag(**lag):
-    return design(chain_paper002={"stages": ["lag"]}, lag={"rate_hz": FS, "tau_s": 0.002, **lag})
+    lag = {"rate_hz": FS, "tau_s": 0.002, **lag}
+    return design_with(chains=True, **{"chain_paper002.stages": ["lag"]}, **{f"lag.{k}": v for k, v in lag.items()})
 
 
 # ---- absent = today ------------------------------------------------------------------------------
@@ -53,7 +43,7 @@ def test_a_config_without_the_stages_reproduces_every_committed_vector():
 
 def test_the_check_sees_a_stage():
     """...and the same comparison fails once a stage is on (it can fail)."""
-    problems = check(generate(design(demod={"phase_trim_rad": 0.01})), ROOT / "vectors")
+    problems = check(generate(design_with(chains=True, **{"demod.phase_trim_rad": 0.01})), ROOT / "vectors")
     for rel in ("demod/i.hex", "chain_paper002/rate.hex", "manifest.json"):
         assert any(p.startswith(f"differs: {rel} ") for p in problems), (rel, problems)
     assert not any("rtd/" in p or "lag/" in p for p in problems), problems
@@ -81,7 +71,7 @@ def test_bad_stages_name_the_field(stages, error):
 
 
 def test_trim_word_is_the_nearest_phase_word_modulo_a_turn():
-    nco = design(demod={"phase_trim_rad": -0.3}).blocks["demod"].nco
+    nco = design_with(chains=True, **{"demod.phase_trim_rad": -0.3}).blocks["demod"].nco
     exact = (-0.3 / (2 * np.pi)) % 1.0 * 2.0**nco.phase_bits
     assert abs(nco.trim - exact) <= 0.5 and nco.trim > 2 ** (nco.phase_bits - 1)   # wrapped: a negative trim
     assert nco.phases(3)[0] == nco.trim      # the table is read at accumulator + trim
@@ -96,7 +86,7 @@ def _stimulus(d):
 def test_the_lag_feeds_the_engines_and_nothing_else():
     """With the lag, the chain's rate is the plain chain's rate evaluated at Te: the same chain with
     the RTD readout replaced by codes whose temperature is the lag's output gives the same rate."""
-    plain, lagged = design(), with_lag()
+    plain, lagged = design_with(chains=True), with_lag()
     ins = _stimulus(plain)
     a = lagged.chains[CHAIN].run(**ins)
     b = plain.chains[CHAIN].run(**ins)
@@ -116,7 +106,7 @@ def test_the_lag_feeds_the_engines_and_nothing_else():
 
 def test_the_chain_with_stages_continues_from_its_state():
     chain = with_lag().chains[CHAIN]
-    ins = _stimulus(design())
+    ins = _stimulus(design_with(chains=True))
     whole = chain.run(**ins)
     cut = ins["vsa"].size // 3
     head = chain.run(**{k: v[:cut] for k, v in ins.items()})
@@ -142,11 +132,11 @@ def _held(d, phase_error: float, rate_fs: float, quad_fs: float, n: int = 12000)
 def test_the_trim_rotates_quadrature_into_rate():
     """No phase error, a trim theta: I = R cos theta + Q sin theta (+ the bias's own rotation)."""
     theta, R, Q = 0.2, 0.05, 0.3
-    got = _held(design(demod={"phase_trim_rad": theta}), 0.0, R, Q)
-    bias = design().chains[CHAIN].bias.reference(temp=np.array([25.0]))["y"][0]
+    got = _held(design_with(chains=True, **{"demod.phase_trim_rad": theta}), 0.0, R, Q)
+    bias = design_with(chains=True).chains[CHAIN].bias.reference(temp=np.array([25.0]))["y"][0]
     want = R * np.cos(theta) + Q * np.sin(theta) + bias * (np.cos(theta) - 1)
     assert abs(got - want) < 2e-5, (got, want)
-    assert abs(_held(design(), 0.0, R, Q) - R) < 2e-5
+    assert abs(_held(design_with(chains=True), 0.0, R, Q) - R) < 2e-5
 
 
 def test_the_trim_removes_a_known_phase_error():
@@ -155,24 +145,24 @@ def test_the_trim_removes_a_known_phase_error():
     doubles it (so the criterion can fail)."""
     phi, R, Q = 0.05, 0.02, 0.3
     tol = 2e-5
-    untrimmed = _held(design(), phi, R, Q)
+    untrimmed = _held(design_with(chains=True), phi, R, Q)
     assert abs(untrimmed - (R - Q * np.sin(phi))) < 1e-3
     c = -np.tan(phi)
-    trimmed = _held(design(demod={"phase_trim_rad": -np.arctan(c)}), phi, R, Q)
+    trimmed = _held(design_with(chains=True, **{"demod.phase_trim_rad": -np.arctan(c)}), phi, R, Q)
     assert abs(trimmed - R) < tol, trimmed - R
-    wrong = _held(design(demod={"phase_trim_rad": np.arctan(c)}), phi, R, Q)
+    wrong = _held(design_with(chains=True, **{"demod.phase_trim_rad": np.arctan(c)}), phi, R, Q)
     assert abs(wrong - R) > 100 * tol and abs(wrong - R) > 1.5 * abs(untrimmed - R)
 
 
 # ---- float reference and budget follow the stages -------------------------------------------------
-@pytest.mark.parametrize("tables", [{"demod": {"phase_trim_rad": -2.2}}, "lag"], ids=["trim", "lag"])
-def test_float_reference_and_budget_hybrid_follow_the_stages(tables):
-    d = with_lag() if tables == "lag" else design(**tables)
+@pytest.mark.parametrize("edits", [{"demod.phase_trim_rad": -2.2}, "lag"], ids=["trim", "lag"])
+def test_float_reference_and_budget_hybrid_follow_the_stages(edits):
+    d = with_lag() if edits == "lag" else design_with(chains=True, **edits)
     chain = d.chains[CHAIN]
     ins = _stimulus(d)
     fixed = to_float(chain.run(**ins).outputs["rate"], chain.outputs["rate"])
     ref = chain.run_float(**ins)["rate"]
-    plain = design().chains[CHAIN].run_float(**ins)["rate"]
+    plain = design_with(chains=True).chains[CHAIN].run_float(**ins)["rate"]
     n = ins["vsa"].size - 1024   # the saturating tail clips the fixed-point chain, not the float one
     err = np.abs(fixed - ref)[1000:n].max()
     assert err < 1e-4, err

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from conftest import OLD_NCO, design_with
+from fxdsp.fixed import Format
 
 # requirement, not a reading of the code: a reference phase bias phi turns the quadrature (here 5 %
 # of full scale, as in the chain's nominal stimulus) into a rate bias quad * phi; 0.05 deg/h at
@@ -43,7 +44,8 @@ def test_old_truncating_nco_is_caught():
 def test_nco_memory_below_the_old_tables():
     """Memory is the one quarter-wave table; the old design held cos and -sin over a full turn."""
     dp = design_with().blocks["demod"].datapath
-    assert dp.qsin.words.size * dp.qsin.width < 2 * 4096 * 16
+    old_bits = 2 * 2 ** OLD_NCO["demod.lut_bits"] * Format.parse(OLD_NCO["demod.lut_format"]).wl  # cos and -sin
+    assert dp.qsin.words.size * dp.qsin.width < old_bits
 
 
 def test_nco_words_fit_their_format_at_every_phase():

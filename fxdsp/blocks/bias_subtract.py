@@ -43,7 +43,6 @@ class BiasSubtractDatapath(Datapath):
     b_align: int
     shift: int           # difference -> out_format
     rules: Rules
-    diff_format: Format = info()
     out_format: Format = info()
     ovf: tuple = info(default=(OvfField("out", 1),))
 
@@ -56,10 +55,10 @@ class BiasSubtract(Block):
         self.name = name
         self.in_format, self.bias_format, self.out_format = in_format, bias_format, out_format
         self.rules = rules
-        self.diff_format = d = sum_format(in_format, bias_format)  # exact difference, checked against 63 bits
+        d = sum_format(in_format, bias_format)  # exact difference, checked against 63 bits
         self.datapath = BiasSubtractDatapath(
             in_w=in_format.wl, bias_w=bias_format.wl, out_w=out_format.wl, x_align=d.fl - in_format.fl,
-            b_align=d.fl - bias_format.fl, shift=d.fl - out_format.fl, rules=rules, diff_format=d,
+            b_align=d.fl - bias_format.fl, shift=d.fl - out_format.fl, rules=rules,
             out_format=out_format)
         self.inputs = {"x": in_format, "bias": bias_format}
         self.outputs = {"y": out_format}

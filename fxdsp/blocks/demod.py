@@ -270,11 +270,8 @@ class DemodDatapath(Datapath):
     atan: Rom                # arctan(2**-j) on angle_format
     addr_shift: int = info()     # LUT address = phase >> addr_shift (truncation)
     phase_mask: int = info()
-    in_format: Format = info()
     data_format: Format = info()
     work_format: Format = info()     # CORDIC x, y: data_format and two guard bits
-    angle_format: Format = info()
-    mix_format: Format = info()      # the product read as 2 x lut
     amp_format: Format = info()      # work x 1/K
     ovf: tuple = info()
 
@@ -290,6 +287,11 @@ class Demod(Block):
             raise ValueError(f"demod.cordic_iterations: must be 4..40, got {cordic_iterations}")
         if angle_format.int_bits < 2:
             raise ValueError(f"demod.angle_format: {angle_format} cannot hold +-pi radians")
+        if nco.rules.rounding != rules.rounding:
+            # the bit-exact mixer rounds the NCO correction by ``rules`` (its datapath), the NCO's own
+            # ``wave`` (budget, tests) by ``nco.rules``: they must be one rounding
+            raise ValueError(f"demod.rounding: the NCO rounds its correction by {nco.rules.rounding!r}, "
+                             f"the demodulator by {rules.rounding!r}; they must be the same")
         self.nco = nco
         self.in_format, self.data_format, self.angle_format = in_format, data_format, angle_format
         self.lpf_i, self.lpf_q = lpf_i, lpf_q
@@ -313,9 +315,8 @@ class Demod(Block):
             amp_shift=amp_format.fl - data_format.fl, qsin=Rom(nco.qsin, nco.lut_format.wl),
             atan=Rom(quantize(np.arctan(2.0 ** -np.arange(cordic_iterations)), angle_format, exact),
                      angle_format.wl),
-            addr_shift=nco.addr_shift, phase_mask=nco.phase_mask, in_format=in_format, data_format=data_format,
-            work_format=self.work_format, angle_format=angle_format, mix_format=self.mix_format,
-            amp_format=amp_format,
+            addr_shift=nco.addr_shift, phase_mask=nco.phase_mask, data_format=data_format,
+            work_format=self.work_format, amp_format=amp_format,
             ovf=(OvfField("mix_i", 1), OvfField("mix_q", 1), *lpf_ovf("i"), *lpf_ovf("q"), OvfField("amp", 1)))
         self.inputs = {"x": in_format}
         self.outputs = {"i": data_format, "q": data_format, "amp": data_format, "phase": angle_format}

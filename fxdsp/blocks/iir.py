@@ -126,7 +126,6 @@ class IirDatapath(Datapath):
     a: np.ndarray = info()   # sections x 2 (a1, a2), den_format
     c: np.ndarray = info()   # sections x 2 error-feedback weights (0 when off)
     c_w: int = info()        # bits the c weights need (the RTL holds 4)
-    acc_bits: int = info()
     data_format: Format = info()
     ovf: tuple = info()      # one flag per section output
 
@@ -186,7 +185,7 @@ class Iir(Block):
         self.datapath = IirDatapath(
             data_w=data_format.wl, sections=int(self.b.shape[0]), coef_w=coef_w, shift_b=shift_b, shift_a=shift_a,
             out_shift=out_shift, acc_w=self.acc_bits + 1, rules=rules, coef=Rom(words, coef_w), b=self.b, a=self.a,
-            c=self.c, c_w=max(2, c_max.bit_length() + 1), acc_bits=self.acc_bits, data_format=data_format,
+            c=self.c, c_w=max(2, c_max.bit_length() + 1), data_format=data_format,
             ovf=tuple(OvfField(f"section{s}", 1) for s in range(self.b.shape[0])))
         self.reset()
 

@@ -107,16 +107,10 @@ class Lag(Block):
         """``wired_rate_hz``: the lag runs inside a chain once per sample of ``rate_source``, so its
         rate is derived from it: ``rate_hz`` left out, or stated equal (for block-level work,
         ``enforce`` False, a stated rate is taken as given)."""
-        if wired_rate_hz is None or (sec.has("rate_hz") and not enforce):
-            rate = sec.number("rate_hz", low=0, low_open=True)
-        elif sec.has("rate_hz"):
-            rate = sec.number("rate_hz", low=0, low_open=True)
-            if rate != wired_rate_hz:
-                raise ValueError(f"{sec.field('rate_hz')}: {rate:g} must equal {rate_source} ({wired_rate_hz:g}): the "
-                                 f"chain runs the lag once per sample; leave it out, it is derived")
-        else:
-            sec.number("rate_hz", wired_rate_hz)  # derived (read, so it is not an unknown key)
-            rate = wired_rate_hz
+        rate = sec.number("rate_hz", wired_rate_hz, low=0, low_open=True)
+        if wired_rate_hz is not None and enforce and rate != wired_rate_hz:
+            raise ValueError(f"{sec.field('rate_hz')}: {rate:g} must equal {rate_source} ({wired_rate_hz:g}): the "
+                             f"chain runs the lag once per sample; leave it out, it is derived")
         return cls(temp_format, sec.number("tau_s", low=0, low_open=True), rate,
                    sec.integer("alpha_bits", low=4, high=24), sec.integer("state_guard_bits", low=0, high=40),
                    sec.rules(), name=sec.path)

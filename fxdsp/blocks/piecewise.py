@@ -94,7 +94,6 @@ class PiecewiseDatapath(Datapath):
     temp_format: Format = info()
     acc_format: Format = info()
     out_format: Format = info()
-    t_format: Format = info()  # T - t0, one bit wider than the temperature
     ovf: tuple = info()
 
 
@@ -145,7 +144,7 @@ class Piecewise(Block):
                 raise ValueError(f"{name}.coefficients: c{k} up to {np.abs(self.coefficients_real[:, k]).max():.6g} "
                                  f"does not fit coef_format {fmt}")
         self.breakpoints.setflags(write=False)
-        t_format = sum_format(temp_format, temp_format)
+        t_format = sum_format(temp_format, temp_format)  # T - t0, one bit wider than the temperature
         p_fmt = product_format(acc_format, t_format)  # raises if acc * t would not fit 63 bits
         sums = [sum_format(acc_format, fmt) for fmt in coef_formats]
         # shifts of the datapath (right shift = rounding, negative = exact left shift)
@@ -158,7 +157,7 @@ class Piecewise(Block):
             coef_align=frozen_array([sf.fl - cf.fl for sf, cf in zip(sums, coef_formats)]),
             out_shift=acc_format.fl - out_format.fl, rules=rules, coef=Rom(self.coef, coef_w),
             bp=Rom(self.breakpoints if self.breakpoints.size else [0], temp_format.wl),
-            temp_format=temp_format, acc_format=acc_format, out_format=out_format, t_format=t_format,
+            temp_format=temp_format, acc_format=acc_format, out_format=out_format,
             ovf=(OvfField("acc", self.order + 1), OvfField("product", self.order), OvfField("out", 1)))
         self.coef = self.datapath.coef.words
         self.inputs = {"temp": temp_format}

@@ -293,13 +293,15 @@ def drive_band(f0: float, a_ppm_per_c: float = SILICON_PPM_PER_C, t0_c: float = 
 
 
 def drive_frequencies(f0: float, points: int = SWEEP_POINTS, a_ppm_per_c: float = SILICON_PPM_PER_C,
-                      t0_c: float = T0_C, temp_range_c: tuple[float, float] = TEMP_RANGE_C) -> np.ndarray:
+                      t0_c: float = T0_C, temp_range_c: tuple[float, float] = TEMP_RANGE_C, *,
+                      band: tuple[float, float] | None = None) -> np.ndarray:
     """``points`` frequencies evenly across :func:`drive_band`, and f0 itself: an exact ratio such as
     f/fs = 1/12 is where a phase-truncating NCO repeats the same few phases and its error becomes a
-    bias; an even grid would step over it."""
+    bias; an even grid would step over it. ``band``: that band when the caller already has it."""
     if points < 2:
         raise ValueError(f"points: need at least 2, got {points}")
-    band = drive_band(f0, a_ppm_per_c, t0_c, temp_range_c)
+    if band is None:
+        band = drive_band(f0, a_ppm_per_c, t0_c, temp_range_c)
     return np.unique(np.append(np.linspace(band[0], band[1], points), f0))
 
 
@@ -322,7 +324,7 @@ def drive_sweep(config: Config, points: int = SWEEP_POINTS, a_ppm_per_c: float =
     :func:`drive_band` around the config's demod.f_hz. ``progress``: a tqdm-like wrapper."""
     f0 = float(config.data["demod"]["f_hz"])
     band = drive_band(f0, a_ppm_per_c, t0_c, temp_range_c)
-    freqs = drive_frequencies(f0, points, a_ppm_per_c, t0_c, temp_range_c)
+    freqs = drive_frequencies(f0, points, band=band)
     it = progress(freqs, desc="drive-frequency sweep", unit="f") if progress else freqs
     pts = [drive_point(config.data, f) for f in it]
     return DriveSweep(f0, a_ppm_per_c, t0_c, tuple(temp_range_c), band, pts)

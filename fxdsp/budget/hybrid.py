@@ -68,7 +68,9 @@ class Switch:
 
     def noise(self, rounding: str, q: float, x: np.ndarray) -> np.ndarray:
         """Textbook rounding error r - x for ``rounding`` with step q, independent of x (except the
-        sign for toward_zero)."""
+        sign for toward_zero). The same model as :func:`_rounded` mode 2 (the loops' copy, compiled);
+        kept apart because the half modes are written differently there (``x + u q - q/2`` against
+        ``x + q (u - 1/2)`` here) and merging them would change the float bits of the budget."""
         u = self.rng.uniform(0.0, 1.0, np.shape(x))
         if rounding == "floor":
             return -q * u
@@ -93,7 +95,9 @@ class Switch:
 @njit(cache=True)
 def _rounded(x, q, rounding, mode, u):
     """x on a grid of step q: mode 0 unrounded, 1 rounded by ``rounding`` as the integer kernels do,
-    2 by the textbook model (an independent uniform u in [0, 1) shaped by the rounding)."""
+    2 by the textbook model (an independent uniform u in [0, 1) shaped by the rounding; the same
+    model as :meth:`Switch.noise`, whose half modes are written as x + q (u - 1/2): not merged, the
+    float bits of the budget would change)."""
     if mode == 1:
         return round_float(x / q, rounding) * q
     if mode == 2:
@@ -147,14 +151,20 @@ def _df1_float(x, b, a, c, mode, rounding, lo, hi, noise, resid):
     return v
 
 
+def _grid_codes(scaled: np.ndarray) -> np.ndarray | None:
+    """The stored integers of values already divided by their LSB, or None when any is off the grid
+    (then the block's own integer kernel cannot be used)."""
+    codes = scaled.astype(np.int64)
+    return codes if np.array_equal(codes, scaled) else None
+
+
 def iir_hybrid(block, x: np.ndarray, coef: str, rnd: str, sw: Switch) -> np.ndarray:
     """The IIR block with its coefficient source ``coef`` and rounding source ``rnd`` switched."""
     lsb = block.data_format.lsb
     xs = np.asarray(x, dtype=float) / lsb
     coef_on = coef in sw
     dp = block.datapath
-    codes = xs.astype(np.int64)
-    if coef_on and rnd in sw and np.array_equal(codes, xs):
+    if coef_on and rnd in sw and (codes := _grid_codes(xs)) is not None:
         # everything of this block is on and its input is on the data grid: the block's own kernel
         return block.run(x=codes).outputs["y"].astype(float) * lsb
     if coef_on:
@@ -210,18 +220,19 @@ def lag_hybrid(block, temp: np.ndarray, sw: Switch) -> np.ndarray:
     """The lag block; sources lag.alpha (alpha as mantissa x 2**-shift) and lag.round (the state
     step at state_format's LSB and the output at temp_format's; in the loop: the state keeps its
     own rounding errors)."""
-    tf = block.temp_format
+    dp = block.datapath
+    tf = dp.temp_format
     x = np.asarray(temp, dtype=float)
-    scaled = x / tf.lsb
-    if "lag.alpha" in sw and "lag.round" in sw and np.array_equal(np.floor(scaled), scaled):
+    if "lag.alpha" in sw and "lag.round" in sw and (codes := _grid_codes(x / tf.lsb)) is not None:
         # all of this block on and its input on the temperature grid: the block's own kernel
-        return block.run(temp=scaled.astype(np.int64)).outputs["te"].astype(float) * tf.lsb
-    alpha = block.m * 2.0**-block.s if "lag.alpha" in sw else block.alpha
+        return block.run(temp=codes).outputs["te"].astype(float) * tf.lsb
+    alpha = dp.alpha_m * 2.0**-dp.alpha_s if "lag.alpha" in sw else block.alpha
     mode = 1 if "lag.round" in sw else 2 if "lag.round" in sw.inject else 0
     noise = sw.rng.uniform(0.0, 1.0, (2, x.size)) if mode == 2 else np.zeros((2, x.size))
     resid = np.zeros((2, x.size))
-    y = _lag_float(x, alpha, block.state_format.lsb, tf.lsb, mode, block.rules.rounding_code, tf.min_value,
-                   tf.max_value, noise, resid)
+    q_state = tf.lsb * 2.0**-dp.guard   # the state's LSB: guard bits below the temperature code
+    y = _lag_float(x, alpha, q_state, tf.lsb, mode, dp.rules.rounding_code, tf.min_value, tf.max_value, noise,
+                   resid)
     if mode == 1:
         sw.record("lag.round", "state", resid[0])
         sw.record("lag.round", "out", resid[1])
@@ -341,16 +352,6 @@ def subtract_hybrid(block, x, bias, name: str, sw: Switch) -> np.ndarray:
 # --------------------------------------------------------------------------------------------
 # chains: analog stimulus, sources, hybrid run
 # --------------------------------------------------------------------------------------------
-def analog_paper002(chain: Paper002Chain, rng: np.random.Generator, n: int) -> dict:
-    """The chain's own nominal stimulus (same draws as ``nominal_stimulus``) before the ADCs:
-    analog signals, the noise-free ones, the ADC codes the chain sees and the programme."""
-    return chain.nominal_analog(rng, n)
-
-
-def analog_paper001(chain: Paper001Chain, rng: np.random.Generator, n: int) -> dict:
-    return chain.nominal_analog(rng, n)
-
-
 def sources_paper002(chain: Paper002Chain) -> list[Source]:
     rtd, sf, div, dem, bias, sub, lpf = (chain.rtd, chain.sf, chain.divide, chain.demod, chain.bias,
                                         chain.subtract, chain.lpf)
@@ -436,7 +437,9 @@ def run_paper001(chain: Paper001Chain, analog: dict, sw: Switch) -> dict[str, np
     return {"f": f, "rate_in": rate_in, "temp": temp, "bias": b, "rate": rate}
 
 
+# per chain: its analog stimulus (the chain's own ``nominal_analog``: the same draws as
+# ``nominal_stimulus``, before the ADCs), its sources and its hybrid run
 CHAIN_MODELS = {
-    "chain_paper002": (analog_paper002, sources_paper002, run_paper002),
-    "chain_paper001": (analog_paper001, sources_paper001, run_paper001),
+    "chain_paper002": (Paper002Chain.nominal_analog, sources_paper002, run_paper002),
+    "chain_paper001": (Paper001Chain.nominal_analog, sources_paper001, run_paper001),
 }

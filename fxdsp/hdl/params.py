@@ -10,7 +10,7 @@ design as
   ``include`` inside ``module #( ... )``;
 * ``chain_paper002_params.vh`` / ``chain_paper001_params.vh``: the port and ovf widths of the tops
   and the enables of their optional stages (``LAG_EN``: the chain's ``stages``, 0 = absent);
-* the ROM files (``rtd_lut.hex``, ``iir_coef.hex``, ``demod_cos.hex``, ...).
+* the ROM files (``rtd_lut.hex``, ``iir_coef.hex``, ``demod_qsin.hex``, ...).
 
 The only checks here are the RTL's own limits (signed temperature wires, 4-bit error-feedback
 weights, positive lag shift): a config the Python model accepts but the RTL cannot build.
