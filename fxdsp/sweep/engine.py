@@ -233,7 +233,14 @@ class Executor:
                 elif fut.status == "error":   # raised retries + 1 times, or its workers kept dying (KilledWorker)
                     yield task, None, _error_text(fut.exception())
                 else:
-                    yield task, None, f"task {fut.status} by the cluster"
+                    # "lost": it finished, but the worker holding its result died before the
+                    # result was fetched (another task killed it). The scheduler recomputes a
+                    # key a client still holds, so wait for that rather than report a failure
+                    try:
+                        result, error = fut.result(), None
+                    except Exception as exc:  # noqa: BLE001 - a task's failure is a result here
+                        result, error = None, f"task {fut.status} by the cluster: {_error_text(exc)}"
+                    yield task, result, error
                 fut.release()
         finally:
             for fut in futures:
