@@ -44,7 +44,7 @@ class Paper002Chain(Block):
                  subtract: BiasSubtract, lpf: Iir, lag: Lag | None = None):
         """The blocks must already be connected wire to wire (``build`` derives each input format from
         the output it is wired to). ``lag``: the optional thermal-lag stage between the RTD readout
-        and the SF / bias engines, run once per chain sample (its rate is the chain's sample rate)."""
+        and the SF / bias engines, fed once per chain sample (it updates every ``lag.decimation``)."""
         self.rtd, self.sf, self.divide, self.demod = rtd, sf, divide, demod
         self.bias, self.subtract, self.lpf = bias, subtract, lpf
         self.lag = lag
@@ -342,7 +342,7 @@ def build(config: Config | str | None = None, chains: bool = True) -> Design:
     subtract001 = BiasSubtract.from_config(sub001_sec, sub001_sec.format("in_format"), bias001.out_format)
 
     stages = paper002_stages(cfg)
-    # the chain's lag stage is the [lag] block, run once per chain sample (its rate is fs)
+    # the chain's lag stage is the [lag] block, fed once per chain sample and updated at its rate_hz
     wired = (fs, "system.fs_hz", chains) if "lag" in stages else ()
     lag = Lag.from_config(cfg.section("lag"), rtd.temp_format, *wired)
 

@@ -209,16 +209,19 @@ def cordic(block, i_vals, q_vals) -> tuple[list[int], list[int]]:
 
 
 def lag(block, temps) -> list[int]:
-    """Te += round((T - Te) * m / 2**s) on a state with g extra fraction bits, started on the first T."""
+    """Te += round((T - Te) * m / 2**s) on a state with g extra fraction bits, started on the first T;
+    with decimation N the state moves on inputs 0, N, 2N, ... and the output holds in between."""
     g = block.g
     alpha = Fraction(block.m, 1 << block.s)
     te = None
     out = []
-    for T in temps:
-        T = int(T) << g
-        if te is None:
-            te = T
-        te += round_to_int((T - te) * alpha, block.rules.rounding)
-        out.append(fit(round_to_int(Fraction(te, 1 << g), block.rules.rounding), block.temp_format,
-                       block.rules.overflow)[0])
+    for k, T in enumerate(temps):
+        if k % block.decimation == 0:
+            T = int(T) << g
+            if te is None:
+                te = T
+            te += round_to_int((T - te) * alpha, block.rules.rounding)
+            held = fit(round_to_int(Fraction(te, 1 << g), block.rules.rounding), block.temp_format,
+                       block.rules.overflow)[0]
+        out.append(held)
     return out

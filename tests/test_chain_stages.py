@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from conftest import default_data, design_with
+from fxdsp.blocks.lag import Lag
 from fxdsp.budget.attribution import attribute
 from fxdsp.chains import build
 from fxdsp.config import Config
@@ -50,15 +51,46 @@ def test_the_check_sees_a_stage():
 
 
 # ---- config -----------------------------------------------------------------------------------
-def test_the_lag_stage_runs_at_the_chain_sample_rate():
+def test_the_lag_stage_updates_at_a_divisor_of_the_chain_sample_rate():
     data = copy.deepcopy(default_data())
     data["chain_paper002"]["stages"] = ["lag"]
-    with pytest.raises(ValueError, match=r"^lag\.rate_hz: 10 must equal system\.fs_hz"):
-        build(Config(data, source="<test>"))
-    del data["lag"]["rate_hz"]   # derived
-    d = build(Config(data, source="<test>"))
-    assert d.blocks["lag"].rate_hz == FS and d.chains[CHAIN].lag is d.blocks["lag"]
+    d = build(Config(copy.deepcopy(data), source="<test>"))   # the shipped 10 Hz: every 9600th sample
+    assert d.blocks["lag"].decimation == FS / data["lag"]["rate_hz"] and d.chains[CHAIN].lag is d.blocks["lag"]
     assert d.chains[CHAIN].MEMBERS[:2] == ("rtd", "lag") and d.ovf_bit(CHAIN, "lag.te") == 1
+    for bad in (7.0, 2 * FS):   # not a whole number of samples; faster than the samples arrive
+        data["lag"]["rate_hz"] = bad
+        with pytest.raises(ValueError, match=r"^lag\.rate_hz: .* must divide system\.fs_hz"):
+            build(Config(copy.deepcopy(data), source="<test>"))
+    del data["lag"]["rate_hz"]   # derived: every sample
+    d = build(Config(data, source="<test>"))
+    assert d.blocks["lag"].rate_hz == FS and d.blocks["lag"].decimation == 1
+    # the block alone (no lag stage) takes its stated rate as given, every input an update
+    assert design_with(**{"lag.rate_hz": 7.0}).blocks["lag"].decimation == 1
+
+
+@pytest.mark.parametrize("decimation", [3, 64])
+def test_a_decimating_lag_matches_its_oracle_and_continues_across_a_cut(decimation):
+    """The state moves on inputs 0, N, 2N, ... and holds between (the oracle, written from that rule);
+    a run cut at any phase continues exactly; the float reference holds the same way."""
+    from block_oracles import lag as lag_oracle
+
+    lag = with_lag(rate_hz=FS / decimation, tau_s=0.05, state_guard_bits=8, rounding="floor").blocks["lag"]
+    assert lag.decimation == decimation
+    temp = lag.stimulus(np.random.default_rng(3), 3000)["temp"]
+    whole = lag.run(temp=temp)
+    assert whole.outputs["te"].tolist() == lag_oracle(lag, temp)
+    held = whole.outputs["te"].reshape(-1)[: temp.size // decimation * decimation].reshape(-1, decimation)
+    assert np.all(held == held[:, :1]), "the output changes only on an update's sample"
+    for cut in (1, decimation + 1, 1001):
+        head = lag.run(temp=temp[:cut])
+        tail = lag.run(state=head.state, temp=temp[cut:])
+        assert np.array_equal(np.concatenate([head.outputs["te"], tail.outputs["te"]]), whole.outputs["te"]), cut
+    ref = lag.reference(temp=temp)["te"]
+    undecimated = Lag(lag.temp_format, lag.tau_s, lag.rate_hz, lag.alpha_bits, lag.g, lag.rules)
+    assert np.array_equal(ref[::decimation], undecimated.reference(temp=temp[::decimation])["te"])
+    assert np.array_equal(ref, np.repeat(ref[::decimation], decimation)[:temp.size])
+    with pytest.raises(ValueError, match="phase"):
+        lag.set_state({**head.state, "phase": decimation})
 
 
 @pytest.mark.parametrize("stages,error", [(["lagg"], "'lagg' is not one of lag"), (["lag", "lag"], "listed twice"),
@@ -155,9 +187,12 @@ def test_the_trim_removes_a_known_phase_error():
 
 
 # ---- float reference and budget follow the stages -------------------------------------------------
-@pytest.mark.parametrize("edits", [{"demod.phase_trim_rad": -2.2}, "lag"], ids=["trim", "lag"])
+@pytest.mark.parametrize("edits", [{"demod.phase_trim_rad": -2.2}, "lag", "lag/32"], ids=["trim", "lag", "lag/32"])
 def test_float_reference_and_budget_hybrid_follow_the_stages(edits):
-    d = with_lag() if edits == "lag" else design_with(chains=True, **edits)
+    if edits == "lag/32":   # updated on every 32nd sample
+        d = with_lag(rate_hz=FS / 32)
+    else:
+        d = with_lag() if edits == "lag" else design_with(chains=True, **edits)
     chain = d.chains[CHAIN]
     ins = _stimulus(d)
     fixed = to_float(chain.run(**ins).outputs["rate"], chain.outputs["rate"])

@@ -10,6 +10,13 @@ at the temperature update rate ``rate_hz`` (a chamber-scale tau of hours at 10 H
 1e-5: far too small for a plain coefficient, so alpha is a ``alpha_bits``-bit mantissa m and a shift
 s, alpha = m * 2**-s, m in [2**(alpha_bits-1), 2**alpha_bits)).
 
+Decimation: inside a chain the input arrives at the chain's sample rate, ``decimation`` = N times
+the update rate (the chain's fs_hz / rate_hz). The state then updates on every N-th input (the
+first after a reset, then every N), and the output holds between updates. Why not update at fs: at
+96 kHz a tau of two hours gives alpha = 1.4e-9, whose dead band (0.5/alpha state LSBs) is ~330
+temperature codes (0.04 C) even at the 20 guard bits a 63-bit product allows; at 10 Hz it is 0.04
+codes. The temperature moves by microkelvin per chain sample: nothing is lost by updating at 10 Hz.
+
 Datapath (stored integers): the state Te carries ``state_guard_bits`` more fraction bits than the
 temperature code (without them, steps smaller than 1/alpha LSB would never move the state: a dead
 band of 1/alpha codes)::
@@ -38,20 +45,33 @@ from .datapath import Datapath, OvfField, info
 
 
 @njit(cache=True)
-def _lag_kernel(x, m, s, g, rounding, lo, hi, overflow, state):
-    """state[0] = Te with g extra fraction bits, carried across calls. Returns (y, overflows)."""
+def _lag_kernel(x, m, s, g, rounding, lo, hi, overflow, decimation, state):
+    """state[0] = Te with g extra fraction bits, state[1] = inputs since the last update (0: the next
+    input updates), both carried across calls. Returns (y, overflows counted at updates)."""
     n = x.shape[0]
     y = np.empty(n, dtype=np.int64)
     te = state[0]
+    phase = state[1]
+    held, _ = convert(te, g, rounding, lo, hi, overflow)   # the output between updates
     count = 0
     for i in range(n):
-        d = (x[i] << g) - te
-        te += shift_right_round(d * m, s, rounding)
-        out, o = convert(te, g, rounding, lo, hi, overflow)
-        count += o
-        y[i] = out
+        if phase == 0:
+            d = (x[i] << g) - te
+            te += shift_right_round(d * m, s, rounding)
+            held, o = convert(te, g, rounding, lo, hi, overflow)
+            count += o
+        y[i] = held
+        phase += 1
+        if phase == decimation:
+            phase = 0
     state[0] = te
+    state[1] = phase
     return y, count
+
+
+def held(updates: np.ndarray, decimation: int, n: int) -> np.ndarray:
+    """Values computed on every ``decimation``-th input, held over the inputs between (n of them)."""
+    return np.repeat(updates, decimation)[:n]
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,6 +85,7 @@ class LagDatapath(Datapath):
     alpha_w: int
     alpha_m: int         # alpha = alpha_m * 2**-alpha_s
     alpha_s: int
+    decim: int           # the state updates on every decim-th input (1: every input)
     rules: Rules
     temp_format: Format = info()
     ovf: tuple = info(default=(OvfField("te", 1),))
@@ -74,7 +95,9 @@ class Lag(Block):
     name = "lag"
 
     def __init__(self, temp_format: Format, tau_s: float, rate_hz: float, alpha_bits: int, state_guard_bits: int,
-                 rules: Rules, name: str = "lag"):
+                 rules: Rules, name: str = "lag", decimation: int = 1):
+        if isinstance(decimation, bool) or not isinstance(decimation, int) or decimation < 1:
+            raise ValueError(f"{name}.decimation: must be an integer >= 1, got {decimation!r}")
         if not tau_s > 0:
             raise ValueError(f"{name}.tau_s: must be > 0, got {tau_s}")
         if not rate_hz > 0:
@@ -88,14 +111,14 @@ class Lag(Block):
         if self.m >= 1 << alpha_bits:  # rounding carried into a new bit
             self.m >>= 1
             self.s -= 1
-        self.alpha_bits, self.g = alpha_bits, state_guard_bits
+        self.alpha_bits, self.g, self.decimation = alpha_bits, state_guard_bits, decimation
         self.rules = rules
         self.state_format = Format(True, temp_format.wl + state_guard_bits + 1, temp_format.fl + state_guard_bits)
         if self.state_format.wl + 1 + alpha_bits > 63:
             raise ValueError(f"{name}: state {self.state_format} times a {alpha_bits}-bit alpha exceeds 63 bits; "
                              f"reduce state_guard_bits or alpha_bits")
         self.datapath = LagDatapath(temp_w=temp_format.wl, guard=self.g, state_w=self.state_format.wl,
-                                    alpha_w=alpha_bits, alpha_m=self.m, alpha_s=self.s, rules=rules,
+                                    alpha_w=alpha_bits, alpha_m=self.m, alpha_s=self.s, decim=decimation, rules=rules,
                                     temp_format=temp_format)
         self.inputs = {"temp": temp_format}
         self.outputs = {"te": temp_format}
@@ -104,29 +127,39 @@ class Lag(Block):
     @classmethod
     def from_config(cls, sec: Section, temp_format: Format, wired_rate_hz: float | None = None,
                     rate_source: str = "", enforce: bool = True) -> "Lag":
-        """``wired_rate_hz``: the lag runs inside a chain once per sample of ``rate_source``, so its
-        rate is derived from it: ``rate_hz`` left out, or stated equal (for block-level work,
-        ``enforce`` False, a stated rate is taken as given)."""
+        """``wired_rate_hz``: the lag's input arrives once per sample of ``rate_source``; ``rate_hz``
+        (left out: that rate) is the update rate and must divide it: the lag then updates on every
+        (wired / rate)-th input and holds between (for block-level work, ``enforce`` False, a stated
+        rate is taken as given and every input updates)."""
         rate = sec.number("rate_hz", wired_rate_hz, low=0, low_open=True)
-        if wired_rate_hz is not None and enforce and rate != wired_rate_hz:
-            raise ValueError(f"{sec.field('rate_hz')}: {rate:g} must equal {rate_source} ({wired_rate_hz:g}): the "
-                             f"chain runs the lag once per sample; leave it out, it is derived")
+        decimation = 1
+        if wired_rate_hz is not None and enforce:
+            ratio = wired_rate_hz / rate
+            decimation = round(ratio)
+            if decimation < 1 or abs(ratio - decimation) > 1e-9 * ratio:
+                raise ValueError(f"{sec.field('rate_hz')}: {rate:g} must divide {rate_source} ({wired_rate_hz:g}) "
+                                 f"into a whole number of samples: the lag updates once every {rate_source} / "
+                                 f"rate_hz samples")
         return cls(temp_format, sec.number("tau_s", low=0, low_open=True), rate,
                    sec.integer("alpha_bits", low=4, high=24), sec.integer("state_guard_bits", low=0, high=40),
-                   sec.rules(), name=sec.path)
+                   sec.rules(), name=sec.path, decimation=decimation)
 
     def reset(self) -> None:
-        self.state = np.zeros(1, dtype=np.int64)
+        self.state = np.zeros(2, dtype=np.int64)
         self.primed = False
 
     def get_state(self) -> dict:
-        """Te with the guard bits, and whether it has been primed by a first reading."""
-        return {"te": int(self.state[0]), "primed": self.primed}
+        """Te with the guard bits, inputs since the last update, and whether it has been primed by a
+        first reading."""
+        return {"te": int(self.state[0]), "phase": int(self.state[1]), "primed": self.primed}
 
     def set_state(self, state) -> None:
-        if not isinstance(state, dict) or set(state) != {"te", "primed"}:
-            raise ValueError(f"{self.name}: state: expected a previous result's state {{'te', 'primed'}}")
-        self.state = np.array([int(state["te"])], dtype=np.int64)
+        if not isinstance(state, dict) or set(state) != {"te", "phase", "primed"}:
+            raise ValueError(f"{self.name}: state: expected a previous result's state {{'te', 'phase', 'primed'}}")
+        phase = int(state["phase"])
+        if not 0 <= phase < self.decimation:
+            raise ValueError(f"{self.name}: state: phase {phase} outside 0..{self.decimation - 1}")
+        self.state = np.array([int(state["te"]), phase], dtype=np.int64)
         self.primed = bool(state["primed"])
 
     def stream(self, log: OverflowLog, temp: np.ndarray) -> dict[str, np.ndarray]:
@@ -136,7 +169,7 @@ class Lag(Block):
             self.primed = True
         dp = self.datapath
         y, n = _lag_kernel(temp, dp.alpha_m, dp.alpha_s, dp.guard, dp.rules.rounding_code, dp.temp_format.min_int,
-                           dp.temp_format.max_int, dp.rules.overflow_code, self.state)
+                           dp.temp_format.max_int, dp.rules.overflow_code, dp.decim, self.state)
         log.add(f"{self.name}.{dp.ovf[0].counter}", n)
         return {"te": y}
 
@@ -146,8 +179,9 @@ class Lag(Block):
         x = np.asarray(temp, dtype=float)
         if x.size == 0:
             return {"te": x}
-        y, _ = lfilter([self.alpha], [1.0, self.alpha - 1.0], x, zi=[(1.0 - self.alpha) * x[0]])
-        return {"te": y}
+        updates = x[::self.decimation]   # the inputs the state updates on; the output holds between
+        y, _ = lfilter([self.alpha], [1.0, self.alpha - 1.0], updates, zi=[(1.0 - self.alpha) * updates[0]])
+        return {"te": held(y, self.decimation, x.size)}
 
     def nominal_stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
         """A chamber programme at the update rate: dwell, ramp up, dwell, ramp down (+ sensor noise)."""
@@ -162,13 +196,14 @@ class Lag(Block):
     def stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
         """Full-scale steps both ways (the state slews across the whole range), corners, nominal."""
         f = self.temp_format
-        hold = int(min(4096, 3 / self.alpha))
+        hold = int(min(4096, 3 * self.decimation / self.alpha))
         parts = [np.full(8, 0, np.int64), np.full(hold, f.max_int, np.int64), np.full(hold, f.min_int, np.int64),
                  np.repeat(corner_codes(f), 16), self.nominal_stimulus(rng, n)["temp"]]
         return {"temp": np.concatenate(parts)}
 
     def parameters(self) -> dict:
         return {"temp_format": str(self.temp_format), "tau_s": self.tau_s, "rate_hz": self.rate_hz,
-                "alpha": self.alpha, "alpha_mantissa": self.m, "alpha_shift": self.s, "alpha_bits": self.alpha_bits,
+                "alpha": self.alpha, **({"decimation": self.decimation} if self.decimation > 1 else {}),
+                "alpha_mantissa": self.m, "alpha_shift": self.s, "alpha_bits": self.alpha_bits,
                 "state_guard_bits": self.g, "state_format": str(self.state_format),
                 "rounding": self.rules.rounding, "overflow": self.rules.overflow}

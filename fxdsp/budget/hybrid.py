@@ -22,6 +22,7 @@ from numba import njit
 from ..chains import Paper001Chain, Paper002Chain
 from ..fixed import Format, Rules, quantize
 from ..fixed.kernels import FLOOR, TOWARD_ZERO, round_float
+from ..blocks.lag import held
 
 # categories of the attribution (item 2)
 ADC = "ADC quantisation"
@@ -219,13 +220,14 @@ def _lag_float(x, alpha, q_state, q_out, mode, rounding, lo, hi, noise, resid):
 def lag_hybrid(block, temp: np.ndarray, sw: Switch) -> np.ndarray:
     """The lag block; sources lag.alpha (alpha as mantissa x 2**-shift) and lag.round (the state
     step at state_format's LSB and the output at temp_format's; in the loop: the state keeps its
-    own rounding errors)."""
+    own rounding errors). A decimating lag updates on every decim-th input and holds between."""
     dp = block.datapath
     tf = dp.temp_format
-    x = np.asarray(temp, dtype=float)
-    if "lag.alpha" in sw and "lag.round" in sw and (codes := _grid_codes(x / tf.lsb)) is not None:
+    full = np.asarray(temp, dtype=float)
+    if "lag.alpha" in sw and "lag.round" in sw and (codes := _grid_codes(full / tf.lsb)) is not None:
         # all of this block on and its input on the temperature grid: the block's own kernel
         return block.run(temp=codes).outputs["te"].astype(float) * tf.lsb
+    x = full[::dp.decim]
     alpha = dp.alpha_m * 2.0**-dp.alpha_s if "lag.alpha" in sw else block.alpha
     mode = 1 if "lag.round" in sw else 2 if "lag.round" in sw.inject else 0
     noise = sw.rng.uniform(0.0, 1.0, (2, x.size)) if mode == 2 else np.zeros((2, x.size))
@@ -236,7 +238,7 @@ def lag_hybrid(block, temp: np.ndarray, sw: Switch) -> np.ndarray:
     if mode == 1:
         sw.record("lag.round", "state", resid[0])
         sw.record("lag.round", "out", resid[1])
-    return y
+    return held(y, dp.decim, full.size)
 
 
 # --------------------------------------------------------------------------------------------

@@ -5,5 +5,6 @@
     .ALPHA_W(16),
     .ALPHA_M(55877),
     .ALPHA_S(25),
+    .DECIM(1),
     .ROUNDING(1),
     .OVERFLOW(1)

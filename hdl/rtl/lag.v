@@ -11,6 +11,9 @@
 // Primed: the first sample accepted after rst starts the state settled, st = temp << GUARD (so
 // d = 0 and te = temp), as the model's reset() + run(). STATE_W is the model's state_format
 // word length (TEMP_W + GUARD + 1). State (st, primed) advances only on in_valid; rst clears it.
+// Decimation (DECIM, the model's decimation = the chain's fs / rate_hz): the state updates on the
+// first accepted sample after rst and then on every DECIM-th; te holds between updates and ovf is
+// set only on an update's sample (the model counts overflows at updates). DECIM = 1: every sample.
 // Interface: in_valid / out_valid, one sample per cycle (the update is combinational).
 // Latency: 1 cycle.
 `default_nettype none
@@ -22,6 +25,7 @@ module lag #(
     parameter integer ALPHA_W  = 16,
     parameter integer ALPHA_M  = 55877,
     parameter integer ALPHA_S  = 25,
+    parameter integer DECIM    = 1,        // the state updates on every DECIM-th sample (>= 1)
     parameter integer ROUNDING = 1,
     parameter integer OVERFLOW = 1
 ) (
@@ -40,9 +44,21 @@ module lag #(
     localparam integer RW  = (RW0 < 2) ? 2 : RW0;
     localparam integer SW  = ((RW > STATE_W) ? RW : STATE_W) + 1;   // te + step, exact
     localparam [MW-1:0] M_C = ALPHA_M[MW-1:0];
+    // phase counter: samples since the last update, 0..DECIM-1 (at least 1 bit wide)
+    localparam integer PH_W = (DECIM > 1) ? $clog2(DECIM) : 1;
+    localparam integer    PH_LAST_I = DECIM - 1;
+    localparam [PH_W-1:0] PH_LAST = PH_LAST_I[PH_W-1:0];
+
+    generate
+        if (DECIM < 1) begin : g_bad_decim
+            initial begin $display("lag: DECIM must be >= 1, got %0d", DECIM); $finish; end
+        end
+    endgenerate
 
     reg signed [STATE_W-1:0] st;                       // te with GUARD extra fraction bits
     reg                      primed;
+    reg [PH_W-1:0]           phase;                    // 0: this sample updates the state
+    wire                     update = in_valid & (phase == {PH_W{1'b0}});
 
     wire signed [STATE_W-1:0] xe = {{(STATE_W-TEMP_W){temp[TEMP_W-1]}}, temp};
     wire signed [STATE_W-1:0] xg = xe <<< GUARD;       // exact: fits STATE_W - 1 bits
@@ -67,9 +83,13 @@ module lag #(
         if (rst) begin
             st     <= {STATE_W{1'b0}};
             primed <= 1'b0;
+            phase  <= {PH_W{1'b0}};
         end else if (in_valid) begin
-            st     <= st_next;
-            primed <= 1'b1;
+            if (update) begin
+                st     <= st_next;
+                primed <= 1'b1;
+            end
+            phase <= (phase == PH_LAST) ? {PH_W{1'b0}} : phase + 1'b1;
         end
     end
 
@@ -80,10 +100,8 @@ module lag #(
             ovf       <= 1'b0;
         end else begin
             out_valid <= in_valid;
-            if (in_valid) begin
-                te  <= te_c;
-                ovf <= ovf_c;
-            end
+            if (update) te <= te_c;
+            if (in_valid) ovf <= update & ovf_c;
         end
     end
 endmodule

@@ -20,14 +20,15 @@ from hdl_util import SIM_BUILD, build_dir, default_data, design_of, generate_int
 
 CHAIN = "chain_paper002"
 FS = default_data()["system"]["fs_hz"]
-# the chain runs its lag once per sample: rate_hz is the chain's sample rate. tau of a few ms makes
-# Te trail the swept temperature by ~1 C within the streamed prefix (a large, visible effect)
+# rate_hz = fs: the lag updates on every chain sample. tau of a few ms makes Te trail the swept
+# temperature by ~1 C within the streamed prefix (a large, visible effect)
 LAG = {"chain_paper002": {"stages": ["lag"]}, "lag": {"rate_hz": FS, "tau_s": 0.002}}
 TRIM = {"demod": {"phase_trim_rad": 0.3}}
-# both, with another lag rounding and few guard bits (the state rounding shows), a trim across a
-# quadrant boundary (negative: the word wraps modulo 2**phase_bits)
+# both, with the lag updated on every 5th sample (DECIM = 5: holds between), another lag rounding
+# and few guard bits (the state rounding shows), a trim across a quadrant boundary (negative: the
+# word wraps modulo 2**phase_bits)
 BOTH = {"chain_paper002": {"stages": ["lag"]}, "demod": {"phase_trim_rad": -2.2},
-        "lag": {"rate_hz": FS, "tau_s": 0.005, "state_guard_bits": 6, "rounding": "floor"}}
+        "lag": {"rate_hz": FS / 5, "tau_s": 0.005, "state_guard_bits": 6, "rounding": "floor"}}
 CONFIGS = {"lag": LAG, "trim": TRIM, "both": BOTH}
 EXTRA = {"DIV_UNROLL": 7}   # 7 quotient bits per cycle: the Python-driven run stays fast
 HEAD, TAIL = 2000, 300      # samples of the nominal sweep and of the saturating hot tail
@@ -80,6 +81,8 @@ MUTATIONS = {
     "lag_bypassed": ("chain_paper002.v", "assign ce_w  = te_w;", "assign ce_w  = t_w;", "lag"),
     "trim_sign_inverted": ("nco.v", "START_C  = PHASE0_C + TRIM_C;", "START_C  = PHASE0_C - TRIM_C;", "trim"),
     "trim_not_passed": ("demod.v", ".PHASE_TRIM(PHASE_TRIM), ", "", "trim"),
+    "lag_not_decimated": ("lag.v", "wire                     update = in_valid & (phase == {PH_W{1'b0}});",
+                          "wire                     update = in_valid;", "both"),
 }
 
 
@@ -106,5 +109,6 @@ def test_chain_with_the_lag_lints_clean(designs):
     d = build_dir("stages_lint")
     generate_into(designs["both"], d)
     assert "parameter integer LAG_EN = 1" in (d / "chain_paper002_params.vh").read_text()
+    assert ".DECIM(5)" in (d / "lag_params.vh").read_text()
     assert lint_iverilog(CHAIN, include=d) == ""
     assert lint_verilator(CHAIN, include=d) == ""
