@@ -37,6 +37,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
                         "confusion matrix of the diagnosis on simulated logs with a random hidden cause"),
     "diagnose-rtd": ("fxdsp.commands.diagnose_rtd",
                      "linear RTD law vs Callendar-Van Dusen on a resistance table, and its diagnosis"),
+    "extend": ("fxdsp.extend.cli", "diagnose a log, extend the compensation with hardware remedies, write the config, "
+                                   "vectors, RTL headers, cocotb regression and report"),
     "sweep": ("fxdsp.sweep.cli", "Monte-Carlo budget, word-length search, confusion matrix, RTL regressions "
                                  "on Dask workers"),
 }

@@ -25,6 +25,12 @@ from fxdsp.ramps import sample_interval
 
 def _heldout_rms(y: np.ndarray, temp: np.ndarray, rate: np.ndarray | None, folds: np.ndarray,
                  extra: np.ndarray | None = None) -> float:
+    return float(np.sqrt(np.mean(heldout_residual(y, temp, rate, folds, extra) ** 2)))
+
+
+def heldout_residual(y: np.ndarray, temp: np.ndarray, rate: np.ndarray | None, folds: np.ndarray,
+                     extra: np.ndarray | None = None) -> np.ndarray:
+    """Per row: the output minus a cubic bias (and SF, with a rate) in temp fitted on the other folds."""
     t = (temp - temp.mean()) / max(temp.std(), 1e-12)
     cols = [np.ones_like(t), t, t**2, t**3]
     if rate is not None and np.any(rate != 0):
@@ -37,7 +43,7 @@ def _heldout_rms(y: np.ndarray, temp: np.ndarray, rate: np.ndarray | None, folds
         train, test = folds != f, folds == f
         coef, *_ = np.linalg.lstsq(X[train], y[train], rcond=None)
         resid[test] = y[test] - X[test] @ coef
-    return float(np.sqrt(np.mean(resid**2)))
+    return resid
 
 
 def lag_extension(diag: Diagnosis, tau_s: float) -> dict:

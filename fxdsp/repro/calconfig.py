@@ -118,7 +118,7 @@ def acc_width(temp_format: str) -> int:
 
 
 def piecewise_table(coefficients, breakpoints=(), t0_c: float = 0.0, out_signed: bool = True,
-                    out_wl: int = 24, *, acc_wl: int, name: str = "piecewise") -> dict:
+                    out_wl: int = 24, *, acc_wl: int, name: str = "piecewise", coef_wl: int = COEF_WL) -> dict:
     """Keys of a ``[piecewise.*]`` table with formats chosen for these coefficients."""
     coef = np.atleast_2d(np.asarray(coefficients, float))
     if coef.shape[1] < 2 or coef.shape[1] > 4:
@@ -134,7 +134,7 @@ def piecewise_table(coefficients, breakpoints=(), t0_c: float = 0.0, out_signed:
     return {"breakpoints_c": [float(b) for b in breakpoints],
             "coefficients": [[float(c) for c in row] for row in coef],
             "t0_c": float(t0_c),
-            "coef_format": [fit_format(coef[:, k], COEF_WL, 1, True, f"{name}.c{k}") for k in range(coef.shape[1])],
+            "coef_format": [fit_format(coef[:, k], coef_wl, 1, True, f"{name}.c{k}") for k in range(coef.shape[1])],
             "acc_format": acc_fmt, "out_format": out_fmt}
 
 

@@ -12,23 +12,19 @@ from __future__ import annotations
 import numpy as np
 
 
-def rate_table_points(log: dict, output=None, temp_col: str = "temp_c", log_s: float = 3600.0,
-                      temp=None, sort: bool = True) -> dict[str, np.ndarray]:
-    """``{"temp_c", "sf", "bias"}`` per rate-table sequence of ``log`` (output units).
-
-    ``output`` replaces ``log["output"]`` (e.g. a compensated rate); ``temp`` replaces the
-    temperature column (e.g. the bit-exact temperature code in C)."""
+def rate_table_windows(log: dict, log_s: float = 3600.0) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(zero-rate rows, all rows) of every rate-table sequence of ``log``: the sequence and the
+    contiguous zero-rate stretch (at most ``log_s``) right before it. These rows are what a paper 002
+    calibration reads; every other row is held out from it."""
     if "rate_dps" not in log:
         raise ValueError("log: needs the rate_dps column (rate-table steps)")
     if not log_s > 0:
         raise ValueError(f"log_s: must be > 0, got {log_s!r}")
     t = np.asarray(log["time_s"], float)
     rate = np.asarray(log["rate_dps"], float)
-    out = np.asarray(log["output"] if output is None else output, float)
-    tc = np.asarray(log[temp_col] if temp is None else temp, float)
     moving = rate != 0
     edges = np.flatnonzero(np.diff(np.concatenate([[0], moving.astype(int), [0]])))
-    temps, sfs, biases = [], [], []
+    windows = []
     for start, stop in zip(edges[::2], edges[1::2]):
         zero = np.flatnonzero((~moving[:start]) & (t[:start] >= t[start] - log_s))
         # only the contiguous zero-rate stretch right before the sequence
@@ -37,7 +33,22 @@ def rate_table_points(log: dict, output=None, temp_col: str = "temp_c", log_s: f
         zero = zero[zero > (np.flatnonzero(moving[:start])[-1] if moving[:start].any() else -1)]
         if zero.size < 2 or stop - start < 2:
             continue
-        idx = np.concatenate([zero, np.arange(start, stop)])
+        windows.append((zero, np.concatenate([zero, np.arange(start, stop)])))
+    return windows
+
+
+def rate_table_points(log: dict, output=None, temp_col: str = "temp_c", log_s: float = 3600.0,
+                      temp=None, sort: bool = True) -> dict[str, np.ndarray]:
+    """``{"temp_c", "sf", "bias"}`` per rate-table sequence of ``log`` (output units).
+
+    ``output`` replaces ``log["output"]`` (e.g. a compensated rate); ``temp`` replaces the
+    temperature column (e.g. the bit-exact temperature code in C)."""
+    windows = rate_table_windows(log, log_s)
+    rate = np.asarray(log["rate_dps"], float)
+    out = np.asarray(log["output"] if output is None else output, float)
+    tc = np.asarray(log[temp_col] if temp is None else temp, float)
+    temps, sfs, biases = [], [], []
+    for zero, idx in windows:
         sf, _ = np.polyfit(rate[idx], out[idx], 1)
         temps.append(float(np.mean(tc[idx])))
         sfs.append(float(sf))

@@ -1,0 +1,196 @@
+"""Held-out compensated-output error with and without each remedy, in the log's units.
+
+paper002: the bit-exact log-rate compensation (:class:`fxdsp.repro.bitexact.Compensator002`:
+RTD code -> SF and bias engines -> divide -> subtract) of the extended config, against the
+applied rate (``rate_dps``), on the rows the calibration did not read (every row outside the
+rate-table windows, :func:`fxdsp.repro.points.rate_table_windows`: ramps, dwells before their
+last hour). Error in deg/s times the calibrated SF at 25 C = the log's output unit (mV). The lag
+runs bit-exactly at the log's rate (the same [lag] word lengths and rounding, alpha for the log's
+interval; the FPGA runs it at [lag] rate_hz, the same filter); the phase trim at log rate is the
+rotation the trimmed NCO applies to the demodulated pair, I' = I cos(theta) + Q sin(theta), with
+the config's quantised trim word (the demodulator itself is verified at 96 kHz by the regression).
+
+thermometer: the output has no applied input, so the error is what the compensation leaves of the
+output's temperature dependence: a cubic bias(T) fitted on the training folds of the diagnosis's
+time-blocked folds and evaluated on the held-out fold (the temperature the engine sees: the
+bit-exact code, through the bit-exact lag when chosen). The final config is fitted on every row;
+its bit-exact blocks are checked against the float polynomial on the log.
+
+Every variant turns stages off one at a time ("without lag", "without trim"), so the report shows
+that the stage produced the gain.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from fxdsp.blocks.lag import Lag
+from fxdsp.diagnose.extension import heldout_residual
+from fxdsp.fixed import OverflowLog, Rules, quantize, to_float  # noqa: F401 (re-exported to the pipeline)
+from fxdsp.ramps import sample_interval
+from fxdsp.repro.points import rate_table_windows
+
+ROUND = Rules("half_up", "saturate")
+
+
+def log_rate_lag(template: Lag, tau_s: float, time_s) -> Lag:
+    """The config's lag (word lengths, rounding) with alpha for the log's sample interval."""
+    return Lag(template.temp_format, tau_s, 1.0 / sample_interval(np.asarray(time_s, float)), template.alpha_bits,
+               template.g, template.rules, name="lag(log rate)")
+
+
+def trim_angle(nco) -> float:
+    """The NCO's quantised trim word as an angle in (-pi, pi]."""
+    turn = nco.trim / 2.0**nco.phase_bits
+    return float(2 * math.pi * (turn - 1.0 if turn > 0.5 else turn))
+
+
+def heldout_rows_paper002(columns: dict) -> np.ndarray:
+    held = np.ones(len(columns["time_s"]), dtype=bool)
+    for _, rows in rate_table_windows(columns):
+        held[rows] = False
+    return held
+
+
+def _variants(stages: set[str]) -> dict[str, set[str]]:
+    """before (none), after (all), and all but one of each switchable stage."""
+    out = {"before": set(), "after": set(stages)}
+    for s in sorted(stages & {"lag", "trim"}):
+        out[f"without {s}"] = set(stages) - {s}
+    return out
+
+
+def tau_of(remedies) -> float | None:
+    return next((r.parameters["tau_s"] for r in remedies if r.stage == "lag"), None)
+
+
+def compensate002(columns: dict, config_text_: str, on: set[str], tau_s: float | None, theta: float):
+    """(rate error in deg/s per row, overflow count) of a config's bit-exact log-rate compensation
+    with the stages ``on``: the lag at the log's rate, the trim as the reference rotation."""
+    from fxdsp.extend.configure import config_from_text
+    from fxdsp.repro.bitexact import Compensator002
+
+    comp = Compensator002(config_from_text(config_text_))
+    ovf = OverflowLog()
+    code, out = stage_inputs(comp, columns, on, tau_s, theta, ovf)
+    got = comp.run(out, code, ovf)
+    return got["rate_dps"] - np.asarray(columns["rate_dps"], float), int(ovf.total)
+
+
+def stage_inputs(comp, columns: dict, on: set[str], tau_s: float | None, theta: float, ovf=None):
+    """(temperature code the engines see, output the divider sees) with the stages ``on``."""
+    code = comp.temperature_code(columns["temp_c"], ovf)
+    if "lag" in on:
+        code = log_rate_lag(comp.design.blocks["lag"], tau_s, columns["time_s"]).run(log=ovf, temp=code).outputs["te"]
+    out = np.asarray(columns["output"], float)
+    if "trim" in on:
+        out = out * math.cos(theta) + np.asarray(columns["quad"], float) * math.sin(theta)
+    return code, out
+
+
+def paper002_applied(columns: dict, variants: dict, remedies) -> dict:
+    """A second run's error (every row: nothing of it was fitted) with the configs fitted on the first."""
+    out = {}
+    for name in ("before", "after"):
+        v = variants["variants"][name]
+        err, n_ovf = compensate002(columns, variants["_configs"][name], set(v["stages"]), tau_of(remedies),
+                                   variants["trim_rad"] or 0.0)
+        err = err * v["sf_nominal_mv_per_dps"]
+        out[name] = {"stages": v["stages"], "rms": float(np.sqrt(np.mean(err**2))),
+                     "max_abs": float(np.abs(err).max()), "overflows": n_ovf}
+    gain = out["before"]["rms"] / out["after"]["rms"] if out["after"]["rms"] > 0 else float("inf")
+    return {"rows": int(err.size), "variants": out, "gain": gain}
+
+
+def paper002_variants(columns: dict, remedies, base_text: str | None) -> dict:
+    """Per variant (a set of stages): its own calibration with those stages in place, its config
+    and its bit-exact held-out error. "after" is the extended config; "before" the plain
+    calibration (order 1, no stage)."""
+    from fxdsp.extend.configure import config_from_text, config_text, paper002_config, remedy_tables
+    from fxdsp.repro.bitexact import Compensator002
+
+    stages = {r.stage for r in remedies}
+    held = heldout_rows_paper002(columns)
+    # the remedies' own words (trim word, lag word lengths) do not depend on the calibration
+    probe = Compensator002(config_from_text(config_text(remedy_tables(remedies, "paper002"), base_text)))
+    theta = trim_angle(probe.design.blocks["demod"].nco) if "trim" in stages else 0.0
+    results, series, configs, cals = {}, {}, {}, {}
+    for name, on in _variants(stages).items():
+        chosen = [r for r in remedies if r.stage in on]
+        code, x = stage_inputs(probe, columns, on, tau_of(remedies), theta)
+        text, cal = paper002_config(columns, chosen, base_text, output=x,
+                                    temp_c=to_float(code, probe.rtd.temp_format) if "lag" in on else None)
+        err, n_ovf = compensate002(columns, text, on, tau_of(remedies), theta)
+        err = err * float(cal["sf_nominal"])
+        results[name] = {"stages": sorted(on), "rms": float(np.sqrt(np.mean(err[held] ** 2))),
+                         "max_abs": float(np.abs(err[held]).max()), "overflows": n_ovf,
+                         "sf_nominal_mv_per_dps": float(cal["sf_nominal"])}
+        series[name], configs[name], cals[name] = err, text, cal
+    return {"unit": "mV (output unit; deg/s x the variant's calibrated SF at 25 C)",
+            "heldout": "rows outside the calibration's rate-table windows", "heldout_rows": int(held.sum()),
+            "rows": int(held.size), "variants": results, "trim_rad": theta if "trim" in stages else None,
+            "_series": series, "_held": held, "_configs": configs, "_cals": cals}
+
+
+def thermometer_errors(columns: dict, design, remedies, folds: np.ndarray) -> dict:
+    """Held-out rms of the cubic-compensated output, with and without the lag (float fits on the
+    bit-exact temperature codes), and the bit-exact chain of the final config on every row."""
+    stages = {r.stage for r in remedies}
+    t = np.asarray(columns["time_s"], float)
+    y = np.asarray(columns["output"], float)
+    lag_block = design.blocks["lag"]
+    fmt = lag_block.temp_format
+    code = quantize(np.asarray(columns["temp_c"], float), fmt, ROUND)
+    temps = {"T": to_float(code, fmt)}
+    if "lag" in stages:
+        temps["Te"] = to_float(log_rate_lag(lag_block, tau_of(remedies), t).run(temp=code).outputs["te"], fmt)
+    results, series = {}, {}
+    for name, on in _variants(stages).items():
+        te = temps["Te"] if "lag" in on else temps["T"]
+        resid = heldout_residual(y, te, None, folds)
+        rms = float(np.sqrt(np.mean(resid**2)))
+        results[name] = {"stages": sorted(on), "rms": rms, "max_abs": float(np.abs(resid).max()), "overflows": 0}
+        series[name] = resid
+    return {"unit": "output unit", "heldout": "time-blocked folds of the diagnosis (fit on the others)",
+            "heldout_rows": int(y.size), "rows": int(y.size), "variants": results, "_series": series,
+            "_held": np.ones(y.size, dtype=bool), "_te": temps.get("Te", temps["T"]), "_code": code}
+
+
+def thermometer_bitexact(design, te_code: np.ndarray, output, fit: dict) -> dict:
+    """The final config's bias engine and subtractor on the log (bit-exact) against the float cubic
+    they quantise: the arithmetic's own error, in the output unit."""
+    bias, sub = design.blocks["piecewise_bias001"], design.blocks["bias_subtract001"]
+    ovf = OverflowLog()
+    y = quantize(np.asarray(output, float), sub.in_format, ROUND, ovf, "output")
+    b = bias.stream(ovf, temp=te_code)["y"]
+    r = to_float(sub.stream(ovf, x=y, bias=b)["y"], sub.out_format)
+    out = {"rms_compensated": float(np.sqrt(np.mean(r**2))), "overflows": int(ovf.total), "lsb": sub.out_format.lsb,
+           "_series": r}
+    if fit is not None:
+        te = to_float(te_code, bias.temp_format)
+        want = np.asarray(output, float) - np.polynomial.polynomial.polyval(te - fit["t0_c"], fit["coefficients"])
+        out["max_abs_vs_float"] = float(np.abs(r - want).max())
+    return out
+
+
+def thermometer_applied(columns: dict, configs: dict, remedies) -> dict:
+    """A second run through the bit-exact chains of the configs fitted on the first: rms of the
+    compensated output about its mean (what is left of the temperature dependence)."""
+    from fxdsp.chains import build
+    from fxdsp.extend.configure import config_from_text
+
+    out = {}
+    for name, stages in (("before", set()), ("after", {r.stage for r in remedies})):
+        design = build(config_from_text(configs[name]))
+        lag = design.blocks["lag"]
+        code = quantize(np.asarray(columns["temp_c"], float), lag.temp_format, ROUND)
+        if "lag" in stages:
+            code = log_rate_lag(lag, tau_of(remedies), columns["time_s"]).run(temp=code).outputs["te"]
+        r = thermometer_bitexact(design, code, columns["output"], None)["_series"]
+        r = r - r.mean()
+        out[name] = {"stages": sorted(stages), "rms": float(np.sqrt(np.mean(r**2))), "max_abs": float(np.abs(r).max()),
+                     "overflows": 0}
+    gain = out["before"]["rms"] / out["after"]["rms"] if out["after"]["rms"] > 0 else float("inf")
+    return {"rows": int(len(columns["time_s"])), "variants": out, "gain": gain}

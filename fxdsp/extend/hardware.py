@@ -1,0 +1,91 @@
+"""The extended config's hardware: golden vectors, Verilog headers and ROMs, a cocotb regression on
+Icarus, and the cost before/after from the committed hardware report.
+
+The regression streams every block of the chosen chain (and the chain_paper002 top) through its
+RTL with this config's generated parameters, against the bit-exact model, with the generic driver
+of ``fxdsp sweep rtl`` (:func:`fxdsp.sweep.rtl.run_block`: corners first, gapped valid). A lag that
+updates on every N-th chain sample (``DECIM`` = fs / rate_hz, thousands) changes its state only a
+few times in a short stream, so the lag is also run alone at its update rate (decimation 1, the
+same alpha word): the arithmetic of every update is checked; the decimation counter itself is the
+test suite's (a 5-sample decimation in tests/hdl/test_hdl_chain_stages.py, and its mutant).
+"""
+
+from __future__ import annotations
+
+import copy
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from fxdsp.chains import build
+from fxdsp.config import Config
+
+CHAIN_BLOCKS = {
+    "paper002": ("rtd", "piecewise_sf", "piecewise_bias", "sf_divide", "demod", "bias_subtract", "iir",
+                 "chain_paper002"),
+    "thermometer": ("piecewise_bias001", "bias_subtract001"),
+}
+
+
+def artefacts(design) -> dict[str, dict[str, str]]:
+    """{"vectors": {relative path: text}, "hdl": {file name: text}} of a design."""
+    from fxdsp import vectors
+    from fxdsp.hdl import params as hp
+
+    return {"vectors": vectors.generate(design), "hdl": hp.generate(design)}
+
+
+def _per_update_lag(config: Config):
+    """The design with the chain's lag stage removed: its lag is the config's at decimation 1."""
+    data = copy.deepcopy(config.data)
+    data.get("chain_paper002", {}).pop("stages", None)
+    return build(Config(data, source=config.name + " (lag per update)"))
+
+
+def regression(design, chain: str, has_lag: bool, build_root: Path | None = None, seed: int = 0,
+               rtl_dir: Path | None = None, only: tuple[str, ...] | None = None) -> dict:
+    """Per block: ok, samples, cycles, first errors. ValueError when Icarus or cocotb is missing.
+    ``rtl_dir``: other Verilog sources (default: the checkout's); ``only``: these labels."""
+    from fxdsp.hdl import params as hp
+    from fxdsp.sweep.rtl import RTL_DIR, check_tools, run_block
+
+    rtl_dir = RTL_DIR if rtl_dir is None else Path(rtl_dir)
+    check_tools(rtl_dir)
+    runs = [(name, design, name) for name in CHAIN_BLOCKS[chain]]
+    if has_lag:
+        lag_design = _per_update_lag(design.config) if chain == "paper002" else design
+        runs.append(("lag (per update)" if chain == "paper002" else "lag", lag_design, "lag"))
+    runs = [r for r in runs if only is None or r[0] in only]
+    files = {id(d): hp.generate(d) for _, d, _ in runs}
+    results = {}
+    with tempfile.TemporaryDirectory(prefix="fxdsp-extend-") as tmp:
+        root = Path(tmp) if build_root is None else Path(build_root)
+        for k, (label, d, name) in enumerate(runs):
+            block_seed = int(np.random.SeedSequence([seed, k]).generate_state(1)[0])
+            results[label] = run_block(d, files[id(d)], name, root / name.replace(" ", "_") / str(k), rtl_dir,
+                                       block_seed)
+    return {"simulator": "icarus", "blocks": results, "passed": all(r["ok"] for r in results.values())}
+
+
+def cost(chain: str, has_lag: bool) -> dict | None:
+    """LUT4 / SB_MAC16 / FF of the chain before and after, from the committed report's rows (the
+    default config's word lengths: an estimate for this config). None without a report."""
+    from fxdsp.hdl.hwreport import load_hw_report
+
+    report = load_hw_report()
+    if report is None:
+        return None
+    rows = {r["name"]: r for r in report["rows"]}
+    before_names = {"paper002": ["chain_paper002"], "thermometer": list(CHAIN_BLOCKS["thermometer"])}[chain]
+    after_names = before_names + (["lag"] if has_lag else [])
+
+    def total(names):
+        got = [rows[n] for n in names if n in rows]
+        picks = {"LUT4": lambda r: r.get("LUT"), "SB_MAC16": lambda r: r.get("MAC16"), "FF": lambda r: r.get("FF"),
+                 "xc7 LUT": lambda r: (r.get("xc7") or {}).get("LUT"),
+                 "xc7 DSP48E1": lambda r: (r.get("xc7") or {}).get("DSP48E1")}
+        return {key: int(sum(pick(r) or 0 for r in got)) if got else None for key, pick in picks.items()}
+
+    return {"before": total(before_names), "after": total(after_names), "before_rows": before_names,
+            "after_rows": after_names, "source": "hdl/HW_REPORT.json rows (default-config word lengths)"}

@@ -1,0 +1,124 @@
+"""The extension as a library call: a log in, the extended config, artefacts and report out."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from fxdsp.chains import build
+from fxdsp.config import default_config_text
+from fxdsp.errors import InputError
+from fxdsp.extend import configure, evaluate, hardware, plan as planning, report as rp
+from fxdsp.outputs import json_text
+
+
+@dataclass
+class Extension:
+    report: dict
+    config_text: str
+    base_config_text: str
+    files: dict = field(default_factory=dict)      # {"vectors": {...}, "hdl": {...}}
+    errors: dict = field(default_factory=dict)     # with the per-row series, for the plot
+    time_s: np.ndarray | None = None
+    model: dict = field(default_factory=dict)      # the diagnosed model, for `fxdsp simulate --model`
+    remedies: list = field(default_factory=list)
+
+    def apply(self, columns: dict, log_name: str) -> dict:
+        """Run the configs fitted on this log on a second run's log; the result joins the report."""
+        chain = self.report["chain"]
+        if chain == "paper002":
+            if "rate_dps" not in columns:
+                raise InputError(f"--apply {log_name}: the paper002 chain needs the rate_dps column")
+            res = evaluate.paper002_applied(columns, self.errors, self.remedies)
+        else:
+            res = evaluate.thermometer_applied(columns, {"before": self.base_config_text, "after": self.config_text},
+                                               self.remedies)
+        self.report["applied"] = {"log": log_name, **res}
+        return self.report["applied"]
+
+    def write(self, folder: Path) -> None:
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "config.toml").write_text(self.config_text, encoding="utf-8")
+        (folder / "config_base.toml").write_text(self.base_config_text, encoding="utf-8")
+        for sub, files in self.files.items():
+            for rel, text in files.items():
+                path = folder / sub / rel
+                path.parent.mkdir(parents=True, exist_ok=True)
+                path.write_text(text, encoding="ascii")
+        (folder / "model.json").write_text(json_text(self.model, "model.json", indent=1), encoding="utf-8")
+        (folder / "report.json").write_text(json_text(self.report, "report.json", indent=1), encoding="utf-8")
+        (folder / "report.md").write_text(rp.markdown(self.report), encoding="utf-8")
+        rp.plot(self.errors, self.time_s, folder / "heldout_error.png", self.errors["unit"].split(" ")[0])
+
+
+def columns_of(series) -> dict:
+    """The diagnosis's usable rows (spikes set aside) as contract columns."""
+    cols = {"time_s": series.t, "temp_c": series.temp, "output": series.out}
+    for name, value in (("ref_temp_c", series.ref), ("rate_dps", series.rate), ("freq_hz", series.freq),
+                        ("quad", series.quad)):
+        if value is not None:
+            cols[name] = value
+    return cols
+
+
+def extend_log(path, mapping=None, delimiter=",", time_format=None, chain="auto", base_text=None,
+               rtl: bool = True, build_root=None) -> Extension:
+    from fxdsp.diagnose.api import diagnose_log
+    from fxdsp.diagnose.logio import read_log
+
+    diag = diagnose_log(read_log(path, mapping, delimiter, time_format))
+    return extend_diagnosis(diag, Path(str(path)).name, chain, base_text, rtl, build_root)
+
+
+def extend_diagnosis(diag, log_name: str, chain="auto", base_text=None, rtl: bool = True,
+                     build_root=None) -> Extension:
+    columns = columns_of(diag.context.series)
+    if chain == "auto":
+        chain = "paper002" if "rate_dps" in columns else "thermometer"
+    remedies = planning.plan(diag, chain)
+    stages = {r.stage for r in remedies}
+    extra = {}
+    if chain == "paper002":
+        errors = evaluate.paper002_variants(columns, remedies, base_text)
+        base, ext, cal = errors["_configs"]["before"], errors["_configs"]["after"], errors["_cals"]["after"]
+        ext_cfg = configure.config_from_text(ext)
+        extra["calibration"] = {"order": cal["order"], "sf_nominal_mv_per_dps": cal["sf_nominal"],
+                                "points": len(cal["points"]["temp_c"])}
+    else:
+        text0 = base_text if base_text is not None else default_config_text()
+        template = build(configure.config_from_text(text0), chains=False)
+        fmt = template.blocks["rtd"].temp_format
+        t = columns["time_s"]
+        rate_hz = 1.0 / evaluate.sample_interval(t)
+        code = evaluate.quantize(columns["temp_c"], fmt, evaluate.ROUND)
+        temp = evaluate.to_float(code, fmt)
+        te_code = code
+        if "lag" in stages:
+            te_code = evaluate.log_rate_lag(template.blocks["lag"], evaluate.tau_of(remedies), t).run(temp=code).outputs["te"]
+        te = evaluate.to_float(te_code, fmt)
+        tables_base = configure.thermometer_tables(temp, temp, columns["output"], rate_hz, str(fmt))
+        tables_ext = configure.thermometer_tables(temp, te, columns["output"], rate_hz, str(fmt))
+        base = configure.thermometer_config(tables_base, [], text0)
+        ext = configure.thermometer_config(tables_ext, remedies, text0)
+        ext_cfg = configure.config_from_text(ext)
+        design = build(ext_cfg)
+        errors = evaluate.thermometer_errors(columns, design, remedies, diag.context.blocks.row_fold())
+        bx = evaluate.thermometer_bitexact(design, te_code, columns["output"], tables_ext["_fit"])
+        extra["bitexact_chain"] = rp.public(bx)
+        extra["fit"] = tables_ext["_fit"]
+    design = build(ext_cfg)
+    files = hardware.artefacts(design)
+    report = {"log": log_name, "chain": chain,
+              "diagnosis": {"causes": list(diag.causes), "parameters": diag.parameters,
+                            "gain": float(diag.gain["ratio"])},
+              "remedies": [{"cause": r.cause, "stage": r.stage, "what": r.what, "parameters": r.parameters}
+                           for r in remedies],
+              "heldout": rp.public(errors), "summary": rp.summary(errors), **extra,
+              "regression": hardware.regression(design, chain, "lag" in stages, build_root) if rtl else None,
+              "cost": hardware.cost(chain, "lag" in stages)}
+    from fxdsp.diagnose.report import replay_model
+
+    return Extension(report, ext, base, files, errors, columns["time_s"], replay_model(diag), remedies)

@@ -1,0 +1,68 @@
+"""Which named cause the FPGA can remedy, and how, per chain.
+
+A remedy changes the compensation hardware, never the sensor: a lag filter on the temperature code
+before the coefficient engines (``thermal_lag``), a phase trim of the demodulator's reference
+(``quadrature_leak``), a higher polynomial order per segment (``rtd_nonlinearity``: a curved
+temperature axis is a smooth distortion the SF and bias polynomials absorb once they may curve).
+A cause with no remedy in the chosen chain (hysteresis, ramp rate, aging, warm-up, a rate-cubic SF
+non-linearity, ...) stops the extension with one line naming it: compensating the rest would
+hand the user a config that silently leaves that error in.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from fxdsp.errors import InputError
+
+CHAINS = ("paper002", "thermometer")
+
+
+@dataclass(frozen=True)
+class Remedy:
+    cause: str
+    stage: str          # "lag", "trim", "order": the name the report and the ablation use
+    what: str           # one line for the report
+    parameters: dict
+
+
+def _lag(diag) -> Remedy:
+    tau = float(diag.parameters["thermal_lag"]["tau_s"])
+    return Remedy("thermal_lag", "lag", f"lag filter (tau {tau:.4g} s) on the temperature code before the "
+                  "coefficient engines", {"tau_s": tau})
+
+
+def _trim(diag) -> Remedy:
+    import math
+
+    c = float(diag.parameters["quadrature_leak"]["c"])
+    return Remedy("quadrature_leak", "trim", f"demodulation phase trim {-math.atan(c):+.5f} rad (-atan c, "
+                  f"c = {c:.4g})", {"c": c, "phase_trim_rad": -math.atan(c)})
+
+
+def _order(diag) -> Remedy:
+    return Remedy("rtd_nonlinearity", "order", "quadratic instead of linear SF and bias segments (the RTD "
+                  "readout's curvature)", {"order": 2})
+
+
+# chain -> cause -> remedy builder; "none" needs none
+REMEDIES = {
+    "paper002": {"thermal_lag": _lag, "quadrature_leak": _trim, "rtd_nonlinearity": _order},
+    # the thermometer chain's bias polynomial is already a cubic: a curved readout needs nothing more
+    "thermometer": {"thermal_lag": _lag},
+}
+ABSORBED = {"thermometer": {"rtd_nonlinearity": "absorbed by the cubic bias polynomial"}}
+
+
+def plan(diag, chain: str) -> list[Remedy]:
+    """The remedies of every named cause, in the diagnosis's order; InputError (exit 2) naming the
+    causes that have none in ``chain``."""
+    if chain not in REMEDIES:
+        raise InputError(f"--chain: unknown chain {chain!r}; expected one of {', '.join(CHAINS)}")
+    table, absorbed = REMEDIES[chain], ABSORBED.get(chain, {})
+    missing = [c for c in diag.causes if c not in table and c not in absorbed and c != "none"]
+    if missing:
+        raise InputError(f"extend: {', '.join(missing)} {'has' if len(missing) == 1 else 'have'} no hardware "
+                         f"remedy in the {chain} chain (remedies: {', '.join(sorted(table))}); "
+                         f"diagnosed causes: {', '.join(diag.causes)}")
+    return [table[c](diag) for c in diag.causes if c in table]

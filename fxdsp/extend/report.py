@@ -1,0 +1,88 @@
+"""The extension's report: ``report.json`` (machine-readable), ``report.md`` and ``heldout_error.png``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+def public(d):
+    """A result without its private (underscore) entries: arrays kept for the plot only."""
+    if isinstance(d, dict):
+        return {k: public(v) for k, v in d.items() if not str(k).startswith("_")}
+    return d
+
+
+def summary(errors: dict) -> dict:
+    """Held-out gain (before / after) and the gain each stage's removal leaves."""
+    v = errors["variants"]
+    after = v["after"]["rms"]
+    gain = v["before"]["rms"] / after if after > 0 else float("inf")
+    without = {k.removeprefix("without "): (v["before"]["rms"] / v[k]["rms"] if v[k]["rms"] > 0 else float("inf"))
+               for k in v if k.startswith("without ")}
+    return {"rms_before": v["before"]["rms"], "rms_after": after, "gain": gain, "gain_without": without}
+
+
+def markdown(rep: dict) -> str:
+    e, s = rep["heldout"], rep["summary"]
+    L = [f"# fxdsp extend: {rep['log']}", "",
+         f"Chain: **{rep['chain']}**. Diagnosis: causes **{', '.join(rep['diagnosis']['causes']) or 'none'}** "
+         f"(held-out gain of the model {rep['diagnosis']['gain']:.3g}).", "", "## Remedies", ""]
+    L += [f"* {r['cause']}: {r['what']}" for r in rep["remedies"]] or ["* none: the calibrated chain as it is"]
+    L += ["", "## Held-out compensated-output error", "",
+          f"Unit: {e['unit']}. Held out: {e['heldout']} ({e['heldout_rows']} of {e['rows']} rows).", "",
+          "| variant | stages | rms | max abs | overflows |", "|---|---|---:|---:|---:|"]
+    for name, r in e["variants"].items():
+        L.append(f"| {name} | {', '.join(r['stages']) or '-'} | {r['rms']:.4g} | {r['max_abs']:.4g} | {r['overflows']} |")
+    L += ["", f"Gain (rms before / after): **{s['gain']:.3g}**" +
+          "".join(f"; with {k} turned off: {g:.3g}" for k, g in s["gain_without"].items()), ""]
+    if rep.get("applied"):
+        a = rep["applied"]
+        L += [f"Applied to a second run, `{a['log']}` (nothing of it fitted, {a['rows']} rows): rms "
+              f"{a['variants']['before']['rms']:.4g} -> {a['variants']['after']['rms']:.4g}, gain **{a['gain']:.3g}**.", ""]
+    if rep.get("bitexact_chain"):
+        b = rep["bitexact_chain"]
+        L += [f"Bit-exact chain of the final config on the log: rms of the compensated output {b['rms_compensated']:.4g}, "
+              f"max |bit-exact - float| {b['max_abs_vs_float']:.3g} (LSB {b['lsb']:.3g}), overflows {b['overflows']}.", ""]
+    L += ["## Hardware", ""]
+    reg = rep.get("regression")
+    if reg is None:
+        L.append("RTL regression: not run (--no-rtl).")
+    else:
+        L += [f"RTL regression ({reg['simulator']}, cocotb, this config's generated parameters): "
+              f"**{'bit-exact' if reg['passed'] else 'MISMATCH'}**", "", "| block | ok | samples | cycles |",
+              "|---|---|---:|---:|"]
+        L += [f"| {k} | {'yes' if r['ok'] else 'NO: ' + '; '.join(r['errors'])} | {r['samples']} | {r['cycles']} |"
+              for k, r in reg["blocks"].items()]
+    c = rep.get("cost")
+    if c:
+        L += ["", f"Cost ({c['source']}): before = {' + '.join(c['before_rows'])}, after = "
+              f"{' + '.join(c['after_rows'])}.", "", "| | " + " | ".join(c["before"]) + " |",
+              "|---|" + "---:|" * len(c["before"])]
+        for when in ("before", "after"):
+            L.append(f"| {when} | " + " | ".join("-" if v is None else str(v) for v in c[when].values()) + " |")
+    L += ["", "Files: `config.toml` (extended), `config_base.toml` (calibrated, no remedy), `vectors/`, `hdl/`, "
+          "`report.json`, `heldout_error.png`, `model.json` (the diagnosed model: `fxdsp simulate --model`).", ""]
+    return "\n".join(L)
+
+
+def plot(errors: dict, time_s, path: Path, unit: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = np.asarray(time_s, float) / 3600.0
+    held = errors["_held"]
+    fig, ax = plt.subplots(figsize=(9, 4))
+    for name in ("before", "after"):
+        y = np.where(held, errors["_series"][name], np.nan)
+        ax.plot(t, y, lw=0.7, label=f"{name} (rms {errors['variants'][name]['rms']:.3g})")
+    ax.set_xlabel("time (h)")
+    ax.set_ylabel(f"held-out error ({unit})")
+    ax.legend(loc="best")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

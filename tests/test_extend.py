@@ -1,0 +1,165 @@
+"""`fxdsp extend` end to end (issue 14): a log in; the extended config, its golden vectors, Verilog
+headers, a cocotb regression on that config and a report out. The simulated logs come from
+`fxdsp simulate` with one injected cause each (a thermal lag, a quadrature leak, both); the real
+one is the tckit 1 V transfer log. Each report's held-out gain and bit-exact status are asserted,
+and each stage is shown to be what produced the gain: with it turned off the gain is gone.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from conftest import SHARED, needs_shared
+from fxdsp.chains import build
+from fxdsp.cli import main
+from fxdsp.config import Config
+
+ROOT = Path(__file__).parents[1]
+TCKIT_REL = "data/tckit/hp3458abx_hp34420a_tcsweep_1vdc_nplc100_test2_oct2024.dsv"
+# vbl6: the channel the diagnosis names thermal_lag alone (vbl5 adds a warm-up, which has no remedy)
+TCKIT_ARGS = ["--map", "time_s=date", "--map", "temp_c=box_temp", "--map", "output=vbl6", "--delimiter", ";",
+              "--time-format", "%d/%m/%Y-%H:%M:%S"]
+needs_icarus = pytest.mark.skipif(shutil.which("iverilog") is None, reason="iverilog is not installed")
+
+# name -> (simulate effects, seed, the stages the extension must add)
+LOGS = {"lag": (["thermal_lag.tau_s=1500"], 1, {"lag"}),
+        "quad": (["quadrature_leak=0.2"], 2, {"trim"}),
+        "both": (["thermal_lag.tau_s=1500", "quadrature_leak=0.05"], 3, {"lag", "trim"}),
+        "hysteresis": (["hysteresis=0.3"], 4, set())}
+
+
+def simulate(folder: Path, name: str, seed: int | None = None) -> Path:
+    effects, default_seed, _ = LOGS[name]
+    path = folder / f"{name}_{seed or default_seed}.csv"
+    args = ["simulate", "--scenario", "paper002", "--seed", str(seed or default_seed), "--out", str(path)]
+    for e in effects:
+        args += ["--effect", e]
+    assert main(args) == 0
+    return path
+
+
+@pytest.fixture(scope="module")
+def logs(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("extend_logs")
+    return {name: simulate(folder, name) for name in LOGS}
+
+
+def extend(args, capsys) -> tuple[int, str, str]:
+    code = main(["extend", *map(str, args)])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@needs_icarus
+@pytest.mark.parametrize("name", ["lag", "quad", "both"])
+def test_extend_a_simulated_paper002_log(logs, name, tmp_path, capsys):
+    out = tmp_path / "ext"
+    code, stdout, err = extend([logs[name], "--out", out], capsys)
+    assert code == 0, err
+    rep = json.loads((out / "report.json").read_text())
+    stages = LOGS[name][2]
+    assert rep["chain"] == "paper002" and {r["stage"] for r in rep["remedies"]} == stages
+    # bit-exact: every block of the chain and the top, on this config's generated parameters
+    reg = rep["regression"]
+    assert reg["passed"] and {"chain_paper002", "demod", "piecewise_sf"} <= set(reg["blocks"])
+    assert ("lag (per update)" in reg["blocks"]) == ("lag" in stages)
+    assert "bit-exact" in stdout
+    # held out: rows the calibration never read, and the remedies' gain on them
+    h, s = rep["heldout"], rep["summary"]
+    assert 0 < h["heldout_rows"] < h["rows"]
+    assert s["gain"] > (3.0 if name != "quad" else 2.0), s
+    assert all(v["overflows"] == 0 for v in h["variants"].values())
+    # each stage produced its share: turned off, the gain it brought is gone
+    for stage in stages:
+        others = rep["summary"]["gain_without"][stage]
+        if stages == {stage}:
+            assert others < 1.1, (stage, others)
+        else:
+            assert h["variants"][f"without {stage}"]["rms"] > 1.1 * s["rms_after"], stage
+    # the config, the headers and the vectors are this extension's
+    cfg = tomllib.loads((out / "config.toml").read_text())
+    build(Config(cfg, source="ext"))
+    hdl = out / "hdl"
+    assert cfg["chain_paper002"]["stages"] == (["lag"] if "lag" in stages else [])
+    assert ("parameter integer LAG_EN = 1" in (hdl / "chain_paper002_params.vh").read_text()) == ("lag" in stages)
+    if "lag" in stages:
+        decim = round(cfg["system"]["fs_hz"] / cfg["lag"]["rate_hz"])
+        assert f".DECIM({decim})" in (hdl / "lag_params.vh").read_text() and decim > 1
+    assert (cfg["demod"]["phase_trim_rad"] != 0) == ("trim" in stages)
+    manifest = json.loads((out / "vectors" / "manifest.json").read_text())
+    assert manifest["blocks"]["chain_paper002"]["parameters"].get("stages", []) == cfg["chain_paper002"]["stages"]
+    assert (out / "heldout_error.png").stat().st_size > 0 and "Held-out" in (out / "report.md").read_text()
+
+
+def test_a_cause_without_a_remedy_is_one_line_and_exit_2(logs, tmp_path, capsys):
+    out = tmp_path / "ext"
+    code, _, err = extend([logs["hysteresis"], "--out", out, "--no-rtl"], capsys)
+    assert code == 2 and err.count("\n") == 1 and "hysteresis has no hardware remedy" in err, err
+    assert not out.exists()   # nothing half-written
+
+
+def test_bad_chain_is_one_line_and_exit_2(logs, tmp_path, capsys):
+    code, _, err = extend([logs["lag"], "--chain", "gyro", "--out", tmp_path / "x", "--no-rtl"], capsys)
+    assert code == 2 and err.count("\n") == 1 and "--chain" in err
+
+
+def test_fit_on_one_run_apply_on_another(logs, tmp_path, capsys):
+    """The configs fitted on run 1 compensate run 2 (another seed: other noise, quadrature wander)."""
+    second = simulate(tmp_path, "both", seed=13)
+    code, stdout, err = extend([logs["both"], "--apply", second, "--out", tmp_path / "ext", "--no-rtl"], capsys)
+    assert code == 0, err
+    applied = json.loads((tmp_path / "ext" / "report.json").read_text())["applied"]
+    assert applied["log"] == second.name and applied["gain"] > 3.0, applied
+    assert "applied to" in stdout
+
+
+def test_same_log_same_bytes(logs, tmp_path, capsys):
+    for k in (1, 2):
+        assert extend([logs["quad"], "--out", tmp_path / f"o{k}", "--no-rtl"], capsys)[0] == 0
+    for name in ("report.json", "config.toml", "vectors/manifest.json", "hdl/demod_params.vh"):
+        assert (tmp_path / "o1" / name).read_bytes() == (tmp_path / "o2" / name).read_bytes(), name
+
+
+@needs_icarus
+def test_the_regression_fails_on_a_mutated_rtl(tmp_path):
+    """The same regression on an RTL copy whose lag rounds its output by floor instead of the
+    configured half_up must report a mismatch (so 'bit-exact' in a report is evidence). (Its state
+    step's rounding would not show: 20 guard bits put it 2**-20 codes below the output.)"""
+    from fxdsp.extend import hardware
+
+    cfg = Config(tomllib.loads((ROOT / "fxdsp" / "configs" / "default.toml").read_text()), source="default")
+    cfg.data["chain_paper002"]["stages"] = ["lag"]
+    cfg.data["lag"]["tau_s"] = 5.0
+    design = build(cfg)
+    rtl = tmp_path / "rtl"
+    shutil.copytree(ROOT / "hdl" / "rtl", rtl)
+    text = (rtl / "lag.v").read_text()
+    old = "fx_convert #(.IN_W(STATE_W), .SHIFT(GUARD), .ROUNDING(ROUNDING)"
+    assert text.count(old) == 1
+    (rtl / "lag.v").write_text(text.replace(old, "fx_convert #(.IN_W(STATE_W), .SHIFT(GUARD), .ROUNDING(0)"))
+    good = hardware.regression(design, "paper002", True, only=("lag (per update)",))
+    bad = hardware.regression(design, "paper002", True, rtl_dir=rtl, only=("lag (per update)",))
+    assert good["passed"] and not bad["passed"], (good, bad)
+
+
+@needs_icarus
+@needs_shared(TCKIT_REL)
+def test_extend_the_tckit_log(tmp_path, capsys):
+    out = tmp_path / "ext"
+    code, stdout, err = extend([SHARED / TCKIT_REL, *TCKIT_ARGS, "--out", out], capsys)
+    assert code == 0, err
+    rep = json.loads((out / "report.json").read_text())
+    assert rep["chain"] == "thermometer" and [r["stage"] for r in rep["remedies"]] == ["lag"]
+    assert rep["regression"]["passed"] and set(rep["regression"]["blocks"]) == {"piecewise_bias001",
+                                                                               "bias_subtract001", "lag"}
+    s = rep["summary"]
+    assert s["gain"] > 2.0 and s["gain_without"]["lag"] < 1.05, s
+    # the hardware arithmetic adds nothing the compensation would notice: a few output LSBs
+    b = rep["bitexact_chain"]
+    assert b["overflows"] == 0 and b["max_abs_vs_float"] < 4 * b["lsb"], b
+    assert b["max_abs_vs_float"] < 0.05 * s["rms_after"]
