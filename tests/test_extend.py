@@ -109,8 +109,15 @@ def test_bad_chain_is_one_line_and_exit_2(logs, tmp_path, capsys):
 
 
 def test_fit_on_one_run_apply_on_another(logs, tmp_path, capsys):
-    """The configs fitted on run 1 compensate run 2 (another seed: other noise, quadrature wander)."""
-    second = simulate(tmp_path, "both", seed=13)
+    """Run 2 is `fxdsp simulate --model` replaying the model run 1's extension wrote (another seed:
+    other noise, other quadrature wander); the configs fitted on run 1 compensate it."""
+    code, _, err = extend([logs["both"], "--out", tmp_path / "first", "--no-rtl"], capsys)
+    assert code == 0, err
+    model = json.loads((tmp_path / "first" / "model.json").read_text())
+    assert set(model["effects"]) == {"thermal_lag", "quadrature_leak"}
+    second = tmp_path / "replay.csv"
+    assert main(["simulate", "--scenario", "paper002", "--model", str(tmp_path / "first" / "model.json"),
+                 "--seed", "13", "--out", str(second)]) == 0
     code, stdout, err = extend([logs["both"], "--apply", second, "--out", tmp_path / "ext", "--no-rtl"], capsys)
     assert code == 0, err
     applied = json.loads((tmp_path / "ext" / "report.json").read_text())["applied"]
