@@ -170,3 +170,27 @@ def test_extend_the_tckit_log(tmp_path, capsys):
     b = rep["bitexact_chain"]
     assert b["overflows"] == 0 and b["max_abs_vs_float"] < 4 * b["lsb"], b
     assert b["max_abs_vs_float"] < 0.05 * s["rms_after"]
+
+
+def test_calibrate_keeps_an_extended_configs_stages(logs, tmp_path, capsys):
+    """`fxdsp calibrate --config EXT --apply LOG2`: the extension's stages stay in the recalibrated
+    config, the fit is made with them in place, and the second run is compensated through them (the
+    quadrature wander and the lag no longer leak into the bias points: a lower bias tempco than the
+    plain calibration's on the same two runs)."""
+    code, _, err = extend([logs["both"], "--out", tmp_path / "ext", "--no-rtl"], capsys)
+    assert code == 0, err
+    second = simulate(tmp_path, "both", seed=13)
+    results = {}
+    for name, extra in (("extended", ["--config", tmp_path / "ext" / "config.toml"]), ("plain", [])):
+        out = tmp_path / f"{name}.json"
+        args = ["calibrate", "--paper", "002", logs["both"], *extra, "--config-out", tmp_path / f"{name}.toml",
+                "--apply", second, "--json", out]
+        assert main(list(map(str, args))) == 0, capsys.readouterr().err
+        results[name] = json.loads(out.read_text())
+    ext, plain = results["extended"], results["plain"]
+    assert ext["config"]["stages"] == ["lag", "trim"] and ext["apply"]["stages"] == ["lag", "trim"]
+    assert "stages" not in plain["apply"]
+    cfg = tomllib.loads((tmp_path / "extended.toml").read_text())
+    assert cfg["chain_paper002"]["stages"] == ["lag"] and cfg["demod"]["phase_trim_rad"] != 0
+    assert ext["apply"]["bias_tempco_deg_h_after"] < 0.5 * plain["apply"]["bias_tempco_deg_h_after"], \
+        (ext["apply"], plain["apply"])

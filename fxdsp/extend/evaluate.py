@@ -47,6 +47,19 @@ def trim_angle(nco) -> float:
     return float(2 * math.pi * (turn - 1.0 if turn > 0.5 else turn))
 
 
+def config_stages(design) -> tuple[set[str], float | None, float]:
+    """The stages a (paper 002) design carries: ({"lag", "trim"} subset, lag tau, trim angle)."""
+    on, tau = set(), None
+    chain = design.chains.get("chain_paper002") if design.chains else None
+    if chain is not None and chain.lag is not None:
+        on.add("lag")
+        tau = chain.lag.tau_s
+    theta = trim_angle(design.blocks["demod"].nco)
+    if design.blocks["demod"].nco.trim != 0:
+        on.add("trim")
+    return on, tau, theta
+
+
 def heldout_rows_paper002(columns: dict) -> np.ndarray:
     held = np.ones(len(columns["time_s"]), dtype=bool)
     for _, rows in rate_table_windows(columns):
@@ -81,6 +94,8 @@ def compensate002(columns: dict, config_text_: str, on: set[str], tau_s: float |
 
 def stage_inputs(comp, columns: dict, on: set[str], tau_s: float | None, theta: float, ovf=None):
     """(temperature code the engines see, output the divider sees) with the stages ``on``."""
+    if "trim" in on and "quad" not in columns:
+        raise ValueError("log: the config's demodulation phase trim needs the quad column to compensate at log rate")
     code = comp.temperature_code(columns["temp_c"], ovf)
     if "lag" in on:
         code = log_rate_lag(comp.design.blocks["lag"], tau_s, columns["time_s"]).run(log=ovf, temp=code).outputs["te"]

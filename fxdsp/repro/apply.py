@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from fxdsp.fixed import OverflowLog, to_float
+
 from fxdsp.repro import paper001
 from fxdsp.repro.bitexact import Compensator000, Compensator001, Compensator002
 from fxdsp.repro.calconfig import config_from_text, config_text, paper000_tables, paper001_tables, paper002_tables
@@ -15,11 +17,26 @@ from fxdsp.sim.calibration import calibrate_paper000_log, calibrate_paper001, tu
 PAPERS = ("002", "001", "000")
 
 
-def calibrated_config(paper: str, log: dict, order: int = 1) -> tuple[str, dict]:
-    """(config TOML text, calibration) of a paper from a log. Paper 001's thermometer is checked
-    bit-exactly against the calibration reference: a failing f0/k is a ValueError."""
+def calibrated_config(paper: str, log: dict, order: int = 1, base_text: str | None = None) -> tuple[str, dict]:
+    """(config TOML text, calibration) of a paper from a log, written into ``base_text`` (default:
+    the built-in config). Paper 002 with a base that carries stages (an extended config from
+    ``fxdsp extend``: a lag, a phase trim) is calibrated with them in place, so its tables do not
+    absorb what the stages remove. Paper 001's thermometer is checked bit-exactly against the
+    calibration reference: a failing f0/k is a ValueError."""
     if paper == "002":
-        cal = calibrate002(log, order)
+        on = set()
+        if base_text is not None:
+            from fxdsp.extend.evaluate import config_stages, stage_inputs
+
+            comp = Compensator002(config_from_text(base_text))
+            on, tau, theta = config_stages(comp.design)
+        if on:
+            code, out = stage_inputs(comp, log, on, tau, theta)
+            temp = to_float(code, comp.rtd.temp_format) if "lag" in on else None
+            cal = calibrate002({**log, "output": out}, order, temp=temp)
+            cal["stages"] = sorted(on)
+        else:
+            cal = calibrate002(log, order)
         tables = paper002_tables(cal)
     elif paper == "001":
         if order != 1:
@@ -33,7 +50,7 @@ def calibrated_config(paper: str, log: dict, order: int = 1) -> tuple[str, dict]
         tables = paper000_tables(cal)
     else:
         raise ValueError(f"--paper: unknown paper {paper!r}; expected one of {', '.join(PAPERS)}")
-    text = config_text(tables, provenance=f"calibrated by fxdsp.repro for paper {paper}")
+    text = config_text(tables, base_text, provenance=f"calibrated by fxdsp.repro for paper {paper}")
     if paper == "001":
         pts = cal["points"]
         check = paper001.check_thermometer(config_from_text(text), pts["temp_c"], pts["freq_hz"])
@@ -48,7 +65,13 @@ def apply_config(paper: str, config_text_: str, log: dict) -> dict:
     """Bit-exact compensation of ``log`` with a config; figures before and after."""
     cfg = config_from_text(config_text_)
     if paper == "002":
-        out = Compensator002(cfg).compensate(log)
+        from fxdsp.extend.evaluate import config_stages, stage_inputs
+
+        comp = Compensator002(cfg)
+        on, tau, theta = config_stages(comp.design)
+        ovf = OverflowLog()
+        code, x = stage_inputs(comp, log, on, tau, theta, ovf)   # the config's stages (none: as before)
+        out = comp.run(x, code, ovf)
         ref = log["ref_temp_c"] if "ref_temp_c" in log else log["temp_c"]
         before = rate_table_points(log, temp=ref)
         after = rate_table_points(log, output=out["rate_dps"], temp=ref)
@@ -57,7 +80,7 @@ def apply_config(paper: str, config_text_: str, log: dict) -> dict:
                 "bias_tempco_deg_h_before": tempco(before["temp_c"], before["bias"] / sf25 * 3600.0),
                 "sf_tempco_ppm_after": tempco(after["temp_c"], after["sf"], True) * 1e6,
                 "bias_tempco_deg_h_after": tempco(after["temp_c"], after["bias"] * 3600.0),
-                "overflows": out["overflows"].total}
+                "overflows": out["overflows"].total, **({"stages": sorted(on)} if on else {})}
     if paper == "001":
         out = Compensator001(cfg).compensate(log)
         r = out["rate_deg_h"]

@@ -10,7 +10,10 @@ resonator's temperature; paper 000: cubic K0(t), K1(t) from the four-position tu
 ``--config-out F`` quantises the fit into a TOML config (a copy of the default with the calibrated
 tables, see :mod:`fxdsp.repro.calconfig`; paper 001's thermometer is checked bit-exactly against the
 calibration reference first). ``--apply LOG2`` runs the bit-exact compensation with that config on a
-second run's log and adds its figures to the output under ``"apply"``.
+second run's log and adds its figures to the output under ``"apply"``. ``--config BASE`` writes the
+calibration into BASE instead of the built-in config; for paper 002 an extended config (``fxdsp
+extend``: lag stage, phase trim) keeps its stages, is calibrated with them in place and applied
+through them: fit on run 1, apply on run 2, for extended configs too.
 """
 
 from __future__ import annotations
@@ -34,11 +37,15 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--config-out", metavar="F.toml", help="write the calibrated, quantised TOML config")
     parser.add_argument("--apply", metavar="LOG2.csv",
                         help="compensate a second run's log bit-exactly with the calibrated config")
+    parser.add_argument("--config", metavar="BASE.toml",
+                        help="write the calibration into this config instead of the built-in one; paper 002: an "
+                             "extended config (fxdsp extend) keeps its lag / phase trim, is calibrated with them "
+                             "in place, and --apply runs them")
     parser.add_argument("--order", type=int, default=1, metavar="N",
                         help="paper 002: polynomial order per segment for the config (1 = the paper's, 2)")
 
 
-PATHS = {"log": IN, "--apply": IN, "--json": OUT_FILE, "--config-out": OUT_FILE}
+PATHS = {"log": IN, "--apply": IN, "--config": IN, "--json": OUT_FILE, "--config-out": OUT_FILE}
 
 
 def run(args) -> int:
@@ -56,9 +63,12 @@ def _run(args, stage) -> int:
     if args.config_out or args.apply:
         from fxdsp.repro.apply import apply_config, calibrated_config
 
-        text, cal = calibrated_config(args.paper, log, args.order)
+        base = Path(args.config).read_text(encoding="utf-8") if args.config else None
+        text, cal = calibrated_config(args.paper, log, args.order, base)
         # file names only: the same run gives the same JSON wherever its files lie
         result["config"] = {"path": Path(args.config_out).name if args.config_out else None, "order": args.order}
+        if cal.get("stages"):
+            result["config"]["stages"] = cal["stages"]
         if "thermometer_check" in cal:
             result["config"]["thermometer_check"] = cal["thermometer_check"]
         if args.config_out:
