@@ -30,13 +30,15 @@ needs_icarus = pytest.mark.skipif(shutil.which("iverilog") is None, reason="iver
 LOGS = {"lag": (["thermal_lag.tau_s=1500"], 1, {"lag"}),
         "quad": (["quadrature_leak=0.2"], 2, {"trim"}),
         "both": (["thermal_lag.tau_s=1500", "quadrature_leak=0.05"], 3, {"lag", "trim"}),
-        "hysteresis": (["hysteresis=0.3"], 4, set())}
+        "hysteresis": (["hysteresis=0.3"], 4, set()),
+        "turnover": (["frequency_nonlinearity=0.0005"], 7, {"order"})}
 
 
 def simulate(folder: Path, name: str, seed: int | None = None) -> Path:
     effects, default_seed, _ = LOGS[name]
     path = folder / f"{name}_{seed or default_seed}.csv"
-    args = ["simulate", "--scenario", "paper002", "--seed", str(seed or default_seed), "--out", str(path)]
+    scenario = "paper001" if name == "turnover" else "paper002"
+    args = ["simulate", "--scenario", scenario, "--seed", str(seed or default_seed), "--out", str(path)]
     for e in effects:
         args += ["--effect", e]
     assert main(args) == 0
@@ -94,6 +96,23 @@ def test_extend_a_simulated_paper002_log(logs, name, tmp_path, capsys):
     manifest = json.loads((out / "vectors" / "manifest.json").read_text())
     assert manifest["blocks"]["chain_paper002"]["parameters"].get("stages", []) == cfg["chain_paper002"]["stages"]
     assert (out / "heldout_error.png").stat().st_size > 0 and "Held-out" in (out / "report.md").read_text()
+
+
+@needs_icarus
+def test_extend_a_paper001_log_whose_resonator_turns_over(logs, tmp_path, capsys):
+    """The frequency thermometer is linear; a turnover k2 (Te - 25)^2 bends T_f, and the remedy is a
+    cubic bias in T_f. Auto picks the paper001 chain (freq_hz, no rate-table steps)."""
+    out = tmp_path / "ext"
+    code, _, err = extend([logs["turnover"], "--out", out], capsys)
+    assert code == 0, err
+    rep = json.loads((out / "report.json").read_text())
+    assert rep["chain"] == "paper001" and [r["stage"] for r in rep["remedies"]] == ["order"]
+    assert rep["regression"]["passed"] and "chain_paper001" in rep["regression"]["blocks"]
+    assert rep["summary"]["gain"] > 1.5 and rep["calibration"]["thermometer_check"]["ok"], rep["summary"]
+    cfg = tomllib.loads((out / "config.toml").read_text())
+    base = tomllib.loads((out / "config_base.toml").read_text())
+    assert len(cfg["piecewise"]["bias001"]["coefficients"][0]) == 4
+    assert len(base["piecewise"]["bias001"]["coefficients"][0]) == 3
 
 
 def test_a_cause_without_a_remedy_is_one_line_and_exit_2(logs, tmp_path, capsys):

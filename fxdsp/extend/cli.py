@@ -1,4 +1,4 @@
-"""``fxdsp extend LOG [--map C=S ...] [--chain auto|paper002|thermometer] [--config BASE] [--no-rtl] --out DIR``
+"""``fxdsp extend LOG [--map C=S ...] [--chain auto|paper002|paper001|thermometer] [--config BASE] [--no-rtl] --out DIR``
 
 From a measured log to a compensation the FPGA can load, with the proof that it works: diagnose the
 log, give every named cause its hardware remedy (exit 2 naming a cause that has none), calibrate
@@ -28,7 +28,7 @@ def configure(parser) -> None:
     parser.add_argument("--time-format", default=None, metavar="F", help="strptime format of the time column")
     parser.add_argument("--chain", default="auto", metavar="NAME",
                         help=f"compensation chain: {', '.join(CHAINS)}, or auto (paper002 when the log has "
-                             "rate_dps, else thermometer)")
+                             "rate-table steps in rate_dps, else paper001 when it has freq_hz, else thermometer)")
     parser.add_argument("--config", default=None, metavar="BASE.toml", help="base config (default: built-in)")
     parser.add_argument("--apply", metavar="LOG2",
                         help="run the compensation fitted on LOG on a second run's log (same --map); its "

@@ -8,6 +8,9 @@ diff against the base shows exactly what the extension changed.
   (:func:`fxdsp.repro.calibrate.calibrate002`, quadratic segments with the ``order`` remedy);
   ``lag``: ``[lag] tau_s`` and ``[chain_paper002] stages = ["lag"]`` (the lag then updates at the
   base's ``[lag] rate_hz``, a divisor of ``fs_hz``); ``trim``: ``[demod] phase_trim_rad``.
+* paper001: f0/k of the resonator thermometer against the reference and the bias polynomial in the
+  frequency's temperature (a cubic instead of the paper's quadratic with the ``order`` remedy, for
+  a resonator whose frequency turns over).
 * thermometer (an instrument read against a thermometer, such as the tckit voltmeter): the log's
   temperature code -> ``lag`` (at the log's own rate) -> a cubic bias polynomial in T
   (``[piecewise.bias001]``) -> ``bias_subtract001``. The blocks are paper 001's bias engine and
@@ -63,6 +66,26 @@ def paper002_config(columns: dict, remedies, base_text: str | None = None, outpu
     what = "; ".join(r.what for r in remedies) or "no remedy"
     text = config_text({**paper002_tables(cal), **remedy_tables(remedies, "paper002")}, base_text,
                        provenance=f"calibrated by fxdsp extend (paper 002): {what}")
+    return text, cal
+
+
+def paper001_config(columns: dict, remedies, base_text: str | None = None) -> tuple[str, dict]:
+    """(config text, calibration) of paper 001's chain: f0/k of the resonator thermometer against the
+    reference, then the bias polynomial (cubic with the ``order`` remedy) in T from f. The
+    thermometer is checked bit-exactly against the calibration points (a failing f0/k raises)."""
+    from fxdsp.repro.calconfig import paper001_tables
+    from fxdsp.repro.paper001 import THERMO_TOL_C, check_thermometer
+    from fxdsp.sim.calibration import calibrate_paper001
+
+    cal = calibrate_paper001(columns, bias_order=3 if "order" in _stages(remedies) else 2)
+    what = "; ".join(r.what for r in remedies) or "no remedy"
+    text = config_text(paper001_tables(cal), base_text, provenance=f"calibrated by fxdsp extend (paper 001): {what}")
+    pts = cal["points"]
+    check = check_thermometer(config_from_text(text), pts["temp_c"], pts["freq_hz"])
+    if not check["ok"]:
+        raise ValueError(f"freq2temp: calibrated f0/k put the calibration points {check['mean_error_c']:+.3f} C "
+                         f"off the reference (limit {THERMO_TOL_C} C)")
+    cal["thermometer_check"] = check
     return text, cal
 
 

@@ -149,6 +149,34 @@ def paper002_variants(columns: dict, remedies, base_text: str | None) -> dict:
             "_series": series, "_held": held, "_configs": configs, "_cals": cals}
 
 
+def paper001_variants(columns: dict, remedies, base_text: str | None) -> dict:
+    """paper 001: before (the paper's quadratic bias) and after (with the remedies), each calibrated
+    on the plateaus; error = the bit-exact chain_paper001's output minus the applied rate (deg/h at
+    the nominal 3600 deg/h per deg/s) on the rows outside the calibration's plateaus."""
+    from fxdsp.extend.configure import config_from_text, paper001_config
+    from fxdsp.repro.bitexact import Compensator001
+    from fxdsp.sim.calibration import find_plateaus
+    from fxdsp.sim.model import PAPER001_SF0
+
+    thermometer = columns["ref_temp_c"] if "ref_temp_c" in columns else columns["temp_c"]
+    held = np.ones(len(columns["time_s"]), dtype=bool)
+    for rows in find_plateaus(columns["time_s"], thermometer):
+        held[rows] = False
+    applied = PAPER001_SF0 * np.asarray(columns["rate_dps"], float) if "rate_dps" in columns else 0.0
+    stages = {r.stage for r in remedies}
+    results, series, configs, cals = {}, {}, {}, {}
+    for name, on in _variants(stages).items():
+        text, cal = paper001_config(columns, [r for r in remedies if r.stage in on], base_text)
+        got = Compensator001(config_from_text(text)).compensate(columns)
+        err = got["rate_deg_h"] - applied
+        results[name] = {"stages": sorted(on), "rms": float(np.sqrt(np.mean(err[held] ** 2))),
+                         "max_abs": float(np.abs(err[held]).max()), "overflows": int(got["overflows"].total)}
+        series[name], configs[name], cals[name] = err, text, cal
+    return {"unit": "deg/h (output unit)", "heldout": "rows outside the calibration's temperature plateaus",
+            "heldout_rows": int(held.sum()), "rows": int(held.size), "variants": results, "_series": series,
+            "_held": held, "_configs": configs, "_cals": cals}
+
+
 def thermometer_errors(columns: dict, design, remedies, folds: np.ndarray) -> dict:
     """Held-out rms of the cubic-compensated output, with and without the lag (float fits on the
     bit-exact temperature codes), and the bit-exact chain of the final config on every row."""

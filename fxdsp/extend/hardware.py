@@ -24,6 +24,7 @@ from fxdsp.config import Config
 CHAIN_BLOCKS = {
     "paper002": ("rtd", "piecewise_sf", "piecewise_bias", "sf_divide", "demod", "bias_subtract", "iir",
                  "chain_paper002"),
+    "paper001": ("freq2temp", "piecewise_bias001", "bias_subtract001", "chain_paper001"),
     "thermometer": ("piecewise_bias001", "bias_subtract001"),
 }
 
@@ -77,7 +78,8 @@ def cost(chain: str, has_lag: bool) -> dict | None:
     if report is None:
         return None
     rows = {r["name"]: r for r in report["rows"]}
-    before_names = {"paper002": ["chain_paper002"], "thermometer": list(CHAIN_BLOCKS["thermometer"])}[chain]
+    before_names = {"paper002": ["chain_paper002"], "paper001": ["chain_paper001"],
+                    "thermometer": list(CHAIN_BLOCKS["thermometer"])}[chain]
     after_names = before_names + (["lag"] if has_lag else [])
 
     def total(names):

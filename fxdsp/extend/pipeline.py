@@ -28,6 +28,9 @@ class Extension:
     def apply(self, columns: dict, log_name: str) -> dict:
         """Run the configs fitted on this log on a second run's log; the result joins the report."""
         chain = self.report["chain"]
+        if chain == "paper001":
+            raise InputError("--apply: not yet for the paper001 chain (fxdsp calibrate --paper 001 --apply applies "
+                             "its config to a second run)")
         if chain == "paper002":
             if "rate_dps" not in columns:
                 raise InputError(f"--apply {log_name}: the paper002 chain needs the rate_dps column")
@@ -64,6 +67,14 @@ def columns_of(series) -> dict:
     return cols
 
 
+def auto_chain(columns: dict) -> str:
+    """paper002 when the log has rate-table steps (its calibration needs them), paper001 when it has
+    the resonator's frequency, else the plain thermometer chain."""
+    if "rate_dps" in columns and np.any(np.asarray(columns["rate_dps"]) != 0):
+        return "paper002"
+    return "paper001" if "freq_hz" in columns else "thermometer"
+
+
 def extend_log(path, mapping=None, delimiter=",", time_format=None, chain="auto", base_text=None,
                rtl: bool = True, build_root=None) -> Extension:
     from fxdsp.diagnose.api import diagnose_log
@@ -77,7 +88,7 @@ def extend_diagnosis(diag, log_name: str, chain="auto", base_text=None, rtl: boo
                      build_root=None) -> Extension:
     columns = columns_of(diag.context.series)
     if chain == "auto":
-        chain = "paper002" if "rate_dps" in columns else "thermometer"
+        chain = auto_chain(columns)
     remedies = planning.plan(diag, chain)
     stages = {r.stage for r in remedies}
     extra = {}
@@ -87,6 +98,14 @@ def extend_diagnosis(diag, log_name: str, chain="auto", base_text=None, rtl: boo
         ext_cfg = configure.config_from_text(ext)
         extra["calibration"] = {"order": cal["order"], "sf_nominal_mv_per_dps": cal["sf_nominal"],
                                 "points": len(cal["points"]["temp_c"])}
+    elif chain == "paper001":
+        if "freq_hz" not in columns:
+            raise InputError("log: the paper001 chain needs the freq_hz column (the resonator thermometer)")
+        errors = evaluate.paper001_variants(columns, remedies, base_text)
+        base, ext, cal = errors["_configs"]["before"], errors["_configs"]["after"], errors["_cals"]["after"]
+        ext_cfg = configure.config_from_text(ext)
+        extra["calibration"] = {"f0_hz": cal["f0_hz"], "k_hz_per_c": cal["k_hz_per_c"],
+                                "bias_poly": cal["bias_poly"], "thermometer_check": cal["thermometer_check"]}
     else:
         text0 = base_text if base_text is not None else default_config_text()
         template = build(configure.config_from_text(text0), chains=False)

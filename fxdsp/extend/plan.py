@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from fxdsp.errors import InputError
 
-CHAINS = ("paper002", "thermometer")
+CHAINS = ("paper002", "paper001", "thermometer")
 
 
 @dataclass(frozen=True)
@@ -40,6 +40,13 @@ def _trim(diag) -> Remedy:
                   f"c = {c:.4g})", {"c": c, "phase_trim_rad": -math.atan(c)})
 
 
+def _cubic(diag) -> Remedy:
+    k2 = float(diag.parameters["frequency_nonlinearity"]["k2_hz_per_c2"])
+    return Remedy("frequency_nonlinearity", "order", f"cubic instead of quadratic bias in the frequency's temperature "
+                  f"(the resonator turns over, k2 = {k2:.3g} Hz/C^2, bending the linear f -> T read-out)",
+                  {"bias_order": 3})
+
+
 def _order(diag) -> Remedy:
     return Remedy("rtd_nonlinearity", "order", "quadratic instead of linear SF and bias segments (the RTD "
                   "readout's curvature)", {"order": 2})
@@ -48,10 +55,15 @@ def _order(diag) -> Remedy:
 # chain -> cause -> remedy builder; "none" needs none
 REMEDIES = {
     "paper002": {"thermal_lag": _lag, "quadrature_leak": _trim, "rtd_nonlinearity": _order},
+    "paper001": {"frequency_nonlinearity": _cubic},
     # the thermometer chain's bias polynomial is already a cubic: a curved readout needs nothing more
     "thermometer": {"thermal_lag": _lag},
 }
-ABSORBED = {"thermometer": {"rtd_nonlinearity": "absorbed by the cubic bias polynomial"}}
+ABSORBED = {"thermometer": {"rtd_nonlinearity": "absorbed by the cubic bias polynomial"},
+            # the resonator is its own thermometer: the chamber thermometer's lag and curvature do not
+            # reach a compensation driven by freq_hz
+            "paper001": {"thermal_lag": "the resonant frequency reads the die itself",
+                         "rtd_nonlinearity": "the chamber thermometer is not in the path"}}
 
 
 def plan(diag, chain: str) -> list[Remedy]:

@@ -137,8 +137,9 @@ def compensate_paper002(cal: dict, temp_c, output) -> np.ndarray:
 
 # --- paper 001 --------------------------------------------------------------------------------------
 
-def calibrate_paper001(log: dict) -> dict:
-    """Paper 001: linear f(T) against the reference thermometer, quadratic bias on T from f.
+def calibrate_paper001(log: dict, bias_order: int = 2) -> dict:
+    """Paper 001: linear f(T) against the reference thermometer, quadratic bias on T from f
+    (``bias_order`` 3: a cubic, for a resonator whose frequency turns over).
 
     Per plateau the means of ref_temp_c (temp_c when there is no reference), freq_hz and output are
     taken; ``bias_poly`` is ascending in T (C) like the paper's -0.25 T^2 - 36.92 T + 1469.5.
@@ -147,15 +148,17 @@ def calibrate_paper001(log: dict) -> dict:
         raise ValueError("log: paper 001 calibration needs the freq_hz column")
     thermometer = log["ref_temp_c"] if "ref_temp_c" in log else log["temp_c"]
     plateaus = find_plateaus(log["time_s"], thermometer)
-    if len(plateaus) < 3:
-        raise ValueError("log: paper 001 calibration needs at least three temperature plateaus")
+    if bias_order not in (2, 3):
+        raise ValueError(f"bias_order: must be 2 or 3, got {bias_order!r}")
+    if len(plateaus) < bias_order + 1:
+        raise ValueError(f"log: paper 001 calibration needs at least {bias_order + 1} temperature plateaus")
     temps = np.array([np.mean(thermometer[i]) for i in plateaus])
     freqs = np.array([np.mean(log["freq_hz"][i]) for i in plateaus])
     bias = np.array([np.mean(log["output"][i]) for i in plateaus])
     k, f0 = np.polyfit(temps, freqs, 1)
     resid = freqs - (f0 + k * temps)
     t_from_f = (freqs - f0) / k
-    q = np.polynomial.polynomial.polyfit(t_from_f, bias, 2)
+    q = np.polynomial.polynomial.polyfit(t_from_f, bias, bias_order)
     span = freqs.max() - freqs.min()
     return {"paper": "001", "f0_hz": float(f0), "k_hz_per_c": float(k),
             "bias_poly": [float(c) for c in q],
