@@ -43,10 +43,20 @@ def _by_stage(remedies, stage: str):
     return next(r for r in remedies if r.stage == stage)
 
 
-def remedy_tables(remedies, chain: str) -> dict:
-    """Config tables of the lag and trim remedies (calibration tables apart)."""
+def remedy_tables(remedies, chain: str, base_text: str | None = None) -> dict:
+    """Config tables of the lag, trim and CVD remedies (calibration tables apart)."""
     tables: dict = {}
     stages = _stages(remedies)
+    if "cvd" in stages:
+        # the element R0 (1 + A T + B T^2) that the linear law R0 (1 + beta T) has been reading:
+        # A = beta, and B/A = b makes the readout's T + b T^2 the curvature the log showed (its
+        # affine part, T + b (T - 25)^2 against T + b T^2, the calibration's segments absorb)
+        import tomllib
+
+        beta = float(tomllib.loads(base_text if base_text is not None else default_config_text())["rtd"]
+                     .get("beta_per_c", 2.183e-3))
+        b = _by_stage(remedies, "cvd").parameters["b_per_c"]
+        tables["rtd"] = {"law": "cvd", "cvd_a": beta, "cvd_b": b * beta, "cvd_c": 0.0}
     if "lag" in stages:
         tables["lag"] = {"tau_s": _by_stage(remedies, "lag").parameters["tau_s"]}
         if chain == "paper002":
@@ -64,8 +74,8 @@ def paper002_config(columns: dict, remedies, base_text: str | None = None, outpu
     order = 2 if "order" in _stages(remedies) else 1
     cal = calibrate002(columns if output is None else {**columns, "output": output}, order, temp=temp_c)
     what = "; ".join(r.what for r in remedies) or "no remedy"
-    text = config_text({**paper002_tables(cal), **remedy_tables(remedies, "paper002")}, base_text,
-                       provenance=f"calibrated by fxdsp extend (paper 002): {what}")
+    text = config_text({**paper002_tables(cal), **remedy_tables(remedies, "paper002", base_text)}, base_text,
+                       provenance=f"calibrated by fxdsp extend (paper 002): {what}", add_missing=True)
     return text, cal
 
 

@@ -48,8 +48,10 @@ def trim_angle(nco) -> float:
 
 
 def config_stages(design) -> tuple[set[str], float | None, float]:
-    """The stages a (paper 002) design carries: ({"lag", "trim"} subset, lag tau, trim angle)."""
+    """The stages a (paper 002) design carries: ({"lag", "trim", "cvd"} subset, lag tau, trim angle)."""
     on, tau = set(), None
+    if design.blocks["rtd"].physics.law == "cvd":
+        on.add("cvd")
     chain = design.chains.get("chain_paper002") if design.chains else None
     if chain is not None and chain.lag is not None:
         on.add("lag")
@@ -67,10 +69,13 @@ def heldout_rows_paper002(columns: dict) -> np.ndarray:
     return held
 
 
+SWITCHABLE = {"lag", "trim", "cvd"}   # stages a variant turns off one at a time
+
+
 def _variants(stages: set[str]) -> dict[str, set[str]]:
     """before (none), after (all), and all but one of each switchable stage."""
     out = {"before": set(), "after": set(stages)}
-    for s in sorted(stages & {"lag", "trim"}):
+    for s in sorted(stages & SWITCHABLE):
         out[f"without {s}"] = set(stages) - {s}
     return out
 
@@ -92,11 +97,25 @@ def compensate002(columns: dict, config_text_: str, on: set[str], tau_s: float |
     return got["rate_dps"] - np.asarray(columns["rate_dps"], float), int(ovf.total)
 
 
+def linear_readout_codes(rtd, temp_c, ovf=None) -> np.ndarray:
+    """The ADC codes behind a temperature read with the linear law R0 (1 + A T) from an element whose
+    table is now Callendar-Van Dusen (A = cvd_a): a log's temp_c back to its resistance, then the
+    bridge and ADC. What the ``cvd`` remedy assumes of a log: its temp_c is that linear reading."""
+    p = rtd.physics
+    r = p.r0 * (1.0 + p.a * np.asarray(temp_c, float))
+    return rtd.adc_quantize(p.adc_fraction(r), ovf)
+
+
 def stage_inputs(comp, columns: dict, on: set[str], tau_s: float | None, theta: float, ovf=None):
-    """(temperature code the engines see, output the divider sees) with the stages ``on``."""
+    """(temperature code the engines see, output the divider sees) with the stages ``on``. A config
+    whose RTD table is CVD reads the log's temp_c as a linear reading of that element."""
     if "trim" in on and "quad" not in columns:
         raise ValueError("log: the config's demodulation phase trim needs the quad column to compensate at log rate")
-    code = comp.temperature_code(columns["temp_c"], ovf)
+    ovf = OverflowLog() if ovf is None else ovf
+    if "cvd" in on:
+        code = comp.rtd.stream(ovf, code=linear_readout_codes(comp.rtd, columns["temp_c"], ovf))["temp"]
+    else:
+        code = comp.temperature_code(columns["temp_c"], ovf)
     if "lag" in on:
         code = log_rate_lag(comp.design.blocks["lag"], tau_s, columns["time_s"]).run(log=ovf, temp=code).outputs["te"]
     out = np.asarray(columns["output"], float)
@@ -119,6 +138,14 @@ def paper002_applied(columns: dict, variants: dict, remedies) -> dict:
     return {"rows": int(err.size), "variants": out, "gain": gain}
 
 
+def _curvature_rms(temp_c, ref_c) -> float:
+    """rms of temp - (a + b ref) over every row: what is left once an affine map is fitted."""
+    ref = np.asarray(ref_c, float)
+    X = np.column_stack([np.ones_like(ref), ref])
+    resid = np.asarray(temp_c, float) - X @ np.linalg.lstsq(X, temp_c, rcond=None)[0]
+    return float(np.sqrt(np.mean(resid**2)))
+
+
 def paper002_variants(columns: dict, remedies, base_text: str | None) -> dict:
     """Per variant (a set of stages): its own calibration with those stages in place, its config
     and its bit-exact held-out error. "after" is the extended config; "before" the plain
@@ -129,19 +156,24 @@ def paper002_variants(columns: dict, remedies, base_text: str | None) -> dict:
     stages = {r.stage for r in remedies}
     held = heldout_rows_paper002(columns)
     # the remedies' own words (trim word, lag word lengths) do not depend on the calibration
-    probe = Compensator002(config_from_text(config_text(remedy_tables(remedies, "paper002"), base_text)))
+    probe = Compensator002(config_from_text(config_text(remedy_tables(remedies, "paper002", base_text), base_text,
+                                                        add_missing=True)))
     theta = trim_angle(probe.design.blocks["demod"].nco) if "trim" in stages else 0.0
     results, series, configs, cals = {}, {}, {}, {}
     for name, on in _variants(stages).items():
         chosen = [r for r in remedies if r.stage in on]
         code, x = stage_inputs(probe, columns, on, tau_of(remedies), theta)
         text, cal = paper002_config(columns, chosen, base_text, output=x,
-                                    temp_c=to_float(code, probe.rtd.temp_format) if "lag" in on else None)
+                                    temp_c=to_float(code, probe.rtd.temp_format) if on & {"lag", "cvd"} else None)
         err, n_ovf = compensate002(columns, text, on, tau_of(remedies), theta)
         err = err * float(cal["sf_nominal"])
         results[name] = {"stages": sorted(on), "rms": float(np.sqrt(np.mean(err[held] ** 2))),
                          "max_abs": float(np.abs(err[held]).max()), "overflows": n_ovf,
                          "sf_nominal_mv_per_dps": float(cal["sf_nominal"])}
+        if "cvd" in stages and "ref_temp_c" in columns:
+            # the table's own effect, before the compensation's floor: the temperature the engines
+            # see against the reference, after removing the affine part every calibration absorbs
+            results[name]["temp_vs_ref_c"] = _curvature_rms(to_float(code, probe.rtd.temp_format), columns["ref_temp_c"])
         series[name], configs[name], cals[name] = err, text, cal
     return {"unit": "mV (output unit; deg/s x the variant's calibrated SF at 25 C)",
             "heldout": "rows outside the calibration's rate-table windows", "heldout_rows": int(held.sum()),

@@ -2,8 +2,9 @@
 
 A remedy changes the compensation hardware, never the sensor: a lag filter on the temperature code
 before the coefficient engines (``thermal_lag``), a phase trim of the demodulator's reference
-(``quadrature_leak``), a higher polynomial order per segment (``rtd_nonlinearity``: a curved
-temperature axis is a smooth distortion the SF and bias polynomials absorb once they may curve).
+(``quadrature_leak``), a Callendar-Van Dusen RTD table (``rtd_nonlinearity``: the element's
+curvature, read with the linear law), a higher polynomial order (``frequency_nonlinearity`` in
+the paper 001 chain: a resonator that turns over bends its linear frequency thermometer).
 A cause with no remedy in the chosen chain (hysteresis, ramp rate, aging, warm-up, a rate-cubic SF
 non-linearity, ...) stops the extension with one line naming it: compensating the rest would
 hand the user a config that silently leaves that error in.
@@ -47,14 +48,15 @@ def _cubic(diag) -> Remedy:
                   {"bias_order": 3})
 
 
-def _order(diag) -> Remedy:
-    return Remedy("rtd_nonlinearity", "order", "quadratic instead of linear SF and bias segments (the RTD "
-                  "readout's curvature)", {"order": 2})
+def _cvd(diag) -> Remedy:
+    b = float(diag.parameters["rtd_nonlinearity"]["b_per_c"])
+    return Remedy("rtd_nonlinearity", "cvd", f"Callendar-Van Dusen RTD table (B/A = {b:.3g} /C: the element's "
+                  "curvature, read linearly until now)", {"b_per_c": b})
 
 
 # chain -> cause -> remedy builder; "none" needs none
 REMEDIES = {
-    "paper002": {"thermal_lag": _lag, "quadrature_leak": _trim, "rtd_nonlinearity": _order},
+    "paper002": {"thermal_lag": _lag, "quadrature_leak": _trim, "rtd_nonlinearity": _cvd},
     "paper001": {"frequency_nonlinearity": _cubic},
     # the thermometer chain's bias polynomial is already a cubic: a curved readout needs nothing more
     "thermometer": {"thermal_lag": _lag},

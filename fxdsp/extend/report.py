@@ -35,6 +35,10 @@ def markdown(rep: dict) -> str:
           "| variant | stages | rms | max abs | overflows |", "|---|---|---:|---:|---:|"]
     for name, r in e["variants"].items():
         L.append(f"| {name} | {', '.join(r['stages']) or '-'} | {r['rms']:.4g} | {r['max_abs']:.4g} | {r['overflows']} |")
+    curv = {k: r["temp_vs_ref_c"] for k, r in e["variants"].items() if "temp_vs_ref_c" in r}
+    if curv:
+        L += ["", "Temperature the engines see against ref_temp_c, rms after an affine fit (the RTD table's own "
+              "effect): " + ", ".join(f"{k} {v:.3g} C" for k, v in curv.items()) + "."]
     L += ["", f"Gain (rms before / after): **{s['gain']:.3g}**" +
           "".join(f"; with {k} turned off: {g:.3g}" for k, g in s["gain_without"].items()), ""]
     if rep.get("applied"):

@@ -32,7 +32,7 @@ def calibrated_config(paper: str, log: dict, order: int = 1, base_text: str | No
             on, tau, theta = config_stages(comp.design)
         if on:
             code, out = stage_inputs(comp, log, on, tau, theta)
-            temp = to_float(code, comp.rtd.temp_format) if "lag" in on else None
+            temp = to_float(code, comp.rtd.temp_format) if on & {"lag", "cvd"} else None
             cal = calibrate002({**log, "output": out}, order, temp=temp)
             cal["stages"] = sorted(on)
         else:

@@ -1,7 +1,8 @@
 """Calibration -> TOML config: quantise a paper's fitted compensation into a copy of the default config.
 
-The calibrated config is the default text with only the calibrated keys rewritten in place (comments
-and every other table untouched), so ``fxdsp.chains.build`` reads it like any config and a diff
+The calibrated config is the default text with only the calibrated keys rewritten in place (every
+other line and table untouched; a rewritten key's trailing comment, which described the old value,
+is dropped), so ``fxdsp.chains.build`` reads it like any config and a diff
 against the default shows exactly what calibration changed.
 
 Units of the log -> fixed-point mapping (documented choices):
@@ -60,8 +61,9 @@ def fit_format(values, wl: int = COEF_WL, headroom_bits: int = 1, signed: bool =
     return f"{'s' if signed else 'u'}{wl}.{fl}"
 
 
-def set_table_keys(text: str, table: str, updates: dict) -> str:
-    """Rewrite ``key = value`` lines of ``[table]`` in TOML text (keys must already exist there)."""
+def set_table_keys(text: str, table: str, updates: dict, add_missing: bool = False) -> str:
+    """Rewrite ``key = value`` lines of ``[table]`` in TOML text. Keys must already exist there,
+    unless ``add_missing``: those are then written right after the table's header line."""
     lines = text.splitlines(keepends=True)
     current = None
     done = set()
@@ -76,17 +78,19 @@ def set_table_keys(text: str, table: str, updates: dict) -> str:
         km = re.match(r"^(\s*)([A-Za-z0-9_]+)(\s*=\s*)", line)
         if km and km.group(2) in updates:
             key = km.group(2)
-            comment = ""
-            cm = re.search(r"\s+#.*$", line.rstrip("\n"))
-            value_part = line[km.end():].rstrip("\n")
-            # keep a trailing comment when the old value had one (values never contain '#')
-            if cm and "#" in value_part:
-                comment = "   " + value_part[value_part.index("#"):]
-            lines[i] = f"{km.group(1)}{key}{km.group(3)}{dumps_value(updates[key], f'{table}.{key}')}{comment}\n"
+            # the base's trailing comment described the old value (a paper's polynomial, an LSB in
+            # its units): a rewritten key drops it rather than keep a statement that is now false
+            lines[i] = f"{km.group(1)}{key}{km.group(3)}{dumps_value(updates[key], f'{table}.{key}')}\n"
             done.add(key)
-    missing = set(updates) - done
+    missing = [k for k in updates if k not in done]
+    if missing and add_missing:
+        at = next((i for i, line in enumerate(lines) if (m := header.match(line)) and m.group(1).strip() == table),
+                  None)
+        if at is not None:
+            new = [f"{k} = {dumps_value(updates[k], f'{table}.{k}')}\n" for k in missing]
+            return "".join(lines[:at + 1] + new + lines[at + 1:])
     if missing:
-        raise ValueError(f"[{table}].{sorted(missing)[0]}: not in the base config, cannot rewrite it")
+        raise ValueError(f"[{table}].{missing[0]}: not in the base config, cannot rewrite it")
     return "".join(lines)
 
 
@@ -191,12 +195,13 @@ def paper000_tables(cal: dict) -> dict:
             "piecewise.k1": piecewise_table([cal["k1_poly"]], [], t0, acc_wl=acc_wl, name="piecewise.k1")}
 
 
-def config_text(tables: dict, base_text: str | None = None, provenance: str = "") -> str:
-    """A copy of ``base_text`` (default config) with ``tables`` ({table: {key: value}}) rewritten.
-    Raises ValueError when the result does not build."""
+def config_text(tables: dict, base_text: str | None = None, provenance: str = "", add_missing: bool = False) -> str:
+    """A copy of ``base_text`` (default config) with ``tables`` ({table: {key: value}}) rewritten
+    (``add_missing``: keys the base lacks are added to their table). Raises ValueError when the
+    result does not build."""
     text = default_config_text() if base_text is None else base_text
     for table, keys in tables.items():
-        text = set_table_keys(text, table, keys)
+        text = set_table_keys(text, table, keys, add_missing)
     if provenance:
         text = "".join(f"# {line}\n" for line in provenance.splitlines()) + text
     config_from_text(text)  # must build
