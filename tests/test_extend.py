@@ -110,7 +110,8 @@ def test_extend_a_paper001_log_whose_resonator_turns_over(logs, tmp_path, capsys
     """The frequency thermometer is linear; a turnover k2 (Te - 25)^2 bends T_f, and the remedy is a
     cubic bias in T_f. Auto picks the paper001 chain (freq_hz, no rate-table steps)."""
     out = tmp_path / "ext"
-    code, _, err = extend([logs["turnover"], "--out", out], capsys)
+    second = simulate(tmp_path, "turnover", seed=17)
+    code, _, err = extend([logs["turnover"], "--apply", second, "--out", out], capsys)
     assert code == 0, err
     rep = json.loads((out / "report.json").read_text())
     assert rep["chain"] == "paper001" and [r["stage"] for r in rep["remedies"]] == ["order"]
@@ -120,6 +121,7 @@ def test_extend_a_paper001_log_whose_resonator_turns_over(logs, tmp_path, capsys
     base = tomllib.loads((out / "config_base.toml").read_text())
     assert len(cfg["piecewise"]["bias001"]["coefficients"][0]) == 4
     assert len(base["piecewise"]["bias001"]["coefficients"][0]) == 3
+    assert rep["applied"]["gain"] > 1.5, rep["applied"]   # fitted on run 1, applied to run 2
 
 
 def test_a_cause_without_a_remedy_is_one_line_and_exit_2(logs, tmp_path, capsys):

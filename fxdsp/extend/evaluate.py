@@ -126,16 +126,13 @@ def stage_inputs(comp, columns: dict, on: set[str], tau_s: float | None, theta: 
 
 def paper002_applied(columns: dict, variants: dict, remedies) -> dict:
     """A second run's error (every row: nothing of it was fitted) with the configs fitted on the first."""
-    out = {}
+    errors = {}
     for name in ("before", "after"):
         v = variants["variants"][name]
         err, n_ovf = compensate002(columns, variants["_configs"][name], set(v["stages"]), tau_of(remedies),
                                    variants["trim_rad"] or 0.0)
-        err = err * v["sf_nominal_mv_per_dps"]
-        out[name] = {"stages": v["stages"], "rms": float(np.sqrt(np.mean(err**2))),
-                     "max_abs": float(np.abs(err).max()), "overflows": n_ovf}
-    gain = out["before"]["rms"] / out["after"]["rms"] if out["after"]["rms"] > 0 else float("inf")
-    return {"rows": int(err.size), "variants": out, "gain": gain}
+        errors[name] = (err * v["sf_nominal_mv_per_dps"], n_ovf)
+    return applied_result(errors, len(columns["time_s"]))
 
 
 def _curvature_rms(temp_c, ref_c) -> float:
@@ -181,28 +178,49 @@ def paper002_variants(columns: dict, remedies, base_text: str | None) -> dict:
             "_series": series, "_held": held, "_configs": configs, "_cals": cals}
 
 
+def compensate001(columns: dict, config_text_: str) -> tuple[np.ndarray, int]:
+    """(error in deg/h per row, overflow count) of chain_paper001 with a config: its output minus the
+    applied rate at the nominal 3600 deg/h per deg/s."""
+    from fxdsp.extend.configure import config_from_text
+    from fxdsp.repro.bitexact import Compensator001
+    from fxdsp.sim.model import PAPER001_SF0
+
+    applied = PAPER001_SF0 * np.asarray(columns["rate_dps"], float) if "rate_dps" in columns else 0.0
+    got = Compensator001(config_from_text(config_text_)).compensate(columns)
+    return got["rate_deg_h"] - applied, int(got["overflows"].total)
+
+
+def applied_result(errors: dict, log_rows: int) -> dict:
+    """Before/after rms over every row of a second run ({name: (error, overflows)})."""
+    out = {name: {"rms": float(np.sqrt(np.mean(e**2))), "max_abs": float(np.abs(e).max()), "overflows": n}
+           for name, (e, n) in errors.items()}
+    gain = out["before"]["rms"] / out["after"]["rms"] if out["after"]["rms"] > 0 else float("inf")
+    return {"rows": log_rows, "variants": out, "gain": gain}
+
+
+def paper001_applied(columns: dict, variants: dict) -> dict:
+    return applied_result({k: compensate001(columns, variants["_configs"][k]) for k in ("before", "after")},
+                          len(columns["time_s"]))
+
+
 def paper001_variants(columns: dict, remedies, base_text: str | None) -> dict:
     """paper 001: before (the paper's quadratic bias) and after (with the remedies), each calibrated
     on the plateaus; error = the bit-exact chain_paper001's output minus the applied rate (deg/h at
     the nominal 3600 deg/h per deg/s) on the rows outside the calibration's plateaus."""
-    from fxdsp.extend.configure import config_from_text, paper001_config
-    from fxdsp.repro.bitexact import Compensator001
+    from fxdsp.extend.configure import paper001_config
     from fxdsp.sim.calibration import find_plateaus
-    from fxdsp.sim.model import PAPER001_SF0
 
     thermometer = columns["ref_temp_c"] if "ref_temp_c" in columns else columns["temp_c"]
     held = np.ones(len(columns["time_s"]), dtype=bool)
     for rows in find_plateaus(columns["time_s"], thermometer):
         held[rows] = False
-    applied = PAPER001_SF0 * np.asarray(columns["rate_dps"], float) if "rate_dps" in columns else 0.0
     stages = {r.stage for r in remedies}
     results, series, configs, cals = {}, {}, {}, {}
     for name, on in _variants(stages).items():
         text, cal = paper001_config(columns, [r for r in remedies if r.stage in on], base_text)
-        got = Compensator001(config_from_text(text)).compensate(columns)
-        err = got["rate_deg_h"] - applied
+        err, n_ovf = compensate001(columns, text)
         results[name] = {"stages": sorted(on), "rms": float(np.sqrt(np.mean(err[held] ** 2))),
-                         "max_abs": float(np.abs(err[held]).max()), "overflows": int(got["overflows"].total)}
+                         "max_abs": float(np.abs(err[held]).max()), "overflows": n_ovf}
         series[name], configs[name], cals[name] = err, text, cal
     return {"unit": "deg/h (output unit)", "heldout": "rows outside the calibration's temperature plateaus",
             "heldout_rows": int(held.sum()), "rows": int(held.size), "variants": results, "_series": series,
@@ -251,21 +269,18 @@ def thermometer_bitexact(design, te_code: np.ndarray, output, fit: dict) -> dict
 
 
 def thermometer_applied(columns: dict, configs: dict, remedies) -> dict:
-    """A second run through the bit-exact chains of the configs fitted on the first: rms of the
-    compensated output about its mean (what is left of the temperature dependence)."""
+    """A second run through the bit-exact chains of the configs fitted on the first: the compensated
+    output about its mean (what is left of the temperature dependence)."""
     from fxdsp.chains import build
     from fxdsp.extend.configure import config_from_text
 
-    out = {}
+    errors = {}
     for name, stages in (("before", set()), ("after", {r.stage for r in remedies})):
         design = build(config_from_text(configs[name]))
         lag = design.blocks["lag"]
         code = quantize(np.asarray(columns["temp_c"], float), lag.temp_format, ROUND)
         if "lag" in stages:
             code = log_rate_lag(lag, tau_of(remedies), columns["time_s"]).run(temp=code).outputs["te"]
-        r = thermometer_bitexact(design, code, columns["output"], None)["_series"]
-        r = r - r.mean()
-        out[name] = {"stages": sorted(stages), "rms": float(np.sqrt(np.mean(r**2))), "max_abs": float(np.abs(r).max()),
-                     "overflows": 0}
-    gain = out["before"]["rms"] / out["after"]["rms"] if out["after"]["rms"] > 0 else float("inf")
-    return {"rows": int(len(columns["time_s"])), "variants": out, "gain": gain}
+        got = thermometer_bitexact(design, code, columns["output"], None)
+        errors[name] = (got["_series"] - got["_series"].mean(), got["overflows"])
+    return applied_result(errors, len(columns["time_s"]))

@@ -29,9 +29,10 @@ class Extension:
         """Run the configs fitted on this log on a second run's log; the result joins the report."""
         chain = self.report["chain"]
         if chain == "paper001":
-            raise InputError("--apply: not yet for the paper001 chain (fxdsp calibrate --paper 001 --apply applies "
-                             "its config to a second run)")
-        if chain == "paper002":
+            if "freq_hz" not in columns:
+                raise InputError(f"--apply {log_name}: the paper001 chain needs the freq_hz column")
+            res = evaluate.paper001_applied(columns, self.errors)
+        elif chain == "paper002":
             if "rate_dps" not in columns:
                 raise InputError(f"--apply {log_name}: the paper002 chain needs the rate_dps column")
             res = evaluate.paper002_applied(columns, self.errors, self.remedies)
