@@ -78,7 +78,10 @@ def test_committed_report_is_current_for_the_rtl_and_default_config():
     design = build()
     report = load_hw_report()
     assert report.get("source_sha256") == source_hash(design), "hdl/HW_REPORT.* is stale: run make hw-report"
-    assert {r["name"] for r in report["rows"]} == set(design.instances)
+    from fxdsp.hdl.report_cli import VARIANTS
+
+    # a row per instance, and one per resource-shared variant of a block (e.g. the serial iir)
+    assert {r["name"] for r in report["rows"]} == set(design.instances) | set(VARIANTS)
 
 
 def test_source_hash_sees_a_one_character_rtl_change(tmp_path, monkeypatch):

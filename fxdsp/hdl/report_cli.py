@@ -14,6 +14,9 @@ Fmax comes from placing and routing the module inside a serial wrapper (one inpu
 output pin, shift registers around the module's ports) because the tops have more port bits than
 the UP5K has pins; the wrapper's shift registers add flip-flops and LUTs to the routed design but
 not to the table's resource columns.
+
+Besides the instances, the resource-shared variants of blocks (:data:`VARIANTS`, e.g. the serial iir
+``iir (ARCH=1)``) get a row each: the same module and config parameters plus the variant's own.
 """
 
 from __future__ import annotations
@@ -37,6 +40,9 @@ UP5K = {"LUT": 5280, "MAC16": 8, "FF": 5280, "BRAM": 30}
 XC7A35T = {"name": "XC7A35T", "LUT": 20800, "DSP48E1": 90, "FF": 41600, "BRAM36": 50}
 XC7_SYNTH = "synth_xilinx -family xc7 -flatten -noiopad"
 BUDGET = {"LUT": 2640, "MAC16": 8, "MHz": 40.0}
+# resource-shared variants reported beside their block's default RTL: row name -> (instance, extra
+# module parameters). A variant has valid/ready (in_ready) whatever the instance table says.
+VARIANTS = {"iir (ARCH=1)": ("iir", {"ARCH": "1"})}
 
 
 def configure(parser) -> None:
@@ -72,9 +78,9 @@ def _dut_params(params: dict[str, str] | None) -> str:
     return "#(" + ", ".join(f".{k}({v})" for k, v in params.items()) + ")"
 
 
-def wrapper(design, name: str, params: dict[str, str] | None) -> str:
+def wrapper(design, name: str, params: dict[str, str] | None, ready: bool = False) -> str:
     inst = design.instances[name]
-    module, ready = inst.module, inst.has_ready
+    module, ready = inst.module, inst.has_ready or ready
     ins, outs = [p.name for p in inst.inputs], [p.name for p in inst.outputs]
     w = {p: port.format.wl for p, port in inst.ports.items()}
     n_ovf = design.ovf_width(name)
@@ -132,25 +138,25 @@ def _read_and_chparam(work: Path, chparam: str) -> str:
 
 
 def _yosys_stat(design, name: str, work: Path, timeout: int, synth_cmd: str, suffix: str, parse,
-                chparam: str) -> dict:
+                chparam: str, tag: str | None = None) -> dict:
     """Synthesise the bare module with yosys ``synth_cmd`` and ``parse`` its ``stat`` (written to
-    ``<name><suffix>`` in ``work``)."""
+    ``<tag or name><suffix>`` in ``work``)."""
     module = design.instances[name].module
-    stat = work / f"{name}{suffix}"
+    stat = work / f"{tag or name}{suffix}"
     script = f"{_read_and_chparam(work, chparam)} {synth_cmd} -top {module}; tee -o {stat} stat"
     subprocess.run(["yosys", "-q", "-p", script], cwd=work, check=True, capture_output=True, text=True,
                    timeout=timeout)
     return parse(stat.read_text())
 
 
-def synth(design, name: str, work: Path, timeout: int, chparam: str) -> dict:
-    return _yosys_stat(design, name, work, timeout, "synth_ice40 -dsp", "_stat.txt", _stat, chparam)
+def synth(design, name: str, work: Path, timeout: int, chparam: str, tag: str | None = None) -> dict:
+    return _yosys_stat(design, name, work, timeout, "synth_ice40 -dsp", "_stat.txt", _stat, chparam, tag)
 
 
-def synth_xc7(design, name: str, work: Path, timeout: int, chparam: str) -> dict:
+def synth_xc7(design, name: str, work: Path, timeout: int, chparam: str, tag: str | None = None) -> dict:
     """yosys ``synth_xilinx -family xc7`` cell counts of the same bare module with the same
     parameters (synthesis only: no place and route, no timing)."""
-    return _yosys_stat(design, name, work, timeout, XC7_SYNTH, "_xc7_stat.txt", _xc7_stat, chparam)
+    return _yosys_stat(design, name, work, timeout, XC7_SYNTH, "_xc7_stat.txt", _xc7_stat, chparam, tag)
 
 
 def _failure(exc: subprocess.CalledProcessError) -> str:
@@ -159,15 +165,18 @@ def _failure(exc: subprocess.CalledProcessError) -> str:
 
 
 def place_route(design, name: str, work: Path, freq: float, timeout: int,
-                params: dict[str, str] | None) -> tuple[float | None, str]:
-    (work / f"{name}_wrap.v").write_text(wrapper(design, name, params))
-    js = work / f"{name}_wrap.json"
-    script = (f"read_verilog -I{work} {_sources()} {work / (name + '_wrap.v')}; "
+                params: dict[str, str] | None, ready: bool = False, tag: str | None = None) -> tuple[float | None, str]:
+    tag = tag or name
+    (work / f"{tag}_wrap.v").write_text(wrapper(design, name, params, ready))
+    js = work / f"{tag}_wrap.json"
+    script = (f"read_verilog -I{work} {_sources()} {work / (tag + '_wrap.v')}; "
               f"synth_ice40 -dsp -top hw_wrap -json {js}")
     subprocess.run(["yosys", "-q", "-p", script], cwd=work, check=True, capture_output=True, text=True,
                    timeout=timeout)
+    # not --quiet: it hides the "Max frequency" line of a design that meets the target (an info,
+    # only a failing one is a warning)
     proc = subprocess.run(["nextpnr-ice40", "--up5k", "--package", "sg48", "--json", str(js), "--freq", str(freq),
-                           "--pcf-allow-unconstrained", "--seed", "1", "--quiet", "--timing-allow-fail"],
+                           "--pcf-allow-unconstrained", "--seed", "1", "--timing-allow-fail"],
                           cwd=work, capture_output=True, text=True, timeout=timeout)
     text = proc.stdout + proc.stderr
     fmax = re.findall(r"Max frequency for clock\s+'[^']*':\s+([\d.]+)\s+MHz", text)
@@ -198,15 +207,21 @@ def run(args) -> int:
         for rel, text in files.items():
             (work / rel).write_text(text)
         digest = source_hash(design, files)  # what is synthesised: the RTL and these files, as read now
-        for name in targets:
+        variants = [v for v, (inst, _) in VARIANTS.items() if inst in targets]
+        for row_name in targets + variants:
+            name, extra = VARIANTS.get(row_name, (row_name, {}))
+            tag = re.sub(r"\W+", "_", row_name).strip("_")
             t0 = time.perf_counter()
             module = design.instances[name].module
             params = module_params(design, name)
+            if extra:
+                params = {**params, **extra}
             chparam = _chparam(module, params)
-            row = {"name": name, "module": module}
+            row = {"name": row_name, "module": module}
             try:
-                row.update(synth(design, name, work, args.timeout, chparam))
-                row["fmax"], row["note"] = place_route(design, name, work, args.freq, args.timeout, params)
+                row.update(synth(design, name, work, args.timeout, chparam, tag))
+                row["fmax"], row["note"] = place_route(design, name, work, args.freq, args.timeout, params,
+                                                       bool(extra), tag)
                 if row["fmax"] is None and "no BELs remaining" in row["note"] and "DSP" in row["note"]:
                     row["note"] = f"does not place: {row['MAC16']} SB_MAC16 > {UP5K['MAC16']} on the device"
             except subprocess.TimeoutExpired:
@@ -220,7 +235,7 @@ def run(args) -> int:
                 xc7["note"] = "not run (--no-xc7)"
             else:
                 try:
-                    xc7.update(synth_xc7(design, name, work, args.xc7_timeout, chparam))
+                    xc7.update(synth_xc7(design, name, work, args.xc7_timeout, chparam, tag))
                 except subprocess.TimeoutExpired:
                     xc7["note"] = f"xc7 synthesis timed out after {args.xc7_timeout} s"
                 except subprocess.CalledProcessError as exc:
@@ -228,7 +243,7 @@ def run(args) -> int:
             xc7["seconds"] = round(time.perf_counter() - t1, 1)
             row["xc7"] = xc7
             rows.append(row)
-            print(f"{name}: {row}", file=sys.stderr)
+            print(f"{row_name}: {row}", file=sys.stderr)
     out = Path(args.out)
     with staged() as stage:  # the Markdown table and its JSON twin land together
         stage.write_text(out, markdown(rows, args.freq, digest))

@@ -104,7 +104,7 @@ module chain_paper002 #(
     wire [IIR_OVF_W-1:0] ovf_iir;
     iir #(
 `include "iir_params.vh"
-    ) u_iir (.clk(clk), .rst(rst), .in_valid(s_v), .x(s_w), .out_valid(r_v), .y(r_w), .ovf(ovf_iir));
+    ) u_iir (.clk(clk), .rst(rst), .in_valid(s_v), .in_ready(), .x(s_w), .out_valid(r_v), .y(r_w), .ovf(ovf_iir));
 
     // ---- per-sample registers (one sample in flight) ----
     reg [TEMP_W-1:0]   temp_r;

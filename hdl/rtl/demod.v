@@ -91,11 +91,11 @@ module demod #(
     iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .SHIFT_B(LPF_SHIFT_B),
           .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
           .OVERFLOW(LPF_OVERFLOW), .COEF_FILE(LPF_COEF_FILE)) u_lpf_i
-        (.clk(clk), .rst(rst), .in_valid(in_valid), .x(mi), .out_valid(lv), .y(li), .ovf(ovf_li));
+        (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mi), .out_valid(lv), .y(li), .ovf(ovf_li));
     iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .SHIFT_B(LPF_SHIFT_B),
           .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
           .OVERFLOW(LPF_OVERFLOW), .COEF_FILE(LPF_COEF_FILE)) u_lpf_q
-        (.clk(clk), .rst(rst), .in_valid(in_valid), .x(mq), .out_valid(lv_q), .y(lq), .ovf(ovf_lq));
+        (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mq), .out_valid(lv_q), .y(lq), .ovf(ovf_lq));
 
     // ---- CORDIC vectoring (combinational on the filter outputs) ----
     reg [ANGLE_W-1:0] atan [0:ITERATIONS-1];

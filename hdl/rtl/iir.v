@@ -5,10 +5,31 @@
 //   y   = fit(r) into DATA_W bits by OVERFLOW (wrap / saturate), ovf[s] flagged
 //   e   = acc - (r << OUT_SHIFT), 0 after an overflow
 // exact in ACC_W bits. Coefficients from COEF_FILE: 7 words per section (b0 b1 b2 a1 a2 c1 c2),
-// COEF_W bits each, sign-extended. State (x1 x2 y1 y2 e1 e2) advances only on in_valid; rst
-// clears it (the model's reset()).
-// Interface: in_valid / out_valid, one sample per cycle (the cascade is combinational).
-// Latency: 1 cycle.
+// COEF_W bits each, sign-extended. State (x1 x2 y1 y2 e1 e2) advances only on an accepted sample;
+// rst clears it (the model's reset()). Both architectures give the same y / ovf for every input.
+// ARCH = 0: one sample per cycle, the cascade is combinational (one multiplier per product).
+//   Interface: in_valid / out_valid (in_ready is tied high). Latency: 1 cycle.
+// ARCH = 1: serial. The 7 products of every section run through ONE fx_mac_serial (one 16 x 16
+//   multiplier: one SB_MAC16), sequenced section after section by a small FSM; the coefficient
+//   ROM is read through a register (block RAM friendly). Interface: in_valid / in_ready /
+//   out_valid; in_ready is high only when idle, a sample is taken at an edge with in_valid &&
+//   in_ready. MAC operands: a = coefficient or error e (MA_W = max(COEF_W, OUT_SHIFT + 2) bits),
+//   b = data or error weight c (DATA_W bits); a product takes N = ceil(MA_W/16) * ceil(DATA_W/16)
+//   multiplier cycles (fx_mac_serial latency N + 3). Schedule of a section, in edges after the
+//   one that takes the sample (section 0) or after the previous section's update:
+//     1 + k N, k = 0..6:   product k issued, in ROM order b0 v, b1 x1, b2 x2, a1 y1, a2 y2,
+//                          c1 e1, c2 e2 (v: the section's input); the ROM reads word k + 1 meanwhile
+//     (k + 1) N + 5:       product k registered, aligned (<< SHIFT_B for k < 3, << SHIFT_A for
+//                          k = 3, 4) and, for the a products, inverted (subtracted as ~t + 1)
+//     (k + 1) N + 6, + 7:  added into the low, then the high half of sum (AW bits in two halves:
+//                          carry chains of AW/2 + 1 bits; the + 1 and the low carry as carries in)
+//     7 N + 8:             r = round(sum) registered (fx_round, ROUNDING)
+//     7 N + 9:             fit(r) and its flag (fx_fit, OVERFLOW), error sum - (r << OUT_SHIFT)
+//     7 N + 10:            state update (e = 0 after an overflow); the output is the next
+//                          section's v; after the last section out_valid is high with y and ovf
+//   Cycles per sample: SECTIONS * (7 N + 10) + 1, e.g. 53 at the default config (24-bit data,
+//   35-bit coefficients, OUT_SHIFT 37: N = 3 * 2); 416 cycles (96 kS/s at 40 MHz) hold 7 such
+//   sections. Latency: SECTIONS * (7 N + 10) cycles from the accepting edge to out_valid.
 `default_nettype none
 
 module iir #(
@@ -21,11 +42,13 @@ module iir #(
     parameter integer ACC_W     = 59,
     parameter integer ROUNDING  = 1,
     parameter integer OVERFLOW  = 1,
+    parameter integer ARCH      = 0,     // 0: one sample per cycle; 1: serial, one shared multiplier
     parameter         COEF_FILE = "iir_coef.hex"
 ) (
     input  wire                clk,
     input  wire                rst,
     input  wire                in_valid,
+    output wire                in_ready,  // ARCH = 1: low while a sample is being computed
     input  wire [DATA_W-1:0]   x,
     output reg                 out_valid,
     output reg  [DATA_W-1:0]   y,
@@ -43,80 +66,294 @@ module iir #(
     reg [COEF_W-1:0] coef [0:7*SECTIONS-1];
     initial $readmemh(COEF_FILE, coef);
 
-    wire [SECTIONS-1:0] ovf_c;
     genvar s;
     generate
-        for (s = 0; s < SECTIONS; s = s + 1) begin : g_sec
-            wire signed [COEF_W-1:0] b0 = coef[7*s+0];
-            wire signed [COEF_W-1:0] b1 = coef[7*s+1];
-            wire signed [COEF_W-1:0] b2 = coef[7*s+2];
-            wire signed [COEF_W-1:0] a1 = coef[7*s+3];
-            wire signed [COEF_W-1:0] a2 = coef[7*s+4];
-            // error-feedback weights are tiny integers (-nearest(a)): C_W bits of their ROM words
-            /* verilator lint_off UNUSEDSIGNAL */
-            wire [COEF_W-1:0] c1w = coef[7*s+5];
-            wire [COEF_W-1:0] c2w = coef[7*s+6];
-            /* verilator lint_on UNUSEDSIGNAL */
-            wire signed [C_W-1:0] c1 = c1w[C_W-1:0];
-            wire signed [C_W-1:0] c2 = c2w[C_W-1:0];
-            reg signed [DATA_W-1:0] x1, x2, y1, y2;
-            reg signed [E_W-1:0]    e1, e2;
-            wire signed [DATA_W-1:0] v;
-            if (s == 0) begin : g_in
-                assign v = x;
-            end else begin : g_chain
-                assign v = g_sec[s-1].out;
+        if (ARCH == 0) begin : g_par
+            // ---- one sample per cycle: the cascade is combinational ----
+            assign in_ready = 1'b1;
+            wire [SECTIONS-1:0] ovf_c;
+            for (s = 0; s < SECTIONS; s = s + 1) begin : g_sec
+                wire signed [COEF_W-1:0] b0 = coef[7*s+0];
+                wire signed [COEF_W-1:0] b1 = coef[7*s+1];
+                wire signed [COEF_W-1:0] b2 = coef[7*s+2];
+                wire signed [COEF_W-1:0] a1 = coef[7*s+3];
+                wire signed [COEF_W-1:0] a2 = coef[7*s+4];
+                // error-feedback weights are tiny integers (-nearest(a)): C_W bits of their ROM words
+                /* verilator lint_off UNUSEDSIGNAL */
+                wire [COEF_W-1:0] c1w = coef[7*s+5];
+                wire [COEF_W-1:0] c2w = coef[7*s+6];
+                /* verilator lint_on UNUSEDSIGNAL */
+                wire signed [C_W-1:0] c1 = c1w[C_W-1:0];
+                wire signed [C_W-1:0] c2 = c2w[C_W-1:0];
+                reg signed [DATA_W-1:0] x1, x2, y1, y2;
+                reg signed [E_W-1:0]    e1, e2;
+                wire signed [DATA_W-1:0] v;
+                if (s == 0) begin : g_in
+                    assign v = x;
+                end else begin : g_chain
+                    assign v = g_sec[s-1].out;
+                end
+                // exact products at their own width (COEF_W x DATA_W, not AW x AW), summed in AW
+                wire signed [PW-1:0]    pb0 = b0 * v;
+                wire signed [PW-1:0]    pb1 = b1 * x1;
+                wire signed [PW-1:0]    pb2 = b2 * x2;
+                wire signed [PW-1:0]    pa1 = a1 * y1;
+                wire signed [PW-1:0]    pa2 = a2 * y2;
+                wire signed [CE_W-1:0]  pc1 = c1 * e1;
+                wire signed [CE_W-1:0]  pc2 = c2 * e2;
+                wire signed [AW-1:0] num = {{(AW-PW){pb0[PW-1]}}, pb0} + {{(AW-PW){pb1[PW-1]}}, pb1}
+                                            + {{(AW-PW){pb2[PW-1]}}, pb2};
+                wire signed [AW-1:0] den = {{(AW-PW){pa1[PW-1]}}, pa1} + {{(AW-PW){pa2[PW-1]}}, pa2};
+                wire signed [AW-1:0] efb = {{(AW-CE_W){pc1[CE_W-1]}}, pc1} + {{(AW-CE_W){pc2[CE_W-1]}}, pc2};
+                wire signed [AW-1:0] acc = (num <<< SHIFT_B) - (den <<< SHIFT_A) + efb;
+                wire signed [RW-1:0] r;
+                fx_round #(.IN_W(AW), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(RW)) u_round (.x(acc), .y(r));
+                wire [DATA_W-1:0] out;
+                fx_fit #(.IN_W(RW), .OUT_W(DATA_W), .OUT_SIGNED(1), .OVERFLOW(OVERFLOW)) u_fit
+                    (.x(r), .y(out), .ovf(ovf_c[s]));
+                wire signed [AW-1:0] re  = {{(AW-RW){r[RW-1]}}, r};
+                /* verilator lint_off UNUSEDSIGNAL */
+                wire signed [AW-1:0] err = acc - (re <<< OUT_SHIFT);
+                /* verilator lint_on UNUSEDSIGNAL */
+                wire signed [E_W-1:0] e = ovf_c[s] ? {E_W{1'b0}} : err[E_W-1:0];
+                always @(posedge clk) begin
+                    if (rst) begin
+                        x1 <= {DATA_W{1'b0}}; x2 <= {DATA_W{1'b0}};
+                        y1 <= {DATA_W{1'b0}}; y2 <= {DATA_W{1'b0}};
+                        e1 <= {E_W{1'b0}};    e2 <= {E_W{1'b0}};
+                    end else if (in_valid) begin
+                        x1 <= v;  x2 <= x1;
+                        y1 <= out; y2 <= y1;
+                        e1 <= e;  e2 <= e1;
+                    end
+                end
             end
-            // exact products at their own width (COEF_W x DATA_W, not AW x AW), summed in AW
-            wire signed [PW-1:0]    pb0 = b0 * v;
-            wire signed [PW-1:0]    pb1 = b1 * x1;
-            wire signed [PW-1:0]    pb2 = b2 * x2;
-            wire signed [PW-1:0]    pa1 = a1 * y1;
-            wire signed [PW-1:0]    pa2 = a2 * y2;
-            wire signed [CE_W-1:0]  pc1 = c1 * e1;
-            wire signed [CE_W-1:0]  pc2 = c2 * e2;
-            wire signed [AW-1:0] num = {{(AW-PW){pb0[PW-1]}}, pb0} + {{(AW-PW){pb1[PW-1]}}, pb1}
-                                        + {{(AW-PW){pb2[PW-1]}}, pb2};
-            wire signed [AW-1:0] den = {{(AW-PW){pa1[PW-1]}}, pa1} + {{(AW-PW){pa2[PW-1]}}, pa2};
-            wire signed [AW-1:0] efb = {{(AW-CE_W){pc1[CE_W-1]}}, pc1} + {{(AW-CE_W){pc2[CE_W-1]}}, pc2};
-            wire signed [AW-1:0] acc = (num <<< SHIFT_B) - (den <<< SHIFT_A) + efb;
-            wire signed [RW-1:0] r;
-            fx_round #(.IN_W(AW), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(RW)) u_round (.x(acc), .y(r));
-            wire [DATA_W-1:0] out;
-            fx_fit #(.IN_W(RW), .OUT_W(DATA_W), .OUT_SIGNED(1), .OVERFLOW(OVERFLOW)) u_fit
-                (.x(r), .y(out), .ovf(ovf_c[s]));
-            wire signed [AW-1:0] re  = {{(AW-RW){r[RW-1]}}, r};
-            /* verilator lint_off UNUSEDSIGNAL */
-            wire signed [AW-1:0] err = acc - (re <<< OUT_SHIFT);
-            /* verilator lint_on UNUSEDSIGNAL */
-            wire signed [E_W-1:0] e = ovf_c[s] ? {E_W{1'b0}} : err[E_W-1:0];
+
             always @(posedge clk) begin
                 if (rst) begin
-                    x1 <= {DATA_W{1'b0}}; x2 <= {DATA_W{1'b0}};
-                    y1 <= {DATA_W{1'b0}}; y2 <= {DATA_W{1'b0}};
-                    e1 <= {E_W{1'b0}};    e2 <= {E_W{1'b0}};
-                end else if (in_valid) begin
-                    x1 <= v;  x2 <= x1;
-                    y1 <= out; y2 <= y1;
-                    e1 <= e;  e2 <= e1;
+                    out_valid <= 1'b0;
+                    y         <= {DATA_W{1'b0}};
+                    ovf       <= {SECTIONS{1'b0}};
+                end else begin
+                    out_valid <= in_valid;
+                    if (in_valid) begin
+                        y   <= g_sec[SECTIONS-1].out;
+                        ovf <= ovf_c;
+                    end
+                end
+            end
+        end else begin : g_ser
+            // ---- serial: the 7 products of every section through one shared fx_mac_serial ----
+            localparam integer MA_W = (COEF_W > E_W) ? COEF_W : E_W;          // a: coefficient or error e
+            localparam integer MB_W = DATA_W;                                // b: data or weight c
+            localparam integer MP_W = MA_W + MB_W;
+            localparam integer RA_W = $clog2(7 * SECTIONS);                  // ROM address 7 sec + k
+            localparam integer RA_LAST_I = 7 * SECTIONS - 1;
+            localparam [RA_W-1:0] RA_LAST = RA_LAST_I[RA_W-1:0];
+            localparam integer SEC_W = (SECTIONS > 1) ? $clog2(SECTIONS) : 1;
+            localparam integer SEC_LAST_I = SECTIONS - 1;
+            localparam [SEC_W-1:0] SEC_LAST = SEC_LAST_I[SEC_W-1:0];
+            localparam integer LO_W = AW / 2;   // the accumulator in two halves: short carry chains
+            localparam integer HI_W = AW - LO_W;
+            localparam [2:0] S_IDLE  = 3'd0;    // FSM states
+            localparam [2:0] S_MAC   = 3'd1;    // products issued and accumulated
+            localparam [2:0] S_LO    = 3'd2;    // the last product's low half ...
+            localparam [2:0] S_HI    = 3'd3;    // ... and high half
+            localparam [2:0] S_ROUND = 3'd4;
+            localparam [2:0] S_FIT   = 3'd5;    // fit and error registered
+            localparam [2:0] S_UPD   = 3'd6;    // state update, next section or output
+            localparam [2:0] K_B0 = 3'd0;       // product slots, in ROM order
+            localparam [2:0] K_B1 = 3'd1;
+            localparam [2:0] K_B2 = 3'd2;
+            localparam [2:0] K_A1 = 3'd3;
+            localparam [2:0] K_A2 = 3'd4;
+            localparam [2:0] K_C1 = 3'd5;
+            localparam [2:0] K_C2 = 3'd6;
+            localparam [2:0] K_END = 3'd7;      // all seven issued
+
+            if (DATA_W < C_W) begin : g_bad_data_w
+                initial begin $display("iir: ARCH=1 needs DATA_W >= %0d, got %0d", C_W, DATA_W); $finish; end
+            end
+
+            reg [2:0]        st;
+            reg [SEC_W-1:0]  sec;       // section being computed
+            reg [2:0]        k;         // next product to issue (0..6; 7: all issued)
+            reg [2:0]        rk;        // next product to come back from the MAC (0..6)
+            reg [RA_W-1:0]   ra;        // ROM address of product k of section sec: 7 sec + k
+            reg [COEF_W-1:0] coef_q;    // registered ROM read
+            reg              rom_ok;    // coef_q is coef[ra] (one cycle after ra moves)
+            reg signed [DATA_W-1:0] v;  // the section's input: x, then each section's output
+            reg [LO_W-1:0]   sum_lo;    // the section's accumulator (the parallel variant's acc):
+            reg [HI_W-1:0]   sum_hi;    // the high half adds the low half's carry one cycle later
+            reg [AW-1:0]     term_q;    // the aligned product, registered (inverted when subtracted)
+            reg              sub_q;     // term_q is to be subtracted: ~t + 1 = -t, the 1 as carry in
+            reg              lo_go;     // the low half adds term_q this cycle ...
+            reg              lo_first;  // ... to 0: the section's first product
+            reg              c_q;       // carry out of the low half
+            reg [HI_W-1:0]   th_q;      // high half of the term, for the next cycle
+            reg              hi_go;     // the high half adds th_q + c_q this cycle
+            reg              hi_first;  // ... to 0: the section's first product
+            wire signed [AW-1:0] sum = {sum_hi, sum_lo};
+            reg signed [RW-1:0] r_q;    // round(sum)
+            reg [DATA_W-1:0] out_q;     // fit(r_q) ...
+            reg              ovf_q;     // ... its overflow flag
+            reg [E_W-1:0]    res_q;     // sum - (r_q << OUT_SHIFT): the error before the overflow rule
+            reg [SECTIONS-1:0] ovf_w;   // flags of the sections done so far
+            reg signed [DATA_W-1:0] sx1 [0:SECTIONS-1];
+            reg signed [DATA_W-1:0] sx2 [0:SECTIONS-1];
+            reg signed [DATA_W-1:0] sy1 [0:SECTIONS-1];
+            reg signed [DATA_W-1:0] sy2 [0:SECTIONS-1];
+            reg signed [E_W-1:0]    se1 [0:SECTIONS-1];
+            reg signed [E_W-1:0]    se2 [0:SECTIONS-1];
+
+            assign in_ready = (st == S_IDLE);
+            always @(posedge clk) coef_q <= coef[ra];
+
+            // ---- operands of product k of section sec ----
+            wire signed [DATA_W-1:0] x1 = sx1[sec];
+            wire signed [DATA_W-1:0] x2 = sx2[sec];
+            wire signed [DATA_W-1:0] y1 = sy1[sec];
+            wire signed [DATA_W-1:0] y2 = sy2[sec];
+            wire signed [E_W-1:0]    e1 = se1[sec];
+            wire signed [E_W-1:0]    e2 = se2[sec];
+            wire signed [MA_W-1:0] ca  = {{(MA_W-COEF_W+1){coef_q[COEF_W-1]}}, coef_q[COEF_W-2:0]};
+            wire signed [MA_W-1:0] e1a = {{(MA_W-E_W+1){e1[E_W-1]}}, e1[E_W-2:0]};
+            wire signed [MA_W-1:0] e2a = {{(MA_W-E_W+1){e2[E_W-1]}}, e2[E_W-2:0]};
+            // the error-feedback weight: the low C_W bits of its ROM word, as the parallel variant
+            wire signed [MB_W-1:0] cb  = {{(MB_W-C_W+1){coef_q[C_W-1]}}, coef_q[C_W-2:0]};
+            reg  signed [MA_W-1:0] a_op;
+            reg  signed [MB_W-1:0] b_op;
+            always @* begin
+                case (k)
+                    K_B0: begin a_op = ca;  b_op = v;  end
+                    K_B1: begin a_op = ca;  b_op = x1; end
+                    K_B2: begin a_op = ca;  b_op = x2; end
+                    K_A1: begin a_op = ca;  b_op = y1; end   // subtracted when accumulated
+                    K_A2: begin a_op = ca;  b_op = y2; end
+                    K_C1: begin a_op = e1a; b_op = cb; end
+                    default: begin a_op = e2a; b_op = cb; end   // K_C2
+                endcase
+            end
+
+            wire mac_ready, mac_valid;
+            wire issue = (st == S_MAC) && (k != K_END) && rom_ok && mac_ready;
+            wire signed [MP_W-1:0] p;
+            fx_mac_serial #(.A_W(MA_W), .B_W(MB_W)) u_mac (.clk(clk), .rst(rst), .in_valid(issue),
+                .in_ready(mac_ready), .a(a_op), .b(b_op), .out_valid(mac_valid), .p(p));
+
+            // ---- accumulation: every product fits PW or CE_W <= AW bits, so p is exact in AW ----
+            wire signed [AW-1:0] pa;
+            if (MP_W <= AW) begin : g_p_ext
+                assign pa = {{(AW-MP_W+1){p[MP_W-1]}}, p[MP_W-2:0]};
+            end else begin : g_p_cut
+                /* verilator lint_off UNUSEDSIGNAL */
+                wire signed [MP_W-1:0] p_all = p;
+                /* verilator lint_on UNUSEDSIGNAL */
+                assign pa = p_all[AW-1:0];
+            end
+            wire signed [AW-1:0] term = (rk <= K_B2) ? (pa <<< SHIFT_B) : (rk <= K_A2) ? (pa <<< SHIFT_A) : pa;
+            wire [LO_W-1:0] term_lo;
+            wire [HI_W-1:0] term_hi;
+            assign {term_hi, term_lo} = term_q;
+            wire [LO_W-1:0] lo_base = lo_first ? {LO_W{1'b0}} : sum_lo;
+            wire [HI_W-1:0] hi_base = hi_first ? {HI_W{1'b0}} : sum_hi;
+            // carries in through an extra low bit ({a, 1} + {b, c} = 2 (a + b + c) + 1 + ~c): one adder each
+            wire [LO_W-1:0] lo_n;
+            wire            lo_c;
+            wire [HI_W-1:0] hi_n;
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire            lo_cin_bit, hi_cin_bit;
+            /* verilator lint_on UNUSEDSIGNAL */
+            assign {lo_c, lo_n, lo_cin_bit} = {1'b0, lo_base, 1'b1} + {1'b0, term_lo, sub_q};
+            assign {hi_n, hi_cin_bit} = {hi_base, 1'b1} + {th_q, c_q};
+
+            // ---- round, fit, error: the same primitives as the parallel variant ----
+            wire signed [RW-1:0] r_c;
+            fx_round #(.IN_W(AW), .ROUNDING(ROUNDING), .SHIFT(OUT_SHIFT), .OUT_W(RW)) u_round (.x(sum), .y(r_c));
+            wire [DATA_W-1:0] out_c;
+            wire              ovf_c;
+            fx_fit #(.IN_W(RW), .OUT_W(DATA_W), .OUT_SIGNED(1), .OVERFLOW(OVERFLOW)) u_fit
+                (.x(r_q), .y(out_c), .ovf(ovf_c));
+            wire signed [AW-1:0] r_x = {{(AW-RW+1){r_q[RW-1]}}, r_q[RW-2:0]};
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire signed [AW-1:0] res = sum - (r_x <<< OUT_SHIFT);
+            /* verilator lint_on UNUSEDSIGNAL */
+            wire signed [E_W-1:0] e_c = ovf_q ? {E_W{1'b0}} : res_q;
+            reg [SECTIONS-1:0] ovf_n;   // the flags with this section's
+            always @* begin
+                ovf_n = ovf_w;
+                ovf_n[sec] = ovf_q;
+            end
+
+            // fit and error of r_q, registered every cycle: r_q holds from S_ROUND to S_UPD, so in
+            // S_UPD they are those of this section's r_q (no enable: a shorter path into them)
+            always @(posedge clk) begin
+                out_q <= out_c;
+                ovf_q <= ovf_c;
+                res_q <= res[E_W-1:0];
+            end
+
+            integer i;
+            always @(posedge clk) begin
+                if (rst) begin
+                    st <= S_IDLE; sec <= {SEC_W{1'b0}}; k <= K_B0; rk <= K_B0; lo_go <= 1'b0; hi_go <= 1'b0;
+                    ra <= {RA_W{1'b0}}; rom_ok <= 1'b0; ovf_w <= {SECTIONS{1'b0}};
+                    out_valid <= 1'b0; y <= {DATA_W{1'b0}}; ovf <= {SECTIONS{1'b0}};
+                    for (i = 0; i < SECTIONS; i = i + 1) begin
+                        sx1[i] <= {DATA_W{1'b0}}; sx2[i] <= {DATA_W{1'b0}};
+                        sy1[i] <= {DATA_W{1'b0}}; sy2[i] <= {DATA_W{1'b0}};
+                        se1[i] <= {E_W{1'b0}};    se2[i] <= {E_W{1'b0}};
+                    end
+                end else begin
+                    out_valid <= 1'b0;
+                    rom_ok <= ~issue;
+                    if (issue) begin
+                        k  <= k + 3'd1;
+                        ra <= (ra == RA_LAST) ? {RA_W{1'b0}} : ra + {{(RA_W-1){1'b0}}, 1'b1};
+                    end
+                    lo_go <= mac_valid;
+                    hi_go <= lo_go;
+                    if (mac_valid) begin
+                        term_q   <= (rk == K_A1 || rk == K_A2) ? ~term : term;
+                        sub_q    <= (rk == K_A1 || rk == K_A2);
+                        lo_first <= (rk == K_B0);
+                        rk  <= (rk == K_C2) ? K_B0 : rk + 3'd1;
+                    end
+                    if (lo_go) begin
+                        c_q      <= lo_c;
+                        sum_lo   <= lo_n;
+                        th_q     <= term_hi;
+                        hi_first <= lo_first;
+                    end
+                    if (hi_go) sum_hi <= hi_n;
+                    case (st)
+                        S_IDLE: if (in_valid) begin
+                            v <= x; sec <= {SEC_W{1'b0}}; k <= K_B0; st <= S_MAC;
+                        end
+                        S_MAC: if (mac_valid && rk == K_C2) st <= S_LO;
+                        S_LO: st <= S_HI;
+                        S_HI: st <= S_ROUND;
+                        S_ROUND: begin
+                            r_q <= r_c; st <= S_FIT;
+                        end
+                        S_FIT: st <= S_UPD;
+                        default: begin   // S_UPD: the section's output and its state update
+                            sx1[sec] <= v;     sx2[sec] <= x1;
+                            sy1[sec] <= out_q; sy2[sec] <= y1;
+                            se1[sec] <= e_c;   se2[sec] <= e1;
+                            v <= out_q;
+                            ovf_w[sec] <= ovf_q;
+                            if (sec == SEC_LAST) begin
+                                st <= S_IDLE; out_valid <= 1'b1; y <= out_q; ovf <= ovf_n;
+                            end else begin
+                                sec <= sec + {{(SEC_W-1){1'b0}}, 1'b1}; k <= K_B0; st <= S_MAC;
+                            end
+                        end
+                    endcase
                 end
             end
         end
     endgenerate
-
-    always @(posedge clk) begin
-        if (rst) begin
-            out_valid <= 1'b0;
-            y         <= {DATA_W{1'b0}};
-            ovf       <= {SECTIONS{1'b0}};
-        end else begin
-            out_valid <= in_valid;
-            if (in_valid) begin
-                y   <= g_sec[SECTIONS-1].out;
-                ovf <= ovf_c;
-            end
-        end
-    end
 endmodule
 
 `default_nettype wire

@@ -29,17 +29,19 @@ def default_design():
     return _design
 
 
-def long_stream(name: str, n: int = N_LONG, unroll: int | None = None, seed: int = 2026, sim: str = "icarus"):
+def long_stream(name: str, n: int = N_LONG, unroll: int | None = None, seed: int = 2026, sim: str = "icarus",
+                extra: dict | None = None):
     d = default_design()
     block = d.all[name]
     stim = block.stimulus(np.random.default_rng(seed), n)
     assert len(next(iter(stim.values()))) >= n
     expected, ovf_model = model_run(d, name, stim)
-    got, ovf_rtl, cycles, seconds = run_harness(d, name, stim, f"long_{name}", unroll, sim=sim)
+    tag = f"long_{name}" + ("_serial" if extra else "")
+    got, ovf_rtl, cycles, seconds = run_harness(d, name, stim, tag, unroll, sim=sim, extra=extra)
     for port, want in expected.items():
         bad = np.flatnonzero(got[port] != want)
         assert bad.size == 0, (f"{name}.{port}: {bad.size} mismatches of {want.size}, first at {bad[0]}: "
                                f"got {got[port][bad[0]]}, expected {want[bad[0]]}")
     assert ovf_rtl == ovf_model, f"{name}: RTL flagged {ovf_rtl} overflows, model counted {ovf_model}"
-    record_throughput("file", name, cycles, seconds, sim=sim)
-    return cycles, seconds
+    record_throughput("file", name + (" (serial)" if extra else ""), cycles, seconds, sim=sim)
+    return cycles, seconds, len(next(iter(stim.values())))

@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from fxdsp.vectors import load
-from hdl_util import RTL, VECTORS, build_dir, design_of, generate_into, model_run, mutated_rtl, rtl_sources, \
-    run_harness
+from hdl_util import RTL, SERIAL, VECTORS, HarnessTimeout, build_dir, design_of, generate_into, model_run, \
+    mutated_rtl, rtl_sources, run_harness
 
 
 class MutantBroken(RuntimeError):
@@ -52,7 +52,7 @@ class Mutation:
     old: str
     new: str
     what: str
-    checks: tuple  # (design overrides or None, block, gapped)
+    checks: tuple  # (design overrides or None, block, gapped[, extra module parameters: a serial variant])
 
 
 MUTATIONS = [
@@ -80,9 +80,28 @@ MUTATIONS = [
              ((None, "piecewise_bias", False),)),
     Mutation("iir_no_error_feedback", "iir.v", "(den <<< SHIFT_A) + efb;", "(den <<< SHIFT_A);",
              "error feedback dropped", ((None, "iir", False),)),
-    Mutation("iir_state_free_running", "iir.v", "end else if (in_valid) begin\n                    x1 <= v;",
-             "end else begin\n                    x1 <= v;", "filter state advances without in_valid",
+    Mutation("iir_state_free_running", "iir.v", "end else if (in_valid) begin\n                        x1 <= v;",
+             "end else begin\n                        x1 <= v;", "filter state advances without in_valid",
              ((None, "iir", True),)),
+    # the serial iir's scheduler (ARCH = 1) and its shared multiplier
+    Mutation("iir_serial_wrong_state_slot", "iir.v", "K_B2: begin a_op = ca;  b_op = x2; end",
+             "K_B2: begin a_op = ca;  b_op = x1; end", "serial: b2 multiplies x1 (operand of the wrong slot)",
+             ((None, "iir", False, SERIAL["iir"]),)),
+    Mutation("iir_serial_wrong_alignment_slot", "iir.v", "(rk <= K_B2) ? (pa <<< SHIFT_B)",
+             "(rk <= K_B1) ? (pa <<< SHIFT_B)", "serial: b2 x2 accumulated with the a products' alignment",
+             ((None, "iir", False, SERIAL["iir"]),)),
+    Mutation("iir_serial_stale_sum", "iir.v", "S_LO: st <= S_HI;", "S_LO: st <= S_ROUND;",
+             "serial: rounding reads the accumulator's high half before the last product reaches it",
+             ((None, "iir", False, SERIAL["iir"]),)),
+    Mutation("iir_serial_missed_stall", "iir.v", "assign in_ready = (st == S_IDLE);", "assign in_ready = 1'b1;",
+             "serial: in_ready high while a sample is computed (samples taken mid-schedule are lost)",
+             (({}, "iir", False, SERIAL["iir"]),)),
+    Mutation("mac_lower_limb_signed", "fx_mac_serial.v", "sb   <= (jb == JB_TOP) & b_l[LIMB-1];",
+             "sb   <= b_l[LIMB-1];", "serial MAC: a lower limb of b read as signed",
+             ((None, "iir", False, SERIAL["iir"]),)),
+    Mutation("mac_column_carry_logical", "fx_mac_serial.v", "carry = acc >>> LIMB;", "carry = acc >> LIMB;",
+             "serial MAC: a negative column carry shifted in logically",
+             ((None, "iir", False, SERIAL["iir"]),)),
     Mutation("nco_free_running", "nco.v", "else if (step) phase <= phase + FTW_C;", "else phase <= phase + FTW_C;",
              "NCO phase advances without in_valid", ((None, "demod", True),)),
     Mutation("nco_no_interpolation", "nco.v", "assign cos_o  = c_sum[NCO_W-1:0];", "assign cos_o  = cb;",
@@ -107,14 +126,15 @@ MUTATIONS = [
              "lag: state guard bits dropped (state kept at the code LSB: dead band)", ((None, "lag", False),)),
     Mutation("lag_step_floor", "lag.v", ".SHIFT(ALPHA_S), .ROUNDING(ROUNDING)", ".SHIFT(ALPHA_S), .ROUNDING(0)",
              "lag: state update not rounded (floor)", ((None, "lag", False), (LAG_FEW_GUARD, "lag", False))),
-    Mutation("lag_state_free_running", "lag.v", "end else if (in_valid) begin\n            st ",
-             "end else begin\n            st ", "lag state advances without in_valid", ((None, "lag", True),)),
+    Mutation("lag_state_free_running", "lag.v", "end else if (in_valid) begin\n            if (update) begin",
+             "end else begin\n            if (phase == {PH_W{1'b0}}) begin", "lag state advances without in_valid",
+             ((None, "lag", True),)),
     Mutation("chain001_misaligned", "chain_paper001.v", "rate_d2 <= rate_d1;", "rate_d2 <= rate_in;",
              "rate_in not delayed with the temperature", ((None, "chain_paper001", False),)),
 ]
 
 
-def _check(rtl: Path, overrides, name: str, gapped: bool, tag: str) -> tuple[bool, str]:
+def _check(rtl: Path, overrides, name: str, gapped: bool, tag: str, extra: dict | None = None) -> tuple[bool, str]:
     d = design_of(overrides)
     if overrides is None and (VECTORS / name).is_dir():
         ins, outs, entry = load(VECTORS, name)
@@ -124,7 +144,9 @@ def _check(rtl: Path, overrides, name: str, gapped: bool, tag: str) -> tuple[boo
         outs, total = model_run(d, name, ins)
     unroll = 7 if name in ("sf_divide", "chain_paper002") else None
     try:
-        got, ovf, _, _ = run_harness(d, name, ins, tag, unroll=unroll, gap=gapped, rtl=rtl)
+        got, ovf, _, _ = run_harness(d, name, ins, tag, unroll=unroll, gap=gapped, rtl=rtl, extra=extra)
+    except HarnessTimeout:  # fewer outputs than samples (e.g. samples lost to a missed stall)
+        return True, "harness stopped at its cycle limit: fewer outputs than samples"
     except subprocess.CalledProcessError as exc:
         if Path(str(exc.cmd[0])).name == "iverilog":  # the harness did not compile: broken, not caught
             raise MutantBroken(f"{tag}: the {name} harness does not compile on {rtl.name}:\n"
@@ -179,8 +201,9 @@ def run(mutations=MUTATIONS, baseline: bool = True) -> list[dict]:
             checks = m.checks if m else ((None, "rtd", False), (None, "bias_subtract", False))
             t0 = time.perf_counter()
             caught, why = False, ""
-            for overrides, name, gapped in checks:
-                caught, why = _check(rtl, overrides, name, gapped, f"mut_{m.key if m else 'baseline'}_{name}")
+            for overrides, name, gapped, *extra in checks:
+                caught, why = _check(rtl, overrides, name, gapped, f"mut_{m.key if m else 'baseline'}_{name}",
+                                     *extra)
                 if caught:
                     break
             rows.append({"mutation": m.key if m else "(none: baseline)", "file": m.file if m else "-",

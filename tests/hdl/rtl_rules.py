@@ -51,6 +51,12 @@ ALLOWED: dict[tuple[str, str, str], tuple[int, str]] = {
     ("sf_divide", "constant", "{1'b0,{(OUT_W-1){1'b1}}}"): (1, "x / 0 result: positive full scale (a value, never added)"),
     ("sf_divide", "constant", "{1'b1,{(OUT_W-1){1'b0}}}"): (1, "x / 0 result: negative full scale (a value, never added)"),
     ("piecewise", "data-bit", "{{(SEG_W-1){1'b0}},le[i]}"): (1, "segment number = count of breakpoint comparators"),
+    ("fx_mac_serial", "select", "a_x[LIMB*ia+:LIMB]"): (
+        1, "16-bit limb of an operand of the exact serial product: every limb is multiplied, no bit dropped"),
+    ("fx_mac_serial", "select", "b_x[LIMB*jb+:LIMB]"): (
+        1, "16-bit limb of an operand of the exact serial product: every limb is multiplied, no bit dropped"),
+    ("fx_mac_serial", "right-shift", "acc>>>LIMB"): (
+        1, "carry of a completed column of the exact serial product: its low 16 bits are stored in p first"),
 }
 
 DECL_KW = {"input", "output", "inout", "wire", "reg", "integer", "localparam", "parameter", "genvar", "signed",

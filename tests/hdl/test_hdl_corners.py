@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from fxdsp.blocks.base import corner_codes, tie_codes
-from hdl_util import SIMULATORS, design_of, run_cocotb, segment
+from hdl_util import SERIAL, SIMULATORS, design_of, run_cocotb, segment
 
 _NARROW = {
     "rtd": {"temp_format": "s14.7"},                        # +-64 C: the LUT range saturates
@@ -123,6 +123,19 @@ def corners(d, name, rng) -> dict[str, np.ndarray]:
 @pytest.mark.parametrize("name", BLOCKS)
 @pytest.mark.parametrize("sim", SIMULATORS)
 def test_corners_reset_gaps(key, name, sim):
+    corner_streams(key, name, sim)
+
+
+@pytest.mark.hdl
+@pytest.mark.parametrize("key", sorted(DESIGNS))
+@pytest.mark.parametrize("name", sorted(SERIAL))
+@pytest.mark.parametrize("sim", SIMULATORS)
+def test_corners_reset_gaps_serial(key, name, sim):
+    """The serial variant: the reset lands mid-schedule, back-to-back valid meets in_ready low."""
+    corner_streams(key, name, sim, SERIAL[name], "_serial")
+
+
+def corner_streams(key, name, sim, extra=None, suffix=""):
     d = design(key)
     rng = np.random.default_rng(3)
     stim = corners(d, name, rng)
@@ -131,4 +144,5 @@ def test_corners_reset_gaps(key, name, sim):
     segs = [segment(d, name, first, abort_after=max(4, n // 4)),  # reset with samples in flight
             segment(d, name, stim, gap=0.0),                      # back to back from reset
             segment(d, name, stim, gap=0.5)]                      # gapped valid from reset
-    run_cocotb(d, name, segs, f"corner_{key}_{name}", seed=11, extra_params=EXTRA.get(name), sim=sim)
+    params = EXTRA.get(name) if extra is None else {**EXTRA.get(name, {}), **extra}
+    run_cocotb(d, name, segs, f"corner_{key}_{name}{suffix}", seed=11, extra_params=params, sim=sim)

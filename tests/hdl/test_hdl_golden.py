@@ -1,6 +1,6 @@
 """(a) The committed golden vectors, bit for bit, through every RTL block and both tops (cocotb,
 Python-driven, on Icarus and on Verilator), with the model's overflow count matched by the RTL's
-overflow flags."""
+overflow flags; the serial (resource-shared) variants of blocks likewise."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import json
 import pytest
 
 from fxdsp.vectors import load
-from hdl_util import SIMULATORS, VECTORS, design_of, record_throughput, run_cocotb, segment
+from hdl_util import SERIAL, SIMULATORS, VECTORS, design_of, record_throughput, run_cocotb, segment
 
 # every instance of the design has an RTL module; the manifest must list them all
 NAMES = sorted(json.loads((VECTORS / "manifest.json").read_text())["blocks"])
@@ -33,3 +33,14 @@ def test_golden_vectors(design, name, sim):
     seg = segment(design, name, ins, outs, total)
     summary = run_cocotb(design, name, [seg], f"golden_{name}", extra_params=EXTRA.get(name), sim=sim)
     record_throughput("cocotb", name, summary["cycles"], summary["seconds"], sim=sim)
+
+
+@pytest.mark.hdl
+@pytest.mark.parametrize("sim", SIMULATORS)
+@pytest.mark.parametrize("name", sorted(SERIAL))
+def test_golden_vectors_serial(design, name, sim):
+    """The same vectors through the serial variant (valid/ready, many cycles per sample)."""
+    ins, outs, entry = load(VECTORS, name)
+    seg = segment(design, name, ins, outs, sum(entry["overflows"].values()))
+    summary = run_cocotb(design, name, [seg], f"golden_{name}_serial", extra_params=SERIAL[name], sim=sim)
+    record_throughput("cocotb", f"{name} (serial)", summary["cycles"], summary["seconds"], sim=sim)

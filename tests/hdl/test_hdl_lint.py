@@ -20,6 +20,12 @@ VARIANTS = [
     ("piecewise", {"ORDER": 3, "SEGMENTS": 1, "ACC_ALIGN": 0, "COEF_ALIGN": 0, "TOP_SHIFT": -2, "OUT_SHIFT": -1}),
     ("piecewise", {"ORDER": 2, "SEGMENTS": 6, "ROUNDING": 2, "OVERFLOW": 0, "OUT_SIGNED": 1}),
     ("iir", {"SECTIONS": 3, "ROUNDING": 3, "OVERFLOW": 0}),
+    ("iir", {"ARCH": 1}),
+    ("iir", {"ARCH": 1, "SECTIONS": 3, "ROUNDING": 3, "OVERFLOW": 0}),
+    ("iir", {"ARCH": 1, "DATA_W": 16, "COEF_W": 16, "OUT_SHIFT": 14, "ACC_W": 34}),  # one-limb operands
+    ("iir", {"ARCH": 1, "COEF_W": 20, "ACC_W": 50}),  # MAC product wider than the accumulator
+    ("fx_mac_serial", {"A_W": 39, "B_W": 24}),
+    ("fx_mac_serial", {"A_W": 2, "B_W": 17}),
     ("sf_divide", {"UNROLL": 7, "SF_SIGNED": 1, "ROUNDING": 2}),
     ("sf_divide", {"UNROLL": 42, "OUT_SHIFT": -2}),
     ("demod", {"LPF_SECTIONS": 2, "ITERATIONS": 8, "ROUNDING": 0}),
