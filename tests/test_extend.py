@@ -12,12 +12,15 @@ import shutil
 import tomllib
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from conftest import SHARED, needs_shared
 from fxdsp.chains import build
 from fxdsp.cli import main
 from fxdsp.config import Config
+from fxdsp.diagnose.logio import read_log
+from fxdsp.extend.evaluate import compensate002, heldout_rows_paper002
 
 ROOT = Path(__file__).parents[1]
 TCKIT_REL = "data/tckit/hp3458abx_hp34420a_tcsweep_1vdc_nplc100_test2_oct2024.dsv"
@@ -82,12 +85,23 @@ def test_extend_a_simulated_paper002_log(logs, name, tmp_path, capsys):
         v = h["variants"]
         assert v["before"]["temp_vs_ref_c"] > 5 * v["after"]["temp_vs_ref_c"], v
     assert all(v["overflows"] == 0 for v in h["variants"].values())
-    # each stage produced its share: turned off, the gain it brought is gone
+    # each stage produced its share. Recalibrated without it, the gain it brought is gone (for a
+    # single stage that variant is "before" by construction, so the check is made on the other
+    # ablation there); and in the extended config itself, the stage switched off while the tables
+    # stay as calibrated, the held-out error grows
+    columns = read_log(logs[name]).columns
+    held = heldout_rows_paper002(columns)
+    tau = next((r["parameters"]["tau_s"] for r in rep["remedies"] if r["stage"] == "lag"), None)
+    config = (out / "config.toml").read_text()
+
+    def rms(on):
+        err, _ = compensate002(columns, config, on, tau, h["trim_rad"] or 0.0)
+        return float(np.sqrt(np.mean(err[held] ** 2)))
+
+    with_all = rms(stages)
     for stage in stages:
-        others = rep["summary"]["gain_without"][stage]
-        if stages == {stage}:
-            assert others < 1.1, (stage, others)
-        else:
+        assert rms(stages - {stage}) > 1.5 * with_all, stage
+        if stages != {stage}:
             assert h["variants"][f"without {stage}"]["rms"] > 1.1 * s["rms_after"], stage
     # the config, the headers and the vectors are this extension's
     cfg = tomllib.loads((out / "config.toml").read_text())
@@ -193,7 +207,17 @@ def test_extend_the_tckit_log(tmp_path, capsys):
     assert rep["regression"]["passed"] and set(rep["regression"]["blocks"]) == {"piecewise_bias001",
                                                                                "bias_subtract001", "lag"}
     s = rep["summary"]
-    assert s["gain"] > 2.0 and s["gain_without"]["lag"] < 1.05, s
+    assert s["gain"] > 2.0, s
+    # the lag carries the gain: the final config's bit-exact chain with its lag bypassed (the cubic
+    # fitted on Te, fed the thermometer's T) leaves much more of the output's temperature dependence
+    from fxdsp.diagnose.logio import parse_mapping
+    from fxdsp.extend.evaluate import thermometer_bitexact, thermometer_codes
+
+    columns = read_log(SHARED / TCKIT_REL, parse_mapping(TCKIT_ARGS[1:6:2]), ";", TCKIT_ARGS[-1]).columns
+    design = build(Config(tomllib.loads((out / "config.toml").read_text()), source="ext"))
+    codes = thermometer_codes(design.blocks["lag"], columns, rep["remedies"][0]["parameters"]["tau_s"])
+    on, off = (thermometer_bitexact(design, codes[k], columns["output"], None)["rms_compensated"] for k in ("Te", "T"))
+    assert off > 2 * on, (on, off)
     # the hardware arithmetic adds nothing the compensation would notice: a few output LSBs
     b = rep["bitexact_chain"]
     assert b["overflows"] == 0 and b["max_abs_vs_float"] < 4 * b["lsb"], b

@@ -46,25 +46,31 @@ def heldout_residual(y: np.ndarray, temp: np.ndarray, rate: np.ndarray | None, f
     return resid
 
 
+def log_rate_lag(template, tau_s: float, time_s):
+    """A config's lag (word lengths, rounding) with alpha for a log's sample interval: the same
+    filter as the FPGA's, run once per logged row."""
+    from fxdsp.blocks.lag import Lag
+
+    return Lag(template.temp_format, tau_s, 1.0 / sample_interval(np.asarray(time_s, float)), template.alpha_bits,
+               template.g, template.rules, name="lag(log rate)")
+
+
 def lag_extension(diag: Diagnosis, tau_s: float) -> dict:
     from fxdsp.chains import build
-    from fxdsp.blocks.lag import Lag
     from fxdsp.fixed import Rules, quantize, to_float
 
     s = diag.context.series
-    template = build(chains=False).blocks["lag"]
-    dt = sample_interval(s.t)
-    block = Lag(template.temp_format, tau_s, 1.0 / dt, template.alpha_bits, template.g, template.rules)
+    block = log_rate_lag(build(chains=False).blocks["lag"], tau_s, s.t)
     code = quantize(s.temp, block.temp_format, Rules("half_up", "saturate"))
     te = to_float(block.run(temp=code).outputs["te"], block.temp_format)
     folds = diag.context.blocks.row_fold()
     before = _heldout_rms(s.out, s.temp, s.rate, folds)
     after = _heldout_rms(s.out, te, s.rate, folds)
-    return {"extension": "lag", "block": "lag", "tau_s": tau_s, "rate_hz": 1.0 / dt,
+    return {"extension": "lag", "block": "lag", "tau_s": tau_s, "rate_hz": block.rate_hz,
             "alpha_mantissa": block.m, "alpha_shift": block.s, "temp_format": str(block.temp_format),
             "rms_without": before, "rms_with": after, "ratio": before / after if after > 0 else float("inf"),
             "heldout": True,
-            "config": f"[lag] tau_s = {tau_s:.6g}, rate_hz = {1.0 / dt:.6g} (then `fxdsp vectors --config F` "
+            "config": f"[lag] tau_s = {tau_s:.6g}, rate_hz = {block.rate_hz:.6g} (then `fxdsp vectors --config F` "
                       f"for this device's golden vectors)"}
 
 

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from fxdsp.config import default_config_text
+from fxdsp.extend.plan import parameter
 from fxdsp.fixed import Format
 from fxdsp.repro.calconfig import acc_width, config_from_text, config_text, fit_format, paper002_tables, \
     piecewise_table
@@ -39,10 +40,6 @@ def _stages(remedies) -> set[str]:
     return {r.stage for r in remedies}
 
 
-def _by_stage(remedies, stage: str):
-    return next(r for r in remedies if r.stage == stage)
-
-
 def remedy_tables(remedies, chain: str, base_text: str | None = None) -> dict:
     """Config tables of the lag, trim and CVD remedies (calibration tables apart)."""
     tables: dict = {}
@@ -55,14 +52,14 @@ def remedy_tables(remedies, chain: str, base_text: str | None = None) -> dict:
 
         beta = float(tomllib.loads(base_text if base_text is not None else default_config_text())["rtd"]
                      .get("beta_per_c", 2.183e-3))
-        b = _by_stage(remedies, "cvd").parameters["b_per_c"]
+        b = parameter(remedies, "cvd", "b_per_c")
         tables["rtd"] = {"law": "cvd", "cvd_a": beta, "cvd_b": b * beta, "cvd_c": 0.0}
     if "lag" in stages:
-        tables["lag"] = {"tau_s": _by_stage(remedies, "lag").parameters["tau_s"]}
+        tables["lag"] = {"tau_s": parameter(remedies, "lag", "tau_s")}
         if chain == "paper002":
             tables["chain_paper002"] = {"stages": ["lag"]}
     if "trim" in stages:
-        tables["demod"] = {"phase_trim_rad": _by_stage(remedies, "trim").parameters["phase_trim_rad"]}
+        tables["demod"] = {"phase_trim_rad": parameter(remedies, "trim", "phase_trim_rad")}
     return tables
 
 

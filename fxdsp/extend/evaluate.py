@@ -26,19 +26,12 @@ import math
 
 import numpy as np
 
-from fxdsp.blocks.lag import Lag
-from fxdsp.diagnose.extension import heldout_residual
-from fxdsp.fixed import OverflowLog, Rules, quantize, to_float  # noqa: F401 (re-exported to the pipeline)
-from fxdsp.ramps import sample_interval
+from fxdsp.diagnose.extension import heldout_residual, log_rate_lag
+from fxdsp.extend.plan import parameter
+from fxdsp.fixed import OverflowLog, Rules, quantize, to_float
 from fxdsp.repro.points import rate_table_windows
 
 ROUND = Rules("half_up", "saturate")
-
-
-def log_rate_lag(template: Lag, tau_s: float, time_s) -> Lag:
-    """The config's lag (word lengths, rounding) with alpha for the log's sample interval."""
-    return Lag(template.temp_format, tau_s, 1.0 / sample_interval(np.asarray(time_s, float)), template.alpha_bits,
-               template.g, template.rules, name="lag(log rate)")
 
 
 def trim_angle(nco) -> float:
@@ -81,8 +74,7 @@ def _variants(stages: set[str]) -> dict[str, set[str]]:
 
 
 def tau_of(remedies) -> float | None:
-    return next((r.parameters["tau_s"] for r in remedies if r.stage == "lag"), None)
-
+    return parameter(remedies, "lag", "tau_s")
 
 def compensate002(columns: dict, config_text_: str, on: set[str], tau_s: float | None, theta: float):
     """(rate error in deg/s per row, overflow count) of a config's bit-exact log-rate compensation
@@ -162,6 +154,7 @@ def paper002_variants(columns: dict, remedies, base_text: str | None) -> dict:
         code, x = stage_inputs(probe, columns, on, tau_of(remedies), theta)
         text, cal = paper002_config(columns, chosen, base_text, output=x,
                                     temp_c=to_float(code, probe.rtd.temp_format) if on & {"lag", "cvd"} else None)
+        # the variant's own RTD table reads the log (the probe's is CVD whenever any variant's is)
         err, n_ovf = compensate002(columns, text, on, tau_of(remedies), theta)
         err = err * float(cal["sf_nominal"])
         results[name] = {"stages": sorted(on), "rms": float(np.sqrt(np.mean(err[held] ** 2))),
@@ -227,28 +220,31 @@ def paper001_variants(columns: dict, remedies, base_text: str | None) -> dict:
             "_held": held, "_configs": configs, "_cals": cals}
 
 
-def thermometer_errors(columns: dict, design, remedies, folds: np.ndarray) -> dict:
+def thermometer_codes(lag_block, columns: dict, tau_s: float | None) -> dict[str, np.ndarray]:
+    """The thermometer chain's temperature codes (the lag's format): the logged reading ``T`` and,
+    with a lag time constant, the bit-exact lag's output at the log's rate ``Te``."""
+    code = quantize(np.asarray(columns["temp_c"], float), lag_block.temp_format, ROUND)
+    codes = {"T": code}
+    if tau_s is not None:
+        codes["Te"] = log_rate_lag(lag_block, tau_s, columns["time_s"]).run(temp=code).outputs["te"]
+    return codes
+
+
+def thermometer_errors(columns: dict, codes: dict, fmt, remedies, folds: np.ndarray) -> dict:
     """Held-out rms of the cubic-compensated output, with and without the lag (float fits on the
-    bit-exact temperature codes), and the bit-exact chain of the final config on every row."""
+    bit-exact temperature ``codes`` of :func:`thermometer_codes`, in ``fmt``)."""
     stages = {r.stage for r in remedies}
-    t = np.asarray(columns["time_s"], float)
     y = np.asarray(columns["output"], float)
-    lag_block = design.blocks["lag"]
-    fmt = lag_block.temp_format
-    code = quantize(np.asarray(columns["temp_c"], float), fmt, ROUND)
-    temps = {"T": to_float(code, fmt)}
-    if "lag" in stages:
-        temps["Te"] = to_float(log_rate_lag(lag_block, tau_of(remedies), t).run(temp=code).outputs["te"], fmt)
     results, series = {}, {}
     for name, on in _variants(stages).items():
-        te = temps["Te"] if "lag" in on else temps["T"]
+        te = to_float(codes["Te"] if "lag" in on else codes["T"], fmt)
         resid = heldout_residual(y, te, None, folds)
         rms = float(np.sqrt(np.mean(resid**2)))
         results[name] = {"stages": sorted(on), "rms": rms, "max_abs": float(np.abs(resid).max()), "overflows": 0}
         series[name] = resid
     return {"unit": "output unit", "heldout": "time-blocked folds of the diagnosis (fit on the others)",
             "heldout_rows": int(y.size), "rows": int(y.size), "variants": results, "_series": series,
-            "_held": np.ones(y.size, dtype=bool), "_te": temps.get("Te", temps["T"]), "_code": code}
+            "_held": np.ones(y.size, dtype=bool)}
 
 
 def thermometer_bitexact(design, te_code: np.ndarray, output, fit: dict) -> dict:
@@ -277,10 +273,7 @@ def thermometer_applied(columns: dict, configs: dict, remedies) -> dict:
     errors = {}
     for name, stages in (("before", set()), ("after", {r.stage for r in remedies})):
         design = build(config_from_text(configs[name]))
-        lag = design.blocks["lag"]
-        code = quantize(np.asarray(columns["temp_c"], float), lag.temp_format, ROUND)
-        if "lag" in stages:
-            code = log_rate_lag(lag, tau_of(remedies), columns["time_s"]).run(temp=code).outputs["te"]
-        got = thermometer_bitexact(design, code, columns["output"], None)
+        codes = thermometer_codes(design.blocks["lag"], columns, tau_of(remedies) if "lag" in stages else None)
+        got = thermometer_bitexact(design, codes.get("Te", codes["T"]), columns["output"], None)
         errors[name] = (got["_series"] - got["_series"].mean(), got["overflows"])
     return applied_result(errors, len(columns["time_s"]))

@@ -10,6 +10,8 @@ import numpy as np
 from fxdsp.chains import build
 from fxdsp.config import default_config_text
 from fxdsp.errors import InputError
+from fxdsp.fixed import to_float
+from fxdsp.ramps import sample_interval
 from fxdsp.extend import configure, evaluate, hardware, plan as planning, report as rp
 from fxdsp.outputs import json_text
 
@@ -110,22 +112,18 @@ def extend_diagnosis(diag, log_name: str, chain="auto", base_text=None, rtl: boo
     else:
         text0 = base_text if base_text is not None else default_config_text()
         template = build(configure.config_from_text(text0), chains=False)
-        fmt = template.blocks["rtd"].temp_format
-        t = columns["time_s"]
-        rate_hz = 1.0 / evaluate.sample_interval(t)
-        code = evaluate.quantize(columns["temp_c"], fmt, evaluate.ROUND)
-        temp = evaluate.to_float(code, fmt)
-        te_code = code
-        if "lag" in stages:
-            te_code = evaluate.log_rate_lag(template.blocks["lag"], evaluate.tau_of(remedies), t).run(temp=code).outputs["te"]
-        te = evaluate.to_float(te_code, fmt)
+        fmt = template.blocks["lag"].temp_format
+        rate_hz = 1.0 / sample_interval(columns["time_s"])
+        codes = evaluate.thermometer_codes(template.blocks["lag"], columns, evaluate.tau_of(remedies))
+        te_code = codes.get("Te", codes["T"])
+        temp, te = to_float(codes["T"], fmt), to_float(te_code, fmt)
         tables_base = configure.thermometer_tables(temp, temp, columns["output"], rate_hz, str(fmt))
         tables_ext = configure.thermometer_tables(temp, te, columns["output"], rate_hz, str(fmt))
         base = configure.thermometer_config(tables_base, [], text0)
         ext = configure.thermometer_config(tables_ext, remedies, text0)
         ext_cfg = configure.config_from_text(ext)
         design = build(ext_cfg)
-        errors = evaluate.thermometer_errors(columns, design, remedies, diag.context.blocks.row_fold())
+        errors = evaluate.thermometer_errors(columns, codes, fmt, remedies, diag.context.blocks.row_fold())
         bx = evaluate.thermometer_bitexact(design, te_code, columns["output"], tables_ext["_fit"])
         extra["bitexact_chain"] = rp.public(bx)
         extra["fit"] = tables_ext["_fit"]

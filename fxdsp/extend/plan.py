@@ -68,6 +68,11 @@ ABSORBED = {"thermometer": {"rtd_nonlinearity": "absorbed by the cubic bias poly
                          "rtd_nonlinearity": "the chamber thermometer is not in the path"}}
 
 
+def parameter(remedies, stage: str, key: str):
+    """A parameter of the remedy of ``stage`` (None when no remedy has that stage)."""
+    return next((r.parameters[key] for r in remedies if r.stage == stage), None)
+
+
 def plan(diag, chain: str) -> list[Remedy]:
     """The remedies of every named cause, in the diagnosis's order; InputError (exit 2) naming the
     causes that have none in ``chain``."""
