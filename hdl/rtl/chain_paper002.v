@@ -45,7 +45,7 @@ module chain_paper002 #(
     wire              ovf_rtd;
     rtd #(
 `include "rtd_params.vh"
-    ) u_rtd (.clk(clk), .rst(rst), .in_valid(accept), .code(rtd_code), .out_valid(t_v), .temp(t_w),
+    ) u_rtd (.clk(clk), .rst(rst), .in_valid(accept), .in_ready(), .code(rtd_code), .out_valid(t_v), .temp(t_w),
              .ovf(ovf_rtd));
 
     // ---- the temperature the coefficient engines see: t_w, or the lag's te (generate below) ----
@@ -60,10 +60,10 @@ module chain_paper002 #(
     wire [B_OVF_W-1:0]  ovf_b;
     piecewise #(
 `include "piecewise_sf_params.vh"
-    ) u_sf (.clk(clk), .rst(rst), .in_valid(ce_v), .temp(ce_w), .out_valid(sf_v), .y(sf_w), .ovf(ovf_sf));
+    ) u_sf (.clk(clk), .rst(rst), .in_valid(ce_v), .in_ready(), .temp(ce_w), .out_valid(sf_v), .y(sf_w), .ovf(ovf_sf));
     piecewise #(
 `include "piecewise_bias_params.vh"
-    ) u_bias (.clk(clk), .rst(rst), .in_valid(ce_v), .temp(ce_w), .out_valid(b_v), .y(b_w), .ovf(ovf_b));
+    ) u_bias (.clk(clk), .rst(rst), .in_valid(ce_v), .in_ready(), .temp(ce_w), .out_valid(b_v), .y(b_w), .ovf(ovf_b));
 
     // ---- sense / SF ----
     wire             d_v;
@@ -133,7 +133,7 @@ module chain_paper002 #(
             wire [TEMP_W-1:0] te_w;
             lag #(
 `include "lag_params.vh"
-            ) u_lag (.clk(clk), .rst(rst), .in_valid(t_v), .temp(t_w), .out_valid(lag_v), .te(te_w),
+            ) u_lag (.clk(clk), .rst(rst), .in_valid(t_v), .in_ready(), .temp(t_w), .out_valid(lag_v), .te(te_w),
                      .ovf(ovf_lag));
             reg ovf_lag_r;
             always @(posedge clk) if (lag_v) ovf_lag_r <= ovf_lag;

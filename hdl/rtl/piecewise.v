@@ -12,7 +12,26 @@
 // Coefficients: COEF_FILE, entry seg*(ORDER+1)+k, COEF_W bits sign-extended; breakpoints:
 // BP_FILE, SEGMENTS-1 entries of T_W bits.
 // ovf: one flag per fit, {out, product[ORDER-1..0], acc[ORDER..0]} (2*ORDER+2 bits).
-// Interface: in_valid / out_valid, one sample per cycle. Latency: 1 cycle.
+// Both architectures give the same y / ovf for every input.
+// ARCH = 0: one sample per cycle, Horner combinational (one multiplier per product).
+//   Interface: in_valid / out_valid (in_ready is tied high). Latency: 1 cycle.
+// ARCH = 1: serial. The ORDER products acc * t run through ONE fx_mac_serial (one 16 x 16
+//   multiplier: one SB_MAC16, N = ceil(ACC_W/16) * ceil((T_W+1)/16) multiplier cycles, latency
+//   N + 3); every rounding and every fit gets a cycle of its own; the coefficient ROM is read
+//   through a register (block RAM friendly). Interface: in_valid / in_ready / out_valid; in_ready
+//   is high only when idle. Schedule, in edges after the one that takes the sample (temp and
+//   t = temp - T0 registered):
+//     1: breakpoint compares registered;  2: ROM address of c[seg][ORDER] (seg = their count);
+//     3: ROM word registered;  4: acc = fit(round(c >> TOP_SHIFT)), address of c[seg][ORDER-1]
+//     per power k = ORDER-1 .. 0, from edge b (b = 4 for the first):
+//       b + 1:          acc * t issued to the MAC;  b + N + 4: product registered by the MAC
+//       b + N + 5, + 6: round(product >> PROD_SHIFT), then its fit (product flag)
+//       b + N + 7:      p << ACC_ALIGN[k] and c[seg][k] << COEF_ALIGN[k] registered
+//       b + N + 8:      their sum registered
+//       b + N + 9, +10: round(sum >> ACC_ALIGN[k]), then acc = its fit (acc flag), next address
+//     then round(acc >> OUT_SHIFT), then y = its fit with out_valid (out flag).
+//   Cycles per sample: ORDER * (N + 10) + 7, e.g. 35 for the paper 001 bias (ORDER 2, 32-bit
+//   acc, 24-bit temperature: N = 4), 55 for k0 (ORDER 3, N = 6). Latency: that minus 1.
 `default_nettype none
 
 module piecewise #(
@@ -31,12 +50,14 @@ module piecewise #(
     parameter integer OUT_SHIFT  = 12,
     parameter integer ROUNDING   = 1,
     parameter integer OVERFLOW   = 1,
+    parameter integer ARCH       = 0,     // 0: one sample per cycle; 1: serial, one shared multiplier
     parameter         COEF_FILE  = "piecewise_sf_coef.hex",
     parameter         BP_FILE    = "piecewise_sf_bp.hex"
 ) (
     input  wire                  clk,
     input  wire                  rst,
     input  wire                  in_valid,
+    output wire                  in_ready,  // ARCH = 1: low while a sample is being computed
     input  wire [T_W-1:0]        temp,
     output reg                   out_valid,
     output reg  [OUT_W-1:0]      y,
@@ -52,7 +73,10 @@ module piecewise #(
     reg [COEF_W-1:0] coef [0:SEGMENTS*NC-1];
     initial $readmemh(COEF_FILE, coef);
 
-    // ---- segment select: count the breakpoints <= temp ----
+    // ---- segment select: count the breakpoints <= t_sel (the input: ARCH 0; registered: ARCH 1) ----
+    /* verilator lint_off UNUSEDSIGNAL */  // one segment: no breakpoint reads it
+    wire [T_W-1:0]   t_sel;
+    /* verilator lint_on UNUSEDSIGNAL */
     wire [SEG_W-1:0] seg;
     generate
         if (NBP == 0) begin : g_noseg
@@ -64,20 +88,50 @@ module piecewise #(
             genvar b;
             for (b = 0; b < NBP; b = b + 1) begin : g_cmp
                 wire [T_W-1:0] bpv = bp[b];
-                assign le[b] = $signed(bpv) <= $signed(temp);
+                assign le[b] = $signed(bpv) <= $signed(t_sel);
+            end
+            // the compares counted: as computed (ARCH 0), or registered (ARCH 1: the compare carry
+            // chains and the count in one cycle were a 40 MHz path; t_sel holds for the sample)
+            wire [NBP-1:0] le_n;
+            if (ARCH == 0) begin : g_le_now
+                assign le_n = le;
+            end else begin : g_le_reg
+                reg [NBP-1:0] le_q;
+                always @(posedge clk) le_q <= le;
+                assign le_n = le_q;
             end
             reg [SEG_W-1:0] cnt;
             integer i;
             always @* begin
                 cnt = {SEG_W{1'b0}};
                 for (i = 0; i < NBP; i = i + 1)
-                    cnt = cnt + {{(SEG_W-1){1'b0}}, le[i]};
+                    cnt = cnt + {{(SEG_W-1){1'b0}}, le_n[i]};
             end
             assign seg = cnt;
         end
     endgenerate
 
     wire signed [TW1-1:0] t = {temp[T_W-1], temp} - {T0_C[T_W-1], T0_C};
+
+    // width of the exact Horner sum of power k (as the parallel variant's SW), and its maximum
+    function integer sum_w;
+        input integer kk;
+        integer aa, ca;
+        begin
+            aa = {24'd0, ACC_ALIGN[8*kk +: 8]};
+            ca = {24'd0, COEF_ALIGN[8*kk +: 8]};
+            sum_w = ((ACC_W + aa > COEF_W + ca) ? ACC_W + aa : COEF_W + ca) + 1;
+        end
+    endfunction
+    function integer sum_w_max;
+        input integer unused;
+        integer kk;
+        begin
+            sum_w_max = unused;
+            for (kk = 0; kk < ORDER; kk = kk + 1)
+                if (sum_w(kk) > sum_w_max) sum_w_max = sum_w(kk);
+        end
+    endfunction
 
     // coefficient of power k of the selected segment
     function [COEF_W-1:0] c_of;
@@ -87,6 +141,12 @@ module piecewise #(
             c_of = coef[s * NC + k];
         end
     endfunction
+
+    genvar j;
+    generate
+    if (ARCH == 0) begin : g_par
+    assign in_ready = 1'b1;
+    assign t_sel = temp;
 
     // ---- top coefficient into the accumulator ----
     wire [ACC_W-1:0] acc_top;
@@ -99,8 +159,6 @@ module piecewise #(
     wire [ACC_W-1:0] acc_fin;
     wire [ORDER-1:0] ovf_prod;
     wire [ORDER-1:0] ovf_acc;
-    genvar j;
-    generate
         for (j = 0; j < ORDER; j = j + 1) begin : g_h
             localparam integer K  = ORDER - 1 - j;
             localparam integer AA = {24'd0, ACC_ALIGN[8*K +: 8]};
@@ -124,7 +182,6 @@ module piecewise #(
             fx_convert #(.IN_W(SW), .SHIFT(AA), .ROUNDING(ROUNDING), .OUT_W(ACC_W), .OUT_SIGNED(1),
                          .OVERFLOW(OVERFLOW)) u_sum (.x(sum), .y(acc_out), .ovf(ovf_acc[j]));
         end
-    endgenerate
     assign acc_fin = g_h[ORDER-1].acc_out;
 
     wire [OUT_W-1:0] y_c;
@@ -145,6 +202,151 @@ module piecewise #(
             end
         end
     end
+    end else begin : g_ser
+        // ---- serial: one fx_mac_serial, one rounding or fit per cycle ----
+        localparam integer KW   = (ORDER > 1) ? $clog2(ORDER) : 1;  // power index 0..ORDER-1
+        localparam integer RA_N = SEGMENTS * NC;
+        localparam integer RA_W = (RA_N > 1) ? $clog2(RA_N) : 1;
+        localparam integer ORW0 = (OUT_SHIFT > 0) ? ACC_W - OUT_SHIFT + 1 : ACC_W - OUT_SHIFT;
+        localparam integer ORW  = (ORW0 < 2) ? 2 : ORW0;    // round(acc >> OUT_SHIFT)
+        localparam integer SWM  = sum_w_max(0);             // the widest Horner sum over the powers
+        localparam integer SRW  = SWM + 1;                  // its rounding (right shifts only)
+        localparam integer NC_I = NC;
+        localparam integer ORDER_I = ORDER;
+        localparam [RA_W-1:0] NC_A = NC_I[RA_W-1:0];
+        localparam [RA_W-1:0] ORDER_A = ORDER_I[RA_W-1:0];
+        localparam [KW-1:0]   K_TOP = ORDER_I[KW-1:0] - 1'b1;
+
+        localparam [3:0] S_IDLE = 4'd0;
+        localparam [3:0] S_SEG = 4'd1;
+        localparam [3:0] S_ADDR = 4'd2;
+        localparam [3:0] S_ROM = 4'd3;
+        localparam [3:0] S_TOP = 4'd4;
+        localparam [3:0] S_ISSUE = 4'd5;
+        localparam [3:0] S_WAIT = 4'd6;
+        localparam [3:0] S_PFIT = 4'd7;
+        localparam [3:0] S_ALGN = 4'd8;
+        localparam [3:0] S_SUM = 4'd9;
+        localparam [3:0] S_SRND = 4'd10;
+        localparam [3:0] S_SFIT = 4'd11;
+        localparam [3:0] S_ORND = 4'd12;
+        localparam [3:0] S_OFIT = 4'd13;
+
+        reg [3:0]               st;
+        reg [T_W-1:0]           temp_q;     // the sample
+        reg signed [TW1-1:0]    t_q;        // t = temp - T0
+        reg [RA_W-1:0]          ra;         // ROM address: seg NC + k
+        reg [COEF_W-1:0]        coef_q;     // registered ROM read
+        reg [KW-1:0]            k;          // the power being added
+        reg signed [ACC_W-1:0]  acc_q;
+        reg signed [SWM-1:0]    s_q;        // the Horner sum of power k
+        reg signed [SRW-1:0]    sr_q;       // round(s_q)
+        reg signed [ORW-1:0]    or_q;       // round(acc >> OUT_SHIFT)
+        reg                     ovf_top_q;
+        reg [ORDER-1:0]         ovf_prod_q; // bit j: power ORDER-1-j, as the parallel variant
+        reg [ORDER-1:0]         ovf_acc_q;
+
+        assign in_ready = (st == S_IDLE);
+        assign t_sel = temp_q;
+        always @(posedge clk) coef_q <= coef[ra];
+
+        // the multiplier: acc * t, exact
+        wire mac_ready, mac_valid;
+        wire signed [PW-1:0] prod;
+        fx_mac_serial #(.A_W(ACC_W), .B_W(TW1)) u_mac (.clk(clk), .rst(rst), .in_valid(st == S_ISSUE),
+            .in_ready(mac_ready), .a(acc_q), .b(t_q), .out_valid(mac_valid), .p(prod));
+
+        // top coefficient into the accumulator (a short path: COEF_W bits)
+        wire [ACC_W-1:0] acc_top;
+        wire             ovf_top;
+        fx_convert #(.IN_W(COEF_W), .SHIFT(TOP_SHIFT), .ROUNDING(ROUNDING), .OUT_W(ACC_W), .OUT_SIGNED(1),
+                     .OVERFLOW(OVERFLOW)) u_top (.x(coef_q), .y(acc_top), .ovf(ovf_top));
+
+        // product: round (as the MAC returns it), then fit (in S_PFIT); held from S_ALGN on
+        wire [ACC_W-1:0] p_q;
+        wire             ovf_p;
+        /* verilator lint_off UNUSEDSIGNAL */   // the FSM knows when the product is there
+        wire             p_v;
+        /* verilator lint_on UNUSEDSIGNAL */
+        fx_convert_pipe #(.IN_W(PW), .SHIFT(PROD_SHIFT), .ROUNDING(ROUNDING), .OUT_W(ACC_W), .OUT_SIGNED(1),
+                          .OVERFLOW(OVERFLOW)) u_prod (.clk(clk), .rst(rst), .in_valid(mac_valid), .x(prod),
+                                                       .out_valid(p_v), .y(p_q), .ovf(ovf_p));
+
+        // Horner sum and its rounding, one alignment per power (selected by k): the aligned
+        // operands are registered first, so the sum is one adder from registers (not one per power
+        // behind a multiplexer: that was the 39 MHz path of a third-order engine)
+        wire signed [SWM-1:0] pe = {{(SWM-ACC_W){p_q[ACC_W-1]}}, p_q};
+        wire signed [SWM-1:0] ce = {{(SWM-COEF_W){coef_q[COEF_W-1]}}, coef_q};
+        wire [SWM-1:0] pal_k [0:ORDER-1];   // p << ACC_ALIGN[k]
+        wire [SWM-1:0] cal_k [0:ORDER-1];   // c[seg][k] << COEF_ALIGN[k]
+        wire [SRW-1:0] srnd_k [0:ORDER-1];  // round(s_q >> ACC_ALIGN[k])
+        for (j = 0; j < ORDER; j = j + 1) begin : g_k
+            localparam integer AA = {24'd0, ACC_ALIGN[8*j +: 8]};
+            localparam integer CA = {24'd0, COEF_ALIGN[8*j +: 8]};
+            assign pal_k[j] = pe <<< AA;
+            assign cal_k[j] = ce <<< CA;
+            fx_round #(.IN_W(SWM), .SHIFT(AA), .ROUNDING(ROUNDING), .OUT_W(SRW)) u_srnd (.x(s_q), .y(srnd_k[j]));
+        end
+        reg signed [SWM-1:0] pal_q, cal_q;
+        wire [ACC_W-1:0] acc_c;
+        wire             ovf_a;
+        fx_fit #(.IN_W(SRW), .OUT_W(ACC_W), .OUT_SIGNED(1), .OVERFLOW(OVERFLOW)) u_sfit
+            (.x(sr_q), .y(acc_c), .ovf(ovf_a));
+
+        // output: round, then fit
+        wire signed [ORW-1:0] or_c;
+        fx_round #(.IN_W(ACC_W), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(ORW)) u_ornd (.x(acc_q), .y(or_c));
+        wire [OUT_W-1:0] y_c;
+        wire             ovf_o;
+        fx_fit #(.IN_W(ORW), .OUT_W(OUT_W), .OUT_SIGNED(OUT_SIGNED), .OVERFLOW(OVERFLOW)) u_ofit
+            (.x(or_q), .y(y_c), .ovf(ovf_o));
+
+        wire [RA_W-1:0] seg_a = {{(RA_W > SEG_W ? RA_W - SEG_W : 0){1'b0}}, seg};   // valid from S_ADDR
+        wire [KW-1:0]   j_of_k = K_TOP - k;   // the parallel variant's stage index of power k
+
+        always @(posedge clk) begin
+            if (rst) begin
+                st <= S_IDLE; ra <= {RA_W{1'b0}}; k <= {KW{1'b0}};
+                out_valid <= 1'b0; y <= {OUT_W{1'b0}}; ovf <= {(2*ORDER+2){1'b0}};
+            end else begin
+                out_valid <= 1'b0;
+                case (st)
+                    S_IDLE: if (in_valid) begin
+                        temp_q <= temp; t_q <= t; st <= S_SEG;
+                    end
+                    S_SEG:  st <= S_ADDR;   // the compares of temp_q are registered (le_q)
+                    S_ADDR: begin ra <= seg_a * NC_A + ORDER_A; st <= S_ROM; end
+                    S_ROM:  st <= S_TOP;
+                    S_TOP:  begin
+                        acc_q <= acc_top; ovf_top_q <= ovf_top;
+                        k <= K_TOP; ra <= ra - 1'b1; st <= S_ISSUE;
+                    end
+                    S_ISSUE: if (mac_ready) st <= S_WAIT;
+                    S_WAIT:  if (mac_valid) st <= S_PFIT;   // the product is rounded at this edge ...
+                    S_PFIT:  st <= S_ALGN;                  // ... and fitted at this one (u_prod)
+                    S_ALGN:  begin
+                        pal_q <= pal_k[k]; cal_q <= cal_k[k]; ovf_prod_q[j_of_k] <= ovf_p; st <= S_SUM;
+                    end
+                    S_SUM:   begin s_q <= pal_q + cal_q; st <= S_SRND; end
+                    S_SRND:  begin sr_q <= srnd_k[k]; st <= S_SFIT; end
+                    S_SFIT:  begin
+                        acc_q <= acc_c; ovf_acc_q[j_of_k] <= ovf_a;
+                        if (k == {KW{1'b0}}) begin
+                            st <= S_ORND;
+                        end else begin
+                            k <= k - 1'b1; ra <= ra - 1'b1; st <= S_ISSUE;
+                        end
+                    end
+                    S_ORND:  begin or_q <= or_c; st <= S_OFIT; end
+                    default: begin   // S_OFIT
+                        y <= y_c; ovf <= {ovf_o, ovf_prod_q, ovf_acc_q, ovf_top_q};
+                        out_valid <= 1'b1; st <= S_IDLE;
+                    end
+                endcase
+            end
+        end
+    end
+    endgenerate
 endmodule
 
 `default_nettype wire

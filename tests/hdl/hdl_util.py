@@ -47,10 +47,25 @@ SIM_BUILD = HERE / "sim_build"
 # The resource-shared (serial) variants of blocks whose default RTL is one sample per clock: the
 # instance name and the module parameters that select it. They have valid/ready whatever the
 # design's table says (it describes the default variant) and are verified beside it.
-SERIAL = {"iir": {"ARCH": 1}}
+SERIAL = {
+    "iir": {"ARCH": 1},
+    "lag": {"ARCH": 1},
+    "piecewise_sf": {"ARCH": 1},
+    "piecewise_k0": {"ARCH": 1},
+    "freq2temp": {"ARCH": 1},
+    "chain_paper001": {"ARCH": 1},
+    "rtd": {"ARCH": 1},
+}
 # modules with an in_ready port whatever their parameters (tied high in the one-sample-per-clock
 # variant): a harness instantiating them connects it (Verilator warns of a missing pin)
-READY_PORT = {"iir"}
+READY_PORT = {
+    "iir",
+    "lag",
+    "piecewise",
+    "freq2temp",
+    "chain_paper001",
+    "rtd",
+}
 
 
 def is_serial(extra: dict | None) -> bool:
@@ -427,7 +442,9 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
     block = design.all[name]
     n_ovf = design.ovf_width(name)
     if design.instances[name].members:
-        pov = f"#(.DIV_UNROLL({unroll or 1}))" if name == "chain_paper002" else ""
+        plist = {"DIV_UNROLL": unroll or 1} if name == "chain_paper002" else {}
+        plist.update(extra or {})  # a serial variant's ARCH
+        pov = "#(" + ", ".join(f".{k}({v})" for k, v in plist.items()) + ")" if plist else ""
     else:
         inst = hp.instance(design, name)
         plist = dict(inst.params)

@@ -50,11 +50,13 @@ ALLOWED: dict[tuple[str, str, str], tuple[int, str]] = {
     ("rtd", "select", "u[ADC_W-1:S]"): (1, "LUT index; the low bits are kept as the interpolation fraction"),
     ("sf_divide", "constant", "{1'b0,{(OUT_W-1){1'b1}}}"): (1, "x / 0 result: positive full scale (a value, never added)"),
     ("sf_divide", "constant", "{1'b1,{(OUT_W-1){1'b0}}}"): (1, "x / 0 result: negative full scale (a value, never added)"),
-    ("piecewise", "data-bit", "{{(SEG_W-1){1'b0}},le[i]}"): (1, "segment number = count of breakpoint comparators"),
+    ("piecewise", "data-bit", "{{(SEG_W-1){1'b0}},le_n[i]}"): (1, "segment number = count of breakpoint comparators"),
     ("fx_mac_serial", "select", "a_x[LIMB*ia+:LIMB]"): (
         1, "16-bit limb of an operand of the exact serial product: every limb is multiplied, no bit dropped"),
     ("fx_mac_serial", "select", "b_x[LIMB*jb+:LIMB]"): (
         1, "16-bit limb of an operand of the exact serial product: every limb is multiplied, no bit dropped"),
+    ("fx_fit", "select", "xe[W-2:TOP]"): (
+        1, "the bits above the format, tested for all-sign (the range test); never kept as a value"),
     ("fx_mac_serial", "right-shift", "acc>>>LIMB"): (
         1, "carry of a completed column of the exact serial product: its low 16 bits are stored in p first"),
 }

@@ -35,6 +35,26 @@ VARIANTS = [
     ("lag", {"TEMP_W": 14, "GUARD": 2, "STATE_W": 17, "ALPHA_W": 24, "ALPHA_M": 16777215, "ALPHA_S": 24,
              "ROUNDING": 2}),
     ("lag", {"ALPHA_W": 4, "ALPHA_M": 8, "ALPHA_S": 70, "ROUNDING": 0}),
+    # serial lag (ARCH = 1)
+    ("lag", {"ARCH": 1}),
+    ("lag", {"ARCH": 1, "DECIM": 5, "GUARD": 0, "STATE_W": 19, "ROUNDING": 3, "OVERFLOW": 0}),
+    ("lag", {"ARCH": 1, "TEMP_W": 14, "GUARD": 0, "STATE_W": 15, "ALPHA_W": 4, "ALPHA_M": 8, "ALPHA_S": 70,
+             "ROUNDING": 2}),  # one-limb operands (d 16 bits, alpha 5), a shift beyond the product
+    # serial rtd (ARCH = 1)
+    ("rtd", {"ARCH": 1}),
+    ("rtd", {"ARCH": 1, "ROUNDING": 3, "OVERFLOW": 0, "SHIFT": -2, "TEMP_W": 40}),  # left shift
+    ("rtd", {"ARCH": 1, "ADC_W": 4, "LUT_INDEX_BITS": 3, "LUT_W": 8, "TEMP_W": 6, "SHIFT": 2,
+             "ROUNDING": 2}),  # one fraction bit
+    ("rtd", {"ARCH": 1, "ADC_W": 24, "LUT_INDEX_BITS": 4, "LUT_W": 32, "SHIFT": 30}),  # two-limb operands
+    # serial piecewise, freq2temp (ARCH = 1)
+    ("piecewise", {"ARCH": 1}),
+    ("piecewise", {"ARCH": 1, "ORDER": 3, "SEGMENTS": 1, "ACC_ALIGN": 0, "COEF_ALIGN": 0, "TOP_SHIFT": -2,
+                   "OUT_SHIFT": -1, "PROD_SHIFT": -1}),
+    ("piecewise", {"ARCH": 1, "ORDER": 2, "SEGMENTS": 6, "ROUNDING": 2, "OVERFLOW": 0, "OUT_SIGNED": 1}),
+    ("piecewise", {"ARCH": 1, "T_W": 12, "ACC_W": 16, "COEF_W": 12, "OUT_W": 10}),  # one-limb operands
+    ("freq2temp", {"ARCH": 1}),
+    ("freq2temp", {"ARCH": 1, "FREQ_W": 15, "KINV_W": 16, "SHIFT": 4, "ROUNDING": 3, "OVERFLOW": 0}),
+    ("chain_paper001", {"ARCH": 1}),
 ]
 
 
@@ -108,7 +128,7 @@ INJECTIONS = {
          "    wire signed [PW:0] ph = {p[PW-1], p} + ({{PW{1'b0}}, 1'b1} <<< (SHIFT - 1));\n"
          "    wire signed [PW-SHIFT:0] pr = ph >>> SHIFT;\n"
          "    fx_convert_reg #(.IN_W(PW - SHIFT + 1), .SHIFT(0),"),
-        (".x(p),", ".x(pr),")], "power-of-two"),
+        (".in_valid(in_valid), .x(p),", ".in_valid(in_valid), .x(pr),")], "power-of-two"),
     "half_constant_concat": ("bias_subtract.v", [
         ("    fx_convert_reg #(", "    wire signed [DW-1:0] dh = d + {{(DW-SHIFT){1'b0}}, 1'b1, {(SHIFT-1){1'b0}}};\n"
                                "    fx_convert_reg #("),
@@ -120,8 +140,10 @@ INJECTIONS = {
                          "constant"),
     "sticky_bit": ("piecewise.v", [("sum = (pe <<< AA) + (ce <<< CA);", "sum = (pe <<< AA) + (ce <<< CA) + |pe[AA:0];")],
                    "sticky-bit"),
-    "floor_by_select": ("freq2temp.v", [(".IN_W(PW), .SHIFT(SHIFT)", ".IN_W(PW - SHIFT), .SHIFT(0)"),
-                                        (".x(p),", ".x(p[PW-1:SHIFT]),")], "select"),
+    "floor_by_select": ("freq2temp.v", [("fx_convert_reg #(.IN_W(PW), .SHIFT(SHIFT)",
+                                         "fx_convert_reg #(.IN_W(PW - SHIFT), .SHIFT(0)"),
+                                        (".in_valid(in_valid), .x(p),", ".in_valid(in_valid), .x(p[PW-1:SHIFT]),")],
+                        "select"),
     "floor_by_divide": ("bias_subtract.v", [(".x(d),", ".x(d / 4),")], "divide"),
     "state_truncated": ("lag.v", [("st     <= st_next;", "st     <= (st_next >>> GUARD) <<< GUARD;")], "right-shift"),
     "one_wire_shifted": ("iir.v", [("wire signed [AW-1:0] acc = ",
