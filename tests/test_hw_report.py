@@ -29,7 +29,7 @@ def test_json_is_written_from_the_rows_hw_report_collects(tmp_path):
     path.write_text(report_json(rows, 40.0, UP5K))
     got = load_hw_report(path)["rows"]
     assert got[0] == {"name": "rtd", "module": "rtd", "LUT": 301, "MAC16": 2, "FF": 20, "BRAM": 0, "fmax": 21.83,
-                      "note": "", "xc7": {"LUT": None, "DSP48E1": None, "FF": None, "BRAM36": None, "BRAM18": None,
+                      "note": "", "sha256": None, "xc7": {"LUT": None, "DSP48E1": None, "FF": None, "BRAM36": None, "BRAM18": None,
                                           "LUTRAM": None, "SRL": None, "note": ""}}
     assert got[1]["LUT"] is None and got[1]["fmax"] is None and got[1]["note"].startswith("timed out")
     rows[0]["xc7"] = {"LUT": 150, "DSP48E1": 2, "FF": 20, "BRAM36": 0, "BRAM18": 1, "LUTRAM": 0, "SRL": 0,
@@ -82,6 +82,56 @@ def test_committed_report_is_current_for_the_rtl_and_default_config():
 
     # a row per instance, and one per resource-shared variant of a block (e.g. the serial iir)
     assert {r["name"] for r in report["rows"]} == set(design.instances) | set(VARIANTS)
+    # and each row's own hash is that of what it synthesises now (what a regeneration reuses)
+    from fxdsp.hdl.report_cli import expected_row_hashes
+
+    expected = expected_row_hashes(design, report["target_mhz"])
+    stale = [r["name"] for r in report["rows"] if r.get("sha256") != expected[r["name"]]]
+    assert not stale, f"rows {stale} of hdl/HW_REPORT.* are stale: run make hw-report"
+
+
+def _copy_rtl(tmp_path, monkeypatch) -> Path:
+    rtl = tmp_path / "hdl" / "rtl"
+    rtl.mkdir(parents=True)
+    for p in (ROOT / "hdl" / "rtl").glob("*.v"):
+        (rtl / p.name).write_text(p.read_text())
+    monkeypatch.setattr(hwreport, "HDL_DIR", tmp_path / "hdl")
+    return rtl
+
+
+def test_row_hash_changes_for_exactly_the_rows_that_read_a_changed_file(tmp_path, monkeypatch):
+    """A change to nco.v re-runs the rows that synthesise it (demod, the paper 002 chain) and no other;
+    a change to a shared primitive re-runs every row that instantiates it."""
+    from fxdsp.chains import build
+    from fxdsp.hdl.report_cli import expected_row_hashes
+
+    design = build()
+    before = expected_row_hashes(design, 40.0)
+    rtl = _copy_rtl(tmp_path, monkeypatch)
+    assert expected_row_hashes(design, 40.0) == before
+    (rtl / "nco.v").write_text((rtl / "nco.v").read_text().replace("1'b1}", "1'b0}", 1))
+    after = expected_row_hashes(design, 40.0)
+    changed = {row for row in before if before[row] != after[row]}
+    assert {"demod", "chain_paper002"} <= changed
+    assert not changed & {"rtd", "iir", "chain_paper001", "piecewise_sf (ARCH=1)", "sf_divide"}
+    (rtl / "fx_round.v").write_text((rtl / "fx_round.v").read_text() + "\n")
+    assert all(before[row] != h for row, h in expected_row_hashes(design, 40.0).items() if row != "bias_subtract")
+    assert expected_row_hashes(design, 41.0)["rtd"] != before["rtd"]   # another target clock is another run
+
+
+def test_previous_rows_are_reused_only_under_the_same_tools_and_when_complete():
+    from fxdsp.hdl.report_cli import reusable_rows
+
+    good = {"sha256": "a", "LUT": 10, "xc7": {"LUT": 5}}
+    failed = {"sha256": "b", "LUT": None, "xc7": {"LUT": 5}}
+    no_xc7 = {"sha256": "c", "LUT": 10, "xc7": {"LUT": None}}
+    tools = {"yosys": "Yosys 0.23"}
+    prev = {"tools": tools, "target_mhz": 40.0, "rows": [good, failed, no_xc7]}
+    assert set(reusable_rows(prev, tools, 40.0, need_xc7=True)) == {"a"}
+    assert set(reusable_rows(prev, tools, 40.0, need_xc7=False)) == {"a", "c"}
+    assert reusable_rows(prev, {"yosys": "Yosys 0.40"}, 40.0, True) == {}
+    assert reusable_rows(prev, tools, 48.0, True) == {}
+    assert reusable_rows(None, tools, 40.0, True) == {}
 
 
 def test_source_hash_sees_a_one_character_rtl_change(tmp_path, monkeypatch):
@@ -90,11 +140,15 @@ def test_source_hash_sees_a_one_character_rtl_change(tmp_path, monkeypatch):
 
     design = build()
     before = source_hash(design)
-    rtl = tmp_path / "hdl" / "rtl"
-    rtl.mkdir(parents=True)
-    for p in (ROOT / "hdl" / "rtl").glob("*.v"):
-        (rtl / p.name).write_text(p.read_text())
-    monkeypatch.setattr(hwreport, "HDL_DIR", tmp_path / "hdl")
+    rtl = _copy_rtl(tmp_path, monkeypatch)
     assert source_hash(design) == before
     (rtl / "nco.v").write_text((rtl / "nco.v").read_text().replace("1'b1}", "1'b0}", 1))
     assert source_hash(design) != before
+
+
+def test_a_module_larger_than_the_device_is_not_sent_to_the_placer():
+    from fxdsp.hdl.report_cli import too_big
+
+    assert too_big({"MAC16": UP5K["MAC16"], "LUT": UP5K["LUT"]}) == ""
+    assert "SB_MAC16" in too_big({"MAC16": UP5K["MAC16"] + 1, "LUT": 10})
+    assert "LUT4" in too_big({"MAC16": 0, "LUT": UP5K["LUT"] + 1})

@@ -13,13 +13,17 @@ against.
 
 ``source_sha256`` identifies what was synthesised: the RTL sources and the generated parameter
 headers and ROMs of the config (:func:`source_hash`). A report whose hash differs from the current
-RTL and default config is stale (the tests say so; ``make hw-report`` regenerates it).
+RTL and default config is stale (the tests say so; ``make hw-report`` regenerates it). Each row's
+``sha256`` (:func:`row_hash`) covers only what that row synthesises (its module's RTL closure, the
+generated files, its parameters), so a regeneration re-runs the rows whose sources changed and
+takes the others from the previous report when the tool versions (``tools``) are the same.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+import re
 from pathlib import Path
 
 from ..outputs import json_text
@@ -27,7 +31,7 @@ from ..outputs import json_text
 # hdl/ of the checkout this package runs from (RTL sources and reports): the one place that knows it
 HDL_DIR = Path(__file__).resolve().parents[2] / "hdl"
 REPORT_NAME = "HW_REPORT.json"
-COLUMNS = ("name", "module", "LUT", "MAC16", "FF", "BRAM", "fmax", "note")
+COLUMNS = ("name", "module", "LUT", "MAC16", "FF", "BRAM", "fmax", "note", "sha256")
 XC7_COLUMNS = ("LUT", "DSP48E1", "FF", "BRAM36", "BRAM18", "LUTRAM", "SRL", "note")
 
 
@@ -54,6 +58,49 @@ def source_hash(design, files: dict[str, str] | None = None) -> str:
     return h.hexdigest()
 
 
+_MODULE = re.compile(r"^\s*module\s+(\w+)", re.M)
+_WORD = re.compile(r"\b\w+\b")
+
+
+def _code(text: str) -> str:
+    """Verilog text without its comments (a module named in a comment is not a dependency)."""
+    return re.sub(r"/\*.*?\*/", " ", re.sub(r"//[^\n]*", " ", text), flags=re.S)
+
+
+def rtl_closure(module: str) -> list[Path]:
+    """The RTL files a synthesis of ``module`` reads: its own file and, transitively, the file of
+    every module whose name appears in the code (comments stripped) of one already taken. Naming a
+    module is enough to count it: an over-approximation (a row re-run for nothing), never a miss."""
+    files = sorted((HDL_DIR / "rtl").glob("*.v"))
+    code = {p: _code(p.read_text(encoding="utf-8")) for p in files}
+    defined = {m: p for p in files for m in _MODULE.findall(code[p])}
+    if module not in defined:
+        raise ValueError(f"module: {module!r} is defined in no file of {HDL_DIR / 'rtl'}")
+    todo, seen = [defined[module]], set()
+    while todo:
+        p = todo.pop()
+        if p in seen:
+            continue
+        seen.add(p)
+        todo += [defined[w] for w in set(_WORD.findall(code[p])) if w in defined]
+    return sorted(seen)
+
+
+def row_hash(module: str, params: dict[str, str] | None, files: dict[str, str], recipe: str = "") -> str:
+    """sha256 of what one report row synthesises: the RTL files of ``module``'s closure
+    (:func:`rtl_closure`), every generated header and ROM (``files``), the row's module
+    parameters (None: a top, which reads the headers) and ``recipe`` (the tool commands and the
+    place-and-route wrapper, as text). Rows whose hash is unchanged need no new synthesis
+    (``fxdsp hw-report`` reuses them)."""
+    h = hashlib.sha256(recipe.encode() + b"\0")
+    for p in rtl_closure(module):
+        h.update(f"rtl/{p.name}".encode() + b"\0" + p.read_text(encoding="utf-8").encode() + b"\0")
+    for name, text in sorted(files.items()):
+        h.update(f"gen/{name}".encode() + b"\0" + text.encode() + b"\0")
+    h.update(json.dumps(params, sort_keys=True).encode())
+    return h.hexdigest()
+
+
 def _row(row: dict) -> dict:
     out = {c: row.get(c, "" if c == "note" else None) for c in COLUMNS}
     xc7 = row.get("xc7") or {}
@@ -62,12 +109,13 @@ def _row(row: dict) -> dict:
 
 
 def report_json(rows: list[dict], freq_mhz: float, device: dict[str, int], source_sha256: str = "",
-                device_xc7: dict | None = None) -> str:
-    """The report's JSON text: the table's columns of every row (with its nested ``xc7`` estimate),
-    the target clock, the devices and the hash of the sources synthesised."""
+                device_xc7: dict | None = None, tools: dict[str, str] | None = None) -> str:
+    """The report's JSON text: the table's columns of every row (with its nested ``xc7`` estimate
+    and its :func:`row_hash`), the target clock, the devices, the tool versions and the hash of all
+    the sources synthesised."""
     data = {"generator": "fxdsp hw-report", "device": {"name": "iCE40UP5K", **device},
             "device_xc7": device_xc7, "target_mhz": freq_mhz, "source_sha256": source_sha256,
-            "rows": [_row(row) for row in rows]}
+            "tools": tools or {}, "rows": [_row(row) for row in rows]}
     return json_text(data, "hw-report", indent=1)   # strict JSON: a failed count is null
 
 

@@ -17,6 +17,11 @@ not to the table's resource columns.
 
 Besides the instances, the resource-shared variants of blocks (:data:`VARIANTS`, e.g. the serial iir
 ``iir (ARCH=1)``) get a row each: the same module and config parameters plus the variant's own.
+
+A row whose hash (:func:`fxdsp.hdl.hwreport.row_hash`: its module's RTL closure, the generated
+files, its parameters, the tool commands and wrapper) and tool versions match a row of the report
+at ``--out`` is taken from it instead of synthesised again (``--fresh`` re-runs every row): after a
+change to one block only the rows that read it are re-run.
 """
 
 from __future__ import annotations
@@ -31,7 +36,7 @@ from pathlib import Path
 
 from ..chains import build
 from ..outputs import IN, OUT_FILE, check_output, staged
-from .hwreport import HDL_DIR, report_json, source_hash
+from .hwreport import HDL_DIR, load_hw_report, report_json, row_hash, source_hash
 from .params import generate, instance, iverilog_params
 
 RTL = HDL_DIR / "rtl"
@@ -45,9 +50,12 @@ VARIANTS = {
     "iir (ARCH=1)": ("iir", {"ARCH": "1"}),
     "rtd (ARCH=1)": ("rtd", {"ARCH": "1"}),
     "lag (ARCH=1)": ("lag", {"ARCH": "1"}),
+    "demod (ARCH=1)": ("demod", {"ARCH": "1"}),
+    "sf_divide (ARCH=1)": ("sf_divide", {"ARCH": "1"}),
     **{f"{n} (ARCH=1)": (n, {"ARCH": "1"}) for n in ("piecewise_sf", "piecewise_bias", "piecewise_bias001",
                                                     "piecewise_k0", "piecewise_k1", "freq2temp")},
     "chain_paper001 (ARCH=1)": ("chain_paper001", {"ARCH": "1"}),
+    "chain_paper002 (ARCH=1)": ("chain_paper002", {"ARCH": "1"}),
 }
 # the issue's targets per chain (half the device for paper 002, a quarter for paper 001), read
 # against the chain's serial row when it has one, else its default row
@@ -65,6 +73,9 @@ def configure(parser) -> None:
     parser.add_argument("--xc7-timeout", type=int, default=900,
                         help="seconds for the xc7 (synth_xilinx) synthesis of one block (default 900)")
     parser.add_argument("--no-xc7", action="store_true", help="skip the xc7 (synth_xilinx) columns")
+    parser.add_argument("--fresh", action="store_true",
+                        help="synthesise every row (default: take the rows whose sources, parameters and tools "
+                             "are unchanged from the report at --out)")
 
 
 def module_params(design, name: str) -> dict[str, str] | None:
@@ -199,6 +210,66 @@ def place_route(design, name: str, work: Path, freq: float, timeout: int,
 PATHS = {"--config": IN, "--out": OUT_FILE}
 
 
+def tool_versions() -> dict[str, str]:
+    """The first line each tool prints of its version: a report's rows are reused only under the
+    same tools (another yosys maps differently)."""
+    out = {}
+    for tool, flag in (("yosys", "-V"), ("nextpnr-ice40", "--version")):
+        proc = subprocess.run([tool, flag], capture_output=True, text=True, timeout=60)
+        out[tool] = ((proc.stdout + proc.stderr).strip().splitlines() or ["unknown"])[0]
+    return out
+
+
+def recipe(design, name: str, params: dict[str, str] | None, ready: bool, freq: float) -> str:
+    """The tool commands and the place-and-route wrapper of a row, as text (part of its row hash)."""
+    return (f"synth_ice40 -dsp | {XC7_SYNTH} | nextpnr-ice40 --up5k --package sg48 --seed 1 --freq {freq:g}\n"
+            + wrapper(design, name, params, ready))
+
+
+def reusable_rows(previous: dict | None, tools: dict[str, str], freq: float, need_xc7: bool) -> dict[str, dict]:
+    """Rows of a previous report that may stand for a new run: same tools and target clock, keyed by
+    row hash; a row without a complete result (a failed or skipped run) is never reused."""
+    if not previous or previous.get("tools") != tools or previous.get("target_mhz") != freq:
+        return {}
+    out = {}
+    for row in previous.get("rows", []):
+        xc7 = row.get("xc7") or {}
+        if row.get("sha256") and row.get("LUT") is not None and (xc7.get("LUT") is not None or not need_xc7):
+            out[row["sha256"]] = row
+    return out
+
+
+def too_big(row: dict) -> str:
+    """Why the synthesised module cannot place on the UP5K whatever the placer does ('' when it may):
+    more SB_MAC16 or LUT4 than the device has."""
+    if row["MAC16"] > UP5K["MAC16"]:
+        return f"does not place: {row['MAC16']} SB_MAC16 > {UP5K['MAC16']} on the device"
+    if row["LUT"] > UP5K["LUT"]:
+        return f"does not place: {row['LUT']} LUT4 > {UP5K['LUT']} on the device"
+    return ""
+
+
+def planned_rows(design, targets: list[str]) -> dict[str, tuple[str, str, dict[str, str] | None, dict]]:
+    """Row name -> (instance, module, module parameters (None: a top), the variant's own parameters)
+    for ``targets`` and their resource-shared variants, in report order."""
+    rows = {}
+    variants = [v for v, (inst, _) in VARIANTS.items() if inst in targets]
+    for row_name in targets + variants:
+        name, extra = VARIANTS.get(row_name, (row_name, {}))
+        params = module_params(design, name)
+        if extra:  # a top (params None) takes only the variant's own
+            params = {**(params or {}), **extra}
+        rows[row_name] = (name, design.instances[name].module, params, extra)
+    return rows
+
+
+def expected_row_hashes(design, freq: float) -> dict[str, str]:
+    """Row name -> :func:`row_hash` of every row a full report of ``design`` holds, as of now."""
+    files = generate(design)
+    return {row: row_hash(module, params, files, recipe(design, name, params, bool(extra), freq))
+            for row, (name, module, params, extra) in planned_rows(design, list(design.instances)).items()}
+
+
 def run(args) -> int:
     check_output(Path(args.out).with_suffix(".json"), OUT_FILE, "--out (its .json twin)")
     for tool in ("yosys", "nextpnr-ice40"):
@@ -206,6 +277,9 @@ def run(args) -> int:
             print(f"fxdsp hw-report: {tool} not found (apt-get install yosys nextpnr-ice40)", file=sys.stderr)
             return 2
     design = build(args.config)
+    tools = tool_versions()
+    previous = None if args.fresh else load_hw_report(Path(args.out).with_suffix(".json"))
+    reuse = reusable_rows(previous, tools, args.freq, not args.no_xc7)
     targets = args.only or list(design.instances)
     unknown = [t for t in targets if t not in design.instances]
     if unknown:
@@ -217,23 +291,27 @@ def run(args) -> int:
         for rel, text in files.items():
             (work / rel).write_text(text)
         digest = source_hash(design, files)  # what is synthesised: the RTL and these files, as read now
-        variants = [v for v, (inst, _) in VARIANTS.items() if inst in targets]
-        for row_name in targets + variants:
-            name, extra = VARIANTS.get(row_name, (row_name, {}))
+        for row_name, (name, module, params, extra) in planned_rows(design, targets).items():
             tag = re.sub(r"\W+", "_", row_name).strip("_")
             t0 = time.perf_counter()
-            module = design.instances[name].module
-            params = module_params(design, name)
-            if extra:  # a top (params None) takes only the variant's own
-                params = {**(params or {}), **extra}
             chparam = _chparam(module, params)
-            row = {"name": row_name, "module": module}
+            digest_row = row_hash(module, params, files, recipe(design, name, params, bool(extra), args.freq))
+            if digest_row in reuse:
+                rows.append({**reuse[digest_row], "name": row_name, "module": module})
+                print(f"{row_name}: unchanged, taken from the previous report", file=sys.stderr)
+                continue
+            row = {"name": row_name, "module": module, "sha256": digest_row}
             try:
                 row.update(synth(design, name, work, args.timeout, chparam, tag))
-                row["fmax"], row["note"] = place_route(design, name, work, args.freq, args.timeout, params,
-                                                       bool(extra), tag)
+                row["fmax"], row["note"] = None, too_big(row)
+                if not row["note"]:  # placing what cannot fit would only spend minutes to say so
+                    row["fmax"], row["note"] = place_route(design, name, work, args.freq, args.timeout, params,
+                                                           bool(extra), tag)
                 if row["fmax"] is None and "no BELs remaining" in row["note"] and "DSP" in row["note"]:
                     row["note"] = f"does not place: {row['MAC16']} SB_MAC16 > {UP5K['MAC16']} on the device"
+                elif row["fmax"] is None and "no BELs remaining" in row["note"] and "ICESTORM_LC" in row["note"]:
+                    row["note"] = (f"does not place: {row['LUT']} LUT4 and {row['FF']} FF need more than the "
+                                   f"{UP5K['LUT']} logic cells of the device")
             except subprocess.TimeoutExpired:
                 row["note"] = f"timed out after {args.timeout} s"
             except subprocess.CalledProcessError as exc:
@@ -257,7 +335,7 @@ def run(args) -> int:
     out = Path(args.out)
     with staged() as stage:  # the Markdown table and its JSON twin land together
         stage.write_text(out, markdown(rows, args.freq, digest))
-        stage.write_text(out.with_suffix(".json"), report_json(rows, args.freq, UP5K, digest, XC7A35T))
+        stage.write_text(out.with_suffix(".json"), report_json(rows, args.freq, UP5K, digest, XC7A35T, tools))
     print(f"wrote {out} and {out.with_suffix('.json')}")
     return 0
 
@@ -329,8 +407,10 @@ rounding or fit per cycle, tables through a registered read port (block RAM), va
 cycles per sample are in each module's header and in `hdl/README.md`. They give the same bits as
 the default RTL (same golden vectors, random sets, corners, long streams and mutants), and each
 places on the UP5K at >= 40 MHz. The paper 001 chain built from them meets its target (its target
-line above reads that row). What remains for paper 002: a serial demod (NCO table in BRAM, mixers
-and the two low-pass filters), and its chain top built from the serial blocks; one MAC per block
-would still exceed half the device in LUT4 (about 300 of each serial block's LUT4 are its own
-`fx_mac_serial` and operand registers), so the top has to share one MAC between the blocks, which
-one sample in flight makes possible: no two blocks compute at once."""
+line above reads that row). The paper 002 chain built from them (`chain_paper002 (ARCH=1)`: 332
+cycles per sample, 6 SB_MAC16) is bit-exact but about twice the LUT4 budget, and its LUT4 plus
+flip-flops exceed the device's logic cells: six engines each carry their own `fx_mac_serial`
+(~200-290 LUT4 each), operand, state and pipeline registers. The way to the target is sharing
+across blocks, which one sample in flight makes possible (no two blocks compute at once): one
+MAC for every product of the chain, one iir engine for the demodulator's two channels and the
+output filter (same formats on the default config), state in block RAM rather than flip-flops."""

@@ -9,18 +9,52 @@
 // config; roundings (floor / half_up / half_even / toward_zero) and overflows (wrap / saturate)
 // are those of each block. The demodulator's Q channel runs as in the model (its filter state is
 // part of the reference) but only I is used; amp and phase are left unconnected.
-// Interface: valid/ready with one sample in flight: in_ready is high when the chain is idle; a
-// sample is accepted on in_valid && in_ready and leaves (temp, rate) with out_valid
-// ceil((VSA_W + sf.fl + guard_bits) / DIV_UNROLL) + 7 + LAG_EN cycles later (55 at DIV_UNROLL = 1
-// on the default config: 16 + 22 + 10 = 48 divider steps); in_ready is high again from the cycle
-// after out_valid, so one sample takes latency + 1 cycles.
+// Interface (both architectures): valid/ready with one sample in flight: in_ready is high when the
+// chain is idle, which includes the cycle of out_valid (busy clears as out_valid is registered, so
+// the next sample may enter as this one leaves); a sample is accepted on in_valid && in_ready and
+// leaves (temp, rate, ovf) with a one-cycle out_valid. Both architectures give the same temp, rate
+// and ovf for every input (the same blocks' bits; only the cycle order differs).
 // ovf: every block's overflow flags of the sample, valid with out_valid:
 // {iir, bias_subtract, demod, sf_divide (zero, out), piecewise_bias, piecewise_sf, [lag,] rtd}.
+// ARCH = 0: every block in its one-sample-per-clock variant (the divider iterative).
+//   Latency ceil((VSA_W + sf.fl + guard_bits) / DIV_UNROLL) + 7 + LAG_EN cycles from acceptance to
+//   out_valid (55 at DIV_UNROLL = 1 on the default config: 16 + 22 + 10 = 48 divider steps), one
+//   sample every latency + 1 cycles; SF and bias computed at once.
+// ARCH = 1: every block that has a serial variant in it, .ARCH(1): rtd, [lag,] piecewise_sf,
+//   piecewise_bias, iir (one fx_mac_serial, one SB_MAC16 each; the rtd LUT in block RAM), demod
+//   (.ARCH(ARCH)), sf_divide (iterative in both; ARCH = 1 pipelines its output path);
+//   bias_subtract is one registered stage. Each
+//   block starts on its predecessor's out_valid pulse and holds its registered outputs until its
+//   next sample, so one sample in flight needs no buffering (every block is idle when its pulse
+//   comes: each one's in_ready is high again at most a cycle after its own out_valid, long before
+//   the chain's next sample reaches it); the demodulator alone, whose schedule is its own, gets a
+//   handshake: its start waits for its in_ready (the divider's quotient holds meanwhile).
+//   Schedule (D_x: edges from block x's accepting edge to its successor's, = its cycles per sample
+//   for the serial blocks (each header gives it; demod's too: 6 N + 29 + 2 ITERATIONS + 2
+//   LPF_SECTIONS (7 M + 10)), = ceil(NW / DIV_UNROLL) + 6 for the pipelined divider (ARCH = 1),
+//   NW = VSA_W + sf.fl + guard_bits):
+//     rtd from the accepting edge; [lag on rtd's out_valid;] piecewise_sf on the temperature's
+//     out_valid; then, on SF's out_valid, sf_divide (vsa / SF; vsa registered at acceptance) and
+//     piecewise_bias (the temperature held by rtd / lag) at once: the two Horner engines never
+//     run together (ready for one shared MAC), the bias engine runs while the divider works (the
+//     divider has no multiplier); demod on the divider's out_valid (and its in_ready); the
+//     subtraction I - bias one cycle after the later of demod's and the bias engine's out_valid
+//     (both registered: I into i_r, bias into b_r); iir on the subtraction's out_valid; out_valid
+//     one cycle after the iir's, busy cleared with it.
+//   Cycles per sample (accepting edge to the next sample's, back to back):
+//     D_rtd + [D_lag] + D_sf + max(D_div + D_demod, D_bias) + 3 + D_iir
+//   = (N_rtd + 10) + [(N_lag + 11)] + (ORDER_sf (N_sf + 10) + 7) + max(ceil(NW/DIV_UNROLL) + 6
+//     + D_demod, ORDER_b (N_b + 10) + 7) + 3 + (SECTIONS (7 N_iir + 10) + 1), the N the blocks'
+//     limb counts (their headers); with the serial demod the bias engine always finishes first;
+//   332 at the default config and DIV_UNROLL = 1: 12 + 21 + max(54 + 189, 21) + 3 + 53 (349 with
+//   the lag at DECIM = 1: + 17; 291 at DIV_UNROLL = 7), against 416 cycles per sample at 40 MHz
+//   and 96 kS/s.
 `default_nettype none
 
 module chain_paper002 #(
 `include "chain_paper002_params.vh"
     , parameter integer DIV_UNROLL = 1
+    , parameter integer ARCH = 0    // 0: one-sample-per-clock blocks; 1: their serial variants
 ) (
     input  wire              clk,
     input  wire              rst,
@@ -45,6 +79,7 @@ module chain_paper002 #(
     wire              ovf_rtd;
     rtd #(
 `include "rtd_params.vh"
+        , .ARCH(ARCH)
     ) u_rtd (.clk(clk), .rst(rst), .in_valid(accept), .in_ready(), .code(rtd_code), .out_valid(t_v), .temp(t_w),
              .ovf(ovf_rtd));
 
@@ -54,16 +89,19 @@ module chain_paper002 #(
 
     // ---- SF(T) and bias(T) ----
     wire                sf_v, b_v;
+    wire                b_go;        // the bias engine's start: with SF (ARCH 0), after it (ARCH 1)
     wire [SF_W-1:0]     sf_w;
     wire [BIAS_W-1:0]   b_w;
     wire [SF_OVF_W-1:0] ovf_sf;
     wire [B_OVF_W-1:0]  ovf_b;
     piecewise #(
 `include "piecewise_sf_params.vh"
+        , .ARCH(ARCH)
     ) u_sf (.clk(clk), .rst(rst), .in_valid(ce_v), .in_ready(), .temp(ce_w), .out_valid(sf_v), .y(sf_w), .ovf(ovf_sf));
     piecewise #(
 `include "piecewise_bias_params.vh"
-    ) u_bias (.clk(clk), .rst(rst), .in_valid(ce_v), .in_ready(), .temp(ce_w), .out_valid(b_v), .y(b_w), .ovf(ovf_b));
+        , .ARCH(ARCH)
+    ) u_bias (.clk(clk), .rst(rst), .in_valid(b_go), .in_ready(), .temp(ce_w), .out_valid(b_v), .y(b_w), .ovf(ovf_b));
 
     // ---- sense / SF ----
     wire             d_v;
@@ -74,7 +112,7 @@ module chain_paper002 #(
     /* verilator lint_on UNUSEDSIGNAL */
     sf_divide #(
 `include "sf_divide_params.vh"
-        , .UNROLL(DIV_UNROLL)
+        , .UNROLL(DIV_UNROLL), .ARCH(ARCH)
     ) u_div (.clk(clk), .rst(rst), .in_valid(sf_v), .in_ready(div_ready), .x(vsa_r), .sf(sf_w),
              .out_valid(d_v), .y(d_w), .ovf(ovf_div));
 
@@ -82,28 +120,34 @@ module chain_paper002 #(
     wire                   i_v;
     wire [DATA_W-1:0]      i_w;
     wire [DEMOD_OVF_W-1:0] ovf_dm;
+    wire                   dm_go;     // the demodulator's start: the divider's out_valid (ARCH 1: and in_ready)
     /* verilator lint_off UNUSEDSIGNAL */
+    wire                   dm_ready;  // in_ready: high in ARCH 0 (one sample per cycle), honoured in ARCH 1
     wire [DATA_W-1:0]      q_w, amp_w;
     wire [ANGLE_W-1:0]     ph_w;
     /* verilator lint_on UNUSEDSIGNAL */
     demod #(
 `include "demod_params.vh"
-    ) u_demod (.clk(clk), .rst(rst), .in_valid(d_v), .x(d_w), .out_valid(i_v), .i(i_w), .q(q_w),
+        , .ARCH(ARCH)
+    ) u_demod (.clk(clk), .rst(rst), .in_valid(dm_go), .in_ready(dm_ready), .x(d_w), .out_valid(i_v), .i(i_w), .q(q_w),
                .amp(amp_w), .phase(ph_w), .ovf(ovf_dm));
 
     // ---- I - bias(T), final low-pass ----
     wire             s_v;
     wire [SUB_W-1:0] s_w;
     wire             ovf_sub;
+    wire              sub_go;     // the subtraction's start: demod's out_valid (ARCH 0), the join (ARCH 1)
+    wire [DATA_W-1:0] sub_x;      // its I: demod's output (ARCH 0), registered (ARCH 1)
     bias_subtract #(
 `include "bias_subtract_params.vh"
-    ) u_sub (.clk(clk), .rst(rst), .in_valid(i_v), .x(i_w), .bias(b_r), .out_valid(s_v), .y(s_w),
+    ) u_sub (.clk(clk), .rst(rst), .in_valid(sub_go), .x(sub_x), .bias(b_r), .out_valid(s_v), .y(s_w),
              .ovf(ovf_sub));
     wire                 r_v;
     wire [RATE_W-1:0]    r_w;
     wire [IIR_OVF_W-1:0] ovf_iir;
     iir #(
 `include "iir_params.vh"
+        , .ARCH(ARCH)
     ) u_iir (.clk(clk), .rst(rst), .in_valid(s_v), .in_ready(), .x(s_w), .out_valid(r_v), .y(r_w), .ovf(ovf_iir));
 
     // ---- per-sample registers (one sample in flight) ----
@@ -133,6 +177,7 @@ module chain_paper002 #(
             wire [TEMP_W-1:0] te_w;
             lag #(
 `include "lag_params.vh"
+                , .ARCH(ARCH)
             ) u_lag (.clk(clk), .rst(rst), .in_valid(t_v), .in_ready(), .temp(t_w), .out_valid(lag_v), .te(te_w),
                      .ovf(ovf_lag));
             reg ovf_lag_r;
@@ -144,6 +189,45 @@ module chain_paper002 #(
             assign ce_v  = t_v;
             assign ce_w  = t_w;
             assign ovf_n = {ovf_iir, ovf_sub_r, ovf_dm_r, ovf_div_r, ovf_b_r, ovf_sf_r, ovf_rtd_r};
+        end
+    endgenerate
+
+    // ---- sequencing of the coefficient engines, the demodulator and the subtraction ----
+    generate
+        if (ARCH == 0) begin : g_par
+            // one-sample-per-clock blocks: every start is the predecessor's out_valid
+            assign b_go   = ce_v;
+            assign dm_go  = d_v;
+            assign sub_go = i_v;
+            assign sub_x  = i_w;
+        end else begin : g_ser
+            // the bias engine after SF's (it runs during the division)
+            assign b_go = sf_v;
+            // the demodulator: started on the divider's out_valid once its in_ready is high (the
+            // quotient d_w holds in the divider's output register until the next division)
+            reg dm_pend;
+            assign dm_go = (d_v | dm_pend) & dm_ready;
+            always @(posedge clk) begin
+                if (rst | accept) dm_pend <= 1'b0;
+                else dm_pend <= (d_v | dm_pend) & ~dm_ready;
+            end
+            // the subtraction: one cycle after the later of I (demod's out_valid) and bias(T) (the
+            // bias engine's out_valid), from registers: I in i_r, bias in b_r
+            reg i_done, b_done, sub_q;
+            reg [DATA_W-1:0] i_r;
+            wire last = (i_v & (b_done | b_v)) | (b_v & i_done);
+            always @(posedge clk) begin
+                if (rst | accept) begin
+                    i_done <= 1'b0; b_done <= 1'b0; sub_q <= 1'b0;
+                end else begin
+                    sub_q <= last;
+                    if (i_v) i_done <= 1'b1;
+                    if (b_v) b_done <= 1'b1;
+                end
+                if (i_v) i_r <= i_w;
+            end
+            assign sub_go = sub_q;
+            assign sub_x  = i_r;
         end
     endgenerate
 

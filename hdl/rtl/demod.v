@@ -4,15 +4,66 @@
 //   mixers: i = fit(round(x * cos >> MIX_SHIFT)), q = fit(round(x * msin >> MIX_SHIFT)) into
 //     DATA_W bits (the factor 2 is in MIX_SHIFT: the product read one fraction bit coarser);
 //   low-pass: iir with the LPF_* parameters, one per channel;
-//   CORDIC (ITERATIONS steps, combinational): pre-rotation by +-90 deg (HALF_PI) into the right
-//     half plane, then shift-and-add with arithmetic right shifts (floor) in DATA_W + 2 guard
-//     bits, the angle accumulated from ATAN_FILE (ANGLE_W bits);
+//   CORDIC (ITERATIONS steps): pre-rotation by +-90 deg (HALF_PI) into the right half plane, then
+//     shift-and-add with arithmetic right shifts (floor) in DATA_W + 2 guard bits, the angle
+//     accumulated from ATAN_FILE (ANGLE_W bits);
 //   amp = fit(round(x_K * INV_K >> AMP_SHIFT)) into DATA_W bits; phase = the angle accumulator.
-// Every rounding by ROUNDING (floor / half_up / half_even / toward_zero), every fit by OVERFLOW
-// (wrap / saturate), flagged in ovf = {amp, lpf_q[LPF_SECTIONS], lpf_i[LPF_SECTIONS], mix_q, mix_i}.
-// PHASE_TRIM: the NCO reference's rotation (nco.v), 0 = none.
-// Interface: in_valid / out_valid, one sample per cycle; the NCO and filter states advance only on
-// in_valid, rst returns them to reset. Latency: 2 cycles (i, q delayed to align with amp, phase).
+// Every rounding by ROUNDING (floor / half_up / half_even / toward_zero; the filters by
+// LPF_ROUNDING), every fit by OVERFLOW (wrap / saturate; the filters by LPF_OVERFLOW), flagged in
+// ovf = {amp, lpf_q[LPF_SECTIONS], lpf_i[LPF_SECTIONS], mix_q, mix_i}. The NCO correction is
+// rounded by ROUNDING and has no fit (the model proves NCO_W bits hold it).
+// PHASE_TRIM: the NCO reference's rotation (nco.v), 0 = none. Both architectures give the same
+// i, q, amp, phase, ovf for every input.
+// ARCH = 0: one sample per cycle, everything combinational (nco, 4 + 2 x 7 multipliers, the CORDIC
+//   unrolled). Interface: in_valid / out_valid (in_ready tied high); the NCO and filter states
+//   advance only on in_valid, rst returns them to reset. Latency: 2 cycles (i, q delayed to align
+//   with amp, phase).
+// ARCH = 1: serial (issue 12). The quarter-wave table is read through ONE registered read port
+//   (tq <= qsin[addr]: block RAM), qsin[k] and qsin[~k] in consecutive cycles (cb's word first:
+//   qsin[k] in odd quadrants, qsin[~k] in even ones; then the complement address, mb's word); the
+//   six products of a sample (d = delta * TWO_PI, mb * d, -cb * d, x * cos, x * msin, x_K * INV_K)
+//   run through ONE fx_mac_serial (one SB_MAC16); the mixer and amplitude products through ONE
+//   fx_convert_pipe (the amplitude's product is scaled to the mixers' shift by the constant
+//   INV_K << (MIX_SHIFT - AMP_SHIFT), or the mixers' up by p << (AMP_SHIFT - MIX_SHIFT)); both
+//   low-pass filters through ONE serial iir (ARCH = 1, CHANNELS = 2: its own fx_mac_serial); the
+//   CORDIC is iterative, one step per two cycles, x and y loaded through its own adders. The phase
+//   accumulator advances once per accepted sample (two halves, the carry registered between).
+//   Interface: in_valid / in_ready / out_valid; in_ready is high only when idle (which includes the
+//   out_valid cycle), a sample is taken at an edge with in_valid && in_ready; out_valid is a
+//   one-cycle pulse with i, q, amp, phase, ovf (held until the next out_valid).
+//   MAC operands: a = dr (delta, then d: DW = INTERP_BITS + TWO_PI_W + 3 bits) or cx (x, then
+//   the CORDIC x: XW = max(IN_W, DATA_W + 3) bits); b = TWO_PI, mb, -cb, cos, -sin or
+//   INV_K << ASH (MB_W = max(TWO_PI_W + 1, NCO_W, INV_K_W + ASH) bits, ASH = max(0, MIX_SHIFT -
+//   AMP_SHIFT)); every product takes N = ceil(max(DW, XW)/16) * ceil(MB_W/16) multiplier cycles
+//   (4 at the default config).
+//   The filters: M = ceil(max(LPF_COEF_W, LPF_OUT_SHIFT + 2)/16) * ceil(DATA_W/16) (6 at the
+//   default), F = 2 LPF_SECTIONS (7 M + 10) cycles for both channels (104 at the default).
+//   Schedule, in edges after the edge 0 that takes the sample (the ROM address is the phase's
+//   index k while idle):
+//     0:              tq = cb's word; x (into the CORDIC x), delta, the address, quadrant
+//                     registered; phase low half advanced
+//     1:              tq = mb's word (complement address); -cb registered (quadrant sign, one
+//                     negator); delta * TWO_PI issued; phase high half
+//     2:              mb registered (the same negator)
+//     N + 5:          d registered (the MAC's out_valid cycle)
+//     N + 6, 2N + 6:  mb * d, then -cb * d issued (back to back)
+//     2N + 10, + 11:  round(mb * d) (fx_round), then cos = cb + it registered
+//     3N + 10, + 11:  round(-cb * d), then -sin = mb + it registered
+//     3N + 12, 4N + 12: x * cos, then x * -sin issued
+//     4N + 16 .. 18:  i = fit(round(x * cos)) (fx_convert_pipe: round, fit), registered
+//     5N + 16 .. 18:  q likewise; both go to the iir at 5N + 18
+//     5N + 18 + F:    the iir's out_valid follows; at 5N + 19 + F li, lq load the CORDIC x, y
+//                     through its adders (x, y, z cleared while waiting for the iir)
+//     5N + 20 + F, + 21: the pre-rotation (x, y = +-y, -+x when x < 0; z = +-HALF_PI), on the
+//                     CORDIC's own adders with the accumulating operands zeroed
+//     5N + 22 + F ..: the ITERATIONS shift-and-add steps, two edges each: the shifted x >>> j,
+//                     y >>> j registered, then the adders (atan ROM read by j)
+//     5N + 22 + F + 2 ITERATIONS: x_K * INV_K issued
+//     6N + 26 + F + 2 ITERATIONS .. + 28: amp = fit(round(...)) (fx_convert_pipe), then every
+//                     output registered, out_valid high; in_ready high again
+//   Cycles per sample: 6 N + 29 + 2 ITERATIONS + 2 LPF_SECTIONS (7 M + 10), 189 at the default
+//   config (N = 4, M = 6, 16 iterations, 1 section), against 416 at 40 MHz and 96 kS/s.
+//   Latency: one cycle less (out_valid in the cycle in which the next sample may be taken).
 `default_nettype none
 
 module demod #(
@@ -48,11 +99,13 @@ module demod #(
     parameter integer AMP_SHIFT     = 17,
     parameter         QSIN_FILE     = "demod_qsin.hex",
     parameter         LPF_COEF_FILE = "demod_lpf_coef.hex",
-    parameter         ATAN_FILE     = "demod_atan.hex"
+    parameter         ATAN_FILE     = "demod_atan.hex",
+    parameter integer ARCH          = 0     // 0: one sample per cycle (in_ready tied high); 1: serial
 ) (
     input  wire                      clk,
     input  wire                      rst,
     input  wire                      in_valid,
+    output wire                      in_ready,
     input  wire [IN_W-1:0]           x,
     output reg                       out_valid,
     output reg  [DATA_W-1:0]         i,
@@ -65,114 +118,448 @@ module demod #(
     localparam integer WW = DATA_W + 3;        // CORDIC work: DATA_W + 2 guard bits, + 1 spare
     localparam integer AW = ANGLE_W + 2;       // angle accumulator, never overflows the port
     localparam integer PW = WW + INV_K_W;
-
-    // ---- NCO and mixers ----
-    wire [NCO_W-1:0] cos_w, msin_w;
-    nco #(.PHASE_BITS(PHASE_BITS), .LUT_BITS(LUT_BITS), .LUT_W(LUT_W), .INTERP_BITS(INTERP_BITS),
-          .TWO_PI(TWO_PI), .TWO_PI_W(TWO_PI_W), .CORR_SHIFT(CORR_SHIFT), .NCO_W(NCO_W), .FTW(FTW),
-          .PHASE0(PHASE0), .PHASE_TRIM(PHASE_TRIM), .ROUNDING(ROUNDING), .QSIN_FILE(QSIN_FILE)) u_nco
-        (.clk(clk), .rst(rst), .step(in_valid), .cos_o(cos_w), .msin_o(msin_w));
-
-    wire signed [MW-1:0] pi_ = $signed(x) * $signed(cos_w);
-    wire signed [MW-1:0] pq_ = $signed(x) * $signed(msin_w);
-    wire [DATA_W-1:0] mi, mq;
-    wire ovf_mi, ovf_mq;
-    fx_convert #(.IN_W(MW), .SHIFT(MIX_SHIFT), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
-                 .OVERFLOW(OVERFLOW)) u_mix_i (.x(pi_), .y(mi), .ovf(ovf_mi));
-    fx_convert #(.IN_W(MW), .SHIFT(MIX_SHIFT), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
-                 .OVERFLOW(OVERFLOW)) u_mix_q (.x(pq_), .y(mq), .ovf(ovf_mq));
-    reg [1:0] ovf_mix_d;
-    always @(posedge clk) if (in_valid) ovf_mix_d <= {ovf_mq, ovf_mi};
-
-    // ---- low-pass filters ----
-    wire [DATA_W-1:0] li, lq;
-    wire [LPF_SECTIONS-1:0] ovf_li, ovf_lq;
-    wire lv, lv_q;
-    iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .SHIFT_B(LPF_SHIFT_B),
-          .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
-          .OVERFLOW(LPF_OVERFLOW), .COEF_FILE(LPF_COEF_FILE)) u_lpf_i
-        (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mi), .out_valid(lv), .y(li), .ovf(ovf_li));
-    iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .SHIFT_B(LPF_SHIFT_B),
-          .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
-          .OVERFLOW(LPF_OVERFLOW), .COEF_FILE(LPF_COEF_FILE)) u_lpf_q
-        (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mq), .out_valid(lv_q), .y(lq), .ovf(ovf_lq));
-
-    // ---- CORDIC vectoring (combinational on the filter outputs) ----
-    reg [ANGLE_W-1:0] atan [0:ITERATIONS-1];
-    initial $readmemh(ATAN_FILE, atan);
-    localparam [ANGLE_W-1:0] HALF_PI_C = HALF_PI[ANGLE_W-1:0];
-    wire signed [AW-1:0] hpi = {{2{HALF_PI_C[ANGLE_W-1]}}, HALF_PI_C};
-
-    wire signed [WW-1:0] xi = {{(WW-DATA_W){li[DATA_W-1]}}, li};
-    wire signed [WW-1:0] yi = {{(WW-DATA_W){lq[DATA_W-1]}}, lq};
-    wire signed [WW-1:0] x0 = ~xi[WW-1] ? xi : (~yi[WW-1] ? yi : -yi);
-    wire signed [WW-1:0] y0 = ~xi[WW-1] ? yi : (~yi[WW-1] ? -xi : xi);
-    wire signed [AW-1:0] z0 = ~xi[WW-1] ? {AW{1'b0}} : (~yi[WW-1] ? hpi : -hpi);
-    // the arctan table as one flat vector (a procedural loop then reads it without an array)
-    wire [ANGLE_W*ITERATIONS-1:0] atan_flat;
     genvar k;
+
     generate
-        for (k = 0; k < ITERATIONS; k = k + 1) begin : g_atan
-            assign atan_flat[ANGLE_W*k +: ANGLE_W] = atan[k];
+        if (ARCH != 0 && ARCH != 1) begin : g_bad_arch
+            initial begin $display("demod: ARCH must be 0 or 1, got %0d", ARCH); $finish; end
+        end
+        if (ARCH == 0) begin : g_par
+            assign in_ready = 1'b1;
+
+            // ---- NCO and mixers ----
+            wire [NCO_W-1:0] cos_w, msin_w;
+            nco #(.PHASE_BITS(PHASE_BITS), .LUT_BITS(LUT_BITS), .LUT_W(LUT_W), .INTERP_BITS(INTERP_BITS),
+                  .TWO_PI(TWO_PI), .TWO_PI_W(TWO_PI_W), .CORR_SHIFT(CORR_SHIFT), .NCO_W(NCO_W), .FTW(FTW),
+                  .PHASE0(PHASE0), .PHASE_TRIM(PHASE_TRIM), .ROUNDING(ROUNDING), .QSIN_FILE(QSIN_FILE)) u_nco
+                (.clk(clk), .rst(rst), .step(in_valid), .cos_o(cos_w), .msin_o(msin_w));
+
+            wire signed [MW-1:0] pi_ = $signed(x) * $signed(cos_w);
+            wire signed [MW-1:0] pq_ = $signed(x) * $signed(msin_w);
+            wire [DATA_W-1:0] mi, mq;
+            wire ovf_mi, ovf_mq;
+            fx_convert #(.IN_W(MW), .SHIFT(MIX_SHIFT), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
+                         .OVERFLOW(OVERFLOW)) u_mix_i (.x(pi_), .y(mi), .ovf(ovf_mi));
+            fx_convert #(.IN_W(MW), .SHIFT(MIX_SHIFT), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
+                         .OVERFLOW(OVERFLOW)) u_mix_q (.x(pq_), .y(mq), .ovf(ovf_mq));
+            reg [1:0] ovf_mix_d;
+            always @(posedge clk) if (in_valid) ovf_mix_d <= {ovf_mq, ovf_mi};
+
+            // ---- low-pass filters ----
+            wire [DATA_W-1:0] li, lq;
+            wire [LPF_SECTIONS-1:0] ovf_li, ovf_lq;
+            wire lv, lv_q;
+            iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .SHIFT_B(LPF_SHIFT_B),
+                  .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
+                  .OVERFLOW(LPF_OVERFLOW), .COEF_FILE(LPF_COEF_FILE)) u_lpf_i
+                (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mi), .out_valid(lv), .y(li), .ovf(ovf_li));
+            iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .SHIFT_B(LPF_SHIFT_B),
+                  .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
+                  .OVERFLOW(LPF_OVERFLOW), .COEF_FILE(LPF_COEF_FILE)) u_lpf_q
+                (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mq), .out_valid(lv_q), .y(lq), .ovf(ovf_lq));
+
+            // ---- CORDIC vectoring (combinational on the filter outputs) ----
+            reg [ANGLE_W-1:0] atan [0:ITERATIONS-1];
+            initial $readmemh(ATAN_FILE, atan);
+            localparam [ANGLE_W-1:0] HALF_PI_C = HALF_PI[ANGLE_W-1:0];
+            wire signed [AW-1:0] hpi = {{2{HALF_PI_C[ANGLE_W-1]}}, HALF_PI_C};
+
+            wire signed [WW-1:0] xi = {{(WW-DATA_W){li[DATA_W-1]}}, li};
+            wire signed [WW-1:0] yi = {{(WW-DATA_W){lq[DATA_W-1]}}, lq};
+            wire signed [WW-1:0] x0 = ~xi[WW-1] ? xi : (~yi[WW-1] ? yi : -yi);
+            wire signed [WW-1:0] y0 = ~xi[WW-1] ? yi : (~yi[WW-1] ? -xi : xi);
+            wire signed [AW-1:0] z0 = ~xi[WW-1] ? {AW{1'b0}} : (~yi[WW-1] ? hpi : -hpi);
+            // the arctan table as one flat vector (a procedural loop then reads it without an array)
+            wire [ANGLE_W*ITERATIONS-1:0] atan_flat;
+            for (k = 0; k < ITERATIONS; k = k + 1) begin : g_atan
+                assign atan_flat[ANGLE_W*k +: ANGLE_W] = atan[k];
+            end
+
+            // the ITERATIONS shift-and-add steps, unrolled by the loop (one evaluation per new I/Q)
+            reg signed [WW-1:0]  cx, cy, tx;
+            reg signed [AW-1:0]  cz, at;
+            reg [ANGLE_W-1:0]    atv;
+            integer j;
+            always @* begin
+                cx = x0; cy = y0; cz = z0;
+                tx = {WW{1'b0}}; at = {AW{1'b0}}; atv = {ANGLE_W{1'b0}};
+                for (j = 0; j < ITERATIONS; j = j + 1) begin
+                    atv = atan_flat[ANGLE_W*j +: ANGLE_W];
+                    at  = {{2{atv[ANGLE_W-1]}}, atv};
+                    if (!cy[WW-1]) begin
+                        tx = cx + (cy >>> j);
+                        cy = cy - (cx >>> j);
+                        cz = cz + at;
+                    end else begin
+                        tx = cx - (cy >>> j);
+                        cy = cy + (cx >>> j);
+                        cz = cz - at;
+                    end
+                    cx = tx;
+                end
+            end
+
+            localparam [INV_K_W-1:0] INV_K_C = INV_K[INV_K_W-1:0];
+            wire signed [INV_K_W-1:0] invk = INV_K_C;
+            wire signed [WW-1:0] xfin = cx;
+            wire signed [PW-1:0] ap = xfin * invk;
+            wire [DATA_W-1:0] amp_c;
+            wire ovf_amp;
+            fx_convert #(.IN_W(PW), .SHIFT(AMP_SHIFT), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
+                         .OVERFLOW(OVERFLOW)) u_amp (.x(ap), .y(amp_c), .ovf(ovf_amp));
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire signed [AW-1:0] zfin = cz;
+            /* verilator lint_on UNUSEDSIGNAL */
+
+            always @(posedge clk) begin
+                if (rst) begin
+                    out_valid <= 1'b0;
+                    i <= {DATA_W{1'b0}}; q <= {DATA_W{1'b0}};
+                    amp <= {DATA_W{1'b0}}; phase <= {ANGLE_W{1'b0}};
+                    ovf <= {(2*LPF_SECTIONS+3){1'b0}};
+                end else begin
+                    out_valid <= lv;
+                    if (lv) begin
+                        i <= li;
+                        q <= lq;
+                        amp <= amp_c;
+                        phase <= zfin[ANGLE_W-1:0];
+                        ovf <= {ovf_amp, ovf_lq, ovf_li, ovf_mix_d};
+                    end
+                end
+            end
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire unused_ok = lv_q;
+            /* verilator lint_on UNUSEDSIGNAL */
+        end else begin : g_ser
+            // ---- serial: one table read port, one shared multiplier, one two-channel iir ----
+            localparam integer QBITS = LUT_BITS - 2;
+            localparam integer DLW   = INTERP_BITS + 2;         // delta: odd, |delta| < 2**INTERP_BITS
+            localparam integer DW    = DLW + TWO_PI_W + 1;      // d = delta * TWO_PI
+            localparam integer NPW   = NCO_W + DW;              // correction product
+            localparam integer CW    = NPW - CORR_SHIFT + 1;    // rounded correction
+            localparam integer SW    = ((CW > NCO_W) ? CW : NCO_W) + 1;
+            localparam integer XW    = (IN_W > WW) ? IN_W : WW; // x, then the CORDIC x (cx)
+            localparam integer MA_W  = (DW > XW) ? DW : XW;     // MAC operand a: dr or cx
+            // one fx_convert_pipe rounds the mixer and the amplitude products at CSH: the one with the
+            // smaller shift is scaled up first (amp: INV_K << ASH, a constant; mixers: p << MSH)
+            localparam integer CSH   = (MIX_SHIFT > AMP_SHIFT) ? MIX_SHIFT : AMP_SHIFT;
+            localparam integer ASH   = CSH - AMP_SHIFT;
+            localparam integer MSH   = CSH - MIX_SHIFT;
+            localparam integer IKW   = INV_K_W + ASH;           // INV_K << ASH
+            localparam integer CV_W  = ((MW + MSH > PW + ASH) ? MW + MSH : PW + ASH);
+            localparam integer MB0   = (TWO_PI_W + 1 > NCO_W) ? TWO_PI_W + 1 : NCO_W;
+            localparam integer MB_W  = (MB0 > IKW) ? MB0 : IKW; // b: constants or NCO values
+            localparam integer MP_W  = MA_W + MB_W;
+            localparam integer PL    = PHASE_BITS / 2;          // phase accumulator: low half ...
+            localparam integer PH    = PHASE_BITS - PL;         // ... and high half
+            localparam integer JW    = (ITERATIONS > 1) ? $clog2(ITERATIONS) : 1;
+            localparam integer J_LAST_I = ITERATIONS - 1;
+            localparam [JW-1:0] J_LAST = J_LAST_I[JW-1:0];
+            localparam [PHASE_BITS-1:0] FTW_C   = FTW[PHASE_BITS-1:0];
+            localparam [PHASE_BITS-1:0] START_C = PHASE0[PHASE_BITS-1:0] + PHASE_TRIM[PHASE_BITS-1:0];
+            localparam [PL-1:0] FTW_LO   = FTW_C[PL-1:0];
+            localparam [PH-1:0] FTW_HI   = FTW_C[PHASE_BITS-1:PL];
+            localparam [PL-1:0] START_LO = START_C[PL-1:0];
+            localparam [PH-1:0] START_HI = START_C[PHASE_BITS-1:PL];
+            localparam [TWO_PI_W-1:0] TWO_PI_C = TWO_PI[TWO_PI_W-1:0];
+            localparam [INV_K_W-1:0]  INV_K_C  = INV_K[INV_K_W-1:0];
+            localparam [ANGLE_W-1:0]  HALF_PI_C = HALF_PI[ANGLE_W-1:0];
+            localparam [4:0] S_IDLE = 5'd0;     // FSM states; idle: the ROM reads qsin[k]
+            localparam [4:0] S_RD   = 5'd1;     // the ROM reads qsin[~k]; delta * TWO_PI issued
+            localparam [4:0] S_NB   = 5'd2;     // cb, mb, -cb registered
+            localparam [4:0] S_WD   = 5'd3;     // waiting for d
+            localparam [4:0] S_PC   = 5'd4;     // mb * d issued
+            localparam [4:0] S_PM   = 5'd5;     // -cb * d issued
+            localparam [4:0] S_WSIN = 5'd6;     // waiting for cos, -sin
+            localparam [4:0] S_PI   = 5'd7;     // x * cos issued
+            localparam [4:0] S_PQ   = 5'd8;     // x * -sin issued
+            localparam [4:0] S_WMIX = 5'd9;     // waiting for i, q (fx_convert_pipe)
+            localparam [4:0] S_LPF  = 5'd10;    // waiting for the two low-pass outputs
+            localparam [4:0] S_COR  = 5'd11;    // pre-rotation, then ITERATIONS CORDIC steps
+            localparam [4:0] S_PA   = 5'd12;    // x_K * INV_K issued
+            localparam [4:0] S_WA   = 5'd13;    // waiting for amp; then the outputs
+            localparam [2:0] R_D = 3'd0;        // products, in the order they come back
+            localparam [2:0] R_C = 3'd1;        // mb * d
+            localparam [2:0] R_M = 3'd2;        // -cb * d
+            localparam [2:0] R_I = 3'd3;        // x * cos
+            localparam [2:0] R_Q = 3'd4;        // x * -sin
+            localparam [2:0] R_A = 3'd5;        // x_K * INV_K
+
+            if (QBITS < 1 || DATA_W < 2) begin : g_bad_widths
+                initial begin $display("demod: ARCH=1 needs LUT_BITS >= 3 and DATA_W >= 2, got %0d, %0d",
+                                       LUT_BITS, DATA_W); $finish; end
+            end
+
+            reg [4:0] st;
+            reg [2:0] rk;                       // the next product to come back from the MAC
+            wire take = (st == S_IDLE) && in_valid;
+            assign in_ready = (st == S_IDLE);
+
+            // ---- phase accumulator: PHASE0 + PHASE_TRIM + n FTW, in two halves (short carry chains) ----
+            reg [PL-1:0] ph_lo;
+            reg [PH-1:0] ph_hi;
+            reg          ph_c;                  // carry of the low half, added into the high half next cycle
+            /* verilator lint_off UNUSEDSIGNAL */  // the bits below the interpolation offset: residual phase
+            wire [PHASE_BITS-1:0] ph = {ph_hi, ph_lo};
+            /* verilator lint_on UNUSEDSIGNAL */
+            wire [PL:0] ph_lo_n = {1'b0, ph_lo} + {1'b0, FTW_LO};
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire        ph_hi_cin;
+            /* verilator lint_on UNUSEDSIGNAL */
+            wire [PH-1:0] ph_hi_n;
+            assign {ph_hi_n, ph_hi_cin} = {ph_hi, 1'b1} + {FTW_HI, ph_c};
+            always @(posedge clk) begin
+                if (rst) begin
+                    ph_lo <= START_LO; ph_hi <= START_HI; ph_c <= 1'b0;
+                end else begin
+                    if (take) {ph_c, ph_lo} <= ph_lo_n;
+                    if (st == S_RD) ph_hi <= ph_hi_n;
+                end
+            end
+
+            // ---- bin and sub-bin offset of the phase (nco.v) ----
+            wire [1:0]       quad = ph[PHASE_BITS-1 -: 2];
+            wire [QBITS-1:0] kb   = ph[PHASE_BITS-3 -: QBITS];
+            wire signed [DLW-1:0] delta;
+            if (INTERP_BITS > 0) begin : g_interp
+                wire [INTERP_BITS-1:0] r = ph[PHASE_BITS-LUT_BITS-1 -: INTERP_BITS];
+                // 2 r + 1 - 2**INTERP_BITS (nco.v)
+                wire [INTERP_BITS:0] odd = {r, 1'b1};
+                wire signed [INTERP_BITS:0] centred = {~odd[INTERP_BITS], odd[INTERP_BITS-1:0]};
+                assign delta = {{(DLW-INTERP_BITS-1){centred[INTERP_BITS]}}, centred};
+            end else begin : g_plain
+                assign delta = {DLW{1'b0}};
+            end
+
+            // ---- the quarter-wave table: one registered read port (block RAM) ----
+            reg [LUT_W-1:0] qsin [0:(1<<QBITS)-1];
+            initial $readmemh(QSIN_FILE, qsin);
+            // read order by quadrant: first the word of cb (qsin[k] in odd quadrants, qsin[~k] in even
+            // ones: nco.v's ca), then its complement ~address, the word of mb (nco.v's ma)
+            reg [QBITS-1:0] k_q;                // the first address
+            reg [1:0]       quad_q;
+            reg [LUT_W-1:0] tq;                 // registered ROM read
+            wire [QBITS-1:0] k_first = kb ^ {QBITS{~quad[0]}};
+            wire [QBITS-1:0] addr = (st == S_IDLE) ? k_first : ~k_q;
+            always @(posedge clk) tq <= qsin[addr];
+
+            // ---- bin centre by quadrant symmetry (nco.v): -cb from the first word, mb from the second ----
+            //   -cb = ca in quadrants 1, 2 (cb = -ca), else -ca;  mb = ma in quadrants 2, 3, else -ma
+            // one negator: the word in tq is ca in S_RD, ma in S_NB
+            wire signed [NCO_W-1:0] tw  = {tq[LUT_W-1], tq};
+            wire signed [NCO_W-1:0] ntw = -tw;
+            wire keep = (st == S_RD) ? (quad_q[1] ^ quad_q[0]) : quad_q[1];
+            wire signed [NCO_W-1:0] tw_s = keep ? tw : ntw;
+            reg signed [NCO_W-1:0] ncb_q;       // -cb, then cos = cb + R(mb d) = R(mb d) - (-cb)
+            reg signed [NCO_W-1:0] mb_q;        // mb, then -sin = mb + R(-cb d)
+
+            // ---- the shared multiplier ----
+            reg  signed [DW-1:0] dr;            // delta, then d = delta * TWO_PI
+            reg  signed [XW-1:0] cx, cy;        // x, then the CORDIC x, y
+            reg  signed [AW-1:0] cz;            // the CORDIC angle
+            wire signed [MA_W-1:0] dr_a = {{(MA_W-DW+1){dr[DW-1]}}, dr[DW-2:0]};
+            wire signed [MA_W-1:0] cx_a = {{(MA_W-XW+1){cx[XW-1]}}, cx[XW-2:0]};
+            wire signed [MB_W-1:0] twopi_b = {{(MB_W-TWO_PI_W){1'b0}}, TWO_PI_C};   // > 0
+            wire signed [MB_W-1:0] invk_u  = {{(MB_W-INV_K_W+1){INV_K_C[INV_K_W-1]}}, INV_K_C[INV_K_W-2:0]};
+            wire signed [MB_W-1:0] invk_b  = invk_u <<< ASH;   // a constant
+            wire signed [MB_W-1:0] mb_b  = {{(MB_W-NCO_W+1){mb_q[NCO_W-1]}}, mb_q[NCO_W-2:0]};
+            wire signed [MB_W-1:0] ncb_b = {{(MB_W-NCO_W+1){ncb_q[NCO_W-1]}}, ncb_q[NCO_W-2:0]};
+            wire a_cx = (st == S_PI) || (st == S_PQ) || (st == S_PA);
+            wire signed [MA_W-1:0] a_op = a_cx ? cx_a : dr_a;
+            reg  signed [MB_W-1:0] b_op;
+            always @* begin
+                case (st)
+                    S_PC:    b_op = mb_b;       // mb * d
+                    S_PM:    b_op = ncb_b;      // -cb * d
+                    S_PI:    b_op = ncb_b;      // x * cos (ncb_q holds cos by then)
+                    S_PQ:    b_op = mb_b;       // x * -sin
+                    S_PA:    b_op = invk_b;     // x_K * INV_K
+                    default: b_op = twopi_b;    // S_RD: delta * TWO_PI
+                endcase
+            end
+            wire mac_ready, mac_valid;
+            wire mac_in = (st == S_RD) ||
+                          (((st == S_PC) || (st == S_PM) || (st == S_PI) || (st == S_PQ) || (st == S_PA)) && mac_ready);
+            /* verilator lint_off UNUSEDSIGNAL */  // each product is exact in its own width: its top bits copy the sign
+            wire signed [MP_W-1:0] p;
+            /* verilator lint_on UNUSEDSIGNAL */
+            fx_mac_serial #(.A_W(MA_W), .B_W(MB_W)) u_mac (.clk(clk), .rst(rst), .in_valid(mac_in),
+                .in_ready(mac_ready), .a(a_op), .b(b_op), .out_valid(mac_valid), .p(p));
+
+            // ---- NCO correction: R(p >> CORR_SHIFT) (fx_round, ROUNDING), added to mb or cb ----
+            wire signed [CW-1:0] rc_c;
+            fx_round #(.IN_W(NPW), .SHIFT(CORR_SHIFT), .ROUNDING(ROUNDING), .OUT_W(CW)) u_corr
+                (.x(p[NPW-1:0]), .y(rc_c));
+            reg signed [CW-1:0] rc_q;
+            reg                 add_go;         // the correction in rc_q is added this cycle ...
+            reg                 add_sin;        // ... to mb (-sin), else to cb = -ncb (cos: rc + ~ncb + 1)
+            wire signed [NCO_W-1:0] add_a = add_sin ? mb_q : ~ncb_q;
+            wire                    add_c = ~add_sin;
+            /* verilator lint_off UNUSEDSIGNAL */  // the top bit: the model proves it is a sign copy; the carry-in bit
+            wire signed [SW-1:0] add_s;
+            wire                 add_cin;
+            assign {add_s, add_cin} = {{(SW-NCO_W){add_a[NCO_W-1]}}, add_a, 1'b1} + {{(SW-CW){rc_q[CW-1]}}, rc_q, add_c};
+            /* verilator lint_on UNUSEDSIGNAL */
+
+            // ---- mixers and amplitude: fit(round(p >> CSH)), one fx_convert_pipe for the three ----
+            //   i, q = fit(round(x * cos, -sin >> MIX_SHIFT)), amp = fit(round(x_K * INV_K >> AMP_SHIFT))
+            wire mix_in = mac_valid && ((rk == R_I) || (rk == R_Q));
+            wire amp_in = mac_valid && (rk == R_A);
+            wire mix_v, mix_o;
+            wire [DATA_W-1:0] mix_y;
+            wire signed [CV_W-1:0] pm_x = {{(CV_W-MW+1){p[MW-1]}}, p[MW-2:0]};   // a mixer product
+            wire signed [CV_W-1:0] cv_x;
+            if (MSH > 0) begin : g_mix_up    // the amplitude's shift is the larger: the mixers scaled up
+                wire signed [CV_W-1:0] pa_x = {{(CV_W-PW+1){p[PW-1]}}, p[PW-2:0]};
+                assign cv_x = amp_in ? pa_x : (pm_x <<< MSH);
+            end else begin : g_mix_as_is     // the amplitude product is already scaled by INV_K << ASH
+                assign cv_x = pm_x;
+            end
+            fx_convert_pipe #(.IN_W(CV_W), .SHIFT(CSH), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
+                              .OVERFLOW(OVERFLOW)) u_cv (.clk(clk), .rst(rst), .in_valid(mix_in | amp_in), .x(cv_x),
+                                                         .out_valid(mix_v), .y(mix_y), .ovf(mix_o));
+            reg [DATA_W-1:0] mi_q;              // i of the mixer, until q joins it
+            reg              got_i, ovf_mi_q, ovf_mq_q;
+
+            // ---- the two low-pass filters: one serial iir engine, channel 0 = I, 1 = Q ----
+            wire lpf_go = (st == S_WMIX) && mix_v && got_i;
+            wire lpf_v;
+            wire [2*DATA_W-1:0] lpf_y;
+            wire [2*LPF_SECTIONS-1:0] lpf_o;    // {lpf_q[S], lpf_i[S]}
+            iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .SHIFT_B(LPF_SHIFT_B),
+                  .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
+                  .OVERFLOW(LPF_OVERFLOW), .ARCH(1), .CHANNELS(2), .COEF_FILE(LPF_COEF_FILE)) u_lpf
+                (.clk(clk), .rst(rst), .in_valid(lpf_go), .in_ready(), .x({mix_y, mi_q}), .out_valid(lpf_v),
+                 .y(lpf_y), .ovf(lpf_o));
+            wire signed [DATA_W-1:0] li, lq;
+            assign {lq, li} = lpf_y;
+
+            // ---- CORDIC: one step per cycle on cx, cy, cz ----
+            reg [JW-1:0] j;
+            reg          pre;                   // the pre-rotation step (before step 0)
+            reg          half;                  // the second cycle of a step: the adders update
+            reg [ANGLE_W-1:0] atan [0:ITERATIONS-1];
+            initial $readmemh(ATAN_FILE, atan);
+            wire [ANGLE_W-1:0] atv = pre ? HALF_PI_C : atan[j];
+            wire signed [AW-1:0] at = {{2{atv[ANGLE_W-1]}}, atv};
+            wire neg = cy[XW-1];                // rotate toward y = 0
+            // the pre-rotation is step 0 with the accumulating operands zeroed:
+            //   x' = 0 +- y, y' = 0 -+ x, z' = 0 +- HALF_PI (taken only when x < 0)
+            // cx, cy load through the same adders (no multiplexer behind them, the critical path): the
+            // base operand is the value, the shifted operand 0 (cy = 0 while idle: x into cx at the
+            // accepting edge; cx = cy = cz = 0 in S_LPF until li, lq load)
+            wire signed [XW-1:0] x_ext  = {{(XW-IN_W+1){x[IN_W-1]}}, x[IN_W-2:0]};
+            wire signed [XW-1:0] li_ext = {{(XW-DATA_W+1){li[DATA_W-1]}}, li[DATA_W-2:0]};
+            wire signed [XW-1:0] lq_ext = {{(XW-DATA_W+1){lq[DATA_W-1]}}, lq[DATA_W-2:0]};
+            wire signed [XW-1:0] bx = (st == S_IDLE) ? x_ext : (st == S_LPF) ? li_ext : pre ? {XW{1'b0}} : cx;
+            wire signed [XW-1:0] by = (st == S_LPF) ? lq_ext : pre ? {XW{1'b0}} : cy;
+            // the shifted operands are registered, the adders take them in the next cycle: a step
+            // takes two cycles (in one, the step counter through the shifter's mux levels and then
+            // the XW-bit adder held the demod to 34 MHz); sx, sy are 0 whenever cx, cy have been 0
+            // for a cycle, as the loads need
+            reg  signed [XW-1:0] sx, sy;
+            always @(posedge clk) begin
+                sx <= cx >>> j;   // floor (arithmetic) shifts: blocks.demod.cordic_vector
+                sy <= cy >>> j;
+            end
+            // y >= 0: x + (y >> j), y - (x >> j), z + atan; y < 0: x - (y >> j), y + (x >> j), z - atan
+            // (a - b as a + ~b + 1: the 1 as a carry in through an extra low bit)
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire cx_cin, cy_cin, cz_cin;
+            /* verilator lint_on UNUSEDSIGNAL */
+            wire signed [XW-1:0] cx_n, cy_n;
+            wire signed [AW-1:0] cz_n;
+            assign {cx_n, cx_cin} = {bx, 1'b1} + {sy ^ {XW{neg}}, neg};
+            assign {cy_n, cy_cin} = {by, 1'b1} + {sx ^ {XW{~neg}}, ~neg};
+            assign {cz_n, cz_cin} = {cz, 1'b1} + {at ^ {AW{neg}}, neg};
+            wire step_en = ~pre | cx[XW-1];     // the pre-rotation only for x < 0
+            wire step    = (st == S_COR) && half && step_en;
+            wire ld_lpf  = (st == S_LPF) && lpf_v;        // li, lq into cx, cy (z stays 0)
+            wire clr_all = rst || ((st == S_LPF) && !lpf_v);
+            always @(posedge clk) begin
+                if (clr_all) cx <= {XW{1'b0}};
+                else if (take || ld_lpf || step) cx <= cx_n;
+                if (clr_all || st == S_WA) cy <= {XW{1'b0}};  // 0 again before the next sample's x loads
+                else if (ld_lpf || step) cy <= cy_n;
+                if (clr_all) cz <= {AW{1'b0}};
+                else if (step) cz <= cz_n;
+            end
+
+            // ---- datapath registers ----
+            always @(posedge clk) begin
+                if (take) begin
+                    dr     <= {{(DW-DLW+1){delta[DLW-1]}}, delta[DLW-2:0]};
+                    k_q    <= k_first;
+                    quad_q <= quad;
+                end
+                if (st == S_RD) ncb_q <= tw_s;
+                if (st == S_NB) mb_q  <= tw_s;
+                if (mac_valid && rk == R_D) dr <= p[DW-1:0];
+                if (mac_valid && (rk == R_C || rk == R_M)) rc_q <= rc_c;
+                if (add_go) begin
+                    if (add_sin) mb_q <= add_s[NCO_W-1:0];
+                    else         ncb_q <= add_s[NCO_W-1:0];
+                end
+                if (st == S_WMIX && mix_v && !got_i) begin
+                    mi_q <= mix_y; ovf_mi_q <= mix_o;
+                end
+                if (lpf_go) ovf_mq_q <= mix_o;
+            end
+
+            always @(posedge clk) begin
+                if (rst) begin
+                    st <= S_IDLE; rk <= R_D; add_go <= 1'b0; add_sin <= 1'b0; got_i <= 1'b0;
+                    j <= {JW{1'b0}}; pre <= 1'b0; half <= 1'b0;
+                    out_valid <= 1'b0;
+                    i <= {DATA_W{1'b0}}; q <= {DATA_W{1'b0}};
+                    amp <= {DATA_W{1'b0}}; phase <= {ANGLE_W{1'b0}};
+                    ovf <= {(2*LPF_SECTIONS+3){1'b0}};
+                end else begin
+                    out_valid <= 1'b0;
+                    add_go  <= mac_valid && (rk == R_C || rk == R_M);
+                    add_sin <= (rk == R_M);
+                    if (mac_valid) rk <= rk + 3'd1;
+                    case (st)
+                        S_IDLE: if (in_valid) begin
+                            rk <= R_D; got_i <= 1'b0; st <= S_RD;
+                        end
+                        S_RD:   st <= S_NB;
+                        S_NB:   st <= S_WD;
+                        S_WD:   if (mac_valid) st <= S_PC;
+                        S_PC:   if (mac_ready) st <= S_PM;
+                        S_PM:   if (mac_ready) st <= S_WSIN;
+                        S_WSIN: if (add_go && add_sin) st <= S_PI;
+                        S_PI:   if (mac_ready) st <= S_PQ;
+                        S_PQ:   if (mac_ready) st <= S_WMIX;
+                        S_WMIX: if (mix_v) begin
+                            got_i <= 1'b1;
+                            if (got_i) st <= S_LPF;
+                        end
+                        S_LPF:  if (lpf_v) begin
+                            j <= {JW{1'b0}}; pre <= 1'b1; half <= 1'b0; st <= S_COR;
+                        end
+                        S_COR:  begin
+                            half <= ~half;
+                            if (half) begin
+                                pre <= 1'b0;
+                                if (!pre) begin
+                                    j <= j + {{(JW-1){1'b0}}, 1'b1};
+                                    if (j == J_LAST) st <= S_PA;
+                                end
+                            end
+                        end
+                        S_PA:   if (mac_ready) st <= S_WA;
+                        default: if (mix_v) begin   // S_WA: amp converted; every output registered, out_valid
+                            st <= S_IDLE; out_valid <= 1'b1;
+                            i <= li; q <= lq; amp <= mix_y; phase <= cz[ANGLE_W-1:0];
+                            ovf <= {mix_o, lpf_o, ovf_mq_q, ovf_mi_q};
+                        end
+                    endcase
+                end
+            end
         end
     endgenerate
-
-    // the ITERATIONS shift-and-add steps, unrolled by the loop (one evaluation per new I/Q)
-    reg signed [WW-1:0]  cx, cy, tx;
-    reg signed [AW-1:0]  cz, at;
-    reg [ANGLE_W-1:0]    atv;
-    integer j;
-    always @* begin
-        cx = x0; cy = y0; cz = z0;
-        tx = {WW{1'b0}}; at = {AW{1'b0}}; atv = {ANGLE_W{1'b0}};
-        for (j = 0; j < ITERATIONS; j = j + 1) begin
-            atv = atan_flat[ANGLE_W*j +: ANGLE_W];
-            at  = {{2{atv[ANGLE_W-1]}}, atv};
-            if (!cy[WW-1]) begin
-                tx = cx + (cy >>> j);
-                cy = cy - (cx >>> j);
-                cz = cz + at;
-            end else begin
-                tx = cx - (cy >>> j);
-                cy = cy + (cx >>> j);
-                cz = cz - at;
-            end
-            cx = tx;
-        end
-    end
-
-    localparam [INV_K_W-1:0] INV_K_C = INV_K[INV_K_W-1:0];
-    wire signed [INV_K_W-1:0] invk = INV_K_C;
-    wire signed [WW-1:0] xfin = cx;
-    wire signed [PW-1:0] ap = xfin * invk;
-    wire [DATA_W-1:0] amp_c;
-    wire ovf_amp;
-    fx_convert #(.IN_W(PW), .SHIFT(AMP_SHIFT), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
-                 .OVERFLOW(OVERFLOW)) u_amp (.x(ap), .y(amp_c), .ovf(ovf_amp));
-    /* verilator lint_off UNUSEDSIGNAL */
-    wire signed [AW-1:0] zfin = cz;
-    /* verilator lint_on UNUSEDSIGNAL */
-
-    always @(posedge clk) begin
-        if (rst) begin
-            out_valid <= 1'b0;
-            i <= {DATA_W{1'b0}}; q <= {DATA_W{1'b0}};
-            amp <= {DATA_W{1'b0}}; phase <= {ANGLE_W{1'b0}};
-            ovf <= {(2*LPF_SECTIONS+3){1'b0}};
-        end else begin
-            out_valid <= lv;
-            if (lv) begin
-                i <= li;
-                q <= lq;
-                amp <= amp_c;
-                phase <= zfin[ANGLE_W-1:0];
-                ovf <= {ovf_amp, ovf_lq, ovf_li, ovf_mix_d};
-            end
-        end
-    end
-    /* verilator lint_off UNUSEDSIGNAL */
-    wire unused_ok = lv_q;
-    /* verilator lint_on UNUSEDSIGNAL */
 endmodule
 
 `default_nettype wire

@@ -30,6 +30,14 @@
 //   Cycles per sample: SECTIONS * (7 N + 10) + 1, e.g. 53 at the default config (24-bit data,
 //   35-bit coefficients, OUT_SHIFT 37: N = 3 * 2); 416 cycles (96 kS/s at 40 MHz) hold 7 such
 //   sections. Latency: SECTIONS * (7 N + 10) cycles from the accepting edge to out_valid.
+//   CHANNELS (ARCH = 1 only, default 1): CHANNELS independent signals through the one engine, the
+//   same coefficients for each, a state per (channel, section). x, y are CHANNELS * DATA_W bits
+//   (channel c in bits [c DATA_W +: DATA_W]), ovf CHANNELS * SECTIONS bits, channel-major (channel
+//   c's sections in [c SECTIONS +: SECTIONS]). The FSM runs channel 0's sections, then channel 1's,
+//   ...: a channel is one more pass of the section schedule above (the ROM address wraps to b0 of
+//   section 0 at the end of a channel). y's slice of channel c loads at the end of channel c; all
+//   of y and ovf are valid with out_valid. Cycles per sample: CHANNELS * SECTIONS * (7 N + 10) + 1;
+//   latency CHANNELS * SECTIONS * (7 N + 10). CHANNELS = 1 is the single-channel engine above.
 `default_nettype none
 
 module iir #(
@@ -43,16 +51,17 @@ module iir #(
     parameter integer ROUNDING  = 1,
     parameter integer OVERFLOW  = 1,
     parameter integer ARCH      = 0,     // 0: one sample per cycle; 1: serial, one shared multiplier
+    parameter integer CHANNELS  = 1,     // signals through the engine (> 1: ARCH = 1 only)
     parameter         COEF_FILE = "iir_coef.hex"
 ) (
-    input  wire                clk,
-    input  wire                rst,
-    input  wire                in_valid,
-    output wire                in_ready,  // ARCH = 1: low while a sample is being computed
-    input  wire [DATA_W-1:0]   x,
-    output reg                 out_valid,
-    output reg  [DATA_W-1:0]   y,
-    output reg  [SECTIONS-1:0] ovf
+    input  wire                         clk,
+    input  wire                         rst,
+    input  wire                         in_valid,
+    output wire                         in_ready,  // ARCH = 1: low while a sample is being computed
+    input  wire [CHANNELS*DATA_W-1:0]   x,
+    output reg                          out_valid,
+    output reg  [CHANNELS*DATA_W-1:0]   y,
+    output reg  [CHANNELS*SECTIONS-1:0] ovf
 );
     localparam integer E_W = OUT_SHIFT + 2;
     localparam integer C_W = 4;                  // |c| <= 2 (checked by the generator)
@@ -68,6 +77,10 @@ module iir #(
 
     genvar s;
     generate
+        if (CHANNELS < 1 || (CHANNELS > 1 && ARCH != 1)) begin : g_bad_channels
+            initial begin $display("iir: CHANNELS > 1 needs ARCH = 1, got CHANNELS %0d, ARCH %0d", CHANNELS, ARCH);
+                          $finish; end
+        end
         if (ARCH == 0) begin : g_par
             // ---- one sample per cycle: the cascade is combinational ----
             assign in_ready = 1'b1;
@@ -153,6 +166,14 @@ module iir #(
             localparam integer SEC_W = (SECTIONS > 1) ? $clog2(SECTIONS) : 1;
             localparam integer SEC_LAST_I = SECTIONS - 1;
             localparam [SEC_W-1:0] SEC_LAST = SEC_LAST_I[SEC_W-1:0];
+            localparam integer SLOTS = CHANNELS * SECTIONS;                  // state slots (channel, section)
+            localparam integer SL_W = (SLOTS > 1) ? $clog2(SLOTS) : 1;
+            localparam integer CH_W = (CHANNELS > 1) ? $clog2(CHANNELS) : 1;
+            localparam integer CH_LAST_I = CHANNELS - 1;
+            localparam integer TAIL = SLOTS - 1;                              // slot of the state just updated
+            localparam [SL_W-1:0] TAIL_S = TAIL[SL_W-1:0];
+            localparam integer ROT = (CHANNELS > 1) ? TAIL : 0;                // slots rotated (CHANNELS > 1)
+            localparam [CH_W-1:0] CH_LAST = CH_LAST_I[CH_W-1:0];
             localparam integer LO_W = AW / 2;   // the accumulator in two halves: short carry chains
             localparam integer HI_W = AW - LO_W;
             localparam [2:0] S_IDLE  = 3'd0;    // FSM states
@@ -176,7 +197,12 @@ module iir #(
             end
 
             reg [2:0]        st;
-            reg [SEC_W-1:0]  sec;       // section being computed
+            reg [SEC_W-1:0]  sec;       // section being computed (of the channel ch)
+            reg [CH_W-1:0]   ch;        // channel being computed
+            wire [31:0]      ch_n = {{(32-CH_W){1'b0}}, ch};   // ch as a number (compared with a loop index)
+            wire [SL_W-1:0]  slot;      // its state slot: ch * SECTIONS + sec
+            wire signed [DATA_W-1:0] x_first;   // channel 0 of the input sample
+            wire signed [DATA_W-1:0] x_next;    // the next channel's input, at the end of a channel
             reg [2:0]        k;         // next product to issue (0..6; 7: all issued)
             reg [2:0]        rk;        // next product to come back from the MAC (0..6)
             reg [RA_W-1:0]   ra;        // ROM address of product k of section sec: 7 sec + k
@@ -198,24 +224,64 @@ module iir #(
             reg [DATA_W-1:0] out_q;     // fit(r_q) ...
             reg              ovf_q;     // ... its overflow flag
             reg [E_W-1:0]    res_q;     // sum - (r_q << OUT_SHIFT): the error before the overflow rule
-            reg [SECTIONS-1:0] ovf_w;   // flags of the sections done so far
-            reg signed [DATA_W-1:0] sx1 [0:SECTIONS-1];
-            reg signed [DATA_W-1:0] sx2 [0:SECTIONS-1];
-            reg signed [DATA_W-1:0] sy1 [0:SECTIONS-1];
-            reg signed [DATA_W-1:0] sy2 [0:SECTIONS-1];
-            reg signed [E_W-1:0]    se1 [0:SECTIONS-1];
-            reg signed [E_W-1:0]    se2 [0:SECTIONS-1];
+            reg [SLOTS-1:0]  ovf_w;     // flags of the sections done so far
+            reg signed [DATA_W-1:0] sx1 [0:SLOTS-1];
+            reg signed [DATA_W-1:0] sx2 [0:SLOTS-1];
+            reg signed [DATA_W-1:0] sy1 [0:SLOTS-1];
+            reg signed [DATA_W-1:0] sy2 [0:SLOTS-1];
+            reg signed [E_W-1:0]    se1 [0:SLOTS-1];
+            reg signed [E_W-1:0]    se2 [0:SLOTS-1];
+            wire ch_done = (sec == SEC_LAST);                   // the channel's last section
+            wire all_done = ch_done && (CHANNELS == 1 || ch == CH_LAST);
+
+            // ---- channels: the state slot, the other channels' inputs ----
+            if (CHANNELS == 1) begin : g_one_ch
+                assign slot = sec;
+                assign x_first = x;
+                assign x_next = x_first;     // never used: one channel
+            end else begin : g_chs
+                reg [SL_W-1:0] slot_q;       // ch * SECTIONS + sec, counted
+                wire take = (st == S_IDLE) && in_valid;
+                reg [(CHANNELS-1)*DATA_W-1:0] xr;   // channels 1.. of the sample, next one lowest
+                wire [(CHANNELS-1)*DATA_W-1:0] x_rest;
+                assign {x_rest, x_first} = x;
+                assign slot = slot_q;
+                if (CHANNELS == 2) begin : g_two
+                    assign x_next = xr;
+                    always @(posedge clk) if (take) xr <= x_rest;
+                end else begin : g_more
+                    wire [DATA_W-1:0] xr_lo;
+                    wire [(CHANNELS-2)*DATA_W-1:0] xr_hi;
+                    assign {xr_hi, xr_lo} = xr;
+                    assign x_next = xr_lo;
+                    always @(posedge clk) begin
+                        if (take) xr <= x_rest;
+                        else if (st == S_UPD && ch_done) xr <= {xr_lo, xr_hi};   // rotate: next channel lowest
+                    end
+                end
+                always @(posedge clk) begin
+                    if (take) slot_q <= {SL_W{1'b0}};
+                    else if (st == S_UPD) slot_q <= slot_q + {{(SL_W-1){1'b0}}, 1'b1};
+                end
+            end
 
             assign in_ready = (st == S_IDLE);
             always @(posedge clk) coef_q <= coef[ra];
 
             // ---- operands of product k of section sec ----
-            wire signed [DATA_W-1:0] x1 = sx1[sec];
-            wire signed [DATA_W-1:0] x2 = sx2[sec];
-            wire signed [DATA_W-1:0] y1 = sy1[sec];
-            wire signed [DATA_W-1:0] y2 = sy2[sec];
-            wire signed [E_W-1:0]    e1 = se1[sec];
-            wire signed [E_W-1:0]    e2 = se2[sec];
+            // CHANNELS > 1: the state of the (channel, section) being computed is always in slot 0: S_UPD
+            // rotates the slots (slot i takes slot i + 1, the updated state goes to the tail), so after
+            // the CHANNELS * SECTIONS sections of a sample every state is back in place (no read
+            // multiplexer over the channels). CHANNELS = 1: the slots indexed by the section, as before
+            // (fewer LUTs there than the rotation).
+            wire [SL_W-1:0] rd_slot = (CHANNELS == 1) ? slot : {SL_W{1'b0}};
+            wire [SL_W-1:0] wr_slot = (CHANNELS == 1) ? slot : TAIL_S;
+            wire signed [DATA_W-1:0] x1 = sx1[rd_slot];
+            wire signed [DATA_W-1:0] x2 = sx2[rd_slot];
+            wire signed [DATA_W-1:0] y1 = sy1[rd_slot];
+            wire signed [DATA_W-1:0] y2 = sy2[rd_slot];
+            wire signed [E_W-1:0]    e1 = se1[rd_slot];
+            wire signed [E_W-1:0]    e2 = se2[rd_slot];
             wire signed [MA_W-1:0] ca  = {{(MA_W-COEF_W+1){coef_q[COEF_W-1]}}, coef_q[COEF_W-2:0]};
             wire signed [MA_W-1:0] e1a = {{(MA_W-E_W+1){e1[E_W-1]}}, e1[E_W-2:0]};
             wire signed [MA_W-1:0] e2a = {{(MA_W-E_W+1){e2[E_W-1]}}, e2[E_W-2:0]};
@@ -279,10 +345,10 @@ module iir #(
             wire signed [AW-1:0] res = sum - (r_x <<< OUT_SHIFT);
             /* verilator lint_on UNUSEDSIGNAL */
             wire signed [E_W-1:0] e_c = ovf_q ? {E_W{1'b0}} : res_q;
-            reg [SECTIONS-1:0] ovf_n;   // the flags with this section's
+            reg [SLOTS-1:0] ovf_n;      // the flags with this section's
             always @* begin
                 ovf_n = ovf_w;
-                ovf_n[sec] = ovf_q;
+                ovf_n[slot] = ovf_q;
             end
 
             // fit and error of r_q, registered every cycle: r_q holds from S_ROUND to S_UPD, so in
@@ -296,10 +362,11 @@ module iir #(
             integer i;
             always @(posedge clk) begin
                 if (rst) begin
-                    st <= S_IDLE; sec <= {SEC_W{1'b0}}; k <= K_B0; rk <= K_B0; lo_go <= 1'b0; hi_go <= 1'b0;
-                    ra <= {RA_W{1'b0}}; rom_ok <= 1'b0; ovf_w <= {SECTIONS{1'b0}};
-                    out_valid <= 1'b0; y <= {DATA_W{1'b0}}; ovf <= {SECTIONS{1'b0}};
-                    for (i = 0; i < SECTIONS; i = i + 1) begin
+                    st <= S_IDLE; sec <= {SEC_W{1'b0}}; ch <= {CH_W{1'b0}}; k <= K_B0; rk <= K_B0;
+                    lo_go <= 1'b0; hi_go <= 1'b0;
+                    ra <= {RA_W{1'b0}}; rom_ok <= 1'b0; ovf_w <= {SLOTS{1'b0}};
+                    out_valid <= 1'b0; y <= {(CHANNELS*DATA_W){1'b0}}; ovf <= {SLOTS{1'b0}};
+                    for (i = 0; i < SLOTS; i = i + 1) begin
                         sx1[i] <= {DATA_W{1'b0}}; sx2[i] <= {DATA_W{1'b0}};
                         sy1[i] <= {DATA_W{1'b0}}; sy2[i] <= {DATA_W{1'b0}};
                         se1[i] <= {E_W{1'b0}};    se2[i] <= {E_W{1'b0}};
@@ -328,7 +395,7 @@ module iir #(
                     if (hi_go) sum_hi <= hi_n;
                     case (st)
                         S_IDLE: if (in_valid) begin
-                            v <= x; sec <= {SEC_W{1'b0}}; k <= K_B0; st <= S_MAC;
+                            v <= x_first; sec <= {SEC_W{1'b0}}; ch <= {CH_W{1'b0}}; k <= K_B0; st <= S_MAC;
                         end
                         S_MAC: if (mac_valid && rk == K_C2) st <= S_LO;
                         S_LO: st <= S_HI;
@@ -338,13 +405,23 @@ module iir #(
                         end
                         S_FIT: st <= S_UPD;
                         default: begin   // S_UPD: the section's output and its state update
-                            sx1[sec] <= v;     sx2[sec] <= x1;
-                            sy1[sec] <= out_q; sy2[sec] <= y1;
-                            se1[sec] <= e_c;   se2[sec] <= e1;
+                            for (i = 0; i < ROT; i = i + 1) begin    // rotate: the next section's state to slot 0
+                                sx1[i] <= sx1[i+1]; sx2[i] <= sx2[i+1];
+                                sy1[i] <= sy1[i+1]; sy2[i] <= sy2[i+1];
+                                se1[i] <= se1[i+1]; se2[i] <= se2[i+1];
+                            end
+                            sx1[wr_slot] <= v;     sx2[wr_slot] <= x1;
+                            sy1[wr_slot] <= out_q; sy2[wr_slot] <= y1;
+                            se1[wr_slot] <= e_c;   se2[wr_slot] <= e1;
                             v <= out_q;
-                            ovf_w[sec] <= ovf_q;
-                            if (sec == SEC_LAST) begin
-                                st <= S_IDLE; out_valid <= 1'b1; y <= out_q; ovf <= ovf_n;
+                            ovf_w[slot] <= ovf_q;
+                            for (i = 0; i < CHANNELS; i = i + 1)   // the channel's output (constant slices)
+                                if (ch_done && (CHANNELS == 1 || ch_n == i)) y[i*DATA_W +: DATA_W] <= out_q;
+                            if (all_done) begin
+                                st <= S_IDLE; out_valid <= 1'b1; ovf <= ovf_n;
+                            end else if (ch_done) begin   // the next channel, from its section 0
+                                v <= x_next; sec <= {SEC_W{1'b0}}; ch <= ch + {{(CH_W-1){1'b0}}, 1'b1};
+                                k <= K_B0; st <= S_MAC;
                             end else begin
                                 sec <= sec + {{(SEC_W-1){1'b0}}, 1'b1}; k <= K_B0; st <= S_MAC;
                             end

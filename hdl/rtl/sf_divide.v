@@ -7,9 +7,17 @@
 // Division by zero: full scale with the sign of x (0 for x = 0), flagged in ovf[1] when x != 0;
 // ovf[0] flags the output fit.
 // Interface: valid/ready. A sample is taken when in_valid && in_ready; in_ready is low while
-// the divider works. Latency: ceil((IN_W + NUM_SHIFT) / UNROLL) + 1 cycles from acceptance to
-// out_valid; a new sample may be accepted in the cycle out_valid is high (one sample per
-// latency cycles).
+// the divider works.
+// ARCH = 0: the sign, rounding and fit of the quotient in the cycle of the last division step.
+//   Latency: ceil((IN_W + NUM_SHIFT) / UNROLL) + 1 cycles from acceptance to out_valid; a new
+//   sample may be accepted in the cycle out_valid is high (one sample per latency cycles).
+// ARCH = 1: the same bits, the output path pipelined for 40 MHz on an iCE40UP5K (in ARCH = 0 the
+//   last restoring step, the NW-bit negation, the rounding adder and the fit are one path: 18.5
+//   MHz): after the last step (quotient and sign held in nq, neg), q_s = sign * q is computed
+//   in two registered halves (the low half's carry registered between), then fx_convert_pipe
+//   rounds (one cycle) and fits (one cycle), then the output register. Latency:
+//   ceil((IN_W + NUM_SHIFT) / UNROLL) + 6 cycles; in_ready is high again in the out_valid cycle
+//   (one sample per latency cycles, as ARCH = 0).
 `default_nettype none
 
 module sf_divide #(
@@ -21,7 +29,8 @@ module sf_divide #(
     parameter integer OUT_SHIFT = 3,
     parameter integer ROUNDING  = 0,
     parameter integer OVERFLOW  = 1,
-    parameter integer UNROLL    = 1
+    parameter integer UNROLL    = 1,
+    parameter integer ARCH      = 0    // 0: output in the last step's cycle; 1: output path pipelined
 ) (
     input  wire             clk,
     input  wire             rst,
@@ -44,7 +53,8 @@ module sf_divide #(
     reg [DW-1:0]     dmag;
     reg              neg, xneg, xzero, dzero;
 
-    assign in_ready = ~busy;
+    wire             fin;       // ARCH 1: the output path holds a quotient (until out_valid)
+    assign in_ready = ~busy & ~fin;
 
     // ---- operand magnitudes at acceptance ----
     wire [IN_W:0]  xext = {x[IN_W-1], x};
@@ -83,24 +93,20 @@ module sf_divide #(
     end
 
     // ---- sign, rounding and fit of the finished quotient ----
-    wire signed [NW:0] qs = neg ? -$signed({1'b0, nq_v}) : $signed({1'b0, nq_v});
-    wire [OUT_W-1:0] y_c;
-    wire             o_c;
-    fx_convert #(.IN_W(NW+1), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(OUT_W), .OUT_SIGNED(1),
-                 .OVERFLOW(OVERFLOW)) u_out (.x(qs), .y(y_c), .ovf(o_c));
     wire [OUT_W-1:0] full_pos = {1'b0, {(OUT_W-1){1'b1}}};
     wire [OUT_W-1:0] full_neg = {1'b1, {(OUT_W-1){1'b0}}};
+    wire             last = busy & (c_v == {CW{1'b0}});   // the last restoring step is this cycle
+    // the result of a division by zero (its own value, no rounding): full scale with the sign of x
+    wire [OUT_W-1:0] y_zero = xzero ? {OUT_W{1'b0}} : (xneg ? full_neg : full_pos);
 
     always @(posedge clk) begin
         if (rst) begin
             busy <= 1'b0; cnt <= {CW{1'b0}};
-            out_valid <= 1'b0; y <= {OUT_W{1'b0}}; ovf <= 2'b00;
             nq <= {NW{1'b0}}; rem <= {DW{1'b0}}; dmag <= {DW{1'b0}};
             neg <= 1'b0; xneg <= 1'b0; xzero <= 1'b0; dzero <= 1'b0;
         end else begin
-            out_valid <= 1'b0;
             if (!busy) begin
-                if (in_valid) begin
+                if (in_valid && in_ready) begin
                     busy  <= 1'b1;
                     cnt   <= NW[CW-1:0];
                     nq    <= nabs[NW-1:0];
@@ -115,20 +121,79 @@ module sf_divide #(
                 rem <= r_v;
                 nq  <= nq_v;
                 cnt <= c_v;
-                if (c_v == {CW{1'b0}}) begin
-                    busy      <= 1'b0;
-                    out_valid <= 1'b1;
-                if (dzero) begin
-                        y   <= xzero ? {OUT_W{1'b0}} : (xneg ? full_neg : full_pos);
-                        ovf <= {~xzero, 1'b0};
-                    end else begin
-                        y   <= y_c;
-                        ovf <= {1'b0, o_c};
+                if (last) busy <= 1'b0;
+            end
+        end
+    end
+
+    generate
+        if (ARCH == 0) begin : g_comb
+            wire signed [NW:0] qs = neg ? -$signed({1'b0, nq_v}) : $signed({1'b0, nq_v});
+            wire [OUT_W-1:0] y_c;
+            wire             o_c;
+            fx_convert #(.IN_W(NW+1), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(OUT_W), .OUT_SIGNED(1),
+                         .OVERFLOW(OVERFLOW)) u_out (.x(qs), .y(y_c), .ovf(o_c));
+            assign fin = 1'b0;
+            always @(posedge clk) begin
+                if (rst) begin
+                    out_valid <= 1'b0; y <= {OUT_W{1'b0}}; ovf <= 2'b00;
+                end else begin
+                    out_valid <= last;
+                    if (last) begin
+                        y   <= dzero ? y_zero : y_c;
+                        ovf <= dzero ? {~xzero, 1'b0} : {1'b0, o_c};
+                    end
+                end
+            end
+        end else begin : g_pipe
+            // after the last step nq and neg hold the quotient and its sign (fin keeps in_ready low);
+            // stages 1, 2: q_s = sign * q = (q ^ sign) + sign in two halves, the low half's carry
+            // registered between them (no NW-bit carry chain: it held this path to 37 MHz);
+            // 3, 4: fx_convert_pipe (round, then fit); 5: the output register (with the
+            // division-by-zero value)
+            localparam integer QW = NW + 1;                  // q_s: the magnitude with a sign bit
+            localparam integer LO = QW / 2;
+            localparam integer HI = QW - LO;
+            wire [QW-1:0]      q_x = {1'b0, nq} ^ {QW{neg}};  // q, or its ones' complement
+            wire [HI-1:0]      q_x_hi;
+            wire [LO-1:0]      q_x_lo;
+            assign {q_x_hi, q_x_lo} = q_x;                 // its two halves (no bit dropped)
+            reg  [LO-1:0]      s_lo;
+            reg  [HI-1:0]      x_hi;                      // the high half of q_x, for stage 2
+            reg                s_c;                       // carry out of the low half
+            reg                q_v, h_v, fin_r;
+            reg signed [NW:0]  q_s;
+            reg                s_v;
+            wire               c_v2;
+            wire [OUT_W-1:0]   y_c;
+            wire               o_c;
+            assign fin = fin_r;
+            fx_convert_pipe #(.IN_W(NW+1), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(OUT_W),
+                              .OUT_SIGNED(1), .OVERFLOW(OVERFLOW)) u_out
+                (.clk(clk), .rst(rst), .in_valid(s_v), .x(q_s), .out_valid(c_v2), .y(y_c), .ovf(o_c));
+            always @(posedge clk) begin
+                if (q_v) begin {s_c, s_lo} <= {1'b0, q_x_lo} + {{LO{1'b0}}, neg}; x_hi <= q_x_hi; end
+                if (h_v) q_s <= {x_hi + {{(HI-1){1'b0}}, s_c}, s_lo};
+            end
+            always @(posedge clk) begin
+                if (rst) begin
+                    q_v <= 1'b0; h_v <= 1'b0; s_v <= 1'b0; fin_r <= 1'b0;
+                    out_valid <= 1'b0; y <= {OUT_W{1'b0}}; ovf <= 2'b00;
+                end else begin
+                    q_v <= last;
+                    h_v <= q_v;
+                    s_v <= h_v;
+                    out_valid <= c_v2;
+                    if (last) fin_r <= 1'b1;
+                    else if (c_v2) fin_r <= 1'b0;
+                    if (c_v2) begin
+                        y   <= dzero ? y_zero : y_c;
+                        ovf <= dzero ? {~xzero, 1'b0} : {1'b0, o_c};
                     end
                 end
             end
         end
-    end
+    endgenerate
 endmodule
 
 `default_nettype wire

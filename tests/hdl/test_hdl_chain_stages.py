@@ -76,6 +76,15 @@ def test_chain_with_stages_matches_the_model_on_the_rtl(designs, baseline, key):
     run_cocotb(d, CHAIN, [segment(d, CHAIN, stimulus(d))], f"stages_{key}", extra_params=EXTRA)
 
 
+@pytest.mark.hdl
+def test_serial_chain_with_both_stages_matches_the_model_on_the_rtl(designs):
+    """ARCH = 1 with the lag and the trim (the serial lag's update and held samples at DECIM 5, the
+    serial demod's trimmed NCO): ~290 cycles per sample, so on Verilator (Icarus would take minutes)."""
+    d = designs["both"]
+    run_cocotb(d, CHAIN, [segment(d, CHAIN, stimulus(d))], "stages_both_serial", extra_params={**EXTRA, "ARCH": 1},
+               sim="verilator")
+
+
 # single-point RTL mutations of the stages, each with the config whose check must catch it
 MUTATIONS = {
     "lag_bypassed": ("chain_paper002.v", "assign ce_w  = te_w;", "assign ce_w  = t_w;", "lag"),
@@ -112,3 +121,5 @@ def test_chain_with_the_lag_lints_clean(designs):
     assert ".DECIM(5)" in (d / "lag_params.vh").read_text()
     assert lint_iverilog(CHAIN, include=d) == ""
     assert lint_verilator(CHAIN, include=d) == ""
+    assert lint_iverilog(CHAIN, {"ARCH": 1}, include=d) == ""   # the serial chain with the serial lag
+    assert lint_verilator(CHAIN, {"ARCH": 1}, include=d) == ""

@@ -24,11 +24,20 @@ VARIANTS = [
     ("iir", {"ARCH": 1, "SECTIONS": 3, "ROUNDING": 3, "OVERFLOW": 0}),
     ("iir", {"ARCH": 1, "DATA_W": 16, "COEF_W": 16, "OUT_SHIFT": 14, "ACC_W": 34}),  # one-limb operands
     ("iir", {"ARCH": 1, "COEF_W": 20, "ACC_W": 50}),  # MAC product wider than the accumulator
+    ("iir", {"ARCH": 1, "CHANNELS": 2}),  # the serial demod's two-channel low-pass engine
+    ("iir", {"ARCH": 1, "CHANNELS": 3, "SECTIONS": 2, "ROUNDING": 2, "OVERFLOW": 0}),
     ("fx_mac_serial", {"A_W": 39, "B_W": 24}),
     ("fx_mac_serial", {"A_W": 2, "B_W": 17}),
     ("sf_divide", {"UNROLL": 7, "SF_SIGNED": 1, "ROUNDING": 2}),
     ("sf_divide", {"UNROLL": 42, "OUT_SHIFT": -2}),
+    ("sf_divide", {"ARCH": 1, "SF_SIGNED": 1, "ROUNDING": 2}),
+    ("sf_divide", {"ARCH": 1, "UNROLL": 42, "OUT_SHIFT": -2, "OVERFLOW": 0}),
     ("demod", {"LPF_SECTIONS": 2, "ITERATIONS": 8, "ROUNDING": 0}),
+    # serial demod (ARCH = 1)
+    ("demod", {"ARCH": 1}),
+    ("demod", {"ARCH": 1, "LPF_SECTIONS": 2, "ITERATIONS": 8, "ROUNDING": 0}),
+    ("demod", {"ARCH": 1, "ROUNDING": 3, "OVERFLOW": 0, "LPF_ROUNDING": 3, "LPF_OVERFLOW": 0}),  # toward_zero / wrap
+    ("demod", {"ARCH": 1, "INTERP_BITS": 0, "IN_W": 30, "ITERATIONS": 5}),  # plain table, x wider than the CORDIC
     ("fx_convert", {"SHIFT": -3, "OUT_SIGNED": 0, "OVERFLOW": 0}),
     ("fx_round", {"SHIFT": 40, "ROUNDING": 3}),
     ("lag", {"GUARD": 0, "STATE_W": 19, "ROUNDING": 3, "OVERFLOW": 0}),
@@ -55,6 +64,8 @@ VARIANTS = [
     ("freq2temp", {"ARCH": 1}),
     ("freq2temp", {"ARCH": 1, "FREQ_W": 15, "KINV_W": 16, "SHIFT": 4, "ROUNDING": 3, "OVERFLOW": 0}),
     ("chain_paper001", {"ARCH": 1}),
+    ("chain_paper002", {"ARCH": 1}),
+    ("chain_paper002", {"ARCH": 1, "DIV_UNROLL": 48}),   # the divider faster than the bias engine
 ]
 
 
