@@ -263,11 +263,16 @@ def planned_rows(design, targets: list[str]) -> dict[str, tuple[str, str, dict[s
     return rows
 
 
+def _digest(design, files: dict[str, str], plan: tuple, freq: float) -> str:
+    """:func:`row_hash` of one planned row (an entry of :func:`planned_rows`)."""
+    name, module, params, extra = plan
+    return row_hash(module, params, files, recipe(design, name, params, bool(extra), freq))
+
+
 def expected_row_hashes(design, freq: float) -> dict[str, str]:
     """Row name -> :func:`row_hash` of every row a full report of ``design`` holds, as of now."""
     files = generate(design)
-    return {row: row_hash(module, params, files, recipe(design, name, params, bool(extra), freq))
-            for row, (name, module, params, extra) in planned_rows(design, list(design.instances)).items()}
+    return {row: _digest(design, files, plan, freq) for row, plan in planned_rows(design, list(design.instances)).items()}
 
 
 def run(args) -> int:
@@ -291,11 +296,12 @@ def run(args) -> int:
         for rel, text in files.items():
             (work / rel).write_text(text)
         digest = source_hash(design, files)  # what is synthesised: the RTL and these files, as read now
-        for row_name, (name, module, params, extra) in planned_rows(design, targets).items():
+        for row_name, plan in planned_rows(design, targets).items():
+            name, module, params, extra = plan
             tag = re.sub(r"\W+", "_", row_name).strip("_")
             t0 = time.perf_counter()
             chparam = _chparam(module, params)
-            digest_row = row_hash(module, params, files, recipe(design, name, params, bool(extra), args.freq))
+            digest_row = _digest(design, files, plan, args.freq)
             if digest_row in reuse:
                 rows.append({**reuse[digest_row], "name": row_name, "module": module})
                 print(f"{row_name}: unchanged, taken from the previous report", file=sys.stderr)

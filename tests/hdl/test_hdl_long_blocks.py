@@ -73,7 +73,7 @@ def _chain_paper001_cycles_per_sample(_p: dict) -> int:
 
 def _demod_cycles_per_sample(p: dict) -> int:
     """The demod's edges from its accepting edge to its successor's (hdl/rtl/demod.v; for a serial
-    block with one sample in flight, its cycles per sample). ARCH = 1 (serial): 6 N + 28 + ITERATIONS
+    block with one sample in flight, its cycles per sample). ARCH = 1 (serial): 6 N + 29 + 2 ITERATIONS
     + F, N the limb products of its shared MAC (a: max(DW, XW) bits, DW = INTERP_BITS + TWO_PI_W + 3,
     XW = max(IN_W, DATA_W + 3); b: max(TWO_PI_W + 1, NCO_W, INV_K_W + max(0, MIX_SHIFT - AMP_SHIFT))
     bits), F = 2 LPF_SECTIONS (7 M + 10) the two-channel serial iir's cycles (M its limb products);
@@ -86,24 +86,20 @@ def _demod_cycles_per_sample(p: dict) -> int:
     return 6 * n + 29 + 2 * p["ITERATIONS"] + 2 * p["LPF_SECTIONS"] * (7 * m + 10)
 
 
-def _sf_divide_cycles(p: dict, unroll: int = 1, arch: int = 0) -> int:
-    """The divider's edges from its accepting edge to its successor's (hdl/rtl/sf_divide.v): its
-    latency ceil((IN_W + NUM_SHIFT) / UNROLL) + 1, + 5 with the output path pipelined (ARCH = 1)."""
-    return -(-(p["IN_W"] + p["NUM_SHIFT"]) // unroll) + 1 + 5 * arch
+def _sf_divide_cycles_per_sample(p: dict) -> int:
+    """The pipelined divider (ARCH = 1, hdl/rtl/sf_divide.v) at UNROLL = 1, from its accepting edge to
+    its successor's: its latency IN_W + NUM_SHIFT + 6."""
+    return p["IN_W"] + p["NUM_SHIFT"] + 6
 
 
-def _sf_divide_serial_cycles_per_sample(p: dict) -> int:
-    return _sf_divide_cycles(p, 1, arch=1)
-
-
-def _chain_paper002_cycles_per_sample(_p: dict, unroll: int = 1) -> int:
+def _chain_paper002_cycles_per_sample(_p: dict) -> int:
     """hdl/rtl/chain_paper002.v, ARCH = 1 (LAG_EN = 0, the default config): rtd's cycles + piecewise_sf's
     + max(the divider's + demod's, piecewise_bias's) (the bias engine runs during the division) + 3
     (the join into registers, the subtraction, the output register) + the iir's."""
     d = default_design()
     par = lambda n: hp.instance(d, n).params  # noqa: E731
     return (_rtd_cycles_per_sample(par("rtd")) + _piecewise_cycles_per_sample(par("piecewise_sf"))
-            + max(_sf_divide_cycles(par("sf_divide"), unroll, arch=1) + _demod_cycles_per_sample(par("demod")),
+            + max(_sf_divide_cycles_per_sample(par("sf_divide")) + _demod_cycles_per_sample(par("demod")),
                   _piecewise_cycles_per_sample(par("piecewise_bias")))
             + 3 + _iir_cycles_per_sample(par("iir")))
 
@@ -111,7 +107,7 @@ def _chain_paper002_cycles_per_sample(_p: dict, unroll: int = 1) -> int:
 SCHEDULES = {"iir": _iir_cycles_per_sample, "rtd": _rtd_cycles_per_sample, "lag": _lag_cycles_per_sample,
              "piecewise_sf": _piecewise_cycles_per_sample, "piecewise_k0": _piecewise_cycles_per_sample,
              "freq2temp": _freq2temp_cycles_per_sample, "chain_paper001": _chain_paper001_cycles_per_sample,
-             "demod": _demod_cycles_per_sample, "sf_divide": _sf_divide_serial_cycles_per_sample,
+             "demod": _demod_cycles_per_sample, "sf_divide": _sf_divide_cycles_per_sample,
              "chain_paper002": _chain_paper002_cycles_per_sample}
 
 
