@@ -9,6 +9,12 @@ samples are still in flight: the outputs seen until then must be a prefix of the
 own ``gap``); 0 is back to back.
 Outputs are sampled on out_valid at each rising edge; for valid/ready DUTs a sample counts as
 accepted only when in_ready was high at the edge.
+A busy valid/ready DUT (a serial one spends hundreds of cycles per sample) is not stepped edge by
+edge from Python: after an edge with in_ready low, if neither in_ready nor out_valid is high
+after it, the driver holds its inputs (valid or, in a gapped segment by the same draw as any
+cycle, idle) and sleeps until one of them rises, resuming at the following edge, the first at
+which the DUT can take or give a sample. Nothing the DUT does at the skipped edges is observable
+at its ports, so the comparison is the same. Cycles are counted from simulation time.
 """
 
 from __future__ import annotations
@@ -20,7 +26,11 @@ import time
 
 import cocotb
 from cocotb.clock import Clock
-from cocotb.triggers import RisingEdge
+from cocotb.triggers import First, ReadOnly, RisingEdge, Timer
+from cocotb.utils import get_sim_time
+
+PERIOD_NS = 10
+IDLE_LIMIT = 500   # cycles without an output once everything is fed: a hung DUT
 
 
 def _u(handle) -> int:
@@ -32,6 +42,27 @@ def _popcount(v: int) -> int:
     return bin(v).count("1")
 
 
+async def _sleep_while_busy(dut, ins, in_h, seg, idx, drive: bool) -> bool:
+    """Set the next cycle's inputs, then sleep until the edge before which in_ready or out_valid is high.
+
+    Called right after an edge (before the DUT's registers update). The next cycle's inputs (the
+    sample at idx if ``drive``, else in_valid low; a gapped segment draws ``drive`` as for any
+    cycle) are held over the whole busy stretch, so the caller must not set them again; ReadOnly
+    then shows the ports the next edge will sample. If neither handshake signal is high, wait for
+    one to rise (or IDLE_LIMIT cycles: the caller's timeout) and return before the edge that
+    samples it, where the caller resumes. Returns whether in_valid is driven.
+    """
+    if drive:
+        for p in ins:
+            in_h[p].value = seg["inputs"][p][idx]
+    dut.in_valid.value = int(drive)
+    await ReadOnly()
+    if int(dut.in_ready.value) == 0 and int(dut.out_valid.value) == 0:
+        await First(RisingEdge(dut.in_ready), RisingEdge(dut.out_valid),
+                    Timer(IDLE_LIMIT * PERIOD_NS + PERIOD_NS // 2, unit="ns"))
+    return drive
+
+
 @cocotb.test()
 async def stream(dut):
     with open(os.environ["FXDSP_SPEC"]) as f:
@@ -41,9 +72,9 @@ async def stream(dut):
     ignore = int(spec.get("ovf_ignore", 0))
     in_h = {p: getattr(dut, p) for p in ins}
     out_h = {p: getattr(dut, p) for p in outs}
-    cocotb.start_soon(Clock(dut.clk, 10, unit="ns").start())
+    cocotb.start_soon(Clock(dut.clk, PERIOD_NS, unit="ns").start())
     t0 = time.perf_counter()
-    cycles = 0
+    sim0 = get_sim_time(unit="ns")
     errors: list[str] = []
     for s_i, seg in enumerate(spec["segments"]):
         dut.in_valid.value = 0
@@ -61,10 +92,13 @@ async def stream(dut):
         ovf_seen = 0
         idx = 0
         driving = False
-        idle = 0
+        last_progress = get_sim_time(unit="ns")  # the last take or output: a hung DUT times out
+        resume = False  # the inputs of this cycle were set while sleeping through a busy stretch
         while True:
             # drive this cycle
-            if idx < n_feed and rng.random() >= seg_gap:
+            if resume:
+                resume = False
+            elif idx < n_feed and rng.random() >= seg_gap:
                 for p in ins:
                     in_h[p].value = seg["inputs"][p][idx]
                 dut.in_valid.value = 1
@@ -73,23 +107,30 @@ async def stream(dut):
                 dut.in_valid.value = 0
                 driving = False
             await RisingEdge(dut.clk)
-            cycles += 1
             # what happened at this edge
-            if driving and (not ready or int(dut.in_ready.value) == 1):
+            taken = driving and (not ready or int(dut.in_ready.value) == 1)
+            now = get_sim_time(unit="ns")
+            if taken:
                 idx += 1
+                last_progress = now
             if int(dut.out_valid.value) == 1:
                 for p in outs:
                     got[p].append(_u(out_h[p]))
                 ovf_seen += _popcount(_u(dut.ovf) & ~ignore)
+                last_progress = now
             if "abort_after" in seg:
                 if idx >= n_feed:
                     break  # reset with samples in flight
             elif len(got[outs[0]]) >= n:
                 break
-            idle = idle + 1 if idx >= n_feed else 0
-            if idle > 500:
+            if now - last_progress > IDLE_LIMIT * PERIOD_NS:
                 errors.append(f"segment {s_i}: timeout, {len(got[outs[0]])} of {n} outputs")
                 break
+            # busy before this edge (in_ready low): most likely busy for many more
+            if ready and int(dut.in_ready.value) == 0:
+                drive = idx < n_feed and rng.random() >= seg_gap
+                driving = await _sleep_while_busy(dut, ins, in_h, seg, idx, drive)
+                resume = True
         for p in outs:
             want = exp[p][: len(got[p])] if "abort_after" in seg else exp[p]
             if len(got[p]) != len(want):
@@ -102,6 +143,7 @@ async def stream(dut):
         if seg.get("ovf_total") is not None and "abort_after" not in seg and ovf_seen != seg["ovf_total"]:
             errors.append(f"segment {s_i}: {ovf_seen} overflow flags, model counted {seg['ovf_total']}")
     seconds = time.perf_counter() - t0
+    cycles = round((get_sim_time(unit="ns") - sim0) / PERIOD_NS)
     with open(spec["summary"], "w") as f:
         json.dump({"cycles": cycles, "seconds": seconds, "errors": errors}, f)
     for e in errors[:20]:

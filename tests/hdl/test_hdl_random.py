@@ -9,7 +9,7 @@ import zlib
 
 import pytest
 
-from hdl_util import ICARUS_PREFIX, SERIAL, design_of, run_cocotb, segment
+from hdl_util import SERIAL, design_of, icarus_samples, icarus_window, run_cocotb, segment
 
 from fxdsp.sweep.rtl import BLOCKS, EXTRA, random_stimulus  # the sweep's RTL shards draw the same way
 
@@ -87,7 +87,6 @@ def test_random_parameter_set_serial(pset, name):
     """The serial variants on the same draws (half_even_narrow: two sections in the schedule)."""
     d = design(pset)
     stim = random_stimulus(d, name, seed=zlib.crc32(f"{pset}:{name}".encode()))
-    if name in ICARUS_PREFIX:  # hundreds of cycles per sample on Icarus: a prefix (the model run on it)
-        stim = {p: v[:ICARUS_PREFIX[name]] for p, v in stim.items()}
+    stim = icarus_window(stim, icarus_samples(name))  # on Icarus (hdl_util.ICARUS_SERIAL_SAMPLES); the model runs on it
     run_cocotb(d, name, [segment(d, name, stim)], f"random_{pset}_{name}_serial", gap=0.25, seed=7,
                extra_params={**EXTRA.get(name, {}), **SERIAL[name]})

@@ -4,13 +4,14 @@ that does not compile is an error of the harness, not a kill."""
 import pytest
 
 from hdl_util import require_iverilog
-from mutation import MUTATIONS, MutantBroken, Mutation, run, table
+from mutation import MUTATIONS, PER_CLOCK_MUTATIONS, MutantBroken, Mutation, run, table
 
 
 @pytest.mark.hdl
 def test_every_mutation_is_caught():
+    """The one-sample-per-clock RTL's mutants (test_mutation_serial.py runs the serial schedulers')."""
     require_iverilog()
-    rows = run()
+    rows = run(PER_CLOCK_MUTATIONS)
     print("\n" + table(rows))
     assert not rows[0]["caught"], f"unmutated RTL fails: {rows[0]['evidence']}"
     survivors = [r["mutation"] for r in rows[1:] if not r["caught"]]
