@@ -66,7 +66,7 @@ module chain_paper002 #(
     // (the widest products of the default config, the iir's and the demod filters' 39-bit coefficient
     // or error x 24-bit data, need them); a block whose operands exceed them stops the elaboration
     , parameter integer MAC_A_W = 48
-    , parameter integer MAC_B_W = 32
+    , parameter integer MAC_B_W = 32   // (see MAC_A_W)
 ) (
     input  wire              clk,
     input  wire              rst,

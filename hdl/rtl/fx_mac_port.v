@@ -21,7 +21,7 @@ module fx_mac_port #(
     parameter integer VAR_N   = 0,    // 1: the caller gives the limb counts na, nb per product
     parameter integer EXT_MAC = 0,    // 0: own fx_mac_serial; 1: the external multiplier on the bundle
     parameter integer MAC_A_W = 48,   // EXT_MAC = 1: the bundle's operand widths (>= A_W, B_W)
-    parameter integer MAC_B_W = 32
+    parameter integer MAC_B_W = 32    // (3 x 2 limbs by default)
 ) (
     input  wire                          clk,
     input  wire                          rst,

@@ -56,7 +56,7 @@ module iir #(
     parameter integer CHANNELS  = 1,     // signals through the engine (> 1: ARCH = 1 only)
     parameter integer EXT_MAC   = 0,     // ARCH = 1: 0 its own fx_mac_serial; 1 the external one on mac_* (fx_mac_port)
     parameter integer MAC_A_W   = 48,    // EXT_MAC = 1: the external multiplier's operand widths (>= MA_W, MB_W)
-    parameter integer MAC_B_W   = 32,
+    parameter integer MAC_B_W   = 32,    // (a: MAC_A_W bits, b: MAC_B_W bits; 3 x 2 limbs by default)
     parameter         COEF_FILE = "iir_coef.hex"
 ) (
     input  wire                         clk,

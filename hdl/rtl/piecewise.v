@@ -55,7 +55,7 @@ module piecewise #(
     parameter integer ARCH       = 0,     // 0: one sample per cycle; 1: serial, one shared multiplier
     parameter integer EXT_MAC    = 0,     // ARCH = 1: 0 its own fx_mac_serial; 1 the external one on mac_* (fx_mac_port)
     parameter integer MAC_A_W    = 48,    // EXT_MAC = 1: the external multiplier's operand widths (>= ACC_W, T_W + 1)
-    parameter integer MAC_B_W    = 32,
+    parameter integer MAC_B_W    = 32,    // (a: MAC_A_W bits, b: MAC_B_W bits; 3 x 2 limbs by default)
     parameter         COEF_FILE  = "piecewise_sf_coef.hex",
     parameter         BP_FILE    = "piecewise_sf_bp.hex"
 ) (

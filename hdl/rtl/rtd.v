@@ -42,7 +42,7 @@ module rtd #(
     parameter integer ARCH           = 0,              // 0: one sample per cycle; 1: serial, one shared multiplier
     parameter integer EXT_MAC        = 0,              // ARCH = 1: 0 its own fx_mac_serial; 1 the external one on mac_* (fx_mac_port)
     parameter integer MAC_A_W        = 48,             // EXT_MAC = 1: the external multiplier's operand widths (>= LUT_W + 1, ADC_W - LUT_INDEX_BITS + 1)
-    parameter integer MAC_B_W        = 32,
+    parameter integer MAC_B_W        = 32,             // (a: MAC_A_W bits, b: MAC_B_W bits; 3 x 2 limbs by default)
     parameter         LUT_FILE       = "rtd_lut.hex"   // $readmemh file of the 2**K + 1 LUT words
 ) (
     input  wire              clk,
