@@ -414,9 +414,10 @@ cycles per sample are in each module's header and in `hdl/README.md`. They give 
 the default RTL (same golden vectors, random sets, corners, long streams and mutants), and each
 places on the UP5K at >= 40 MHz. The paper 001 chain built from them meets its target (its target
 line above reads that row). The paper 002 chain built from them (`chain_paper002 (ARCH=1)`: 332
-cycles per sample, 6 SB_MAC16) is bit-exact but about twice the LUT4 budget, and its LUT4 plus
-flip-flops exceed the device's logic cells: six engines each carry their own `fx_mac_serial`
-(~200-290 LUT4 each), operand, state and pipeline registers. The way to the target is sharing
-across blocks, which one sample in flight makes possible (no two blocks compute at once): one
-MAC for every product of the chain, one iir engine for the demodulator's two channels and the
-output filter (same formats on the default config), state in block RAM rather than flip-flops."""
+cycles per sample) is bit-exact; one sample in flight means no two of its blocks compute at once,
+so its serial blocks share ONE `fx_mac_serial` (one SB_MAC16: rtd, both piecewise engines, the
+demodulator with its two-channel filter, the output iir; each keeps its own schedule), which took
+it from 6 SB_MAC16, 4645 LUT4 and 4447 FF to the row above. What remains over the LUT4 budget is
+the engines' own logic and their operand, state and pipeline registers: the next steps are one iir
+engine for the demodulator's two channels and the output filter (same formats on the default
+config) and state in block RAM rather than flip-flops."""

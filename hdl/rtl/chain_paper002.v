@@ -21,14 +21,20 @@
 //   out_valid (55 at DIV_UNROLL = 1 on the default config: 16 + 22 + 10 = 48 divider steps), one
 //   sample every latency + 1 cycles; SF and bias computed at once.
 // ARCH = 1: every block that has a serial variant in it, .ARCH(1): rtd, [lag,] piecewise_sf,
-//   piecewise_bias, iir (one fx_mac_serial, one SB_MAC16 each; the rtd LUT in block RAM), demod
-//   (.ARCH(ARCH)), sf_divide (iterative in both; ARCH = 1 pipelines its output path);
-//   bias_subtract is one registered stage. Each
+//   piecewise_bias, iir, demod (the rtd LUT and the demod's NCO table in block RAM), sf_divide
+//   (iterative in both; ARCH = 1 pipelines its output path); bias_subtract is one registered stage.
+//   ONE fx_mac_serial (one SB_MAC16, MAC_A_W x MAC_B_W operands, VAR_N = 1) serves rtd, both
+//   piecewise engines, demod (its own products and its low-pass filters') and iir: they run one
+//   after another, so each gets EXT_MAC = 1 and issues on its mac_* bundle (fx_mac_port) with its own
+//   limb counts, i.e. its own schedule; the requests (at most one at a time, a simulation check
+//   says so) select the operands, out_valid goes to the block that issued (own, set at the take).
+//   [The lag keeps its own multiplier.] Each
 //   block starts on its predecessor's out_valid pulse and holds its registered outputs until its
 //   next sample, so one sample in flight needs no buffering (every block is idle when its pulse
 //   comes: each one's in_ready is high again at most a cycle after its own out_valid, long before
 //   the chain's next sample reaches it); the demodulator alone, whose schedule is its own, gets a
-//   handshake: its start waits for its in_ready (the divider's quotient holds meanwhile).
+//   handshake: its start waits for its in_ready and for the bias engine's (idle: off the shared
+//   multiplier; the divider's quotient holds meanwhile).
 //   Schedule (D_x: edges from block x's accepting edge to its successor's, = its cycles per sample
 //   for the serial blocks (each header gives it; demod's too: 6 N + 29 + 2 ITERATIONS + 2
 //   LPF_SECTIONS (7 M + 10)), = ceil(NW / DIV_UNROLL) + 6 for the pipelined divider (ARCH = 1),
@@ -36,25 +42,31 @@
 //     rtd from the accepting edge; [lag on rtd's out_valid;] piecewise_sf on the temperature's
 //     out_valid; then, on SF's out_valid, sf_divide (vsa / SF; vsa registered at acceptance) and
 //     piecewise_bias (the temperature held by rtd / lag) at once: the two Horner engines never
-//     run together (ready for one shared MAC), the bias engine runs while the divider works (the
-//     divider has no multiplier); demod on the divider's out_valid (and its in_ready); the
+//     run together (one shared MAC), the bias engine runs while the divider works (the divider
+//     has no multiplier); demod on the later of the divider's out_valid and the bias engine's
+//     (the shared multiplier: demod's first product is issued without a wait) (and its in_ready); the
 //     subtraction I - bias one cycle after the later of demod's and the bias engine's out_valid
 //     (both registered: I into i_r, bias into b_r); iir on the subtraction's out_valid; out_valid
 //     one cycle after the iir's, busy cleared with it.
 //   Cycles per sample (accepting edge to the next sample's, back to back):
-//     D_rtd + [D_lag] + D_sf + max(D_div + D_demod, D_bias) + 3 + D_iir
-//   = (N_rtd + 10) + [(N_lag + 11)] + (ORDER_sf (N_sf + 10) + 7) + max(ceil(NW/DIV_UNROLL) + 6
-//     + D_demod, ORDER_b (N_b + 10) + 7) + 3 + (SECTIONS (7 N_iir + 10) + 1), the N the blocks'
-//     limb counts (their headers); with the serial demod the bias engine always finishes first;
-//   332 at the default config and DIV_UNROLL = 1: 12 + 21 + max(54 + 189, 21) + 3 + 53 (349 with
-//   the lag at DECIM = 1: + 17; 291 at DIV_UNROLL = 7), against 416 cycles per sample at 40 MHz
-//   and 96 kS/s.
+//     D_rtd + [D_lag] + D_sf + max(D_div, D_bias) + D_demod + 3 + D_iir
+//   = (N_rtd + 10) + [(N_lag + 11)] + (ORDER_sf (N_sf + 10) + 7) + max(ceil(NW/DIV_UNROLL) + 6,
+//     ORDER_b (N_b + 10) + 7) + D_demod + 3 + (SECTIONS (7 N_iir + 10) + 1), the N the blocks'
+//     limb counts (their headers);
+//   332 at the default config and DIV_UNROLL = 1: 12 + 21 + max(54, 21) + 189 + 3 + 53 (349 with
+//   the lag at DECIM = 1: + 17; 299 at DIV_UNROLL = 7, where the bias engine's 21 cycles outlast
+//   the divider's 13), against 416 cycles per sample at 40 MHz and 96 kS/s.
 `default_nettype none
 
 module chain_paper002 #(
 `include "chain_paper002_params.vh"
     , parameter integer DIV_UNROLL = 1
     , parameter integer ARCH = 0    // 0: one-sample-per-clock blocks; 1: their serial variants
+    // ARCH = 1: operand widths of the one multiplier the serial blocks share: 3 x 2 limbs of 16 bits
+    // (the widest products of the default config, the iir's and the demod filters' 39-bit coefficient
+    // or error x 24-bit data, need them); a block whose operands exceed them stops the elaboration
+    , parameter integer MAC_A_W = 48
+    , parameter integer MAC_B_W = 32   // (see MAC_A_W)
 ) (
     input  wire              clk,
     input  wire              rst,
@@ -71,6 +83,19 @@ module chain_paper002 #(
     assign in_ready = ~busy;
     wire accept = in_valid & ~busy;
 
+    // ---- the shared multiplier's bundle (fx_mac_port; ARCH = 1, below): each serial block's request,
+    // one reply. Users, bit i of own: 0 rtd, 1 piecewise_sf, 2 piecewise_bias, 3 demod (its own
+    // products and its low-pass filters'), 4 iir. ARCH = 0: no request, nothing replies.
+    localparam integer NU = 5;
+    localparam integer MAC_P_W = MAC_A_W + MAC_B_W;
+    wire               rt_req, sf_req, bi_req, dm_req, ir_req;
+    wire [MAC_A_W-1:0] rt_a, sf_a, bi_a, dm_a, ir_a;
+    wire [MAC_B_W-1:0] rt_b, sf_b, bi_b, dm_b, ir_b;
+    wire [3:0]         rt_na, sf_na, bi_na, dm_na, ir_na, rt_nb, sf_nb, bi_nb, dm_nb, ir_nb;
+    wire               sh_ready, sh_valid;
+    wire [MAC_P_W-1:0] sh_p;
+    reg  [NU-1:0]      own;      // who issued the product in the multiplier: its out_valid goes there
+
     reg [VSA_W-1:0] vsa_r;
 
     // ---- temperature ----
@@ -79,9 +104,11 @@ module chain_paper002 #(
     wire              ovf_rtd;
     rtd #(
 `include "rtd_params.vh"
-        , .ARCH(ARCH)
+        , .ARCH(ARCH), .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
     ) u_rtd (.clk(clk), .rst(rst), .in_valid(accept), .in_ready(), .code(rtd_code), .out_valid(t_v), .temp(t_w),
-             .ovf(ovf_rtd));
+             .ovf(ovf_rtd),
+             .mac_in_valid(rt_req), .mac_in_ready(sh_ready), .mac_a(rt_a), .mac_b(rt_b), .mac_na(rt_na),
+             .mac_nb(rt_nb), .mac_out_valid(sh_valid & own[0]), .mac_p(sh_p));
 
     // ---- the temperature the coefficient engines see: t_w, or the lag's te (generate below) ----
     wire              ce_v;
@@ -90,18 +117,24 @@ module chain_paper002 #(
     // ---- SF(T) and bias(T) ----
     wire                sf_v, b_v;
     wire                b_go;        // the bias engine's start: with SF (ARCH 0), after it (ARCH 1)
+    wire                b_ready;     // the bias engine is idle (ARCH 1: the demodulator may start)
     wire [SF_W-1:0]     sf_w;
     wire [BIAS_W-1:0]   b_w;
     wire [SF_OVF_W-1:0] ovf_sf;
     wire [B_OVF_W-1:0]  ovf_b;
     piecewise #(
 `include "piecewise_sf_params.vh"
-        , .ARCH(ARCH)
-    ) u_sf (.clk(clk), .rst(rst), .in_valid(ce_v), .in_ready(), .temp(ce_w), .out_valid(sf_v), .y(sf_w), .ovf(ovf_sf));
+        , .ARCH(ARCH), .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
+    ) u_sf (.clk(clk), .rst(rst), .in_valid(ce_v), .in_ready(), .temp(ce_w), .out_valid(sf_v), .y(sf_w), .ovf(ovf_sf),
+             .mac_in_valid(sf_req), .mac_in_ready(sh_ready), .mac_a(sf_a), .mac_b(sf_b), .mac_na(sf_na),
+             .mac_nb(sf_nb), .mac_out_valid(sh_valid & own[1]), .mac_p(sh_p));
     piecewise #(
 `include "piecewise_bias_params.vh"
-        , .ARCH(ARCH)
-    ) u_bias (.clk(clk), .rst(rst), .in_valid(b_go), .in_ready(), .temp(ce_w), .out_valid(b_v), .y(b_w), .ovf(ovf_b));
+        , .ARCH(ARCH), .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
+    ) u_bias (.clk(clk), .rst(rst), .in_valid(b_go), .in_ready(b_ready), .temp(ce_w), .out_valid(b_v), .y(b_w),
+              .ovf(ovf_b),
+             .mac_in_valid(bi_req), .mac_in_ready(sh_ready), .mac_a(bi_a), .mac_b(bi_b), .mac_na(bi_na),
+             .mac_nb(bi_nb), .mac_out_valid(sh_valid & own[2]), .mac_p(sh_p));
 
     // ---- sense / SF ----
     wire             d_v;
@@ -128,9 +161,11 @@ module chain_paper002 #(
     /* verilator lint_on UNUSEDSIGNAL */
     demod #(
 `include "demod_params.vh"
-        , .ARCH(ARCH)
+        , .ARCH(ARCH), .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
     ) u_demod (.clk(clk), .rst(rst), .in_valid(dm_go), .in_ready(dm_ready), .x(d_w), .out_valid(i_v), .i(i_w), .q(q_w),
-               .amp(amp_w), .phase(ph_w), .ovf(ovf_dm));
+               .amp(amp_w), .phase(ph_w), .ovf(ovf_dm),
+             .mac_in_valid(dm_req), .mac_in_ready(sh_ready), .mac_a(dm_a), .mac_b(dm_b), .mac_na(dm_na),
+             .mac_nb(dm_nb), .mac_out_valid(sh_valid & own[3]), .mac_p(sh_p));
 
     // ---- I - bias(T), final low-pass ----
     wire             s_v;
@@ -147,8 +182,10 @@ module chain_paper002 #(
     wire [IIR_OVF_W-1:0] ovf_iir;
     iir #(
 `include "iir_params.vh"
-        , .ARCH(ARCH)
-    ) u_iir (.clk(clk), .rst(rst), .in_valid(s_v), .in_ready(), .x(s_w), .out_valid(r_v), .y(r_w), .ovf(ovf_iir));
+        , .ARCH(ARCH), .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
+    ) u_iir (.clk(clk), .rst(rst), .in_valid(s_v), .in_ready(), .x(s_w), .out_valid(r_v), .y(r_w), .ovf(ovf_iir),
+             .mac_in_valid(ir_req), .mac_in_ready(sh_ready), .mac_a(ir_a), .mac_b(ir_b), .mac_na(ir_na),
+             .mac_nb(ir_nb), .mac_out_valid(sh_valid & own[4]), .mac_p(sh_p));
 
     // ---- per-sample registers (one sample in flight) ----
     reg [TEMP_W-1:0]   temp_r;
@@ -200,17 +237,64 @@ module chain_paper002 #(
             assign dm_go  = d_v;
             assign sub_go = i_v;
             assign sub_x  = i_w;
+            // no shared multiplier
+            assign sh_ready = 1'b0;
+            assign sh_valid = 1'b0;
+            assign sh_p = {MAC_P_W{1'b0}};
+            always @(posedge clk) own <= {NU{1'b0}};
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire unused_mac = rt_req ^ sf_req ^ bi_req ^ dm_req ^ ir_req ^ b_ready
+                              ^ (^rt_a) ^ (^sf_a) ^ (^bi_a) ^ (^dm_a) ^ (^ir_a) ^ (^rt_b) ^ (^sf_b) ^ (^bi_b) ^ (^dm_b)
+                              ^ (^ir_b) ^ (^rt_na) ^ (^sf_na) ^ (^bi_na) ^ (^dm_na) ^ (^ir_na) ^ (^rt_nb) ^ (^sf_nb)
+                              ^ (^bi_nb) ^ (^dm_nb) ^ (^ir_nb);
+            /* verilator lint_on UNUSEDSIGNAL */
         end else begin : g_ser
             // the bias engine after SF's (it runs during the division)
             assign b_go = sf_v;
-            // the demodulator: started on the divider's out_valid once its in_ready is high (the
-            // quotient d_w holds in the divider's output register until the next division)
+            // the demodulator: started on the divider's out_valid once its in_ready is high and the
+            // bias engine is idle (the quotient d_w holds in the divider's output register until the
+            // next division). The bias engine's idle is what keeps the two off the shared multiplier
+            // at once (the demodulator's first product is issued without a wait); it costs no cycle
+            // when the bias engine finishes before the divider (always with the serial demod's ...
+            // and at the default config: 21 against 54 cycles)
             reg dm_pend;
-            assign dm_go = (d_v | dm_pend) & dm_ready;
+            assign dm_go = (d_v | dm_pend) & dm_ready & b_ready;
             always @(posedge clk) begin
                 if (rst | accept) dm_pend <= 1'b0;
-                else dm_pend <= (d_v | dm_pend) & ~dm_ready;
+                else dm_pend <= (d_v | dm_pend) & ~dm_go;
             end
+
+            // ---- the one multiplier of the serial blocks: they run one after another (the schedule
+            // above; the demodulator after the bias engine), so at most one requests at a time: the
+            // operands are selected by the requests (one-hot), in_ready goes to every block (only the
+            // requester reads it), and out_valid to the block that issued the product (own, set
+            // as the multiplier takes it). Each block keeps its own limb counts (VAR_N = 1), so its
+            // schedule is that of its own multiplier.
+            wire [NU-1:0] req = {ir_req, dm_req, bi_req, sf_req, rt_req};
+            wire [MAC_A_W-1:0] sh_a = ({MAC_A_W{rt_req}} & rt_a) | ({MAC_A_W{sf_req}} & sf_a) | ({MAC_A_W{bi_req}} & bi_a)
+                                    | ({MAC_A_W{dm_req}} & dm_a) | ({MAC_A_W{ir_req}} & ir_a);
+            wire [MAC_B_W-1:0] sh_b = ({MAC_B_W{rt_req}} & rt_b) | ({MAC_B_W{sf_req}} & sf_b) | ({MAC_B_W{bi_req}} & bi_b)
+                                    | ({MAC_B_W{dm_req}} & dm_b) | ({MAC_B_W{ir_req}} & ir_b);
+            wire [3:0] sh_na = ({4{rt_req}} & rt_na) | ({4{sf_req}} & sf_na) | ({4{bi_req}} & bi_na)
+                             | ({4{dm_req}} & dm_na) | ({4{ir_req}} & ir_na);
+            wire [3:0] sh_nb = ({4{rt_req}} & rt_nb) | ({4{sf_req}} & sf_nb) | ({4{bi_req}} & bi_nb)
+                             | ({4{dm_req}} & dm_nb) | ({4{ir_req}} & ir_nb);
+            wire sh_in = |req;
+            fx_mac_serial #(.A_W(MAC_A_W), .B_W(MAC_B_W), .VAR_N(1)) u_mac (.clk(clk), .rst(rst), .in_valid(sh_in),
+                .in_ready(sh_ready), .a(sh_a), .b(sh_b), .na(sh_na), .nb(sh_nb), .out_valid(sh_valid), .p(sh_p));
+            always @(posedge clk) begin
+                if (rst) own <= {NU{1'b0}};
+                else if (sh_in & sh_ready) own <= req;
+            end
+`ifndef SYNTHESIS
+            // simulation only: two requests at once would be a scheduling error (one product lost)
+            always @(posedge clk) begin
+                if (!rst && (req & (req - {{(NU-1){1'b0}}, 1'b1})) != {NU{1'b0}}) begin
+                    $display("chain_paper002: blocks %b request the shared multiplier at once", req);
+                    $finish;
+                end
+            end
+`endif
             // the subtraction: one cycle after the later of I (demod's out_valid) and bias(T) (the
             // bias engine's out_valid), from registers: I in i_r, bias in b_r
             reg i_done, b_done, sub_q;

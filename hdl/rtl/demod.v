@@ -25,7 +25,9 @@
 //   run through ONE fx_mac_serial (one SB_MAC16); the mixer and amplitude products through ONE
 //   fx_convert_pipe (the amplitude's product is scaled to the mixers' shift by the constant
 //   INV_K << (MIX_SHIFT - AMP_SHIFT), or the mixers' up by p << (AMP_SHIFT - MIX_SHIFT)); both
-//   low-pass filters through ONE serial iir (ARCH = 1, CHANNELS = 2: its own fx_mac_serial); the
+//   low-pass filters through ONE serial iir (ARCH = 1, CHANNELS = 2), whose products go through the
+//   same fx_mac_serial (the iir's EXT_MAC bundle: it computes only while the FSM waits in S_LPF,
+//   where the demodulator issues nothing; each keeps its own limb counts: N, M below); the
 //   CORDIC is iterative, one step per two cycles, x and y loaded through its own adders. The phase
 //   accumulator advances once per accepted sample (two halves, the carry registered between).
 //   Interface: in_valid / in_ready / out_valid; in_ready is high only when idle (which includes the
@@ -64,6 +66,9 @@
 //   Cycles per sample: 6 N + 29 + 2 ITERATIONS + 2 LPF_SECTIONS (7 M + 10), 189 at the default
 //   config (N = 4, M = 6, 16 iterations, 1 section), against 416 at 40 MHz and 96 kS/s.
 //   Latency: one cycle less (out_valid in the cycle in which the next sample may be taken).
+//   The shared multiplier: max(MA_W, the filters' a) x max(MB_W, DATA_W) bits (fx_mac_serial
+//   VAR_N = 1); EXT_MAC = 1: none here, its requests (the demodulator's and the filters') go out on
+//   the mac_* bundle (fx_mac_port), e.g. to chain_paper002's one multiplier.
 `default_nettype none
 
 module demod #(
@@ -100,7 +105,10 @@ module demod #(
     parameter         QSIN_FILE     = "demod_qsin.hex",
     parameter         LPF_COEF_FILE = "demod_lpf_coef.hex",
     parameter         ATAN_FILE     = "demod_atan.hex",
-    parameter integer ARCH          = 0     // 0: one sample per cycle (in_ready tied high); 1: serial
+    parameter integer ARCH          = 0,    // 0: one sample per cycle (in_ready tied high); 1: serial
+    parameter integer EXT_MAC       = 0,    // ARCH = 1: 0 its own fx_mac_serial; 1 the external one on mac_* (fx_mac_port)
+    parameter integer MAC_A_W       = 48,   // EXT_MAC = 1: the external multiplier's operand widths (>= the
+    parameter integer MAC_B_W       = 32    // demod's and its low-pass filters' operands)
 ) (
     input  wire                      clk,
     input  wire                      rst,
@@ -112,7 +120,16 @@ module demod #(
     output reg  [DATA_W-1:0]         q,
     output reg  [DATA_W-1:0]         amp,
     output reg  [ANGLE_W-1:0]        phase,
-    output reg  [2*LPF_SECTIONS+2:0] ovf
+    output reg  [2*LPF_SECTIONS+2:0] ovf,
+    // the external multiplier (ARCH = 1 and EXT_MAC = 1; else the outputs are 0): fx_mac_port's bundle
+    output wire                          mac_in_valid,
+    input  wire                          mac_in_ready,
+    output wire [MAC_A_W-1:0]            mac_a,
+    output wire [MAC_B_W-1:0]            mac_b,
+    output wire [3:0]                    mac_na,
+    output wire [3:0]                    mac_nb,
+    input  wire                          mac_out_valid,
+    input  wire [MAC_A_W+MAC_B_W-1:0]    mac_p
 );
     localparam integer MW = IN_W + NCO_W;
     localparam integer WW = DATA_W + 3;        // CORDIC work: DATA_W + 2 guard bits, + 1 spare
@@ -126,6 +143,15 @@ module demod #(
         end
         if (ARCH == 0) begin : g_par
             assign in_ready = 1'b1;
+            // no multiplier in this variant: the bundle unused
+            assign mac_in_valid = 1'b0;
+            assign mac_a = {MAC_A_W{1'b0}};
+            assign mac_b = {MAC_B_W{1'b0}};
+            assign mac_na = 4'd0;
+            assign mac_nb = 4'd0;
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire unused_mac = mac_in_ready ^ mac_out_valid ^ (^mac_p);
+            /* verilator lint_on UNUSEDSIGNAL */
 
             // ---- NCO and mixers ----
             wire [NCO_W-1:0] cos_w, msin_w;
@@ -151,12 +177,16 @@ module demod #(
             wire lv, lv_q;
             iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .SHIFT_B(LPF_SHIFT_B),
                   .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
-                  .OVERFLOW(LPF_OVERFLOW), .COEF_FILE(LPF_COEF_FILE)) u_lpf_i
-                (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mi), .out_valid(lv), .y(li), .ovf(ovf_li));
+                  .OVERFLOW(LPF_OVERFLOW), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W), .COEF_FILE(LPF_COEF_FILE)) u_lpf_i
+                (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mi), .out_valid(lv), .y(li), .ovf(ovf_li),
+                 .mac_in_valid(), .mac_in_ready(1'b0), .mac_a(), .mac_b(), .mac_na(), .mac_nb(),
+                 .mac_out_valid(1'b0), .mac_p({(MAC_A_W+MAC_B_W){1'b0}}));
             iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .SHIFT_B(LPF_SHIFT_B),
                   .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
-                  .OVERFLOW(LPF_OVERFLOW), .COEF_FILE(LPF_COEF_FILE)) u_lpf_q
-                (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mq), .out_valid(lv_q), .y(lq), .ovf(ovf_lq));
+                  .OVERFLOW(LPF_OVERFLOW), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W), .COEF_FILE(LPF_COEF_FILE)) u_lpf_q
+                (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mq), .out_valid(lv_q), .y(lq), .ovf(ovf_lq),
+                 .mac_in_valid(), .mac_in_ready(1'b0), .mac_a(), .mac_b(), .mac_na(), .mac_nb(),
+                 .mac_out_valid(1'b0), .mac_p({(MAC_A_W+MAC_B_W){1'b0}}));
 
             // ---- CORDIC vectoring (combinational on the filter outputs) ----
             reg [ANGLE_W-1:0] atan [0:ITERATIONS-1];
@@ -251,6 +281,11 @@ module demod #(
             localparam integer MB0   = (TWO_PI_W + 1 > NCO_W) ? TWO_PI_W + 1 : NCO_W;
             localparam integer MB_W  = (MB0 > IKW) ? MB0 : IKW; // b: constants or NCO values
             localparam integer MP_W  = MA_W + MB_W;
+            // the low-pass filters' operands (iir.v ARCH = 1: coefficient or error e, data or weight c)
+            // and the multiplier shared with them: the wider of each
+            localparam integer LA_W  = (LPF_COEF_W > LPF_OUT_SHIFT + 2) ? LPF_COEF_W : LPF_OUT_SHIFT + 2;
+            localparam integer DA_W  = (MA_W > LA_W) ? MA_W : LA_W;
+            localparam integer DB_W  = (MB_W > DATA_W) ? MB_W : DATA_W;
             localparam integer PL    = PHASE_BITS / 2;          // phase accumulator: low half ...
             localparam integer PH    = PHASE_BITS - PL;         // ... and high half
             localparam integer JW    = (ITERATIONS > 1) ? $clog2(ITERATIONS) : 1;
@@ -384,8 +419,29 @@ module demod #(
             /* verilator lint_off UNUSEDSIGNAL */  // each product is exact in its own width: its top bits copy the sign
             wire signed [MP_W-1:0] p;
             /* verilator lint_on UNUSEDSIGNAL */
-            fx_mac_serial #(.A_W(MA_W), .B_W(MB_W)) u_mac (.clk(clk), .rst(rst), .in_valid(mac_in),
-                .in_ready(mac_ready), .a(a_op), .b(b_op), .out_valid(mac_valid), .p(p));
+            // the demodulator's products and its low-pass filters' (the iir's requests on its mac_*
+            // bundle) share ONE multiplier: the iir computes only while the FSM waits for it in S_LPF
+            // (taken at the edge into S_LPF, its out_valid the way out), and the demodulator issues no
+            // product there (its x * -sin has returned before the mixers' q, S_LPF's entry; x_K * INV_K
+            // is issued after). So S_LPF selects the iir's request and routes the out_valid to it
+            // (every other state: the demodulator's). Each keeps its own limb counts (VAR_N = 1) and so
+            // its schedule: N = 4 and M = 6 at the default config.
+            wire lpf_own = (st == S_LPF);
+            wire                dm_v, lp_v, sh_ready, sh_valid;
+            wire [DA_W-1:0]     dm_a, lp_a;
+            wire [DB_W-1:0]     dm_b, lp_b;
+            wire [3:0]          dm_na, dm_nb, lp_na, lp_nb;
+            wire [DA_W+DB_W-1:0] sh_p;
+            fx_mac_port #(.A_W(MA_W), .B_W(MB_W), .EXT_MAC(1), .MAC_A_W(DA_W), .MAC_B_W(DB_W)) u_mac_dm
+                (.clk(clk), .rst(rst), .in_valid(mac_in), .in_ready(mac_ready), .a(a_op), .b(b_op), .na(4'd0), .nb(4'd0),
+                 .out_valid(mac_valid), .p(p), .mac_in_valid(dm_v), .mac_in_ready(sh_ready), .mac_a(dm_a),
+                 .mac_b(dm_b), .mac_na(dm_na), .mac_nb(dm_nb), .mac_out_valid(sh_valid & ~lpf_own), .mac_p(sh_p));
+            // the shared multiplier: its own (EXT_MAC = 0) or the external one on this module's mac_*
+            fx_mac_port #(.A_W(DA_W), .B_W(DB_W), .VAR_N(1), .EXT_MAC(EXT_MAC), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)) u_mac
+                (.clk(clk), .rst(rst), .in_valid(lpf_own ? lp_v : dm_v), .in_ready(sh_ready), .a(lpf_own ? lp_a : dm_a),
+                 .b(lpf_own ? lp_b : dm_b), .na(lpf_own ? lp_na : dm_na), .nb(lpf_own ? lp_nb : dm_nb),
+                 .out_valid(sh_valid), .p(sh_p), .mac_in_valid(mac_in_valid), .mac_in_ready(mac_in_ready), .mac_a(mac_a),
+                 .mac_b(mac_b), .mac_na(mac_na), .mac_nb(mac_nb), .mac_out_valid(mac_out_valid), .mac_p(mac_p));
 
             // ---- NCO correction: R(p >> CORR_SHIFT) (fx_round, ROUNDING), added to mb or cb ----
             wire signed [CW-1:0] rc_c;
@@ -429,9 +485,11 @@ module demod #(
             wire [2*LPF_SECTIONS-1:0] lpf_o;    // {lpf_q[S], lpf_i[S]}
             iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .SHIFT_B(LPF_SHIFT_B),
                   .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
-                  .OVERFLOW(LPF_OVERFLOW), .ARCH(1), .CHANNELS(2), .COEF_FILE(LPF_COEF_FILE)) u_lpf
+                  .OVERFLOW(LPF_OVERFLOW), .ARCH(1), .CHANNELS(2), .EXT_MAC(1), .MAC_A_W(DA_W), .MAC_B_W(DB_W),
+                  .COEF_FILE(LPF_COEF_FILE)) u_lpf
                 (.clk(clk), .rst(rst), .in_valid(lpf_go), .in_ready(), .x({mix_y, mi_q}), .out_valid(lpf_v),
-                 .y(lpf_y), .ovf(lpf_o));
+                 .y(lpf_y), .ovf(lpf_o), .mac_in_valid(lp_v), .mac_in_ready(sh_ready), .mac_a(lp_a), .mac_b(lp_b),
+                 .mac_na(lp_na), .mac_nb(lp_nb), .mac_out_valid(sh_valid & lpf_own), .mac_p(sh_p));
             wire signed [DATA_W-1:0] li, lq;
             assign {lq, li} = lpf_y;
 

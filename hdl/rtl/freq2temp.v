@@ -59,7 +59,7 @@ module freq2temp #(
             wire signed [PW-1:0] p;
             assign in_ready = ~busy | out_valid;   // the next sample may enter as this one leaves
             fx_mac_serial #(.A_W(DW), .B_W(KINV_W)) u_mac (.clk(clk), .rst(rst), .in_valid(issue),
-                .in_ready(mac_ready), .a(d_q), .b(kinv), .out_valid(mac_valid), .p(p));
+                .in_ready(mac_ready), .a(d_q), .b(kinv), .na(4'd0), .nb(4'd0), .out_valid(mac_valid), .p(p));
             fx_convert_pipe #(.IN_W(PW), .SHIFT(SHIFT), .ROUNDING(ROUNDING), .OUT_W(TEMP_W), .OUT_SIGNED(1),
                               .OVERFLOW(OVERFLOW)) u_out (.clk(clk), .rst(rst), .in_valid(mac_valid), .x(p),
                                                           .out_valid(out_valid), .y(temp), .ovf(ovf));

@@ -25,11 +25,21 @@
 //   edge t + 3:    accumulated; after edge N + 3 out_valid is high with p
 // Latency: N + 3 cycles. Cycles per product: N (in_ready is high when idle and in the cycle of the
 // last limb pair, so operands issued back to back keep the multiplier busy every cycle).
+// VAR_N = 1 (a multiplier shared by callers of different widths, e.g. chain_paper002 ARCH = 1):
+// A_W, B_W are the widest operands; each product runs on its own limb counts na (1..NA), nb (1..NB),
+// taken with a, b: the caller sign-extends its operands into a, b, and gets its own schedule (N = na
+// nb pairs, latency N + 3, in_ready as above). The top column of a product (nc = na + nb - 1 columns)
+// is stored at limb nc - 1 (its sum's low 32 bits: limbs nc - 1, nc), so p[0 +: caller's
+// product width] is the caller's exact product (that width <= 16 (na + nb)); the bits above are
+// left over from earlier products. p is valid in the out_valid cycle (the next product's first
+// limb pair overwrites limb 0 at the next edge); every caller reads it there. VAR_N = 0: na, nb
+// are not read (NA, NB), the logic is that of a fixed-width product.
 `default_nettype none
 
 module fx_mac_serial #(
     parameter integer A_W = 32,    // bits of the signed operand a (>= 2)
-    parameter integer B_W = 24     // bits of the signed operand b (>= 2)
+    parameter integer B_W = 24,    // bits of the signed operand b (>= 2)
+    parameter integer VAR_N = 0    // 1: limb counts na, nb per product (a shared multiplier); 0: NA, NB
 ) (
     input  wire                      clk,
     input  wire                      rst,        // synchronous; drops a product in flight
@@ -37,6 +47,10 @@ module fx_mac_serial #(
     output wire                      in_ready,
     input  wire signed [A_W-1:0]     a,
     input  wire signed [B_W-1:0]     b,
+    /* verilator lint_off UNUSEDSIGNAL */   // VAR_N = 0: not read; else the bits above NA, NB
+    input  wire [3:0]                na,         // VAR_N = 1: limbs of a in this product (1..NA <= 8)
+    input  wire [3:0]                nb,         // VAR_N = 1: limbs of b (1..NB)
+    /* verilator lint_on UNUSEDSIGNAL */
     output reg                       out_valid,  // one cycle per product, in the order accepted
     output wire signed [A_W+B_W-1:0] p           // a * b, exact, while out_valid
 );
@@ -62,11 +76,13 @@ module fx_mac_serial #(
     localparam integer JB_TOP_I = NB - 1;
     localparam [IW-1:0] IA_TOP = IA_TOP_I[IW-1:0];
     localparam [JW-1:0] JB_TOP = JB_TOP_I[JW-1:0];
-    localparam [CW-1:0] JB_TOP_C = JB_TOP_I[CW-1:0];
 
     generate
         if (A_W < 2 || B_W < 2) begin : g_bad_width
             initial begin $display("fx_mac_serial: A_W and B_W must be >= 2, got %0d, %0d", A_W, B_W); $finish; end
+        end
+        if (VAR_N != 0 && (NA > 8 || NB > 8)) begin : g_bad_limbs
+            initial begin $display("fx_mac_serial: VAR_N = 1 takes up to 8 limbs, got %0d, %0d", NA, NB); $finish; end
         end
     endgenerate
 
@@ -79,17 +95,21 @@ module fx_mac_serial #(
     reg           first;        // the pair is the product's first ...
     reg           newcol;       // ... starts a new column (the column below is complete)
 
-    wire last = (ia == IA_TOP) && (jb == JB_TOP);             // the top column has one pair: the last
+    // the top limbs of this product: NA - 1, NB - 1, or (VAR_N = 1) na - 1, nb - 1 taken with a, b
+    wire [IW-1:0] ia_top;
+    wire [JW-1:0] jb_top;
+    wire [CW-1:0] jb_top_c = {{(CW-JW){1'b0}}, jb_top};
+    wire last = (ia == ia_top) && (jb == jb_top);             // the top column has one pair: the last
     assign in_ready = ~busy | last;
     wire take = in_valid & in_ready;
 
     // next pair: along the column (i + 1, j - 1) while it lasts, else the start of column c + 1
     wire [CW-1:0] col  = {{(CW-IW){1'b0}}, ia} + {{(CW-JW){1'b0}}, jb};
     wire [CW-1:0] coln = col + {{(CW-1){1'b0}}, 1'b1};
-    wire          along = (ia != IA_TOP) && (jb != {JW{1'b0}});
-    wire          low  = coln <= JB_TOP_C;                   // column c + 1 starts at (0, c + 1)
+    wire          along = (ia != ia_top) && (jb != {JW{1'b0}});
+    wire          low  = coln <= jb_top_c;                   // column c + 1 starts at (0, c + 1)
     /* verilator lint_off UNUSEDSIGNAL */                      // the spare bits of a column number
-    wire [CW-1:0] in_  = coln - JB_TOP_C;
+    wire [CW-1:0] in_  = coln - jb_top_c;
     /* verilator lint_on UNUSEDSIGNAL */
 
     always @(posedge clk) begin
@@ -113,7 +133,7 @@ module fx_mac_serial #(
                 newcol <= 1'b0;
             end else begin
                 ia <= low ? {IW{1'b0}} : in_[IW-1:0];
-                jb <= low ? coln[JW-1:0] : JB_TOP;
+                jb <= low ? coln[JW-1:0] : jb_top;
                 newcol <= 1'b1;
             end
         end
@@ -141,8 +161,8 @@ module fx_mac_serial #(
     always @(posedge clk) begin
         au   <= a_l;
         bu   <= b_l;
-        sa   <= (ia == IA_TOP) & a_l[LIMB-1];
-        sb   <= (jb == JB_TOP) & b_l[LIMB-1];
+        sa   <= (ia == ia_top) & a_l[LIMB-1];
+        sb   <= (jb == jb_top) & b_l[LIMB-1];
         prod <= au * bu;
         corr <= (sb ? au_x : {(LIMB+2){1'b0}}) + (sa ? bs_x : {(LIMB+2){1'b0}});
         pp   <= $signed({2'b00, prod}) - $signed({corr, {LIMB{1'b0}}});
@@ -164,22 +184,70 @@ module fx_mac_serial #(
 
     // ---- column sums, least significant column first ----
     reg  signed [ACC_W-1:0] acc;
-    reg  signed [TOP_W-1:0] p_top;
     wire signed [ACC_W-1:0] pp_x  = {{(ACC_W-PP_W){pp[PP_W-1]}}, pp};
     // the column below is complete: its low 16 bits are stored in p (below), the rest carries on
     wire signed [ACC_W-1:0] carry = acc >>> LIMB;            // (signed, on its own: arithmetic)
     wire signed [ACC_W-1:0] acc_0 = f_q[2] ? {ACC_W{1'b0}} : (n_q[2] ? carry : acc);
     wire signed [ACC_W-1:0] acc_n = acc_0 + pp_x;
-    always @(posedge clk) begin
-        if (v_q[2]) begin
-            acc <= acc_n;
-            if (l_q[2]) p_top <= acc_n[TOP_W-1:0];
-        end
-    end
+    always @(posedge clk) if (v_q[2]) acc <= acc_n;
     generate
-        if (NC > 1) begin : g_limbs
+        if (VAR_N == 0) begin : g_fixed_n
+            assign ia_top = IA_TOP;
+            assign jb_top = JB_TOP;
+        end else begin : g_var_n
+            // na - 1, nb - 1: the low bits (the counts are <= NA, NB)
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire [3:0]    na1 = na - 4'd1;
+            wire [3:0]    nb1 = nb - 4'd1;
+            wire [3-IW:0] na1_hi;
+            wire [3-JW:0] nb1_hi;
+            /* verilator lint_on UNUSEDSIGNAL */
+            wire [IW-1:0] na1_lo;
+            wire [JW-1:0] nb1_lo;
+            assign {na1_hi, na1_lo} = na1;
+            assign {nb1_hi, nb1_lo} = nb1;
+            reg  [IW-1:0] ia_top_q;
+            reg  [JW-1:0] jb_top_q;
+            always @(posedge clk) if (take) begin ia_top_q <= na1_lo; jb_top_q <= nb1_lo; end
+            assign ia_top = ia_top_q;
+            assign jb_top = jb_top_q;
+        end
+        if (VAR_N != 0) begin : g_var_p
+            // limbs 0 .. NC: each column's low 16 bits stored as it completes (its last pair is
+            // accumulated: the next pair starts a new column, or it is the product's last), into limb
+            // ec (0 at the product's first pair); the last pair's sum (the top column) into limbs
+            // ec, ec + 1. One source per limb but the top's second limb: acc_n.
+            localparam integer VL  = NC + 1;
+            localparam integer VEW = $clog2(VL + 1);
+            reg  [LIMB*VL-1:0] res;
+            reg  [VEW-1:0]     ec;
+            wire               colend = v_q[2] & (l_q[2] | n_q[1]);
+            wire [VEW-1:0]     ec_c   = f_q[2] ? {VEW{1'b0}} : ec;
+            wire [VEW-1:0]     ec_c1  = ec_c + {{(VEW-1){1'b0}}, 1'b1};
+            /* verilator lint_off UNUSEDSIGNAL */   // above the top column's 32 bits: sign copies
+            wire [ACC_W-2*LIMB-1:0] acc_n_hi;
+            /* verilator lint_on UNUSEDSIGNAL */
+            wire [LIMB-1:0]    acc_n_l0, acc_n_l1;
+            assign {acc_n_hi, acc_n_l1, acc_n_l0} = acc_n;
+            wire [31:0]        ec_n   = {{(32-VEW){1'b0}}, ec_c};    // as numbers (compared with L)
+            wire [31:0]        ec_n1  = {{(32-VEW){1'b0}}, ec_c1};
+            integer L;
+            always @(posedge clk) begin
+                if (colend) ec <= ec_c1;
+                for (L = 0; L < VL; L = L + 1) begin
+                    if (colend && ec_n == L) res[LIMB*L +: LIMB] <= acc_n_l0;
+                    else if (v_q[2] && l_q[2] && ec_n1 == L) res[LIMB*L +: LIMB] <= acc_n_l1;
+                end
+            end
+            /* verilator lint_off UNUSEDSIGNAL */   // above P_W: no product is wider
+            wire [LIMB*VL-1:0] res_all = res;
+            /* verilator lint_on UNUSEDSIGNAL */
+            assign p = res_all[P_W-1:0];
+        end else if (NC > 1) begin : g_limbs
             reg [RES_W-1:0] res;    // p below the top column, one 16-bit limb per completed column
             reg [EW-1:0]    ec;     // the next limb to store
+            reg signed [TOP_W-1:0] p_top;
+            always @(posedge clk) if (v_q[2] && l_q[2]) p_top <= acc_n[TOP_W-1:0];
             always @(posedge clk) begin
                 if (v_q[2] && (f_q[2] || n_q[2])) begin
                     if (f_q[2]) begin
@@ -192,6 +260,8 @@ module fx_mac_serial #(
             end
             assign p = {p_top, res};
         end else begin : g_one
+            reg signed [TOP_W-1:0] p_top;
+            always @(posedge clk) if (v_q[2] && l_q[2]) p_top <= acc_n[TOP_W-1:0];
             assign p = p_top;
         end
     endgenerate

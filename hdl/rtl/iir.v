@@ -38,6 +38,8 @@
 //   section 0 at the end of a channel). y's slice of channel c loads at the end of channel c; all
 //   of y and ovf are valid with out_valid. Cycles per sample: CHANNELS * SECTIONS * (7 N + 10) + 1;
 //   latency CHANNELS * SECTIONS * (7 N + 10). CHANNELS = 1 is the single-channel engine above.
+//   EXT_MAC = 1: no multiplier here; the products go out on the mac_* bundle (fx_mac_port) to a
+//   multiplier shared with other blocks (demod's, chain_paper002's), the schedule unchanged.
 `default_nettype none
 
 module iir #(
@@ -52,6 +54,9 @@ module iir #(
     parameter integer OVERFLOW  = 1,
     parameter integer ARCH      = 0,     // 0: one sample per cycle; 1: serial, one shared multiplier
     parameter integer CHANNELS  = 1,     // signals through the engine (> 1: ARCH = 1 only)
+    parameter integer EXT_MAC   = 0,     // ARCH = 1: 0 its own fx_mac_serial; 1 the external one on mac_* (fx_mac_port)
+    parameter integer MAC_A_W   = 48,    // EXT_MAC = 1: the external multiplier's operand widths (>= MA_W, MB_W)
+    parameter integer MAC_B_W   = 32,    // (a: MAC_A_W bits, b: MAC_B_W bits; 3 x 2 limbs by default)
     parameter         COEF_FILE = "iir_coef.hex"
 ) (
     input  wire                         clk,
@@ -61,7 +66,16 @@ module iir #(
     input  wire [CHANNELS*DATA_W-1:0]   x,
     output reg                          out_valid,
     output reg  [CHANNELS*DATA_W-1:0]   y,
-    output reg  [CHANNELS*SECTIONS-1:0] ovf
+    output reg  [CHANNELS*SECTIONS-1:0] ovf,
+    // the external multiplier (ARCH = 1 and EXT_MAC = 1; else the outputs are 0): fx_mac_port's bundle
+    output wire                          mac_in_valid,
+    input  wire                          mac_in_ready,
+    output wire [MAC_A_W-1:0]            mac_a,
+    output wire [MAC_B_W-1:0]            mac_b,
+    output wire [3:0]                    mac_na,
+    output wire [3:0]                    mac_nb,
+    input  wire                          mac_out_valid,
+    input  wire [MAC_A_W+MAC_B_W-1:0]    mac_p
 );
     localparam integer E_W = OUT_SHIFT + 2;
     localparam integer C_W = 4;                  // |c| <= 2 (checked by the generator)
@@ -84,6 +98,15 @@ module iir #(
         if (ARCH == 0) begin : g_par
             // ---- one sample per cycle: the cascade is combinational ----
             assign in_ready = 1'b1;
+            // no multiplier in this variant: the bundle unused
+            assign mac_in_valid = 1'b0;
+            assign mac_a = {MAC_A_W{1'b0}};
+            assign mac_b = {MAC_B_W{1'b0}};
+            assign mac_na = 4'd0;
+            assign mac_nb = 4'd0;
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire unused_mac = mac_in_ready ^ mac_out_valid ^ (^mac_p);
+            /* verilator lint_on UNUSEDSIGNAL */
             wire [SECTIONS-1:0] ovf_c;
             for (s = 0; s < SECTIONS; s = s + 1) begin : g_sec
                 wire signed [COEF_W-1:0] b0 = coef[7*s+0];
@@ -304,8 +327,10 @@ module iir #(
             wire mac_ready, mac_valid;
             wire issue = (st == S_MAC) && (k != K_END) && rom_ok && mac_ready;
             wire signed [MP_W-1:0] p;
-            fx_mac_serial #(.A_W(MA_W), .B_W(MB_W)) u_mac (.clk(clk), .rst(rst), .in_valid(issue),
-                .in_ready(mac_ready), .a(a_op), .b(b_op), .out_valid(mac_valid), .p(p));
+            fx_mac_port #(.A_W(MA_W), .B_W(MB_W), .EXT_MAC(EXT_MAC), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)) u_mac
+                (.clk(clk), .rst(rst), .in_valid(issue), .in_ready(mac_ready), .a(a_op), .b(b_op), .na(4'd0), .nb(4'd0),
+                 .out_valid(mac_valid), .p(p), .mac_in_valid(mac_in_valid), .mac_in_ready(mac_in_ready), .mac_a(mac_a), .mac_b(mac_b),
+                     .mac_na(mac_na), .mac_nb(mac_nb), .mac_out_valid(mac_out_valid), .mac_p(mac_p));
 
             // ---- accumulation: every product fits PW or CE_W <= AW bits, so p is exact in AW ----
             wire signed [AW-1:0] pa;

@@ -200,7 +200,7 @@ module lag #(
             wire issue = (fsm == S_ISSUE) & mac_ready;
             wire signed [PW-1:0] p;
             fx_mac_serial #(.A_W(DW), .B_W(MW)) u_mac (.clk(clk), .rst(rst), .in_valid(issue),
-                .in_ready(mac_ready), .a(d_c), .b(m_c), .out_valid(mac_valid), .p(p));
+                .in_ready(mac_ready), .a(d_c), .b(m_c), .na(4'd0), .nb(4'd0), .out_valid(mac_valid), .p(p));
 
             // ---- step = round(p >> ALPHA_S): the same primitive as the parallel variant ----
             wire signed [RW-1:0] step_c;

@@ -32,6 +32,8 @@
 //     then round(acc >> OUT_SHIFT), then y = its fit with out_valid (out flag).
 //   Cycles per sample: ORDER * (N + 10) + 7, e.g. 35 for the paper 001 bias (ORDER 2, 32-bit
 //   acc, 24-bit temperature: N = 4), 55 for k0 (ORDER 3, N = 6). Latency: that minus 1.
+//   EXT_MAC = 1: no multiplier here; the products go out on the mac_* bundle (fx_mac_port) to a
+//   multiplier shared with other blocks (chain_paper002's), the schedule unchanged.
 `default_nettype none
 
 module piecewise #(
@@ -51,6 +53,9 @@ module piecewise #(
     parameter integer ROUNDING   = 1,
     parameter integer OVERFLOW   = 1,
     parameter integer ARCH       = 0,     // 0: one sample per cycle; 1: serial, one shared multiplier
+    parameter integer EXT_MAC    = 0,     // ARCH = 1: 0 its own fx_mac_serial; 1 the external one on mac_* (fx_mac_port)
+    parameter integer MAC_A_W    = 48,    // EXT_MAC = 1: the external multiplier's operand widths (>= ACC_W, T_W + 1)
+    parameter integer MAC_B_W    = 32,    // (a: MAC_A_W bits, b: MAC_B_W bits; 3 x 2 limbs by default)
     parameter         COEF_FILE  = "piecewise_sf_coef.hex",
     parameter         BP_FILE    = "piecewise_sf_bp.hex"
 ) (
@@ -61,7 +66,16 @@ module piecewise #(
     input  wire [T_W-1:0]        temp,
     output reg                   out_valid,
     output reg  [OUT_W-1:0]      y,
-    output reg  [2*ORDER+1:0]    ovf
+    output reg  [2*ORDER+1:0]    ovf,
+    // the external multiplier (ARCH = 1 and EXT_MAC = 1; else the outputs are 0): fx_mac_port's bundle
+    output wire                          mac_in_valid,
+    input  wire                          mac_in_ready,
+    output wire [MAC_A_W-1:0]            mac_a,
+    output wire [MAC_B_W-1:0]            mac_b,
+    output wire [3:0]                    mac_na,
+    output wire [3:0]                    mac_nb,
+    input  wire                          mac_out_valid,
+    input  wire [MAC_A_W+MAC_B_W-1:0]    mac_p
 );
     localparam integer NC  = ORDER + 1;
     localparam integer NBP = SEGMENTS - 1;
@@ -146,6 +160,15 @@ module piecewise #(
     generate
     if (ARCH == 0) begin : g_par
     assign in_ready = 1'b1;
+    // no multiplier in this variant: the bundle unused
+    assign mac_in_valid = 1'b0;
+    assign mac_a = {MAC_A_W{1'b0}};
+    assign mac_b = {MAC_B_W{1'b0}};
+    assign mac_na = 4'd0;
+    assign mac_nb = 4'd0;
+    /* verilator lint_off UNUSEDSIGNAL */
+    wire unused_mac = mac_in_ready ^ mac_out_valid ^ (^mac_p);
+    /* verilator lint_on UNUSEDSIGNAL */
     assign t_sel = temp;
 
     // ---- top coefficient into the accumulator ----
@@ -253,8 +276,10 @@ module piecewise #(
         // the multiplier: acc * t, exact
         wire mac_ready, mac_valid;
         wire signed [PW-1:0] prod;
-        fx_mac_serial #(.A_W(ACC_W), .B_W(TW1)) u_mac (.clk(clk), .rst(rst), .in_valid(st == S_ISSUE),
-            .in_ready(mac_ready), .a(acc_q), .b(t_q), .out_valid(mac_valid), .p(prod));
+        fx_mac_port #(.A_W(ACC_W), .B_W(TW1), .EXT_MAC(EXT_MAC), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)) u_mac
+            (.clk(clk), .rst(rst), .in_valid(st == S_ISSUE), .in_ready(mac_ready), .a(acc_q), .b(t_q), .na(4'd0),
+             .nb(4'd0), .out_valid(mac_valid), .p(prod), .mac_in_valid(mac_in_valid), .mac_in_ready(mac_in_ready), .mac_a(mac_a), .mac_b(mac_b),
+                 .mac_na(mac_na), .mac_nb(mac_nb), .mac_out_valid(mac_out_valid), .mac_p(mac_p));
 
         // top coefficient into the accumulator (a short path: COEF_W bits)
         wire [ACC_W-1:0] acc_top;

@@ -27,6 +27,8 @@
 //   Cycles per sample: N + 10, e.g. 12 at the default config (26-bit LUT, 7 fraction bits:
 //   N = 2 * 1); far inside the 416 cycles of a 96 kS/s sample at 40 MHz. Latency: N + 9 cycles
 //   from the accepting edge to out_valid.
+//   EXT_MAC = 1: no multiplier here; the product goes out on the mac_* bundle (fx_mac_port) to a
+//   multiplier shared with other blocks (chain_paper002's), the schedule unchanged.
 `default_nettype none
 
 module rtd #(
@@ -38,6 +40,9 @@ module rtd #(
     parameter integer ROUNDING       = 1,              // 0 floor, 1 half_up, 2 half_even, 3 toward_zero
     parameter integer OVERFLOW       = 1,              // 0 wrap, 1 saturate
     parameter integer ARCH           = 0,              // 0: one sample per cycle; 1: serial, one shared multiplier
+    parameter integer EXT_MAC        = 0,              // ARCH = 1: 0 its own fx_mac_serial; 1 the external one on mac_* (fx_mac_port)
+    parameter integer MAC_A_W        = 48,             // EXT_MAC = 1: the external multiplier's operand widths (>= LUT_W + 1, ADC_W - LUT_INDEX_BITS + 1)
+    parameter integer MAC_B_W        = 32,             // (a: MAC_A_W bits, b: MAC_B_W bits; 3 x 2 limbs by default)
     parameter         LUT_FILE       = "rtd_lut.hex"   // $readmemh file of the 2**K + 1 LUT words
 ) (
     input  wire              clk,
@@ -47,7 +52,16 @@ module rtd #(
     input  wire [ADC_W-1:0]  code,
     output wire              out_valid,
     output wire [TEMP_W-1:0] temp,
-    output wire              ovf
+    output wire              ovf,
+    // the external multiplier (ARCH = 1 and EXT_MAC = 1; else the outputs are 0): fx_mac_port's bundle
+    output wire                          mac_in_valid,
+    input  wire                          mac_in_ready,
+    output wire [MAC_A_W-1:0]            mac_a,
+    output wire [MAC_B_W-1:0]            mac_b,
+    output wire [3:0]                    mac_na,
+    output wire [3:0]                    mac_nb,
+    input  wire                          mac_out_valid,
+    input  wire [MAC_A_W+MAC_B_W-1:0]    mac_p
 );
     localparam integer K  = LUT_INDEX_BITS;
     localparam integer S  = ADC_W - LUT_INDEX_BITS;
@@ -78,6 +92,15 @@ module rtd #(
         if (ARCH == 0) begin : g_par
             // ---- one sample per cycle: both LUT words read combinationally ----
             assign in_ready = 1'b1;
+            // no multiplier in this variant: the bundle unused
+            assign mac_in_valid = 1'b0;
+            assign mac_a = {MAC_A_W{1'b0}};
+            assign mac_b = {MAC_B_W{1'b0}};
+            assign mac_na = 4'd0;
+            assign mac_nb = 4'd0;
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire unused_mac = mac_in_ready ^ mac_out_valid ^ (^mac_p);
+            /* verilator lint_on UNUSEDSIGNAL */
             wire signed [LUT_W-1:0] base = lut[{1'b0, idx}];
             wire signed [LUT_W-1:0] nxt  = lut[idx1];
             wire signed [LUT_W:0]   diff = {nxt[LUT_W-1], nxt} - {base[LUT_W-1], base};
@@ -131,8 +154,10 @@ module rtd #(
             wire mac_ready, mac_valid;
             wire issue = (st == S_MAC) && mac_ready;
             wire signed [EW-1:0] p;
-            fx_mac_serial #(.A_W(DW), .B_W(FW)) u_mac (.clk(clk), .rst(rst), .in_valid(issue),
-                .in_ready(mac_ready), .a(diff_q), .b(fr), .out_valid(mac_valid), .p(p));
+            fx_mac_port #(.A_W(DW), .B_W(FW), .EXT_MAC(EXT_MAC), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)) u_mac
+                (.clk(clk), .rst(rst), .in_valid(issue), .in_ready(mac_ready), .a(diff_q), .b(fr), .na(4'd0), .nb(4'd0),
+                 .out_valid(mac_valid), .p(p), .mac_in_valid(mac_in_valid), .mac_in_ready(mac_in_ready), .mac_a(mac_a), .mac_b(mac_b),
+                     .mac_na(mac_na), .mac_nb(mac_nb), .mac_out_valid(mac_out_valid), .mac_p(mac_p));
 
             wire signed [EW-1:0] be   = {{(EW-LUT_W){base_q[LUT_W-1]}}, base_q};
             wire signed [EW-1:0] ex_c = (be <<< S) + p;

@@ -97,6 +97,11 @@ READY_PORT = {
     "demod",
 }
 
+# modules with the external-multiplier bundle (mac_*, fx_mac_port) whatever their parameters: a
+# harness runs them on their own multiplier (EXT_MAC = 0) and ties the bundle off, declared at
+# 2 x 2 bits (Verilator warns of a missing pin)
+MAC_PORT = {"iir", "piecewise", "rtd", "demod"}
+
 
 def is_serial(extra: dict | None) -> bool:
     """Parameters that select a serial variant (ARCH != 0): valid/ready, in_ready honoured."""
@@ -486,6 +491,8 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
         plist = dict(inst.params)
         if module == "sf_divide" and unroll:
             plist["UNROLL"] = unroll
+        if module in MAC_PORT:
+            plist.update({"MAC_A_W": 2, "MAC_B_W": 2})
         plist.update(extra or {})
         pov = "#(" + ", ".join(f".{k}({hp.literal(inst, k, v)})" for k, v in plist.items()) + ")"
     L = ["`timescale 1ns/1ps", "`default_nettype none", "module tb;", "    reg clk = 1'b0;", "    reg rst = 1'b1;",
@@ -511,6 +518,9 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
         conns.append(".in_ready(in_ready)")
     else:
         L.append("    wire in_ready = 1'b1;")
+    if module in MAC_PORT and not design.instances[name].members:
+        conns += [".mac_in_valid()", ".mac_in_ready(1'b0)", ".mac_a()", ".mac_b()", ".mac_na()", ".mac_nb()",
+                  ".mac_out_valid(1'b0)", ".mac_p(4'd0)"]
     L.append(f"    wire [{n_ovf - 1}:0] ign = {n_ovf}'d{ovf_ignore(design, name)};")
     L.append(f"    {module} {pov} dut ({', '.join(conns)});")
     L.append("    always #5 clk = ~clk;")

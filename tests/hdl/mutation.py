@@ -96,7 +96,7 @@ MUTATIONS = [
     Mutation("iir_serial_missed_stall", "iir.v", "assign in_ready = (st == S_IDLE);", "assign in_ready = 1'b1;",
              "serial: in_ready high while a sample is computed (samples taken mid-schedule are lost)",
              (({}, "iir", False, SERIAL["iir"]),)),
-    Mutation("mac_lower_limb_signed", "fx_mac_serial.v", "sb   <= (jb == JB_TOP) & b_l[LIMB-1];",
+    Mutation("mac_lower_limb_signed", "fx_mac_serial.v", "sb   <= (jb == jb_top) & b_l[LIMB-1];",
              "sb   <= b_l[LIMB-1];", "serial MAC: a lower limb of b read as signed",
              ((None, "iir", False, SERIAL["iir"]),)),
     Mutation("mac_column_carry_logical", "fx_mac_serial.v", "carry = acc >>> LIMB;", "carry = acc >> LIMB;",
@@ -244,6 +244,26 @@ MUTATIONS = [
              "serial chain 002: bias (and its flags) registered as the bias engine starts, before its out_valid "
              "(wrong slot: the previous sample's bias)",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
+    # ---- one multiplier shared by the serial blocks: demod ARCH = 1 with its filters, chain 002 ARCH = 1 ----
+    Mutation("chain002_mac_owner_kept", "chain_paper002.v", "else if (sh_in & sh_ready) own <= req;",
+             "else if (sh_in & sh_ready) own <= own | req;",
+             "serial chain 002: the shared multiplier's owner not replaced at a take: out_valid also reaches every "
+             "block that issued earlier (their product counters advance on others' products)",
+             ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
+    Mutation("chain002_mac_stale_operand", "chain_paper002.v", "({MAC_A_W{ir_req}} & ir_a)",
+             "({MAC_A_W{own[4]}} & ir_a)",
+             "serial chain 002: the iir's operand a selected by the previous product's owner, not by its request "
+             "(its first product of a sample takes another block's operand)",
+             ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
+    Mutation("demod_mac_valid_to_filter", "demod.v", ".mac_out_valid(sh_valid & lpf_own)",
+             ".mac_out_valid(sh_valid)",
+             "serial demod: the demodulator's products also counted as its low-pass filters' (out_valid not "
+             "routed by the owner of the shared multiplier)",
+             ((None, "demod", False, SERIAL["demod"]),)),
+    Mutation("mac_var_top_limb", "fx_mac_serial.v", "else if (v_q[2] && l_q[2] && ec_n1 == L)",
+             "else if (v_q[2] && l_q[2] && ec_n1 == L + 1)",
+             "shared MAC (VAR_N = 1): the top column's high half stored one limb too high",
+             ((None, "demod", False, SERIAL["demod"]),)),
 ]
 
 

@@ -28,6 +28,16 @@ VARIANTS = [
     ("iir", {"ARCH": 1, "CHANNELS": 3, "SECTIONS": 2, "ROUNDING": 2, "OVERFLOW": 0}),
     ("fx_mac_serial", {"A_W": 39, "B_W": 24}),
     ("fx_mac_serial", {"A_W": 2, "B_W": 17}),
+    ("fx_mac_serial", {"A_W": 48, "B_W": 32, "VAR_N": 1}),  # shared by callers of different widths
+    ("fx_mac_serial", {"A_W": 2, "B_W": 17, "VAR_N": 1}),
+    # the external (shared) multiplier's bundle instead of an own fx_mac_serial
+    ("fx_mac_port", {"EXT_MAC": 1}),
+    ("fx_mac_port", {"EXT_MAC": 1, "VAR_N": 1, "A_W": 48, "B_W": 32}),
+    ("iir", {"ARCH": 1, "EXT_MAC": 1}),
+    ("iir", {"ARCH": 1, "CHANNELS": 2, "EXT_MAC": 1}),
+    ("rtd", {"ARCH": 1, "EXT_MAC": 1}),
+    ("piecewise", {"ARCH": 1, "EXT_MAC": 1}),
+    ("demod", {"ARCH": 1, "EXT_MAC": 1}),
     ("sf_divide", {"UNROLL": 7, "SF_SIGNED": 1, "ROUNDING": 2}),
     ("sf_divide", {"UNROLL": 42, "OUT_SHIFT": -2}),
     ("sf_divide", {"ARCH": 1, "SF_SIGNED": 1, "ROUNDING": 2}),

@@ -94,14 +94,14 @@ def _sf_divide_cycles_per_sample(p: dict) -> int:
 
 def _chain_paper002_cycles_per_sample(_p: dict) -> int:
     """hdl/rtl/chain_paper002.v, ARCH = 1 (LAG_EN = 0, the default config): rtd's cycles + piecewise_sf's
-    + max(the divider's + demod's, piecewise_bias's) (the bias engine runs during the division) + 3
-    (the join into registers, the subtraction, the output register) + the iir's."""
+    + max(the divider's, piecewise_bias's) (the bias engine runs during the division; demod starts after
+    both: the two share the multiplier) + demod's + 3 (the join into registers, the subtraction, the
+    output register) + the iir's."""
     d = default_design()
     par = lambda n: hp.instance(d, n).params  # noqa: E731
     return (_rtd_cycles_per_sample(par("rtd")) + _piecewise_cycles_per_sample(par("piecewise_sf"))
-            + max(_sf_divide_cycles_per_sample(par("sf_divide")) + _demod_cycles_per_sample(par("demod")),
-                  _piecewise_cycles_per_sample(par("piecewise_bias")))
-            + 3 + _iir_cycles_per_sample(par("iir")))
+            + max(_sf_divide_cycles_per_sample(par("sf_divide")), _piecewise_cycles_per_sample(par("piecewise_bias")))
+            + _demod_cycles_per_sample(par("demod")) + 3 + _iir_cycles_per_sample(par("iir")))
 
 
 SCHEDULES = {"iir": _iir_cycles_per_sample, "rtd": _rtd_cycles_per_sample, "lag": _lag_cycles_per_sample,
