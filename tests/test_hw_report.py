@@ -152,3 +152,43 @@ def test_a_module_larger_than_the_device_is_not_sent_to_the_placer():
     assert too_big({"MAC16": UP5K["MAC16"], "LUT": UP5K["LUT"]}) == ""
     assert "SB_MAC16" in too_big({"MAC16": UP5K["MAC16"] + 1, "LUT": 10})
     assert "LUT4" in too_big({"MAC16": 0, "LUT": UP5K["LUT"] + 1})
+
+
+def test_only_reruns_its_rows_and_keeps_the_reports_other_current_rows(tmp_path, monkeypatch, capsys):
+    """`hw-report --fresh --only rtd` on a copy of the committed report: rtd's rows are synthesised again
+    (the tools faked here), every other row comes over unchanged, none is lost; a stale row not asked
+    for is left out with a message rather than kept as if current."""
+    import argparse
+    import shutil as sh
+
+    from fxdsp.hdl import report_cli
+
+    out = tmp_path / "HW_REPORT.md"
+    sh.copy(ROOT / "hdl" / "HW_REPORT.json", out.with_suffix(".json"))
+    committed = load_hw_report(out.with_suffix(".json"))
+    monkeypatch.setattr(report_cli.shutil, "which", lambda tool: "/usr/bin/" + tool)
+    monkeypatch.setattr(report_cli, "tool_versions", lambda: committed["tools"])
+    monkeypatch.setattr(report_cli, "synth", lambda *a, **k: {"LUT": 1, "MAC16": 0, "FF": 1, "BRAM": 0, "CARRY": 0})
+    monkeypatch.setattr(report_cli, "synth_xc7", lambda *a, **k: {"LUT": 1, "DSP48E1": 0, "FF": 1, "BRAM36": 0,
+                                                                 "BRAM18": 0, "LUTRAM": 0, "SRL": 0})
+    monkeypatch.setattr(report_cli, "place_route", lambda *a, **k: (99.0, ""))
+    parser = argparse.ArgumentParser()
+    report_cli.configure(parser)
+
+    def rerun(*argv):
+        assert report_cli.run(parser.parse_args(["--out", str(out), *argv])) == 0
+        return {r["name"]: r for r in load_hw_report(out.with_suffix(".json"))["rows"]}
+
+    rows = rerun("--fresh", "--only", "rtd")
+    before = {r["name"]: r for r in committed["rows"]}
+    assert list(rows) == list(before)
+    assert all(rows[n]["LUT"] == 1 for n in rows if n.startswith("rtd"))
+    assert all(rows[n] == before[n] for n in rows if not n.startswith("rtd"))
+    # a row made stale (its hash no longer the current one) and not asked for is dropped, said on stderr
+    data = json.loads(out.with_suffix(".json").read_text())
+    next(r for r in data["rows"] if r["name"] == "iir")["sha256"] = "0" * 64
+    out.with_suffix(".json").write_text(json.dumps(data))
+    capsys.readouterr()
+    rows = rerun("--only", "rtd")
+    assert "iir" not in rows and "iir (ARCH=1)" in rows
+    assert "iir: not in --only" in capsys.readouterr().err

@@ -173,12 +173,14 @@ def test_simulate_sigint_keeps_the_previous_log(tmp_path):
         time.sleep(delay)
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=120)
-        assert proc.returncode in (0, 130), err
+        # -SIGINT: the signal landed during the interpreter's start-up, before Python's own handler
+        # (a loaded machine): nothing written yet, the previous log must still be there
+        assert proc.returncode in (0, 130, -signal.SIGINT), err
         codes.append(proc.returncode)
         lines = err.strip().splitlines()
         assert "Traceback" not in err and len(lines) <= 1, err
         text = out.read_text()
-        if proc.returncode == 130:
+        if proc.returncode != 0:
             assert text == "previous log\n"
         else:  # finished before the signal: a complete log
             assert text.splitlines()[-1].count(",") == text.splitlines()[-2].count(",")

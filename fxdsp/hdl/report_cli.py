@@ -67,7 +67,8 @@ def configure(parser) -> None:
     parser.add_argument("--config", help="TOML config (default: the built-in one)")
     parser.add_argument("--out", default=str(HDL_DIR / "HW_REPORT.md"),
                         help="Markdown report to write (its JSON twin goes beside it, suffix .json)")
-    parser.add_argument("--only", nargs="*", help="subset of the design's instances (default: every block and chain)")
+    parser.add_argument("--only", nargs="*", help="re-run only these instances' rows (default: every block and chain); "
+                        "the report's other rows are kept while they are current")
     parser.add_argument("--freq", type=float, default=40.0, help="nextpnr target clock in MHz (default 40)")
     parser.add_argument("--timeout", type=int, default=1200, help="seconds per tool run")
     parser.add_argument("--xc7-timeout", type=int, default=900,
@@ -283,8 +284,9 @@ def run(args) -> int:
             return 2
     design = build(args.config)
     tools = tool_versions()
-    previous = None if args.fresh else load_hw_report(Path(args.out).with_suffix(".json"))
-    reuse = reusable_rows(previous, tools, args.freq, not args.no_xc7)
+    previous = load_hw_report(Path(args.out).with_suffix(".json"))
+    current = reusable_rows(previous, tools, args.freq, not args.no_xc7)  # rows still valid as they are
+    reuse = {} if args.fresh else current
     targets = args.only or list(design.instances)
     unknown = [t for t in targets if t not in design.instances]
     if unknown:
@@ -296,12 +298,20 @@ def run(args) -> int:
         for rel, text in files.items():
             (work / rel).write_text(text)
         digest = source_hash(design, files)  # what is synthesised: the RTL and these files, as read now
-        for row_name, plan in planned_rows(design, targets).items():
+        chosen = planned_rows(design, targets)
+        for row_name, plan in planned_rows(design, list(design.instances)).items():
             name, module, params, extra = plan
             tag = re.sub(r"\W+", "_", row_name).strip("_")
             t0 = time.perf_counter()
             chparam = _chparam(module, params)
             digest_row = _digest(design, files, plan, args.freq)
+            if row_name not in chosen:  # --only: the report's other rows stay while they are current
+                if digest_row in current:
+                    rows.append({**current[digest_row], "name": row_name, "module": module})
+                else:
+                    print(f"{row_name}: not in --only and stale or absent in the previous report: left out",
+                          file=sys.stderr)
+                continue
             if digest_row in reuse:
                 rows.append({**reuse[digest_row], "name": row_name, "module": module})
                 print(f"{row_name}: unchanged, taken from the previous report", file=sys.stderr)
@@ -315,9 +325,12 @@ def run(args) -> int:
                                                            bool(extra), tag)
                 if row["fmax"] is None and "no BELs remaining" in row["note"] and "DSP" in row["note"]:
                     row["note"] = f"does not place: {row['MAC16']} SB_MAC16 > {UP5K['MAC16']} on the device"
-                elif row["fmax"] is None and "no BELs remaining" in row["note"] and "ICESTORM_LC" in row["note"]:
-                    row["note"] = (f"does not place: {row['LUT']} LUT4 and {row['FF']} FF need more than the "
-                                   f"{UP5K['LUT']} logic cells of the device")
+                elif row["fmax"] is None and "ICESTORM_LC" in row["note"] and (
+                        "no BELs remaining" in row["note"] or "Failed to expand region" in row["note"]):
+                    cells = re.search(r"of (\d+) ICESTORM_LCs", row["note"])  # the packer's count, when given
+                    need = f"{cells.group(1)} logic cells (packed)" if cells else "more logic cells"
+                    row["note"] = (f"does not place: {row['LUT']} LUT4 and {row['FF']} FF need {need}, the device "
+                                   f"has {UP5K['LUT']}")
             except subprocess.TimeoutExpired:
                 row["note"] = f"timed out after {args.timeout} s"
             except subprocess.CalledProcessError as exc:
