@@ -353,19 +353,12 @@ module demod #(
                 end
             end
 
-            // ---- bin and sub-bin offset of the phase (nco.v) ----
-            wire [1:0]       quad = ph[PHASE_BITS-1 -: 2];
-            wire [QBITS-1:0] kb   = ph[PHASE_BITS-3 -: QBITS];
+            // ---- bin and sub-bin offset of the phase (nco_phase, as in nco.v) ----
+            wire [1:0]       quad;
+            wire [QBITS-1:0] kb;
             wire signed [DLW-1:0] delta;
-            if (INTERP_BITS > 0) begin : g_interp
-                wire [INTERP_BITS-1:0] r = ph[PHASE_BITS-LUT_BITS-1 -: INTERP_BITS];
-                // 2 r + 1 - 2**INTERP_BITS (nco.v)
-                wire [INTERP_BITS:0] odd = {r, 1'b1};
-                wire signed [INTERP_BITS:0] centred = {~odd[INTERP_BITS], odd[INTERP_BITS-1:0]};
-                assign delta = {{(DLW-INTERP_BITS-1){centred[INTERP_BITS]}}, centred};
-            end else begin : g_plain
-                assign delta = {DLW{1'b0}};
-            end
+            nco_phase #(.PHASE_BITS(PHASE_BITS), .LUT_BITS(LUT_BITS), .INTERP_BITS(INTERP_BITS)) u_fields (
+                .phase(ph), .quad(quad), .k(kb), .delta(delta));
 
             // ---- the quarter-wave table: one registered read port (block RAM) ----
             reg [LUT_W-1:0] qsin [0:(1<<QBITS)-1];

@@ -3,7 +3,8 @@
 // (PHASE0 + n FTW) plus the phase trim, which rotates the reference by PHASE_TRIM / 2**PHASE_BITS
 // turns without touching the frequency. Adding a constant commutes with the accumulation modulo
 // 2**PHASE_BITS, so the trim is folded into the reset value (a constant: no adder; PHASE_TRIM = 0
-// is the untrimmed NCO). The top LUT_BITS phase bits are the bin: the
+// is the untrimmed NCO). The phase word's fields come from nco_phase (the serial demod reads its own
+// phase through the same module). The top LUT_BITS phase bits are the bin: the
 // quadrant (2 bits) and the index k of a quarter-wave sine table (QSIN_FILE: 2**(LUT_BITS-2) words
 // of LUT_W bits, sin at the bin centres, quantised half_up / saturate by the generator). cos and -sin
 // of the bin centre are +-qsin[k], +-qsin[~k] by quadrant (cb, mb). First-order interpolation
@@ -60,8 +61,11 @@ module nco #(
     end
 
     // ---- bin centre: quadrant symmetry of the quarter table ----
-    wire [1:0]       quad = phase[PHASE_BITS-1 -: 2];
-    wire [QBITS-1:0] k    = phase[PHASE_BITS-3 -: QBITS];
+    wire [1:0]       quad;
+    wire [QBITS-1:0] k;
+    wire signed [DLW-1:0] delta;          // the sub-bin centre (nco_phase), for the correction below
+    nco_phase #(.PHASE_BITS(PHASE_BITS), .LUT_BITS(LUT_BITS), .INTERP_BITS(INTERP_BITS)) u_fields (
+        .phase(phase), .quad(quad), .k(k), .delta(delta));
     wire [LUT_W-1:0] s_k  = qsin[k];
     wire [LUT_W-1:0] s_r  = qsin[~k];
     wire signed [NCO_W-1:0] sk = {s_k[LUT_W-1], s_k};
@@ -74,19 +78,6 @@ module nco #(
     wire signed [NCO_W-1:0] mb = quad[1] ? ma : -ma;
 
     // ---- first-order correction from the sub-bin offset ----
-    wire signed [DLW-1:0] delta;
-    generate
-        if (INTERP_BITS > 0) begin : g_interp
-            wire [INTERP_BITS-1:0] r = phase[PHASE_BITS-LUT_BITS-1 -: INTERP_BITS];
-            // 2 r + 1 - 2**INTERP_BITS: r with a 1 appended is 2 r + 1; inverting its top bit
-            // subtracts 2**INTERP_BITS when the word is read as signed
-            wire [INTERP_BITS:0] odd = {r, 1'b1};
-            wire signed [INTERP_BITS:0] centred = {~odd[INTERP_BITS], odd[INTERP_BITS-1:0]};
-            assign delta = {{(DLW-INTERP_BITS-1){centred[INTERP_BITS]}}, centred};
-        end else begin : g_plain
-            assign delta = {DLW{1'b0}};
-        end
-    endgenerate
     wire signed [TWO_PI_W:0] twopi = {1'b0, TWO_PI_C};
     wire signed [DW-1:0] d  = delta * twopi;
     wire signed [PW-1:0] pc = mb * d;

@@ -110,7 +110,7 @@ MUTATIONS = [
     Mutation("nco_quadrant_sign", "nco.v", "wire signed [NCO_W-1:0] mb = quad[1] ? ma : -ma;",
              "wire signed [NCO_W-1:0] mb = quad[1] ? -ma : ma;", "NCO -sin with the quadrant sign inverted",
              ((None, "demod", False),)),
-    Mutation("nco_offset_not_centred", "nco.v", "wire [INTERP_BITS:0] odd = {r, 1'b1};",
+    Mutation("nco_offset_not_centred", "nco_phase.v", "wire [INTERP_BITS:0] odd = {r, 1'b1};",
              "wire [INTERP_BITS:0] odd = {r, 1'b0};", "NCO sub-bin offset truncated instead of centred (a bias)",
              ((None, "demod", False), (NCO_GENERIC, "demod", False))),
     Mutation("nco_correction_floor", "nco.v", ".ROUNDING(ROUNDING), .OUT_W(CW)) u_rm",

@@ -42,17 +42,12 @@ ALLOWED: dict[tuple[str, str, str], tuple[int, str]] = {
     # ARCH = 0 (unrolled): twice each; ARCH = 1 (one step per cycle): once each
     ("demod", "right-shift", "cy>>>j"): (3, "CORDIC micro-rotation: floor shift by definition (blocks.demod.cordic_vector)"),
     ("demod", "right-shift", "cx>>>j"): (3, "CORDIC micro-rotation: floor shift by definition (blocks.demod.cordic_vector)"),
-    # the serial demod's own NCO phase fields (ARCH = 1), as nco.v's
-    ("demod", "select", "ph[PHASE_BITS-1-:2]"): (1, "serial NCO: quadrant = top two phase bits (model: Nco bin, a >> (L - 2))"),
-    ("demod", "select", "ph[PHASE_BITS-3-:QBITS]"): (
-        1, "serial NCO: quarter-table index = the next L - 2 phase bits (model: a & qmask)"),
-    ("demod", "select", "ph[PHASE_BITS-LUT_BITS-1-:INTERP_BITS]"): (
-        1, "serial NCO: interpolation offset = the interp_bits below the bin; the bits below are the residual "
-           "phase error (model: _nco_wave r)"),
     ("demod", "select", "atan_flat[ANGLE_W*j+:ANGLE_W]"): (1, "field of the flat arctan table, not a value"),
-    ("nco", "select", "phase[PHASE_BITS-1-:2]"): (1, "quadrant = top two phase bits (model: Nco bin, a >> (L - 2))"),
-    ("nco", "select", "phase[PHASE_BITS-3-:QBITS]"): (1, "quarter-table index = the next L - 2 phase bits (model: a & qmask)"),
-    ("nco", "select", "phase[PHASE_BITS-LUT_BITS-1-:INTERP_BITS]"): (
+    # the NCO phase word's fields, read by nco.v and the serial demod (ARCH = 1) through nco_phase
+    ("nco_phase", "select", "phase[PHASE_BITS-1-:2]"): (1, "quadrant = top two phase bits (model: Nco bin, a >> (L - 2))"),
+    ("nco_phase", "select", "phase[PHASE_BITS-3-:QBITS]"): (
+        1, "quarter-table index = the next L - 2 phase bits (model: a & qmask)"),
+    ("nco_phase", "select", "phase[PHASE_BITS-LUT_BITS-1-:INTERP_BITS]"): (
         1, "interpolation offset = the interp_bits below the bin; the bits below are the residual phase error "
            "(model: _nco_wave r)"),
     ("rtd", "select", "u[ADC_W-1:S]"): (1, "LUT index; the low bits are kept as the interpolation fraction"),
