@@ -42,6 +42,14 @@ def _popcount(v: int) -> int:
     return bin(v).count("1")
 
 
+def _drive(dut, ins, in_h, seg, idx, drive: bool) -> None:
+    """The next cycle's inputs: the sample at idx with in_valid high, or in_valid low (the data held)."""
+    if drive:
+        for p in ins:
+            in_h[p].value = seg["inputs"][p][idx]
+    dut.in_valid.value = int(drive)
+
+
 async def _sleep_while_busy(dut, ins, in_h, seg, idx, drive: bool) -> bool:
     """Set the next cycle's inputs, then sleep until the edge before which in_ready or out_valid is high.
 
@@ -52,10 +60,7 @@ async def _sleep_while_busy(dut, ins, in_h, seg, idx, drive: bool) -> bool:
     one to rise (or IDLE_LIMIT cycles: the caller's timeout) and return before the edge that
     samples it, where the caller resumes. Returns whether in_valid is driven.
     """
-    if drive:
-        for p in ins:
-            in_h[p].value = seg["inputs"][p][idx]
-    dut.in_valid.value = int(drive)
+    _drive(dut, ins, in_h, seg, idx, drive)
     await ReadOnly()
     if int(dut.in_ready.value) == 0 and int(dut.out_valid.value) == 0:
         await First(RisingEdge(dut.in_ready), RisingEdge(dut.out_valid),
@@ -98,14 +103,9 @@ async def stream(dut):
             # drive this cycle
             if resume:
                 resume = False
-            elif idx < n_feed and rng.random() >= seg_gap:
-                for p in ins:
-                    in_h[p].value = seg["inputs"][p][idx]
-                dut.in_valid.value = 1
-                driving = True
             else:
-                dut.in_valid.value = 0
-                driving = False
+                driving = idx < n_feed and rng.random() >= seg_gap
+                _drive(dut, ins, in_h, seg, idx, driving)
             await RisingEdge(dut.clk)
             # what happened at this edge
             taken = driving and (not ready or int(dut.in_ready.value) == 1)
