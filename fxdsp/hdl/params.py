@@ -9,8 +9,11 @@ design as
 * ``<inst>_params.vh``: the parameter override list (``.NAME(value), ...``) that the chain tops
   ``include`` inside ``module #( ... )``;
 * ``chain_paper002_params.vh`` / ``chain_paper001_params.vh``: the port and ovf widths of the tops
-  and the enables of their optional stages (``LAG_EN``: the chain's ``stages``, 0 = absent);
-* the ROM files (``rtd_lut.hex``, ``iir_coef.hex``, ``demod_qsin.hex``, ...).
+  and the enables of their optional stages (``LAG_EN``: the chain's ``stages``, 0 = absent), and
+  ``LPF_SHARED``: 1 when the output low-pass has the demodulator's low-pass format, so that the serial
+  chain runs it on the demodulator's filter engine (:func:`lpf_shared`);
+* the ROM files (``rtd_lut.hex``, ``iir_coef.hex``, ``demod_qsin.hex``, ...), and for a shared
+  engine ``chain_paper002_lpf_coef.hex``: its I, Q and output coefficient sets, one per channel.
 
 The only checks here are the RTL's own limits (signed temperature wires, 4-bit error-feedback
 weights, positive lag shift): a config the Python model accepts but the RTL cannot build.
@@ -19,6 +22,8 @@ weights, positive lag shift): a config the Python model accepts but the RTL cann
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+
+import numpy as np
 
 from ..chains import Design
 from ..fixed.hexfile import hex_words
@@ -80,8 +85,35 @@ def chain_params(design: Design) -> dict[str, dict[str, int]]:
         p["N_OVF"] = design.ovf_width(name)
         stages = getattr(inst.block, "stages", ())
         p.update({k: int(stage in stages) for k, stage in spec.get("stages", {}).items()})
+        if name == SHARED_LPF_CHAIN:
+            p["LPF_SHARED"] = int(lpf_shared(design))
         out[name] = p
     return out
+
+
+# the chain whose serial RTL may run its output low-pass ("iir") on the demodulator's filter engine
+SHARED_LPF_CHAIN, SHARED_LPF_FILE = "chain_paper002", "chain_paper002_lpf_coef.hex"
+
+
+def _engine_params(dp) -> dict:
+    """An iir datapath's RTL parameters but its coefficient file: the engine's format."""
+    return {k: v for k, v in dp.verilog("lpf")[0].items() if k != "COEF_FILE"}
+
+
+def lpf_shared(design: Design) -> bool:
+    """Whether the output low-pass ("iir") and the demodulator's I / Q low-pass have one format
+    (every iir parameter but the coefficients equal): then one filter engine runs all three, the
+    output filter as its third channel with a coefficient set of its own (demod ``AUX_LPF``)."""
+    return _engine_params(design.instances["iir"].block.datapath) == \
+        _engine_params(design.instances["demod"].block.datapath.lpf)
+
+
+def shared_lpf_rom(design: Design) -> str:
+    """The shared engine's coefficient ROM: a set per channel, I and Q (the demodulator's low-pass),
+    then the output low-pass, as the iir reads them (COEF_SETS = CHANNELS)."""
+    lpf = design.instances["demod"].block.datapath.lpf.coef
+    out = design.instances["iir"].block.datapath.coef
+    return hex_words(np.concatenate([lpf.words.ravel(), lpf.words.ravel(), out.words.ravel()]), lpf.width)
 
 
 def _wire(design: Design, wire: str):
@@ -139,4 +171,6 @@ def generate(design: Design) -> dict[str, str]:
         files.update(inst.roms)
     for name, p in chain_params(design).items():
         files[f"{name}_params.vh"] = chain_header(name, p)
+        if p.get("LPF_SHARED"):
+            files[SHARED_LPF_FILE] = shared_lpf_rom(design)
     return files

@@ -14,4 +14,5 @@
     parameter integer DEMOD_OVF_W = 5,
     parameter integer IIR_OVF_W = 1,
     parameter integer N_OVF = 18,
-    parameter integer LAG_EN = 0
+    parameter integer LAG_EN = 0,
+    parameter integer LPF_SHARED = 1

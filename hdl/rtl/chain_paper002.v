@@ -28,7 +28,11 @@
 //   after another, so each gets EXT_MAC = 1 and issues on its mac_* bundle (fx_mac_port) with its own
 //   limb counts, i.e. its own schedule; the requests (at most one at a time, a simulation check
 //   says so) select the operands, out_valid goes to the block that issued (own, set at the take).
-//   [The lag keeps its own multiplier.] Each
+//   [The lag keeps its own multiplier.] One filter engine: when the output low-pass has the
+//   demodulator's low-pass format (LPF_SHARED, from the generator), the output filter is the third
+//   channel of the demodulator's I / Q filter engine (demod AUX_LPF = 1, its coefficients the third
+//   set of chain_paper002_lpf_coef.hex), run after the subtraction while the demodulator is idle, with
+//   the same schedule as the iir of its own (D_iir); else the iir has an engine of its own. Each
 //   block starts on its predecessor's out_valid pulse and holds its registered outputs until its
 //   next sample, so one sample in flight needs no buffering (every block is idle when its pulse
 //   comes: each one's in_ready is high again at most a cycle after its own out_valid, long before
@@ -79,6 +83,8 @@ module chain_paper002 #(
     output reg  [RATE_W-1:0] rate,
     output reg  [N_OVF-1:0]  ovf
 );
+    // ARCH = 1 and one low-pass format: the output low-pass runs on the demodulator's filter engine
+    localparam integer AUX = (ARCH == 1 && LPF_SHARED != 0) ? 1 : 0;
     reg busy;
     assign in_ready = ~busy;
     wire accept = in_valid & ~busy;
@@ -150,6 +156,9 @@ module chain_paper002 #(
              .out_valid(d_v), .y(d_w), .ovf(ovf_div));
 
     // ---- demodulator (I) ----
+    wire                   aux_go, aux_v;        // AUX: the output low-pass on demod's filter engine
+    wire [DATA_W-1:0]      aux_x, aux_y;
+    wire [IIR_OVF_W-1:0]   aux_o;
     wire                   i_v;
     wire [DATA_W-1:0]      i_w;
     wire [DEMOD_OVF_W-1:0] ovf_dm;
@@ -162,10 +171,12 @@ module chain_paper002 #(
     demod #(
 `include "demod_params.vh"
         , .ARCH(ARCH), .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
+        , .AUX_LPF(AUX), .AUX_COEF_FILE("chain_paper002_lpf_coef.hex")
     ) u_demod (.clk(clk), .rst(rst), .in_valid(dm_go), .in_ready(dm_ready), .x(d_w), .out_valid(i_v), .i(i_w), .q(q_w),
                .amp(amp_w), .phase(ph_w), .ovf(ovf_dm),
              .mac_in_valid(dm_req), .mac_in_ready(sh_ready), .mac_a(dm_a), .mac_b(dm_b), .mac_na(dm_na),
-             .mac_nb(dm_nb), .mac_out_valid(sh_valid & own[3]), .mac_p(sh_p));
+             .mac_nb(dm_nb), .mac_out_valid(sh_valid & own[3]), .mac_p(sh_p),
+             .aux_in_valid(aux_go), .aux_x(aux_x), .aux_out_valid(aux_v), .aux_y(aux_y), .aux_ovf(aux_o));
 
     // ---- I - bias(T), final low-pass ----
     wire             s_v;
@@ -180,12 +191,36 @@ module chain_paper002 #(
     wire                 r_v;
     wire [RATE_W-1:0]    r_w;
     wire [IIR_OVF_W-1:0] ovf_iir;
-    iir #(
+    generate
+        if (AUX != 0) begin : g_lpf_shared
+            // the output low-pass: the demodulator's filter engine's third channel (aux_*)
+            assign aux_go  = s_v;
+            assign aux_x   = s_w;     // LPF_SHARED: the output low-pass's data format is the demodulator's
+            assign r_v     = aux_v;
+            assign r_w     = aux_y;
+            assign ovf_iir = aux_o;
+            assign ir_req = 1'b0;
+            assign ir_a = {MAC_A_W{1'b0}};
+            assign ir_b = {MAC_B_W{1'b0}};
+            assign ir_na = 4'd0;
+            assign ir_nb = 4'd0;
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire unused_own = own[4];       // the output low-pass's products are demod's (own[3])
+            /* verilator lint_on UNUSEDSIGNAL */
+        end else begin : g_lpf_own
+            assign aux_go = 1'b0;
+            assign aux_x  = {DATA_W{1'b0}};
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire unused_aux = aux_v ^ (^aux_y) ^ (^aux_o);
+            /* verilator lint_on UNUSEDSIGNAL */
+            iir #(
 `include "iir_params.vh"
-        , .ARCH(ARCH), .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
-    ) u_iir (.clk(clk), .rst(rst), .in_valid(s_v), .in_ready(), .x(s_w), .out_valid(r_v), .y(r_w), .ovf(ovf_iir),
-             .mac_in_valid(ir_req), .mac_in_ready(sh_ready), .mac_a(ir_a), .mac_b(ir_b), .mac_na(ir_na),
-             .mac_nb(ir_nb), .mac_out_valid(sh_valid & own[4]), .mac_p(sh_p));
+                , .ARCH(ARCH), .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
+            ) u_iir (.clk(clk), .rst(rst), .in_valid(s_v), .in_ready(), .x(s_w), .out_valid(r_v), .y(r_w), .ovf(ovf_iir),
+                     .mac_in_valid(ir_req), .mac_in_ready(sh_ready), .mac_a(ir_a), .mac_b(ir_b), .mac_na(ir_na),
+                     .mac_nb(ir_nb), .mac_out_valid(sh_valid & own[4]), .mac_p(sh_p));
+        end
+    endgenerate
 
     // ---- per-sample registers (one sample in flight) ----
     reg [TEMP_W-1:0]   temp_r;

@@ -69,6 +69,14 @@
 //   The shared multiplier: max(MA_W, the filters' a) x max(MB_W, DATA_W) bits (fx_mac_serial
 //   VAR_N = 1); EXT_MAC = 1: none here, its requests (the demodulator's and the filters') go out on
 //   the mac_* bundle (fx_mac_port), e.g. to chain_paper002's one multiplier.
+//   AUX_LPF = 1 (ARCH = 1): the filter engine also runs an auxiliary low-pass of the same format
+//   (LPF_* parameters) with its own coefficients, as its third channel (iir CHANNELS = 3, COEF_SETS = 3,
+//   SPLIT = 1; AUX_COEF_FILE holds the I, Q and auxiliary sets, 7 LPF_SECTIONS words each): a sample
+//   on aux_in_valid / aux_x is filtered while the demodulator is idle (its in_ready low meanwhile)
+//   and leaves on aux_out_valid / aux_y / aux_ovf after LPF_SECTIONS (7 M + 10) + 1 cycles; the
+//   caller gives it only when in_ready is high (chain_paper002's output low-pass, after the
+//   subtraction; a simulation check stops otherwise). AUX_LPF = 0: the aux ports are not read, aux_y
+//   and aux_ovf are 0 and aux_out_valid low.
 `default_nettype none
 
 module demod #(
@@ -108,7 +116,9 @@ module demod #(
     parameter integer ARCH          = 0,    // 0: one sample per cycle (in_ready tied high); 1: serial
     parameter integer EXT_MAC       = 0,    // ARCH = 1: 0 its own fx_mac_serial; 1 the external one on mac_* (fx_mac_port)
     parameter integer MAC_A_W       = 48,   // EXT_MAC = 1: the external multiplier's operand widths (>= the
-    parameter integer MAC_B_W       = 32    // demod's and its low-pass filters' operands)
+    parameter integer MAC_B_W       = 32,   // demod's and its low-pass filters' operands)
+    parameter integer AUX_LPF       = 0,    // ARCH = 1: 1 the filter engine also runs the aux low-pass (aux_*)
+    parameter         AUX_COEF_FILE = "demod_aux_lpf_coef.hex"   // AUX_LPF = 1: the I, Q and aux sets
 ) (
     input  wire                      clk,
     input  wire                      rst,
@@ -129,7 +139,13 @@ module demod #(
     output wire [3:0]                    mac_na,
     output wire [3:0]                    mac_nb,
     input  wire                          mac_out_valid,
-    input  wire [MAC_A_W+MAC_B_W-1:0]    mac_p
+    input  wire [MAC_A_W+MAC_B_W-1:0]    mac_p,
+    // the auxiliary low-pass channel (ARCH = 1 and AUX_LPF = 1)
+    input  wire                          aux_in_valid,
+    input  wire [DATA_W-1:0]             aux_x,
+    output wire                          aux_out_valid,
+    output wire [DATA_W-1:0]             aux_y,
+    output wire [LPF_SECTIONS-1:0]       aux_ovf
 );
     localparam integer MW = IN_W + NCO_W;
     localparam integer WW = DATA_W + 3;        // CORDIC work: DATA_W + 2 guard bits, + 1 spare
@@ -141,6 +157,10 @@ module demod #(
         if (ARCH != 0 && ARCH != 1) begin : g_bad_arch
             initial begin $display("demod: ARCH must be 0 or 1, got %0d", ARCH); $finish; end
         end
+        if (AUX_LPF != 0 && (ARCH != 1 || AUX_LPF != 1)) begin : g_bad_aux
+            initial begin $display("demod: AUX_LPF = 1 needs ARCH = 1, got AUX_LPF %0d, ARCH %0d", AUX_LPF, ARCH);
+                          $finish; end
+        end
         if (ARCH == 0) begin : g_par
             assign in_ready = 1'b1;
             // no multiplier in this variant: the bundle unused
@@ -150,8 +170,11 @@ module demod #(
             assign mac_na = 4'd0;
             assign mac_nb = 4'd0;
             /* verilator lint_off UNUSEDSIGNAL */
-            wire unused_mac = mac_in_ready ^ mac_out_valid ^ (^mac_p);
+            wire unused_mac = mac_in_ready ^ mac_out_valid ^ (^mac_p) ^ aux_in_valid ^ (^aux_x);
             /* verilator lint_on UNUSEDSIGNAL */
+            assign aux_out_valid = 1'b0;
+            assign aux_y = {DATA_W{1'b0}};
+            assign aux_ovf = {LPF_SECTIONS{1'b0}};
 
             // ---- NCO and mixers ----
             wire [NCO_W-1:0] cos_w, msin_w;
@@ -328,8 +351,10 @@ module demod #(
 
             reg [4:0] st;
             reg [2:0] rk;                       // the next product to come back from the MAC
-            wire take = (st == S_IDLE) && in_valid;
-            assign in_ready = (st == S_IDLE);
+            wire aux_busy;                      // AUX_LPF: the filter engine runs the aux channel
+            wire idle = (st == S_IDLE) && !aux_busy;
+            wire take = idle && in_valid;
+            assign in_ready = idle;
 
             // ---- phase accumulator: PHASE0 + PHASE_TRIM + n FTW, in two halves (short carry chains) ----
             reg [PL-1:0] ph_lo;
@@ -419,7 +444,7 @@ module demod #(
             // is issued after). So S_LPF selects the iir's request and routes the out_valid to it
             // (every other state: the demodulator's). Each keeps its own limb counts (VAR_N = 1) and so
             // its schedule: N = 4 and M = 6 at the default config.
-            wire lpf_own = (st == S_LPF);
+            wire lpf_own = (st == S_LPF) || aux_busy;
             wire                dm_v, lp_v, sh_ready, sh_valid;
             wire [DA_W-1:0]     dm_a, lp_a;
             wire [DB_W-1:0]     dm_b, lp_b;
@@ -471,20 +496,63 @@ module demod #(
             reg [DATA_W-1:0] mi_q;              // i of the mixer, until q joins it
             reg              got_i, ovf_mi_q, ovf_mq_q;
 
-            // ---- the two low-pass filters: one serial iir engine, channel 0 = I, 1 = Q ----
+            // ---- the two low-pass filters: one serial iir engine, channel 0 = I, 1 = Q (AUX_LPF: and
+            // channel 2 = the aux low-pass, a pass of its own while the demodulator is idle) ----
+            localparam integer LCH = 2 + AUX_LPF;
             wire lpf_go = (st == S_WMIX) && mix_v && got_i;
-            wire lpf_v;
-            wire [2*DATA_W-1:0] lpf_y;
-            wire [2*LPF_SECTIONS-1:0] lpf_o;    // {lpf_q[S], lpf_i[S]}
+            wire lpf_done;                      // the engine's out_valid: I and Q, or the aux channel
+            wire [LCH*DATA_W-1:0] lpf_yall;
+            wire [LCH*LPF_SECTIONS-1:0] lpf_oall;
+            wire aux_go;
+            wire [LCH*DATA_W-1:0] lpf_x;        // {[aux_x,] q, i}
             iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .SHIFT_B(LPF_SHIFT_B),
                   .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
-                  .OVERFLOW(LPF_OVERFLOW), .ARCH(1), .CHANNELS(2), .EXT_MAC(1), .MAC_A_W(DA_W), .MAC_B_W(DB_W),
-                  .COEF_FILE(LPF_COEF_FILE)) u_lpf
-                (.clk(clk), .rst(rst), .in_valid(lpf_go), .in_ready(), .x({mix_y, mi_q}), .out_valid(lpf_v),
-                 .y(lpf_y), .ovf(lpf_o), .mac_in_valid(lp_v), .mac_in_ready(sh_ready), .mac_a(lp_a), .mac_b(lp_b),
+                  .OVERFLOW(LPF_OVERFLOW), .ARCH(1), .CHANNELS(LCH), .COEF_SETS((AUX_LPF != 0) ? LCH : 1),
+                  .SPLIT(AUX_LPF), .EXT_MAC(1), .MAC_A_W(DA_W), .MAC_B_W(DB_W), .COEF_FILE(LPF_COEF_FILE),
+                  .SETS_FILE(AUX_COEF_FILE)) u_lpf
+                (.clk(clk), .rst(rst), .in_valid(lpf_go | aux_go), .in_ready(), .x(lpf_x), .out_valid(lpf_done),
+                 .y(lpf_yall), .ovf(lpf_oall), .mac_in_valid(lp_v), .mac_in_ready(sh_ready), .mac_a(lp_a), .mac_b(lp_b),
                  .mac_na(lp_na), .mac_nb(lp_nb), .mac_out_valid(sh_valid & lpf_own), .mac_p(sh_p));
+            wire lpf_v = lpf_done && !aux_busy;
+            wire [2*DATA_W-1:0] lpf_y;          // {q, i} of the engine's outputs ...
+            wire [2*LPF_SECTIONS-1:0] lpf_o;    // ... and their flags {lpf_q[S], lpf_i[S]}
             wire signed [DATA_W-1:0] li, lq;
             assign {lq, li} = lpf_y;
+            if (AUX_LPF != 0) begin : g_aux
+                reg aux_q;                      // the aux pass is in the engine: from aux_in_valid to its out_valid
+                assign aux_go = aux_in_valid;
+                assign lpf_x = {aux_x, mix_y, mi_q};
+                assign aux_busy = aux_q;
+                always @(posedge clk) begin
+                    if (rst) aux_q <= 1'b0;
+                    else if (aux_go) aux_q <= 1'b1;
+                    else if (lpf_done) aux_q <= 1'b0;
+                end
+                assign aux_out_valid = lpf_done && aux_q;
+                assign {aux_y, lpf_y} = lpf_yall;
+                assign {aux_ovf, lpf_o} = lpf_oall;
+`ifndef SYNTHESIS
+                // simulation only: an aux sample while the demodulator works would share its multiplier
+                always @(posedge clk) begin
+                    if (!rst && aux_in_valid && !idle) begin
+                        $display("demod: aux_in_valid while busy (state %0d, aux %b)", st, aux_q);
+                        $finish;
+                    end
+                end
+`endif
+            end else begin : g_no_aux
+                assign aux_go = 1'b0;
+                assign aux_busy = 1'b0;
+                assign lpf_x = {mix_y, mi_q};
+                assign aux_out_valid = 1'b0;
+                assign aux_y = {DATA_W{1'b0}};
+                assign aux_ovf = {LPF_SECTIONS{1'b0}};
+                assign lpf_y = lpf_yall;
+                assign lpf_o = lpf_oall;
+                /* verilator lint_off UNUSEDSIGNAL */
+                wire unused_aux = aux_in_valid ^ (^aux_x);
+                /* verilator lint_on UNUSEDSIGNAL */
+            end
 
             // ---- CORDIC: one step per cycle on cx, cy, cz ----
             reg [JW-1:0] j;
@@ -572,7 +640,7 @@ module demod #(
                     add_sin <= (rk == R_M);
                     if (mac_valid) rk <= rk + 3'd1;
                     case (st)
-                        S_IDLE: if (in_valid) begin
+                        S_IDLE: if (take) begin
                             rk <= R_D; got_i <= 1'b0; st <= S_RD;
                         end
                         S_RD:   st <= S_NB;

@@ -38,6 +38,15 @@
 //   section 0 at the end of a channel). y's slice of channel c loads at the end of channel c; all
 //   of y and ovf are valid with out_valid. Cycles per sample: CHANNELS * SECTIONS * (7 N + 10) + 1;
 //   latency CHANNELS * SECTIONS * (7 N + 10). CHANNELS = 1 is the single-channel engine above.
+//   COEF_SETS (CHANNELS > 1): 1 = every channel filters with the same coefficients (COEF_FILE holds
+//   one set: 7 SECTIONS words); CHANNELS = one set per channel (SETS_FILE, read instead: 7 SECTIONS
+//   CHANNELS words, channel c's from word 7 SECTIONS c), e.g. two different filters through one engine.
+//   SPLIT = 1 (CHANNELS > 1): the last channel is a pass of its own. A sample then takes two passes,
+//   each started by in_valid and ended by out_valid: channels 0 .. CHANNELS - 2 (x's slices of them
+//   read at the first take), then the last channel (its slice read at the second take). Passes
+//   alternate from reset; y and ovf slices of a channel change only in its own pass. Cycles per pass:
+//   (channels of the pass) * SECTIONS * (7 N + 10) + 1. chain_paper002 ARCH = 1 runs its output
+//   low-pass as such a last channel of the demodulator's I / Q engine.
 //   EXT_MAC = 1: no multiplier here; the products go out on the mac_* bundle (fx_mac_port) to a
 //   multiplier shared with other blocks (demod's, chain_paper002's), the schedule unchanged.
 `default_nettype none
@@ -54,10 +63,13 @@ module iir #(
     parameter integer OVERFLOW  = 1,
     parameter integer ARCH      = 0,     // 0: one sample per cycle; 1: serial, one shared multiplier
     parameter integer CHANNELS  = 1,     // signals through the engine (> 1: ARCH = 1 only)
+    parameter integer COEF_SETS = 1,     // coefficient sets in COEF_FILE: 1 (shared) or CHANNELS (one per channel)
+    parameter integer SPLIT     = 0,     // 1: the last channel runs as a pass of its own (CHANNELS > 1)
     parameter integer EXT_MAC   = 0,     // ARCH = 1: 0 its own fx_mac_serial; 1 the external one on mac_* (fx_mac_port)
     parameter integer MAC_A_W   = 48,    // EXT_MAC = 1: the external multiplier's operand widths (>= MA_W, MB_W)
     parameter integer MAC_B_W   = 32,    // (a: MAC_A_W bits, b: MAC_B_W bits; 3 x 2 limbs by default)
-    parameter         COEF_FILE = "iir_coef.hex"
+    parameter         COEF_FILE = "iir_coef.hex",
+    parameter         SETS_FILE = "iir_sets_coef.hex"   // COEF_SETS > 1: the file read instead (a set per channel)
 ) (
     input  wire                         clk,
     input  wire                         rst,
@@ -86,14 +98,24 @@ module iir #(
     localparam integer AW  = (AW0 > CE_W) ? AW0 : CE_W;
     localparam integer RW  = AW - OUT_SHIFT + 1;
 
-    reg [COEF_W-1:0] coef [0:7*SECTIONS-1];
-    initial $readmemh(COEF_FILE, coef);
+    reg [COEF_W-1:0] coef [0:7*SECTIONS*COEF_SETS-1];
 
     genvar s;
     generate
+        // the file of the sets (two parameters: a string conditional would pad the shorter name)
+        if (COEF_SETS > 1) begin : g_sets_file
+            initial $readmemh(SETS_FILE, coef);
+        end else begin : g_coef_file
+            initial $readmemh(COEF_FILE, coef);
+        end
         if (CHANNELS < 1 || (CHANNELS > 1 && ARCH != 1)) begin : g_bad_channels
             initial begin $display("iir: CHANNELS > 1 needs ARCH = 1, got CHANNELS %0d, ARCH %0d", CHANNELS, ARCH);
                           $finish; end
+        end
+        if ((COEF_SETS != 1 && COEF_SETS != CHANNELS) || (SPLIT != 0 && (SPLIT != 1 || CHANNELS < 2)))
+        begin : g_bad_split
+            initial begin $display("iir: COEF_SETS must be 1 or CHANNELS and SPLIT 0, or 1 with CHANNELS > 1, got %0d, %0d, %0d",
+                                   COEF_SETS, SPLIT, CHANNELS); $finish; end
         end
         if (ARCH == 0) begin : g_par
             // ---- one sample per cycle: the cascade is combinational ----
@@ -183,8 +205,8 @@ module iir #(
             localparam integer MA_W = (COEF_W > E_W) ? COEF_W : E_W;          // a: coefficient or error e
             localparam integer MB_W = DATA_W;                                // b: data or weight c
             localparam integer MP_W = MA_W + MB_W;
-            localparam integer RA_W = $clog2(7 * SECTIONS);                  // ROM address 7 sec + k
-            localparam integer RA_LAST_I = 7 * SECTIONS - 1;
+            localparam integer RA_W = (7 * SECTIONS * COEF_SETS > 1) ? $clog2(7 * SECTIONS * COEF_SETS) : 1;
+            localparam integer RA_LAST_I = 7 * SECTIONS * COEF_SETS - 1;     // ROM address 7 (set S + sec) + k
             localparam [RA_W-1:0] RA_LAST = RA_LAST_I[RA_W-1:0];
             localparam integer SEC_W = (SECTIONS > 1) ? $clog2(SECTIONS) : 1;
             localparam integer SEC_LAST_I = SECTIONS - 1;
@@ -193,10 +215,14 @@ module iir #(
             localparam integer SL_W = (SLOTS > 1) ? $clog2(SLOTS) : 1;
             localparam integer CH_W = (CHANNELS > 1) ? $clog2(CHANNELS) : 1;
             localparam integer CH_LAST_I = CHANNELS - 1;
+            localparam integer NA = CHANNELS - SPLIT;                         // channels of the first pass
+            localparam integer NA_LAST_I = NA - 1;
+            localparam integer B_SLOT_I = NA * SECTIONS;                      // the last channel's first slot (SPLIT)
             localparam integer TAIL = SLOTS - 1;                              // slot of the state just updated
             localparam [SL_W-1:0] TAIL_S = TAIL[SL_W-1:0];
             localparam integer ROT = (CHANNELS > 1) ? TAIL : 0;                // slots rotated (CHANNELS > 1)
             localparam [CH_W-1:0] CH_LAST = CH_LAST_I[CH_W-1:0];
+            localparam [CH_W-1:0] NA_LAST = NA_LAST_I[CH_W-1:0];
             localparam integer LO_W = AW / 2;   // the accumulator in two halves: short carry chains
             localparam integer HI_W = AW - LO_W;
             localparam [2:0] S_IDLE  = 3'd0;    // FSM states
@@ -255,36 +281,63 @@ module iir #(
             reg signed [E_W-1:0]    se1 [0:SLOTS-1];
             reg signed [E_W-1:0]    se2 [0:SLOTS-1];
             wire ch_done = (sec == SEC_LAST);                   // the channel's last section
-            wire all_done = ch_done && (CHANNELS == 1 || ch == CH_LAST);
+            // the pass's last channel: every channel, or (SPLIT) the first pass's last, then the last channel
+            wire all_done = ch_done && (CHANNELS == 1 || ch == CH_LAST || (SPLIT != 0 && ch == NA_LAST));
+            wire pass_b;                // SPLIT: the next (or current) pass is the last channel's
+            wire signed [DATA_W-1:0] x_pass;    // the pass's first input: channel 0's, or the last channel's
 
             // ---- channels: the state slot, the other channels' inputs ----
             if (CHANNELS == 1) begin : g_one_ch
                 assign slot = sec;
                 assign x_first = x;
                 assign x_next = x_first;     // never used: one channel
+                assign pass_b = 1'b0;
+                assign x_pass = x_first;
             end else begin : g_chs
                 reg [SL_W-1:0] slot_q;       // ch * SECTIONS + sec, counted
                 wire take = (st == S_IDLE) && in_valid;
-                reg [(CHANNELS-1)*DATA_W-1:0] xr;   // channels 1.. of the sample, next one lowest
-                wire [(CHANNELS-1)*DATA_W-1:0] x_rest;
-                assign {x_rest, x_first} = x;
+                assign x_first = x[DATA_W-1:0];
                 assign slot = slot_q;
-                if (CHANNELS == 2) begin : g_two
-                    assign x_next = xr;
-                    always @(posedge clk) if (take) xr <= x_rest;
-                end else begin : g_more
-                    wire [DATA_W-1:0] xr_lo;
-                    wire [(CHANNELS-2)*DATA_W-1:0] xr_hi;
-                    assign {xr_hi, xr_lo} = xr;
-                    assign x_next = xr_lo;
-                    always @(posedge clk) begin
-                        if (take) xr <= x_rest;
-                        else if (st == S_UPD && ch_done) xr <= {xr_lo, xr_hi};   // rotate: next channel lowest
+                if (NA == 1) begin : g_single   // SPLIT with two channels: a channel per pass
+                    assign x_next = x_first;    // never used: one channel per pass
+                end else begin : g_first_pass
+                    // channels 1 .. NA - 1 of the sample (the first pass's), the next one lowest
+                    reg [(NA-1)*DATA_W-1:0] xr;
+                    wire [(NA-1)*DATA_W-1:0] x_rest = x[DATA_W +: (NA-1)*DATA_W];
+                    if (NA == 2) begin : g_two
+                        assign x_next = xr;
+                        always @(posedge clk) if (take) xr <= x_rest;
+                    end else begin : g_more
+                        wire [DATA_W-1:0] xr_lo;
+                        wire [(NA-2)*DATA_W-1:0] xr_hi;
+                        assign {xr_hi, xr_lo} = xr;
+                        assign x_next = xr_lo;
+                        always @(posedge clk) begin
+                            if (take) xr <= x_rest;
+                            else if (st == S_UPD && ch_done) xr <= {xr_lo, xr_hi};   // rotate: next channel lowest
+                        end
                     end
                 end
-                always @(posedge clk) begin
-                    if (take) slot_q <= {SL_W{1'b0}};
-                    else if (st == S_UPD) slot_q <= slot_q + {{(SL_W-1){1'b0}}, 1'b1};
+                if (SPLIT != 0) begin : g_split
+                    // the passes alternate: the first pass's channels, then the last channel alone
+                    reg pb;
+                    always @(posedge clk) begin
+                        if (rst) pb <= 1'b0;
+                        else if (st == S_UPD && all_done) pb <= ~pb;
+                    end
+                    assign pass_b = pb;
+                    assign x_pass = pb ? x[CH_LAST_I*DATA_W +: DATA_W] : x_first;
+                    always @(posedge clk) begin
+                        if (take) slot_q <= pb ? B_SLOT_I[SL_W-1:0] : {SL_W{1'b0}};
+                        else if (st == S_UPD) slot_q <= slot_q + {{(SL_W-1){1'b0}}, 1'b1};
+                    end
+                end else begin : g_whole
+                    assign pass_b = 1'b0;
+                    assign x_pass = x_first;
+                    always @(posedge clk) begin
+                        if (take) slot_q <= {SL_W{1'b0}};
+                        else if (st == S_UPD) slot_q <= slot_q + {{(SL_W-1){1'b0}}, 1'b1};
+                    end
                 end
             end
 
@@ -420,7 +473,8 @@ module iir #(
                     if (hi_go) sum_hi <= hi_n;
                     case (st)
                         S_IDLE: if (in_valid) begin
-                            v <= x_first; sec <= {SEC_W{1'b0}}; ch <= {CH_W{1'b0}}; k <= K_B0; st <= S_MAC;
+                            v <= x_pass; sec <= {SEC_W{1'b0}}; ch <= pass_b ? CH_LAST : {CH_W{1'b0}};
+                            k <= K_B0; st <= S_MAC;
                         end
                         S_MAC: if (mac_valid && rk == K_C2) st <= S_LO;
                         S_LO: st <= S_HI;

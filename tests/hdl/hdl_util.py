@@ -101,6 +101,8 @@ READY_PORT = {
 # harness runs them on their own multiplier (EXT_MAC = 0) and ties the bundle off, declared at
 # 2 x 2 bits (Verilator warns of a missing pin)
 MAC_PORT = {"iir", "piecewise", "rtd", "demod"}
+# modules with the auxiliary low-pass channel (aux_*, read only with AUX_LPF = 1): tied off alone
+AUX_PORT = {"demod"}
 
 
 def is_serial(extra: dict | None) -> bool:
@@ -521,6 +523,9 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
     if module in MAC_PORT and not design.instances[name].members:
         conns += [".mac_in_valid()", ".mac_in_ready(1'b0)", ".mac_a()", ".mac_b()", ".mac_na()", ".mac_nb()",
                   ".mac_out_valid(1'b0)", ".mac_p(4'd0)"]
+    if module in AUX_PORT and not design.instances[name].members:
+        w = design.instances[name].ports["i"].format.wl
+        conns += [".aux_in_valid(1'b0)", f".aux_x({w}'d0)", ".aux_out_valid()", ".aux_y()", ".aux_ovf()"]
     L.append(f"    wire [{n_ovf - 1}:0] ign = {n_ovf}'d{ovf_ignore(design, name)};")
     L.append(f"    {module} {pov} dut ({', '.join(conns)});")
     L.append("    always #5 clk = ~clk;")

@@ -208,7 +208,7 @@ MUTATIONS = [
     Mutation("demod_serial_stale_d", "demod.v", "S_WD:   if (mac_valid) st <= S_PC;", "S_WD:   st <= S_PC;",
              "serial demod: the NCO corrections issued before d = delta * TWO_PI returns (delta used as d)",
              ((None, "demod", False, SERIAL["demod"]),)),
-    Mutation("demod_serial_missed_stall", "demod.v", "assign in_ready = (st == S_IDLE);", "assign in_ready = 1'b1;",
+    Mutation("demod_serial_missed_stall", "demod.v", "assign in_ready = idle;", "assign in_ready = 1'b1;",
              "serial demod: in_ready high while a sample is computed (samples taken mid-schedule are lost)",
              (({}, "demod", False, SERIAL["demod"]),)),
     Mutation("demod_serial_lpf_wrong_channel_slot", "iir.v", "localparam integer TAIL = SLOTS - 1;",
@@ -245,15 +245,32 @@ MUTATIONS = [
              "(wrong slot: the previous sample's bias)",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
     # ---- one multiplier shared by the serial blocks: demod ARCH = 1 with its filters, chain 002 ARCH = 1 ----
-    Mutation("chain002_mac_owner_kept", "chain_paper002.v", "else if (sh_in & sh_ready) own <= req;",
-             "else if (sh_in & sh_ready) own <= own | req;",
-             "serial chain 002: the shared multiplier's owner not replaced at a take: out_valid also reaches every "
-             "block that issued earlier (their product counters advance on others' products)",
+    # (own <= own | req, an owner kept after its products, is an equivalent mutant since the output
+    # low-pass runs in demod's engine: every block is idle while another multiplies and ignores a stray
+    # out_valid; the owner must still be held from the take to the product's return)
+    Mutation("chain002_mac_owner_not_held", "chain_paper002.v", "else if (sh_in & sh_ready) own <= req;",
+             "else own <= req;",
+             "serial chain 002: the shared multiplier's owner follows the live requests instead of being held "
+             "from the take: a product that returns while nobody requests reaches no block",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
-    Mutation("chain002_mac_stale_operand", "chain_paper002.v", "({MAC_A_W{ir_req}} & ir_a)",
-             "({MAC_A_W{own[4]}} & ir_a)",
-             "serial chain 002: the iir's operand a selected by the previous product's owner, not by its request "
-             "(its first product of a sample takes another block's operand)",
+    Mutation("chain002_mac_stale_operand", "chain_paper002.v", "({MAC_A_W{dm_req}} & dm_a)",
+             "({MAC_A_W{own[3]}} & dm_a)",
+             "serial chain 002: the demodulator's operand a selected by the previous product's owner, not by its "
+             "request (its first product of a sample takes the bias engine's operand)",
+             ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
+    # ---- one filter engine: the output low-pass as the demodulator's engine's third channel (LPF_SHARED) ----
+    Mutation("chain002_lpf_wrong_set", "demod.v", ".COEF_SETS((AUX_LPF != 0) ? LCH : 1)", ".COEF_SETS(1)",
+             "serial chain 002: the output low-pass (the filter engine's third channel) filters with the "
+             "demodulator's low-pass coefficients, not its own set (wrong slot)",
+             ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
+    Mutation("chain002_lpf_stale_input", "chain_paper002.v", "assign aux_go  = s_v;", "assign aux_go  = sub_go;",
+             "serial chain 002: the output low-pass takes the subtraction's output a cycle before its out_valid "
+             "(the previous sample's difference: stale operand)",
+             ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
+    Mutation("chain002_lpf_wrong_channel_input", "iir.v",
+             "assign x_pass = pb ? x[CH_LAST_I*DATA_W +: DATA_W] : x_first;", "assign x_pass = x_first;",
+             "split iir engine: the last channel's pass filters channel 0's input (the demodulator's I mixer) "
+             "instead of its own",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
     Mutation("demod_mac_valid_to_filter", "demod.v", ".mac_out_valid(sh_valid & lpf_own)",
              ".mac_out_valid(sh_valid)",

@@ -58,6 +58,9 @@ ALLOWED: dict[tuple[str, str, str], tuple[int, str]] = {
         1, "16-bit limb of an operand of the exact serial product: every limb is multiplied, no bit dropped"),
     ("fx_mac_serial", "select", "b_x[LIMB*jb+:LIMB]"): (
         1, "16-bit limb of an operand of the exact serial product: every limb is multiplied, no bit dropped"),
+    # the serial iir's channel slices of its multi-channel x (channel c in bits c DATA_W ..)
+    ("iir", "select", "x[DATA_W+:(NA-1)*DATA_W]"): (1, "the input channels 1 .. NA - 1 of the first pass, not a value"),
+    ("iir", "select", "x[CH_LAST_I*DATA_W+:DATA_W]"): (1, "the last channel's input (SPLIT), not a value"),
     ("fx_fit", "select", "xe[W-2:TOP]"): (
         1, "the bits above the format, tested for all-sign (the range test); never kept as a value"),
     ("fx_mac_serial", "right-shift", "acc>>>LIMB"): (

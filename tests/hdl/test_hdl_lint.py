@@ -35,6 +35,12 @@ VARIANTS = [
     ("fx_mac_port", {"EXT_MAC": 1, "VAR_N": 1, "A_W": 48, "B_W": 32}),
     ("iir", {"ARCH": 1, "EXT_MAC": 1}),
     ("iir", {"ARCH": 1, "CHANNELS": 2, "EXT_MAC": 1}),
+    # one engine for different filters: a coefficient set per channel, the last channel a pass of its own
+    ("iir", {"ARCH": 1, "CHANNELS": 3, "COEF_SETS": 3, "SPLIT": 1, "EXT_MAC": 1}),   # chain_paper002's
+    ("iir", {"ARCH": 1, "CHANNELS": 2, "COEF_SETS": 2, "SPLIT": 1}),                 # a channel per pass
+    ("iir", {"ARCH": 1, "CHANNELS": 4, "COEF_SETS": 4, "SPLIT": 1, "SECTIONS": 2}),  # three, then one
+    ("demod", {"ARCH": 1, "EXT_MAC": 1, "AUX_LPF": 1}),
+    ("demod", {"ARCH": 1, "AUX_LPF": 1, "LPF_SECTIONS": 2}),
     ("rtd", {"ARCH": 1, "EXT_MAC": 1}),
     ("piecewise", {"ARCH": 1, "EXT_MAC": 1}),
     ("demod", {"ARCH": 1, "EXT_MAC": 1}),
