@@ -50,7 +50,7 @@
 //     has no multiplier); demod on the later of the divider's out_valid and the bias engine's
 //     (the shared multiplier: demod's first product is issued without a wait) (and its in_ready); the
 //     subtraction I - bias one cycle after the later of demod's and the bias engine's out_valid
-//     (both registered: I into i_r, bias into b_r); iir on the subtraction's out_valid; out_valid
+//     (both held in the blocks' output registers); iir on the subtraction's out_valid; out_valid
 //     one cycle after the iir's, busy cleared with it.
 //   Cycles per sample (accepting edge to the next sample's, back to back):
 //     D_rtd + [D_lag] + D_sf + max(D_div, D_bias) + D_demod + 3 + D_iir
@@ -183,10 +183,12 @@ module chain_paper002 #(
     wire [SUB_W-1:0] s_w;
     wire             ovf_sub;
     wire              sub_go;     // the subtraction's start: demod's out_valid (ARCH 0), the join (ARCH 1)
-    wire [DATA_W-1:0] sub_x;      // its I: demod's output (ARCH 0), registered (ARCH 1)
+    wire [DATA_W-1:0] sub_x;      // its I: demod's output
+    wire [BIAS_W-1:0] sub_b;      // its bias: registered here (ARCH 0), the bias engine's held output (ARCH 1)
+    wire [TEMP_W-1:0] temp_o;     // the temperature output: registered here (ARCH 0), rtd's held output (ARCH 1)
     bias_subtract #(
 `include "bias_subtract_params.vh"
-    ) u_sub (.clk(clk), .rst(rst), .in_valid(sub_go), .x(sub_x), .bias(b_r), .out_valid(s_v), .y(s_w),
+    ) u_sub (.clk(clk), .rst(rst), .in_valid(sub_go), .x(sub_x), .bias(sub_b), .out_valid(s_v), .y(s_w),
              .ovf(ovf_sub));
     wire                 r_v;
     wire [RATE_W-1:0]    r_w;
@@ -223,8 +225,6 @@ module chain_paper002 #(
     endgenerate
 
     // ---- per-sample registers (one sample in flight) ----
-    reg [TEMP_W-1:0]   temp_r;
-    reg [BIAS_W-1:0]   b_r;
     reg                ovf_rtd_r;
     reg [SF_OVF_W-1:0] ovf_sf_r;
     reg [B_OVF_W-1:0]  ovf_b_r;
@@ -233,9 +233,9 @@ module chain_paper002 #(
     reg                ovf_sub_r;
     always @(posedge clk) begin
         if (accept) vsa_r <= vsa;
-        if (t_v) begin temp_r <= t_w; ovf_rtd_r <= ovf_rtd; end
+        if (t_v) ovf_rtd_r <= ovf_rtd;
         if (sf_v) ovf_sf_r <= ovf_sf;
-        if (b_v) begin b_r <= b_w; ovf_b_r <= ovf_b; end
+        if (b_v) ovf_b_r <= ovf_b;
         if (d_v) ovf_div_r <= ovf_div;
         if (i_v) ovf_dm_r <= ovf_dm;
         if (s_v) ovf_sub_r <= ovf_sub;
@@ -272,6 +272,15 @@ module chain_paper002 #(
             assign dm_go  = d_v;
             assign sub_go = i_v;
             assign sub_x  = i_w;
+            // the pipelined blocks' outputs move on with the next sample's: temperature and bias held here
+            reg [TEMP_W-1:0] temp_r;
+            reg [BIAS_W-1:0] b_r;
+            always @(posedge clk) begin
+                if (t_v) temp_r <= t_w;
+                if (b_v) b_r <= b_w;
+            end
+            assign sub_b  = b_r;
+            assign temp_o = temp_r;
             // no shared multiplier
             assign sh_ready = 1'b0;
             assign sh_valid = 1'b0;
@@ -331,9 +340,9 @@ module chain_paper002 #(
             end
 `endif
             // the subtraction: one cycle after the later of I (demod's out_valid) and bias(T) (the
-            // bias engine's out_valid), from registers: I in i_r, bias in b_r
+            // bias engine's out_valid), from the blocks' output registers: each holds its value until its
+            // block's next sample, which is the chain's next (no copy here; the temperature likewise)
             reg i_done, b_done, sub_q;
-            reg [DATA_W-1:0] i_r;
             wire last = (i_v & (b_done | b_v)) | (b_v & i_done);
             always @(posedge clk) begin
                 if (rst | accept) begin
@@ -343,10 +352,11 @@ module chain_paper002 #(
                     if (i_v) i_done <= 1'b1;
                     if (b_v) b_done <= 1'b1;
                 end
-                if (i_v) i_r <= i_w;
             end
             assign sub_go = sub_q;
-            assign sub_x  = i_r;
+            assign sub_x  = i_w;
+            assign sub_b  = b_w;
+            assign temp_o = t_w;
         end
     endgenerate
 
@@ -362,7 +372,7 @@ module chain_paper002 #(
             if (accept) busy <= 1'b1;
             if (r_v) begin
                 busy <= 1'b0;
-                temp <= temp_r;
+                temp <= temp_o;
                 rate <= r_w;
                 ovf  <= ovf_n;
             end

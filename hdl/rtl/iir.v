@@ -47,6 +47,13 @@
 //   alternate from reset; y and ovf slices of a channel change only in its own pass. Cycles per pass:
 //   (channels of the pass) * SECTIONS * (7 N + 10) + 1. chain_paper002 ARCH = 1 runs its output
 //   low-pass as such a last channel of the demodulator's I / Q engine.
+//   State (ARCH = 1): in block RAM, not flip-flops (two SB_RAM40_4K-friendly memories, one
+//   registered read port and one write port each: x1 x2 y1 y2 in one, e1 e2 in the other). The
+//   state word of product k is read while k holds, like its coefficient; a pair's newer word is
+//   marked by a per-slot bit (ph) and an update writes the new value over the older word and flips
+//   it (x in the S_LO cycle, y and e in S_UPD), so nothing is copied; rst clears per-slot
+//   "written" bits and a word not written since rst reads as 0 (the model's reset state), so the
+//   RAM needs no clearing. Same schedule and cycles as above.
 //   EXT_MAC = 1: no multiplier here; the products go out on the mac_* bundle (fx_mac_port) to a
 //   multiplier shared with other blocks (demod's, chain_paper002's), the schedule unchanged.
 `default_nettype none
@@ -218,9 +225,6 @@ module iir #(
             localparam integer NA = CHANNELS - SPLIT;                         // channels of the first pass
             localparam integer NA_LAST_I = NA - 1;
             localparam integer B_SLOT_I = NA * SECTIONS;                      // the last channel's first slot (SPLIT)
-            localparam integer TAIL = SLOTS - 1;                              // slot of the state just updated
-            localparam [SL_W-1:0] TAIL_S = TAIL[SL_W-1:0];
-            localparam integer ROT = (CHANNELS > 1) ? TAIL : 0;                // slots rotated (CHANNELS > 1)
             localparam [CH_W-1:0] CH_LAST = CH_LAST_I[CH_W-1:0];
             localparam [CH_W-1:0] NA_LAST = NA_LAST_I[CH_W-1:0];
             localparam integer LO_W = AW / 2;   // the accumulator in two halves: short carry chains
@@ -233,7 +237,7 @@ module iir #(
             localparam [2:0] S_FIT   = 3'd5;    // fit and error registered
             localparam [2:0] S_UPD   = 3'd6;    // state update, next section or output
             localparam [2:0] K_B0 = 3'd0;       // product slots, in ROM order
-            localparam [2:0] K_B1 = 3'd1;
+            //               K_B1 = 1: b1 x1 (the newest x word: no case of its own)
             localparam [2:0] K_B2 = 3'd2;
             localparam [2:0] K_A1 = 3'd3;
             localparam [2:0] K_A2 = 3'd4;
@@ -274,12 +278,20 @@ module iir #(
             reg              ovf_q;     // ... its overflow flag
             reg [E_W-1:0]    res_q;     // sum - (r_q << OUT_SHIFT): the error before the overflow rule
             reg [SLOTS-1:0]  ovf_w;     // flags of the sections done so far
-            reg signed [DATA_W-1:0] sx1 [0:SLOTS-1];
-            reg signed [DATA_W-1:0] sx2 [0:SLOTS-1];
-            reg signed [DATA_W-1:0] sy1 [0:SLOTS-1];
-            reg signed [DATA_W-1:0] sy2 [0:SLOTS-1];
-            reg signed [E_W-1:0]    se1 [0:SLOTS-1];
-            reg signed [E_W-1:0]    se2 [0:SLOTS-1];
+            // the state in block RAM, one registered read port and one write port each (SB_RAM40_4K):
+            // xy = x1, x2, y1, y2 (DATA_W bits) at {slot, pair (0 x, 1 y), word}, e = e1, e2 (E_W bits)
+            // at {slot, word}. A pair's two words are the newest (1) and the one before (2): word ph of
+            // the slot is the newest, ~ph the older; an update writes the new value over the older word
+            // and flips ph, so nothing is copied. A word not written since rst reads as 0 (vld: the
+            // model's reset state) without clearing the RAM.
+            (* ram_style = "block" *) reg [DATA_W-1:0] ram_xy [0:4*(1<<SL_W)-1];
+            (* ram_style = "block" *) reg [E_W-1:0]    ram_e  [0:2*(1<<SL_W)-1];
+            reg [SLOTS-1:0]  ph;        // per slot: which word of each pair is the newest
+            reg [SLOTS-1:0]  vld0;      // per slot: word 0 / word 1 written since rst
+            reg [SLOTS-1:0]  vld1;
+            reg [DATA_W-1:0] xy_q;      // registered reads
+            reg [E_W-1:0]    e_q;
+            reg              xy_ok, e_ok;   // ... of words written since rst
             wire ch_done = (sec == SEC_LAST);                   // the channel's last section
             // the pass's last channel: every channel, or (SPLIT) the first pass's last, then the last channel
             wire all_done = ch_done && (CHANNELS == 1 || ch == CH_LAST || (SPLIT != 0 && ch == NA_LAST));
@@ -344,23 +356,24 @@ module iir #(
             assign in_ready = (st == S_IDLE);
             always @(posedge clk) coef_q <= coef[ra];
 
-            // ---- operands of product k of section sec ----
-            // CHANNELS > 1: the state of the (channel, section) being computed is always in slot 0: S_UPD
-            // rotates the slots (slot i takes slot i + 1, the updated state goes to the tail), so after
-            // the CHANNELS * SECTIONS sections of a sample every state is back in place (no read
-            // multiplexer over the channels). CHANNELS = 1: the slots indexed by the section, as before
-            // (fewer LUTs there than the rotation).
-            wire [SL_W-1:0] rd_slot = (CHANNELS == 1) ? slot : {SL_W{1'b0}};
-            wire [SL_W-1:0] wr_slot = (CHANNELS == 1) ? slot : TAIL_S;
-            wire signed [DATA_W-1:0] x1 = sx1[rd_slot];
-            wire signed [DATA_W-1:0] x2 = sx2[rd_slot];
-            wire signed [DATA_W-1:0] y1 = sy1[rd_slot];
-            wire signed [DATA_W-1:0] y2 = sy2[rd_slot];
-            wire signed [E_W-1:0]    e1 = se1[rd_slot];
-            wire signed [E_W-1:0]    e2 = se2[rd_slot];
+            // ---- operands of product k of section sec: the state word read for k (one cycle ahead,
+            // like the coefficient: both are read while k holds, rom_ok says when) ----
+            // k = 1, 2: x1 (newest word), x2; 3, 4: y1, y2; 5, 6: e1, e2
+            wire ph_s = ph[slot];
+            wire rd_w = ph_s ^ (k == K_B2 || k == K_A2 || k == K_C2);   // the word: newest, or the older
+            wire [SL_W+1:0] xy_ra = {slot, (k == K_A1 || k == K_A2), rd_w};
+            wire [SL_W:0]   e_ra  = {slot, rd_w};
+            wire            rd_ok = rd_w ? vld1[slot] : vld0[slot];
+            always @(posedge clk) begin
+                xy_q  <= ram_xy[xy_ra];
+                e_q   <= ram_e[e_ra];
+                xy_ok <= rd_ok;
+                e_ok  <= rd_ok;
+            end
+            wire signed [DATA_W-1:0] s_xy = xy_q & {DATA_W{xy_ok}};
+            wire signed [E_W-1:0]    s_e  = e_q & {E_W{e_ok}};
             wire signed [MA_W-1:0] ca  = {{(MA_W-COEF_W+1){coef_q[COEF_W-1]}}, coef_q[COEF_W-2:0]};
-            wire signed [MA_W-1:0] e1a = {{(MA_W-E_W+1){e1[E_W-1]}}, e1[E_W-2:0]};
-            wire signed [MA_W-1:0] e2a = {{(MA_W-E_W+1){e2[E_W-1]}}, e2[E_W-2:0]};
+            wire signed [MA_W-1:0] ea  = {{(MA_W-E_W+1){s_e[E_W-1]}}, s_e[E_W-2:0]};
             // the error-feedback weight: the low C_W bits of its ROM word, as the parallel variant
             wire signed [MB_W-1:0] cb  = {{(MB_W-C_W+1){coef_q[C_W-1]}}, coef_q[C_W-2:0]};
             reg  signed [MA_W-1:0] a_op;
@@ -368,12 +381,8 @@ module iir #(
             always @* begin
                 case (k)
                     K_B0: begin a_op = ca;  b_op = v;  end
-                    K_B1: begin a_op = ca;  b_op = x1; end
-                    K_B2: begin a_op = ca;  b_op = x2; end
-                    K_A1: begin a_op = ca;  b_op = y1; end   // subtracted when accumulated
-                    K_A2: begin a_op = ca;  b_op = y2; end
-                    K_C1: begin a_op = e1a; b_op = cb; end
-                    default: begin a_op = e2a; b_op = cb; end   // K_C2
+                    K_C1, K_C2: begin a_op = ea; b_op = cb; end
+                    default: begin a_op = ca; b_op = s_xy; end   // x1, x2, y1, y2 (the a's subtracted when accumulated)
                 endcase
             end
 
@@ -437,6 +446,17 @@ module iir #(
                 res_q <= res[E_W-1:0];
             end
 
+            // the state writes, over the slot's older words (~ph): x = the section's input once its
+            // seven products are issued (S_LO), y and e when the section's output is known (S_UPD)
+            wire              upd   = (st == S_UPD);
+            wire              xy_we = (st == S_LO) || upd;      // one write port: x, then y
+            wire [SL_W+1:0]   xy_wa = {slot, upd, ~ph_s};
+            wire [DATA_W-1:0] xy_wd = upd ? out_q : v;
+            always @(posedge clk) begin
+                if (xy_we) ram_xy[xy_wa] <= xy_wd;
+                if (upd)   ram_e[{slot, ~ph_s}] <= e_c;
+            end
+
             integer i;
             always @(posedge clk) begin
                 if (rst) begin
@@ -444,11 +464,7 @@ module iir #(
                     lo_go <= 1'b0; hi_go <= 1'b0;
                     ra <= {RA_W{1'b0}}; rom_ok <= 1'b0; ovf_w <= {SLOTS{1'b0}};
                     out_valid <= 1'b0; y <= {(CHANNELS*DATA_W){1'b0}}; ovf <= {SLOTS{1'b0}};
-                    for (i = 0; i < SLOTS; i = i + 1) begin
-                        sx1[i] <= {DATA_W{1'b0}}; sx2[i] <= {DATA_W{1'b0}};
-                        sy1[i] <= {DATA_W{1'b0}}; sy2[i] <= {DATA_W{1'b0}};
-                        se1[i] <= {E_W{1'b0}};    se2[i] <= {E_W{1'b0}};
-                    end
+                    ph <= {SLOTS{1'b0}}; vld0 <= {SLOTS{1'b0}}; vld1 <= {SLOTS{1'b0}};
                 end else begin
                     out_valid <= 1'b0;
                     rom_ok <= ~issue;
@@ -484,14 +500,10 @@ module iir #(
                         end
                         S_FIT: st <= S_UPD;
                         default: begin   // S_UPD: the section's output and its state update
-                            for (i = 0; i < ROT; i = i + 1) begin    // rotate: the next section's state to slot 0
-                                sx1[i] <= sx1[i+1]; sx2[i] <= sx2[i+1];
-                                sy1[i] <= sy1[i+1]; sy2[i] <= sy2[i+1];
-                                se1[i] <= se1[i+1]; se2[i] <= se2[i+1];
-                            end
-                            sx1[wr_slot] <= v;     sx2[wr_slot] <= x1;
-                            sy1[wr_slot] <= out_q; sy2[wr_slot] <= y1;
-                            se1[wr_slot] <= e_c;   se2[wr_slot] <= e1;
+                            // the state: x (written in S_LO), y and e over the older words, now the newest
+                            ph[slot] <= ~ph_s;
+                            if (ph_s) vld0[slot] <= 1'b1;
+                            else      vld1[slot] <= 1'b1;
                             v <= out_q;
                             ovf_w[slot] <= ovf_q;
                             for (i = 0; i < CHANNELS; i = i + 1)   // the channel's output (constant slices)

@@ -84,11 +84,20 @@ MUTATIONS = [
              "end else begin\n                        x1 <= v;", "filter state advances without in_valid",
              ((None, "iir", True),)),
     # the serial iir's scheduler (ARCH = 1) and its shared multiplier
-    Mutation("iir_serial_wrong_state_slot", "iir.v", "K_B2: begin a_op = ca;  b_op = x2; end",
-             "K_B2: begin a_op = ca;  b_op = x1; end", "serial: b2 multiplies x1 (operand of the wrong slot)",
+    Mutation("iir_serial_wrong_state_slot", "iir.v", "wire rd_w = ph_s ^ (k == K_B2 || k == K_A2 || k == K_C2);",
+             "wire rd_w = ph_s ^ (k == K_A2 || k == K_C2);", "serial: b2 multiplies x1 (operand of the wrong slot)",
+             ((None, "iir", False, SERIAL["iir"]),)),
+    # the serial iir's state in block RAM: the older word of each pair is overwritten, the reset is a mask
+    Mutation("iir_serial_state_overwrites_newest", "iir.v", "wire [SL_W+1:0]   xy_wa = {slot, upd, ~ph_s};",
+             "wire [SL_W+1:0]   xy_wa = {slot, upd, ph_s};",
+             "serial: the update writes x and y over the newest words (x1, y1) instead of the older (x2, y2 lost)",
+             ((None, "iir", False, SERIAL["iir"]),)),
+    Mutation("iir_serial_reset_state_unmasked", "iir.v", "wire signed [DATA_W-1:0] s_xy = xy_q & {DATA_W{xy_ok}};",
+             "wire signed [DATA_W-1:0] s_xy = xy_q;",
+             "serial: x, y words not written since rst read from the RAM as they are (not the model's zero state)",
              ((None, "iir", False, SERIAL["iir"]),)),
     Mutation("iir_serial_wrong_alignment_slot", "iir.v", "(rk <= K_B2) ? (pa <<< SHIFT_B)",
-             "(rk <= K_B1) ? (pa <<< SHIFT_B)", "serial: b2 x2 accumulated with the a products' alignment",
+             "(rk < K_B2) ? (pa <<< SHIFT_B)", "serial: b2 x2 accumulated with the a products' alignment",
              ((None, "iir", False, SERIAL["iir"]),)),
     Mutation("iir_serial_stale_sum", "iir.v", "S_LO: st <= S_HI;", "S_LO: st <= S_ROUND;",
              "serial: rounding reads the accumulator's high half before the last product reaches it",
@@ -211,8 +220,9 @@ MUTATIONS = [
     Mutation("demod_serial_missed_stall", "demod.v", "assign in_ready = idle;", "assign in_ready = 1'b1;",
              "serial demod: in_ready high while a sample is computed (samples taken mid-schedule are lost)",
              (({}, "demod", False, SERIAL["demod"]),)),
-    Mutation("demod_serial_lpf_wrong_channel_slot", "iir.v", "localparam integer TAIL = SLOTS - 1;",
-             "localparam integer TAIL = 0;",
+    Mutation("demod_serial_lpf_wrong_channel_slot", "iir.v",
+             "if (take) slot_q <= {SL_W{1'b0}};\n                        else if (st == S_UPD) slot_q <= slot_q + {{(SL_W-1){1'b0}}, 1'b1};",
+             "if (take) slot_q <= {SL_W{1'b0}};\n                        else if (st == S_UPD) slot_q <= slot_q;",
              "two-channel iir: the Q channel reads and updates the I channel's state slot",
              ((None, "demod", False, SERIAL["demod"]),)),
     Mutation("demod_serial_cordic_short", "demod.v", "localparam integer J_LAST_I = ITERATIONS - 1;",
@@ -239,11 +249,12 @@ MUTATIONS = [
              ".in_valid(ce_v), .in_ready(div_ready)",
              "serial chain 002: the divider started on the temperature, with the previous sample's SF",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
-    Mutation("chain002_serial_bias_before_out_valid", "chain_paper002.v",
-             "if (b_v) begin b_r <= b_w; ovf_b_r <= ovf_b; end", "if (b_go) begin b_r <= b_w; ovf_b_r <= ovf_b; end",
-             "serial chain 002: bias (and its flags) registered as the bias engine starts, before its out_valid "
-             "(wrong slot: the previous sample's bias)",
-             ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
+    Mutation("chain002_serial_demod_ignores_bias_engine", "chain_paper002.v",
+             "assign dm_go = (d_v | dm_pend) & dm_ready & b_ready;", "assign dm_go = (d_v | dm_pend) & dm_ready;",
+             "serial chain 002: the demodulator started on the quotient while the bias engine still multiplies "
+             "(missed stall: at DIV_UNROLL 48 the divider's 7 cycles end before the bias engine's product returns; "
+             "at DIV_UNROLL 7 its 13 cycles outlast it, an equivalent mutant there)",
+             ((None, "chain_paper002", False, {**SERIAL["chain_paper002"], "DIV_UNROLL": 48}),)),
     # ---- one multiplier shared by the serial blocks: demod ARCH = 1 with its filters, chain 002 ARCH = 1 ----
     # (own <= own | req, an owner kept after its products, is an equivalent mutant since the output
     # low-pass runs in demod's engine: every block is idle while another multiplies and ignores a stray
