@@ -20,6 +20,8 @@ import sys
 import tomllib
 from collections.abc import Iterable
 
+from .interrupts import interrupts_held
+
 # name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("fxdsp.commands.demo", "generate the golden vectors on the default config and print a summary"),
@@ -60,7 +62,10 @@ def build_parser(load: Iterable[str] | None = None) -> argparse.ArgumentParser:
     for name, (module_name, help_text) in COMMANDS.items():
         sp = sub.add_parser(name, help=help_text, description=help_text)
         if load is None or name in load:
-            module = importlib.import_module(module_name)
+            # SIGINT held during the import: a Ctrl-C landing inside importlib's own callbacks is
+            # printed as an ignored exception (a traceback) and lost; held, it interrupts right after
+            with interrupts_held():
+                module = importlib.import_module(module_name)
             module.configure(sp)
             sp.set_defaults(_module=module)
     return parser

@@ -25,13 +25,13 @@ import json
 import math
 import os
 import shutil
-import signal
 import tempfile
-import threading
 from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
+
+from .interrupts import interrupts_held
 
 IN, IN_DIR, OUT_FILE, OUT_DIR = "in", "in-dir", "out-file", "out-dir"
 DIRECT_ENV = "FXDSP_UNSAFE_DIRECT_WRITES"
@@ -129,22 +129,6 @@ def json_text(data, what: str, **kw) -> str:
         raise ValueError(f"{what}: the result holds a non-finite number (nan or inf); nothing written") from None
 
 
-@contextmanager
-def _interrupts_held():
-    """SIGINT during the block is delivered (as KeyboardInterrupt) when it ends."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    caught = []
-    previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
-        if caught:
-            raise KeyboardInterrupt
-
-
 class Stage:
     """Staged outputs: :meth:`path` gives where to write the file that will become ``final``."""
 
@@ -189,7 +173,7 @@ class Stage:
         moves = list(self._moves)
         for staged, final in self._trees:
             moves += [(f, final / f.relative_to(staged)) for f in sorted(staged.rglob("*")) if not f.is_dir()]
-        with _interrupts_held():
+        with interrupts_held():
             for staged, final in moves:
                 final.parent.mkdir(parents=True, exist_ok=True)
                 os.replace(staged, final)
