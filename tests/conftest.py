@@ -114,35 +114,29 @@ def failing_writes(k: int | None, exc: type[BaseException]):
 
 # ---- the order of the test files under `pytest -n 2 --dist loadfile` -----------------------------
 # pytest-xdist hands out whole files, by default the files with the most tests first, which puts the
-# long single-test files (the mutation proofs, ~30-50 s each) last, on one worker while the other
+# long single-test files (the mutation proofs, ~20-40 s each) last, on one worker while the other
 # idles. Longest first instead (LPT scheduling; the tail is then a few short files): seconds of each
 # file >= 5 s, measured on a fresh clone (Verilator models built) on a 2-core machine; every other
 # file after them in collection order. A wrong or stale number costs wall time, never a test.
 FILE_SECONDS = {
-    "hdl/test_hdl_golden.py": 160,
-    "hdl/test_hdl_long_blocks.py": 115,
-    "hdl/test_hdl_corners.py": 96,
-    "test_extend.py": 80,
-    "hdl/test_hdl_chain_stages.py": 62,
-    "test_budget.py": 58,
-    "hdl/test_mutation_serial.py": 47,
-    "hdl/test_hdl_random.py": 34,
-    "hdl/test_hdl_long_chains.py": 32,
-    "test_sweep.py": 32,
-    "hdl/test_mutation.py": 31,
-    "test_diagnose_independent.py": 28,
-    "test_diagnose_hidden.py": 26,
-    "test_outputs.py": 19,
-    "test_fixed_mutation.py": 11,
-    "test_budget_floor.py": 10,
-    "hdl/test_hdl_lint.py": 10,
-    "test_config_errors.py": 9,
-    "test_fixed_properties.py": 9,
-    "hdl/test_cocotb_driver.py": 8,
-    "test_datapath.py": 7,
-    "test_cli_commands.py": 6,
-    "test_log_reader.py": 5,
-    "test_config_writer.py": 5,
+    "hdl/test_hdl_golden.py": 90,
+    "hdl/test_hdl_corners.py": 71,
+    "hdl/test_hdl_long_blocks.py": 64,
+    "hdl/test_hdl_random.py": 39,
+    "test_extend.py": 36,
+    "test_budget.py": 31,
+    "hdl/test_hdl_chain_stages.py": 29,
+    "hdl/test_mutation_serial.py": 22,
+    "test_diagnose_independent.py": 20,
+    "test_sweep.py": 18,
+    "test_diagnose_hidden.py": 17,
+    "hdl/test_mutation.py": 17,
+    "hdl/test_hdl_long_chains.py": 13,
+    "hdl/test_hdl_lint.py": 11,
+    "test_fixed_properties.py": 8,
+    "test_config_errors.py": 7,
+    "test_outputs.py": 7,
+    "test_fixed_mutation.py": 6,
 }
 TESTS = Path(__file__).resolve().parent
 
