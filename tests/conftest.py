@@ -2,6 +2,16 @@
 
 from __future__ import annotations
 
+import os
+
+# One OpenBLAS thread per process, set before anything imports numpy (this is the first conftest
+# pytest imports, in the xdist controller and in each worker; workers and every child inherit it).
+# `pytest -n 2` on 2 cores runs two workers, each of whose BLAS calls would otherwise start a second
+# thread that waits, spinning, for a core the other worker holds: the diagnosis's many small least
+# squares ran ~3x slower (np.linalg.lstsq 3000 x 12: 2.2 s -> 0.77 s per 3000 calls single-threaded;
+# test_diagnose_hidden.py alone 36.2 -> 20.1 s). An explicit setting in the environment wins.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 import contextlib
 import copy
 import io
@@ -100,6 +110,57 @@ def failing_writes(k: int | None, exc: type[BaseException]):
 
     with mock.patch.object(Path, "write_text", write_text):
         yield
+
+
+# ---- the order of the test files under `pytest -n 2 --dist loadfile` -----------------------------
+# pytest-xdist hands out whole files, by default the files with the most tests first, which puts the
+# long single-test files (the mutation proofs, ~20-40 s each) last, on one worker while the other
+# idles. Longest first instead (LPT scheduling; the tail is then a few short files): seconds of each
+# file >= 5 s, measured on a fresh clone (Verilator models built) on a 2-core machine; every other
+# file after them in collection order. A wrong or stale number costs wall time, never a test.
+FILE_SECONDS = {
+    "hdl/test_hdl_golden.py": 90,
+    "hdl/test_hdl_corners.py": 71,
+    "hdl/test_hdl_long_blocks.py": 64,
+    "hdl/test_hdl_random.py": 39,
+    "test_extend.py": 36,
+    "test_budget.py": 31,
+    "hdl/test_hdl_chain_stages.py": 29,
+    "hdl/test_mutation_serial.py": 22,
+    "test_diagnose_independent.py": 20,
+    "test_sweep.py": 18,
+    "test_diagnose_hidden.py": 17,
+    "hdl/test_mutation.py": 17,
+    "hdl/test_hdl_long_chains.py": 13,
+    "hdl/test_hdl_lint.py": 11,
+    "test_fixed_properties.py": 8,
+    "test_config_errors.py": 7,
+    "test_outputs.py": 7,
+    "test_fixed_mutation.py": 6,
+}
+TESTS = Path(__file__).resolve().parent
+
+
+def pytest_configure(config):
+    # keep the collection order below (xdist's --dist loadscope/loadfile would re-sort by test count)
+    if hasattr(config.option, "loadscopereorder"):
+        config.option.loadscopereorder = False
+
+
+def pytest_collection_modifyitems(session, config, items):
+    """Files by FILE_SECONDS, longest first (stable: each file's tests stay together, in order)."""
+    first: dict[str, int] = {}
+    for i, item in enumerate(items):
+        first.setdefault(str(item.path), i)
+
+    def cost(item) -> int:
+        try:
+            rel = Path(item.path).resolve().relative_to(TESTS).as_posix()
+        except ValueError:
+            return 0
+        return FILE_SECONDS.get(rel, 0)
+
+    items.sort(key=lambda item: (-cost(item), first[str(item.path)]))
 
 
 @pytest.fixture(scope="session")

@@ -7,6 +7,8 @@ and each stage is shown to be what produced the gain: with it turned off the gai
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import shutil
 import tomllib
@@ -59,6 +61,17 @@ def extend(args, capsys) -> tuple[int, str, str]:
     code = main(["extend", *map(str, args)])
     out, err = capsys.readouterr()
     return code, out, err
+
+
+@pytest.fixture(scope="module")
+def both_extended(logs, tmp_path_factory):
+    """`fxdsp extend BOTH --no-rtl` once for the module (two tests read its model and its config):
+    (exit status, stdout, stderr, the --out folder). Nothing writes into the folder afterwards."""
+    out = tmp_path_factory.mktemp("both_extended") / "ext"
+    so, se = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(so), contextlib.redirect_stderr(se):
+        code = main(["extend", str(logs["both"]), "--out", str(out), "--no-rtl"])
+    return code, so.getvalue(), se.getvalue(), out
 
 
 @needs_icarus
@@ -150,15 +163,15 @@ def test_bad_chain_is_one_line_and_exit_2(logs, tmp_path, capsys):
     assert code == 2 and err.count("\n") == 1 and "--chain" in err
 
 
-def test_fit_on_one_run_apply_on_another(logs, tmp_path, capsys):
+def test_fit_on_one_run_apply_on_another(logs, both_extended, tmp_path, capsys):
     """Run 2 is `fxdsp simulate --model` replaying the model run 1's extension wrote (another seed:
     other noise, other quadrature wander); the configs fitted on run 1 compensate it."""
-    code, _, err = extend([logs["both"], "--out", tmp_path / "first", "--no-rtl"], capsys)
+    code, _, err, first = both_extended
     assert code == 0, err
-    model = json.loads((tmp_path / "first" / "model.json").read_text())
+    model = json.loads((first / "model.json").read_text())
     assert set(model["effects"]) == {"thermal_lag", "quadrature_leak"}
     second = tmp_path / "replay.csv"
-    assert main(["simulate", "--scenario", "paper002", "--model", str(tmp_path / "first" / "model.json"),
+    assert main(["simulate", "--scenario", "paper002", "--model", str(first / "model.json"),
                  "--seed", "13", "--out", str(second)]) == 0
     code, stdout, err = extend([logs["both"], "--apply", second, "--out", tmp_path / "ext", "--no-rtl"], capsys)
     assert code == 0, err
@@ -224,16 +237,16 @@ def test_extend_the_tckit_log(tmp_path, capsys):
     assert b["max_abs_vs_float"] < 0.05 * s["rms_after"]
 
 
-def test_calibrate_keeps_an_extended_configs_stages(logs, tmp_path, capsys):
+def test_calibrate_keeps_an_extended_configs_stages(logs, both_extended, tmp_path, capsys):
     """`fxdsp calibrate --config EXT --apply LOG2`: the extension's stages stay in the recalibrated
     config, the fit is made with them in place, and the second run is compensated through them (the
     quadrature wander and the lag no longer leak into the bias points: a lower bias tempco than the
     plain calibration's on the same two runs)."""
-    code, _, err = extend([logs["both"], "--out", tmp_path / "ext", "--no-rtl"], capsys)
+    code, _, err, ext_dir = both_extended
     assert code == 0, err
     second = simulate(tmp_path, "both", seed=13)
     results = {}
-    for name, extra in (("extended", ["--config", tmp_path / "ext" / "config.toml"]), ("plain", [])):
+    for name, extra in (("extended", ["--config", ext_dir / "config.toml"]), ("plain", [])):
         out = tmp_path / f"{name}.json"
         args = ["calibrate", "--paper", "002", logs["both"], *extra, "--config-out", tmp_path / f"{name}.toml",
                 "--apply", second, "--json", out]

@@ -167,9 +167,16 @@ def test_simulate_sigint_keeps_the_previous_log(tmp_path):
         out.parent.mkdir()
         out.write_text("previous log\n")
         env = {**os.environ, "PYTHONPATH": str(REPO)}
-        proc = subprocess.Popen([sys.executable, "-m", "fxdsp.cli", "simulate", "--scenario", "paper002", "--time-step",
-                                 "0.1", "--out", str(out)], stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
-                                env=env)
+        # SIGINT handled here while the child starts, so that the child does not inherit it ignored:
+        # pytest started as a background job of a shell without job control (`make test &`, some CI
+        # runners) ignores SIGINT, and so would every child, which then always ran to the end
+        previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+        try:
+            proc = subprocess.Popen([sys.executable, "-m", "fxdsp.cli", "simulate", "--scenario", "paper002",
+                                     "--time-step", "0.1", "--out", str(out)], stderr=subprocess.PIPE,
+                                    stdout=subprocess.PIPE, text=True, env=env)
+        finally:
+            signal.signal(signal.SIGINT, previous)
         time.sleep(delay)
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=120)
