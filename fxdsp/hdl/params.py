@@ -72,9 +72,10 @@ def instances(design: Design) -> dict[str, Instance]:
     return {name: instance(design, name) for name, inst in design.instances.items() if not inst.members}
 
 
-def chain_params(design: Design) -> dict[str, dict[str, int]]:
-    """Port widths of the tops, the ovf widths of their members (from the instance table) and the
-    enables of their optional stages (1 when the chain has the stage)."""
+def chain_params(design: Design) -> dict[str, dict[str, int | str]]:
+    """Port widths of the tops, the ovf widths of their members (from the instance table), the
+    enables of their optional stages (1 when the chain has the stage) and, for a chain with a
+    shared filter engine, its enable and the file of its coefficient sets."""
     out = {}
     for name, inst in design.instances.items():
         if not inst.members:
@@ -85,14 +86,15 @@ def chain_params(design: Design) -> dict[str, dict[str, int]]:
         p["N_OVF"] = design.ovf_width(name)
         stages = getattr(inst.block, "stages", ())
         p.update({k: int(stage in stages) for k, stage in spec.get("stages", {}).items()})
-        if name == SHARED_LPF_CHAIN:
+        if spec.get("shared_lpf"):
             p["LPF_SHARED"] = int(lpf_shared(design))
+            p["LPF_SETS_FILE"] = SHARED_LPF_FILE
         out[name] = p
     return out
 
 
-# the chain whose serial RTL may run its output low-pass ("iir") on the demodulator's filter engine
-SHARED_LPF_CHAIN, SHARED_LPF_FILE = "chain_paper002", "chain_paper002_lpf_coef.hex"
+# the coefficient sets of the filter engine shared by the demodulator and the output low-pass
+SHARED_LPF_FILE = "chain_paper002_lpf_coef.hex"
 
 
 def _engine_params(dp) -> dict:
@@ -122,7 +124,8 @@ def _wire(design: Design, wire: str):
 
 
 # the tops' parameter names -> the wire (instance.port) whose width they are, the member instances
-# whose ovf width they are, and the optional stages they enable, in the order of the generated header
+# whose ovf width they are, and the optional stages they enable, in the order of the generated header;
+# shared_lpf: the serial top may run its output low-pass on the demodulator's filter engine
 CHAIN_PORTS = {
     "chain_paper002": {
         "wires": {"VSA_W": "chain_paper002.vsa", "CODE_W": "chain_paper002.rtd_code", "TEMP_W": "rtd.temp",
@@ -130,7 +133,7 @@ CHAIN_PORTS = {
                   "DATA_W": "demod.i", "ANGLE_W": "demod.phase", "SUB_W": "bias_subtract.y", "RATE_W": "iir.y"},
         "ovf": {"SF_OVF_W": "piecewise_sf", "B_OVF_W": "piecewise_bias", "DEMOD_OVF_W": "demod",
                 "IIR_OVF_W": "iir"},
-        "stages": {"LAG_EN": "lag"}},
+        "stages": {"LAG_EN": "lag"}, "shared_lpf": True},
     "chain_paper001": {
         "wires": {"FREQ_W": "chain_paper001.f", "RATE_W": "chain_paper001.rate_in", "TEMP_W": "freq2temp.temp",
                   "BIAS_W": "piecewise_bias001.y", "OUT_W": "bias_subtract001.y"},
@@ -157,8 +160,9 @@ def header(inst: Instance, name: str) -> str:
     return f"// {name}: {inst.module} parameters, {GENERATED}\n{body}\n"
 
 
-def chain_header(name: str, params: dict[str, int]) -> str:
-    body = ",\n".join(f"    parameter integer {k} = {v}" for k, v in params.items())
+def chain_header(name: str, params: dict[str, int | str]) -> str:
+    body = ",\n".join(f'    parameter {k} = "{v}"' if isinstance(v, str) else f"    parameter integer {k} = {v}"
+                       for k, v in params.items())
     return f"// {name}: port widths, {GENERATED}\n{body}\n"
 
 
@@ -172,5 +176,5 @@ def generate(design: Design) -> dict[str, str]:
     for name, p in chain_params(design).items():
         files[f"{name}_params.vh"] = chain_header(name, p)
         if p.get("LPF_SHARED"):
-            files[SHARED_LPF_FILE] = shared_lpf_rom(design)
+            files[p["LPF_SETS_FILE"]] = shared_lpf_rom(design)
     return files

@@ -15,4 +15,5 @@
     parameter integer IIR_OVF_W = 1,
     parameter integer N_OVF = 18,
     parameter integer LAG_EN = 0,
-    parameter integer LPF_SHARED = 1
+    parameter integer LPF_SHARED = 1,
+    parameter LPF_SETS_FILE = "chain_paper002_lpf_coef.hex"

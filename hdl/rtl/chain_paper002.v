@@ -31,7 +31,7 @@
 //   [The lag keeps its own multiplier.] One filter engine: when the output low-pass has the
 //   demodulator's low-pass format (LPF_SHARED, from the generator), the output filter is the third
 //   channel of the demodulator's I / Q filter engine (demod AUX_LPF = 1, its coefficients the third
-//   set of chain_paper002_lpf_coef.hex), run after the subtraction while the demodulator is idle, with
+//   set of LPF_SETS_FILE, from the generator), run after the subtraction while the demodulator is idle, with
 //   the same schedule as the iir of its own (D_iir); else the iir has an engine of its own. Each
 //   block starts on its predecessor's out_valid pulse and holds its registered outputs until its
 //   next sample, so one sample in flight needs no buffering (every block is idle when its pulse
@@ -171,7 +171,7 @@ module chain_paper002 #(
     demod #(
 `include "demod_params.vh"
         , .ARCH(ARCH), .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
-        , .AUX_LPF(AUX), .AUX_COEF_FILE("chain_paper002_lpf_coef.hex")
+        , .AUX_LPF(AUX), .AUX_COEF_FILE(LPF_SETS_FILE)
     ) u_demod (.clk(clk), .rst(rst), .in_valid(dm_go), .in_ready(dm_ready), .x(d_w), .out_valid(i_v), .i(i_w), .q(q_w),
                .amp(amp_w), .phase(ph_w), .ovf(ovf_dm),
              .mac_in_valid(dm_req), .mac_in_ready(sh_ready), .mac_a(dm_a), .mac_b(dm_b), .mac_na(dm_na),

@@ -161,6 +161,15 @@ module demod #(
             initial begin $display("demod: AUX_LPF = 1 needs ARCH = 1, got AUX_LPF %0d, ARCH %0d", AUX_LPF, ARCH);
                           $finish; end
         end
+        if (AUX_LPF == 0) begin : g_no_aux_port
+            // no auxiliary channel (always so at ARCH = 0): aux_* not read, the outputs 0
+            assign aux_out_valid = 1'b0;
+            assign aux_y = {DATA_W{1'b0}};
+            assign aux_ovf = {LPF_SECTIONS{1'b0}};
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire unused_aux = aux_in_valid ^ (^aux_x);
+            /* verilator lint_on UNUSEDSIGNAL */
+        end
         if (ARCH == 0) begin : g_par
             assign in_ready = 1'b1;
             // no multiplier in this variant: the bundle unused
@@ -170,11 +179,8 @@ module demod #(
             assign mac_na = 4'd0;
             assign mac_nb = 4'd0;
             /* verilator lint_off UNUSEDSIGNAL */
-            wire unused_mac = mac_in_ready ^ mac_out_valid ^ (^mac_p) ^ aux_in_valid ^ (^aux_x);
+            wire unused_mac = mac_in_ready ^ mac_out_valid ^ (^mac_p);
             /* verilator lint_on UNUSEDSIGNAL */
-            assign aux_out_valid = 1'b0;
-            assign aux_y = {DATA_W{1'b0}};
-            assign aux_ovf = {LPF_SECTIONS{1'b0}};
 
             // ---- NCO and mixers ----
             wire [NCO_W-1:0] cos_w, msin_w;
@@ -544,14 +550,8 @@ module demod #(
                 assign aux_go = 1'b0;
                 assign aux_busy = 1'b0;
                 assign lpf_x = {mix_y, mi_q};
-                assign aux_out_valid = 1'b0;
-                assign aux_y = {DATA_W{1'b0}};
-                assign aux_ovf = {LPF_SECTIONS{1'b0}};
                 assign lpf_y = lpf_yall;
                 assign lpf_o = lpf_oall;
-                /* verilator lint_off UNUSEDSIGNAL */
-                wire unused_aux = aux_in_valid ^ (^aux_x);
-                /* verilator lint_on UNUSEDSIGNAL */
             end
 
             // ---- CORDIC: one step per cycle on cx, cy, cz ----

@@ -291,7 +291,7 @@ module iir #(
             reg [SLOTS-1:0]  vld1;
             reg [DATA_W-1:0] xy_q;      // registered reads
             reg [E_W-1:0]    e_q;
-            reg              xy_ok, e_ok;   // ... of words written since rst
+            reg              rd_ok_q;   // ... of words written since rst
             wire ch_done = (sec == SEC_LAST);                   // the channel's last section
             // the pass's last channel: every channel, or (SPLIT) the first pass's last, then the last channel
             wire all_done = ch_done && (CHANNELS == 1 || ch == CH_LAST || (SPLIT != 0 && ch == NA_LAST));
@@ -339,17 +339,14 @@ module iir #(
                     end
                     assign pass_b = pb;
                     assign x_pass = pb ? x[CH_LAST_I*DATA_W +: DATA_W] : x_first;
-                    always @(posedge clk) begin
-                        if (take) slot_q <= pb ? B_SLOT_I[SL_W-1:0] : {SL_W{1'b0}};
-                        else if (st == S_UPD) slot_q <= slot_q + {{(SL_W-1){1'b0}}, 1'b1};
-                    end
                 end else begin : g_whole
                     assign pass_b = 1'b0;
                     assign x_pass = x_first;
-                    always @(posedge clk) begin
-                        if (take) slot_q <= {SL_W{1'b0}};
-                        else if (st == S_UPD) slot_q <= slot_q + {{(SL_W-1){1'b0}}, 1'b1};
-                    end
+                end
+                // the pass's first slot: 0, or the last channel's (pass_b)
+                always @(posedge clk) begin
+                    if (take) slot_q <= pass_b ? B_SLOT_I[SL_W-1:0] : {SL_W{1'b0}};
+                    else if (st == S_UPD) slot_q <= slot_q + {{(SL_W-1){1'b0}}, 1'b1};
                 end
             end
 
@@ -367,11 +364,10 @@ module iir #(
             always @(posedge clk) begin
                 xy_q  <= ram_xy[xy_ra];
                 e_q   <= ram_e[e_ra];
-                xy_ok <= rd_ok;
-                e_ok  <= rd_ok;
+                rd_ok_q <= rd_ok;
             end
-            wire signed [DATA_W-1:0] s_xy = xy_q & {DATA_W{xy_ok}};
-            wire signed [E_W-1:0]    s_e  = e_q & {E_W{e_ok}};
+            wire signed [DATA_W-1:0] s_xy = xy_q & {DATA_W{rd_ok_q}};
+            wire signed [E_W-1:0]    s_e  = e_q & {E_W{rd_ok_q}};
             wire signed [MA_W-1:0] ca  = {{(MA_W-COEF_W+1){coef_q[COEF_W-1]}}, coef_q[COEF_W-2:0]};
             wire signed [MA_W-1:0] ea  = {{(MA_W-E_W+1){s_e[E_W-1]}}, s_e[E_W-2:0]};
             // the error-feedback weight: the low C_W bits of its ROM word, as the parallel variant
