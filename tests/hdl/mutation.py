@@ -92,7 +92,7 @@ MUTATIONS = [
              "wire [SL_W+1:0]   xy_wa = {slot, upd, ph_s};",
              "serial: the update writes x and y over the newest words (x1, y1) instead of the older (x2, y2 lost)",
              ((None, "iir", False, SERIAL["iir"]),)),
-    Mutation("iir_serial_reset_state_unmasked", "iir.v", "wire signed [DATA_W-1:0] s_xy = xy_q & {DATA_W{xy_ok}};",
+    Mutation("iir_serial_reset_state_unmasked", "iir.v", "wire signed [DATA_W-1:0] s_xy = xy_q & {DATA_W{rd_ok_q}};",
              "wire signed [DATA_W-1:0] s_xy = xy_q;",
              "serial: x, y words not written since rst read from the RAM as they are (not the model's zero state)",
              ((None, "iir", False, SERIAL["iir"]),)),
