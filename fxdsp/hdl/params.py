@@ -11,9 +11,12 @@ design as
 * ``chain_paper002_params.vh`` / ``chain_paper001_params.vh``: the port and ovf widths of the tops
   and the enables of their optional stages (``LAG_EN``: the chain's ``stages``, 0 = absent), and
   ``LPF_SHARED``: 1 when the output low-pass has the demodulator's low-pass format, so that the serial
-  chain runs it on the demodulator's filter engine (:func:`lpf_shared`);
-* the ROM files (``rtd_lut.hex``, ``iir_coef.hex``, ``demod_qsin.hex``, ...), and for a shared
-  engine ``chain_paper002_lpf_coef.hex``: its I, Q and output coefficient sets, one per channel.
+  chain runs it on the demodulator's filter engine (:func:`lpf_shared`), and ``PW_SHARED``: 1 when
+  SF(T) and bias(T) differ only in coefficients and output format, so that the serial chain runs both
+  on one piecewise engine (:func:`pw_shared`; the bias set's own parameters as ``PW1_*``);
+* the ROM files (``rtd_lut.hex``, ``iir_coef.hex``, ``demod_qsin.hex``, ...), and for the shared
+  engines ``chain_paper002_lpf_coef.hex`` (I, Q and output low-pass coefficient sets, one per channel)
+  and ``chain_paper002_pw_coef.hex`` (the SF set, then the bias set).
 
 The only checks here are the RTL's own limits (signed temperature wires, 4-bit error-feedback
 weights, positive lag shift): a config the Python model accepts but the RTL cannot build.
@@ -89,8 +92,45 @@ def chain_params(design: Design) -> dict[str, dict[str, int | str]]:
         if spec.get("shared_lpf"):
             p["LPF_SHARED"] = int(lpf_shared(design))
             p["LPF_SETS_FILE"] = SHARED_LPF_FILE
+        if spec.get("shared_pw"):
+            p.update(shared_pw_params(design))
         out[name] = p
     return out
+
+
+# the coefficient sets of the piecewise engine shared by SF(T) and bias(T)
+SHARED_PW_FILE = "chain_paper002_pw_coef.hex"
+# the piecewise parameters a second coefficient set has of its own (piecewise.v SETS = 2: the "_1"
+# parameters; OUT_W_1 is the chain's BIAS_W); the files are the sets' ROMs
+PW_OWN = ("COEF_ALIGN", "OUT_SHIFT", "OUT_W", "OUT_SIGNED")
+PW_FILES = ("COEF_FILE", "BP_FILE")
+
+
+def pw_shared(design: Design) -> bool:
+    """Whether SF(T) ("piecewise_sf") and bias(T) ("piecewise_bias") can share one piecewise engine:
+    every RTL parameter equal but the coefficients and the output stage (:data:`PW_OWN`), and the
+    same breakpoints (the segment compares are the engine's)."""
+    sf, bias = (design.instances[n].block.datapath for n in ("piecewise_sf", "piecewise_bias"))
+    skip = set(PW_OWN) | set(PW_FILES)
+    same = {k: v for k, v in sf.verilog("sf")[0].items() if k not in skip} == \
+        {k: v for k, v in bias.verilog("bias")[0].items() if k not in skip}
+    return same and np.array_equal(sf.bp.words, bias.bp.words)
+
+
+def shared_pw_params(design: Design) -> dict[str, int | str]:
+    """The chain header's entries for the shared piecewise engine: its enable, the coefficient-set
+    file and the bias set's own parameters (``PW1_<name>``; 0 when not shared)."""
+    shared = pw_shared(design)
+    bias = design.instances["piecewise_bias"].block.datapath.verilog("bias")[0]
+    out: dict[str, int | str] = {"PW_SHARED": int(shared), "PW_SETS_FILE": SHARED_PW_FILE}
+    out.update({f"PW1_{k}": (int(bias[k]) if shared else 0) for k in PW_OWN if k != "OUT_W"})
+    return out
+
+
+def shared_pw_rom(design: Design) -> str:
+    """The shared piecewise engine's coefficient ROM: the SF set, then the bias set (SETS_FILE)."""
+    sf, bias = (design.instances[n].block.datapath.coef for n in ("piecewise_sf", "piecewise_bias"))
+    return hex_words(np.concatenate([sf.words.ravel(), bias.words.ravel()]), sf.width)
 
 
 # the coefficient sets of the filter engine shared by the demodulator and the output low-pass
@@ -125,7 +165,8 @@ def _wire(design: Design, wire: str):
 
 # the tops' parameter names -> the wire (instance.port) whose width they are, the member instances
 # whose ovf width they are, and the optional stages they enable, in the order of the generated header;
-# shared_lpf: the serial top may run its output low-pass on the demodulator's filter engine
+# shared_lpf: the serial top may run its output low-pass on the demodulator's filter engine;
+# shared_pw: ... and SF(T), bias(T) on one piecewise engine
 CHAIN_PORTS = {
     "chain_paper002": {
         "wires": {"VSA_W": "chain_paper002.vsa", "CODE_W": "chain_paper002.rtd_code", "TEMP_W": "rtd.temp",
@@ -133,7 +174,8 @@ CHAIN_PORTS = {
                   "DATA_W": "demod.i", "ANGLE_W": "demod.phase", "SUB_W": "bias_subtract.y", "RATE_W": "iir.y"},
         "ovf": {"SF_OVF_W": "piecewise_sf", "B_OVF_W": "piecewise_bias", "DEMOD_OVF_W": "demod",
                 "IIR_OVF_W": "iir"},
-        "stages": {"LAG_EN": "lag"}, "shared_lpf": True},
+        "stages": {"LAG_EN": "lag"}, "shared_lpf": True,
+        "shared_pw": True},
     "chain_paper001": {
         "wires": {"FREQ_W": "chain_paper001.f", "RATE_W": "chain_paper001.rate_in", "TEMP_W": "freq2temp.temp",
                   "BIAS_W": "piecewise_bias001.y", "OUT_W": "bias_subtract001.y"},
@@ -160,9 +202,20 @@ def header(inst: Instance, name: str) -> str:
     return f"// {name}: {inst.module} parameters, {GENERATED}\n{body}\n"
 
 
+# chain header entries that are 64-bit constants (packed per-power shifts)
+CHAIN_CONSTS = {"PW1_COEF_ALIGN"}
+
+
+def _chain_param(k: str, v) -> str:
+    if isinstance(v, str):
+        return f'    parameter {k} = "{v}"'
+    if k in CHAIN_CONSTS:
+        return f"    parameter [63:0] {k} = 64'h{int(v) & ((1 << 64) - 1):016x}"
+    return f"    parameter integer {k} = {v}"
+
+
 def chain_header(name: str, params: dict[str, int | str]) -> str:
-    body = ",\n".join(f'    parameter {k} = "{v}"' if isinstance(v, str) else f"    parameter integer {k} = {v}"
-                       for k, v in params.items())
+    body = ",\n".join(_chain_param(k, v) for k, v in params.items())
     return f"// {name}: port widths, {GENERATED}\n{body}\n"
 
 
@@ -177,4 +230,6 @@ def generate(design: Design) -> dict[str, str]:
         files[f"{name}_params.vh"] = chain_header(name, p)
         if p.get("LPF_SHARED"):
             files[p["LPF_SETS_FILE"]] = shared_lpf_rom(design)
+        if p.get("PW_SHARED"):
+            files[p["PW_SETS_FILE"]] = shared_pw_rom(design)
     return files

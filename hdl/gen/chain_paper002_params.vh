@@ -16,4 +16,9 @@
     parameter integer N_OVF = 18,
     parameter integer LAG_EN = 0,
     parameter integer LPF_SHARED = 1,
-    parameter LPF_SETS_FILE = "chain_paper002_lpf_coef.hex"
+    parameter LPF_SETS_FILE = "chain_paper002_lpf_coef.hex",
+    parameter integer PW_SHARED = 1,
+    parameter PW_SETS_FILE = "chain_paper002_pw_coef.hex",
+    parameter [63:0] PW1_COEF_ALIGN = 64'h0000000000000003,
+    parameter integer PW1_OUT_SHIFT = 3,
+    parameter integer PW1_OUT_SIGNED = 1

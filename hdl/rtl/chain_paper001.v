@@ -49,6 +49,7 @@ module chain_paper001 #(
 `include "piecewise_bias001_params.vh"
         , .ARCH(ARCH), .MAC_A_W(2), .MAC_B_W(2)   // its own multiplier (EXT_MAC = 0): the bundle unused
     ) u_bias (.clk(clk), .rst(rst), .in_valid(t_v), .in_ready(), .temp(t_w), .out_valid(b_v), .y(b_w),
+              .out_valid_1(), .y_1(), .ovf_1(),
               .ovf(ovf_b), .mac_in_valid(), .mac_in_ready(1'b0), .mac_a(), .mac_b(), .mac_na(), .mac_nb(),
               .mac_out_valid(1'b0), .mac_p(4'd0));
 

@@ -40,7 +40,7 @@
 //   handshake: its start waits for its in_ready and for the bias engine's (idle: off the shared
 //   multiplier; the divider's quotient holds meanwhile).
 //   Schedule (D_x: edges from block x's accepting edge to its successor's, = its cycles per sample
-//   for the serial blocks (each header gives it; demod's too: 6 N + 29 + 2 ITERATIONS + 2
+//   for the serial blocks (each header gives it; demod's too: 6 N + 30 + 3 ITERATIONS + 2
 //   LPF_SECTIONS (7 M + 10)), = ceil(NW / DIV_UNROLL) + 6 for the pipelined divider (ARCH = 1),
 //   NW = VSA_W + sf.fl + guard_bits):
 //     rtd from the accepting edge; [lag on rtd's out_valid;] piecewise_sf on the temperature's
@@ -57,9 +57,15 @@
 //   = (N_rtd + 10) + [(N_lag + 11)] + (ORDER_sf (N_sf + 10) + 7) + max(ceil(NW/DIV_UNROLL) + 6,
 //     ORDER_b (N_b + 10) + 7) + D_demod + 3 + (SECTIONS (7 N_iir + 10) + 1), the N the blocks'
 //     limb counts (their headers);
-//   332 at the default config and DIV_UNROLL = 1: 12 + 21 + max(54, 21) + 189 + 3 + 53 (349 with
-//   the lag at DECIM = 1: + 17; 299 at DIV_UNROLL = 7, where the bias engine's 21 cycles outlast
+//   349 at the default config and DIV_UNROLL = 1: 12 + 21 + max(54, 21) + 206 + 3 + 53 (366 with
+//   the lag at DECIM = 1: + 17; 316 at DIV_UNROLL = 7, where the bias engine's 21 cycles outlast
 //   the divider's 13), against 416 cycles per sample at 40 MHz and 96 kS/s.
+//   One coefficient engine: when SF(T) and bias(T) differ only in their coefficients and output
+//   stage (PW_SHARED, from the generator: the same breakpoints, formats and rules), they are the
+//   two coefficient sets of ONE piecewise engine (SETS = 2, the bias set's COEF_ALIGN, OUT_SHIFT,
+//   OUT_W, OUT_SIGNED from PW1_* and BIAS_W, both sets in PW_SETS_FILE): the bias pass starts as
+//   SF's out_valid leaves, as the bias engine of its own would, so the schedule above is unchanged;
+//   else (e.g. the random set half_even_narrow) two engines.
 `default_nettype none
 
 module chain_paper002 #(
@@ -85,6 +91,8 @@ module chain_paper002 #(
 );
     // ARCH = 1 and one low-pass format: the output low-pass runs on the demodulator's filter engine
     localparam integer AUX = (ARCH == 1 && LPF_SHARED != 0) ? 1 : 0;
+    // ARCH = 1 and one coefficient-engine format: SF(T) and bias(T) on one piecewise engine
+    localparam integer PW = (ARCH == 1 && PW_SHARED != 0) ? 1 : 0;
     reg busy;
     assign in_ready = ~busy;
     wire accept = in_valid & ~busy;
@@ -120,27 +128,53 @@ module chain_paper002 #(
     wire              ce_v;
     wire [TEMP_W-1:0] ce_w;
 
-    // ---- SF(T) and bias(T) ----
+    // ---- SF(T) and bias(T): two engines, or (PW) one engine with two coefficient sets ----
     wire                sf_v, b_v;
-    wire                b_go;        // the bias engine's start: with SF (ARCH 0), after it (ARCH 1)
     wire                b_ready;     // the bias engine is idle (ARCH 1: the demodulator may start)
     wire [SF_W-1:0]     sf_w;
     wire [BIAS_W-1:0]   b_w;
     wire [SF_OVF_W-1:0] ovf_sf;
     wire [B_OVF_W-1:0]  ovf_b;
-    piecewise #(
+    generate
+        if (PW != 0) begin : g_pw_shared
+            // SF's set, then bias's on the same temperature (SETS = 2): the bias pass starts as SF
+            // leaves, as the bias engine of its own would on sf_v (ARCH 1); in_ready is high when both are done
+            piecewise #(
 `include "piecewise_sf_params.vh"
-        , .ARCH(ARCH), .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
-    ) u_sf (.clk(clk), .rst(rst), .in_valid(ce_v), .in_ready(), .temp(ce_w), .out_valid(sf_v), .y(sf_w), .ovf(ovf_sf),
-             .mac_in_valid(sf_req), .mac_in_ready(sh_ready), .mac_a(sf_a), .mac_b(sf_b), .mac_na(sf_na),
-             .mac_nb(sf_nb), .mac_out_valid(sh_valid & own[1]), .mac_p(sh_p));
-    piecewise #(
+                , .ARCH(ARCH), .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
+                , .SETS(2), .SETS_FILE(PW_SETS_FILE), .COEF_ALIGN_1(PW1_COEF_ALIGN), .OUT_SHIFT_1(PW1_OUT_SHIFT)
+                , .OUT_W_1(BIAS_W), .OUT_SIGNED_1(PW1_OUT_SIGNED)
+            ) u_pw (.clk(clk), .rst(rst), .in_valid(ce_v), .in_ready(b_ready), .temp(ce_w), .out_valid(sf_v),
+                    .y(sf_w), .ovf(ovf_sf), .out_valid_1(b_v), .y_1(b_w), .ovf_1(ovf_b),
+                    .mac_in_valid(sf_req), .mac_in_ready(sh_ready), .mac_a(sf_a), .mac_b(sf_b), .mac_na(sf_na),
+                    .mac_nb(sf_nb), .mac_out_valid(sh_valid & own[1]), .mac_p(sh_p));
+            assign bi_req = 1'b0;
+            assign bi_a = {MAC_A_W{1'b0}};
+            assign bi_b = {MAC_B_W{1'b0}};
+            assign bi_na = 4'd0;
+            assign bi_nb = 4'd0;
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire unused_own_b = own[2];     // the bias set's products are the shared engine's (own[1])
+            /* verilator lint_on UNUSEDSIGNAL */
+        end else begin : g_pw_two
+            // the bias engine's start: with SF (ARCH 0), after it (ARCH 1: it runs during the division)
+            wire b_go = (ARCH == 0) ? ce_v : sf_v;
+            piecewise #(
+`include "piecewise_sf_params.vh"
+                , .ARCH(ARCH), .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
+            ) u_sf (.clk(clk), .rst(rst), .in_valid(ce_v), .in_ready(), .temp(ce_w), .out_valid(sf_v), .y(sf_w),
+                    .ovf(ovf_sf), .out_valid_1(), .y_1(), .ovf_1(),
+                    .mac_in_valid(sf_req), .mac_in_ready(sh_ready), .mac_a(sf_a), .mac_b(sf_b), .mac_na(sf_na),
+                    .mac_nb(sf_nb), .mac_out_valid(sh_valid & own[1]), .mac_p(sh_p));
+            piecewise #(
 `include "piecewise_bias_params.vh"
-        , .ARCH(ARCH), .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
-    ) u_bias (.clk(clk), .rst(rst), .in_valid(b_go), .in_ready(b_ready), .temp(ce_w), .out_valid(b_v), .y(b_w),
-              .ovf(ovf_b),
-             .mac_in_valid(bi_req), .mac_in_ready(sh_ready), .mac_a(bi_a), .mac_b(bi_b), .mac_na(bi_na),
-             .mac_nb(bi_nb), .mac_out_valid(sh_valid & own[2]), .mac_p(sh_p));
+                , .ARCH(ARCH), .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
+            ) u_bias (.clk(clk), .rst(rst), .in_valid(b_go), .in_ready(b_ready), .temp(ce_w), .out_valid(b_v),
+                      .y(b_w), .ovf(ovf_b), .out_valid_1(), .y_1(), .ovf_1(),
+                      .mac_in_valid(bi_req), .mac_in_ready(sh_ready), .mac_a(bi_a), .mac_b(bi_b), .mac_na(bi_na),
+                      .mac_nb(bi_nb), .mac_out_valid(sh_valid & own[2]), .mac_p(sh_p));
+        end
+    endgenerate
 
     // ---- sense / SF ----
     wire             d_v;
@@ -268,7 +302,6 @@ module chain_paper002 #(
     generate
         if (ARCH == 0) begin : g_par
             // one-sample-per-clock blocks: every start is the predecessor's out_valid
-            assign b_go   = ce_v;
             assign dm_go  = d_v;
             assign sub_go = i_v;
             assign sub_x  = i_w;
@@ -293,8 +326,6 @@ module chain_paper002 #(
                               ^ (^bi_nb) ^ (^dm_nb) ^ (^ir_nb);
             /* verilator lint_on UNUSEDSIGNAL */
         end else begin : g_ser
-            // the bias engine after SF's (it runs during the division)
-            assign b_go = sf_v;
             // the demodulator: started on the divider's out_valid once its in_ready is high and the
             // bias engine is idle (the quotient d_w holds in the divider's output register until the
             // next division). The bias engine's idle is what keeps the two off the shared multiplier

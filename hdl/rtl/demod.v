@@ -28,7 +28,8 @@
 //   low-pass filters through ONE serial iir (ARCH = 1, CHANNELS = 2), whose products go through the
 //   same fx_mac_serial (the iir's EXT_MAC bundle: it computes only while the FSM waits in S_LPF,
 //   where the demodulator issues nothing; each keeps its own limb counts: N, M below); the
-//   CORDIC is iterative, one step per two cycles, x and y loaded through its own adders. The phase
+//   CORDIC is iterative, one step per three cycles on ONE shifter (x, then y), x and y loaded through
+//   its own adders. The phase
 //   accumulator advances once per accepted sample (two halves, the carry registered between).
 //   Interface: in_valid / in_ready / out_valid; in_ready is high only when idle (which includes the
 //   out_valid cycle), a sample is taken at an edge with in_valid && in_ready; out_valid is a
@@ -56,14 +57,14 @@
 //     5N + 16 .. 18:  q likewise; both go to the iir at 5N + 18
 //     5N + 18 + F:    the iir's out_valid follows; at 5N + 19 + F li, lq load the CORDIC x, y
 //                     through its adders (x, y, z cleared while waiting for the iir)
-//     5N + 20 + F, + 21: the pre-rotation (x, y = +-y, -+x when x < 0; z = +-HALF_PI), on the
+//     5N + 20 + F .. + 22: the pre-rotation (x, y = +-y, -+x when x < 0; z = +-HALF_PI), on the
 //                     CORDIC's own adders with the accumulating operands zeroed
-//     5N + 22 + F ..: the ITERATIONS shift-and-add steps, two edges each: the shifted x >>> j,
-//                     y >>> j registered, then the adders (atan ROM read by j)
-//     5N + 22 + F + 2 ITERATIONS: x_K * INV_K issued
-//     6N + 26 + F + 2 ITERATIONS .. + 28: amp = fit(round(...)) (fx_convert_pipe), then every
+//     5N + 23 + F ..: the ITERATIONS shift-and-add steps, three edges each: x >>> j registered,
+//                     then y >>> j (one shifter), then the adders (atan ROM read by j)
+//     5N + 23 + F + 3 ITERATIONS: x_K * INV_K issued
+//     6N + 27 + F + 3 ITERATIONS .. + 29: amp = fit(round(...)) (fx_convert_pipe), then every
 //                     output registered, out_valid high; in_ready high again
-//   Cycles per sample: 6 N + 29 + 2 ITERATIONS + 2 LPF_SECTIONS (7 M + 10), 189 at the default
+//   Cycles per sample: 6 N + 30 + 3 ITERATIONS + 2 LPF_SECTIONS (7 M + 10), 206 at the default
 //   config (N = 4, M = 6, 16 iterations, 1 section), against 416 at 40 MHz and 96 kS/s.
 //   Latency: one cycle less (out_valid in the cycle in which the next sample may be taken).
 //   The shared multiplier: max(MA_W, the filters' a) x max(MB_W, DATA_W) bits (fx_mac_serial
@@ -557,7 +558,10 @@ module demod #(
             // ---- CORDIC: one step per cycle on cx, cy, cz ----
             reg [JW-1:0] j;
             reg          pre;                   // the pre-rotation step (before step 0)
-            reg          half;                  // the second cycle of a step: the adders update
+            localparam [1:0] CP_X = 2'd0;       // the cycles of a step: x >>> j registered,
+            localparam [1:0] CP_Y = 2'd1;       // ... y >>> j registered,
+            localparam [1:0] CP_ADD = 2'd2;     // ... the adders update
+            reg [1:0]    cp;                    // the cycle of a step (CP_*)
             reg [ANGLE_W-1:0] atan [0:ITERATIONS-1];
             initial $readmemh(ATAN_FILE, atan);
             wire [ANGLE_W-1:0] atv = pre ? HALF_PI_C : atan[j];
@@ -573,14 +577,21 @@ module demod #(
             wire signed [XW-1:0] lq_ext = {{(XW-DATA_W+1){lq[DATA_W-1]}}, lq[DATA_W-2:0]};
             wire signed [XW-1:0] bx = (st == S_IDLE) ? x_ext : (st == S_LPF) ? li_ext : pre ? {XW{1'b0}} : cx;
             wire signed [XW-1:0] by = (st == S_LPF) ? lq_ext : pre ? {XW{1'b0}} : cy;
-            // the shifted operands are registered, the adders take them in the next cycle: a step
-            // takes two cycles (in one, the step counter through the shifter's mux levels and then
-            // the XW-bit adder held the demod to 34 MHz); sx, sy are 0 whenever cx, cy have been 0
-            // for a cycle, as the loads need
+            // ONE shifter for x and y: x >>> j registered in a step's cycle 0, y >>> j in cycle 1, the
+            // adders take both in cycle 2 (three cycles per step; the shifter's mux levels and the
+            // XW-bit adder in one cycle held the demod to 34 MHz, and a second shifter cost ~56 LUT4).
+            // Outside the CORDIC cp alternates 0, 1, so sx, sy are 0 whenever cx, cy have been 0 for
+            // two cycles (and from rst), as the loads need
             reg  signed [XW-1:0] sx, sy;
+            wire signed [XW-1:0] sh_in = cp[0] ? cy : cx;
+            wire signed [XW-1:0] sh = sh_in >>> j;   // floor (arithmetic) shift: blocks.demod.cordic_vector
             always @(posedge clk) begin
-                sx <= cx >>> j;   // floor (arithmetic) shifts: blocks.demod.cordic_vector
-                sy <= cy >>> j;
+                if (rst) begin            // 0 from the reset on: a sample may come at once
+                    sx <= {XW{1'b0}}; sy <= {XW{1'b0}};
+                end else begin
+                    if (cp == CP_X) sx <= sh;
+                    if (cp == CP_Y) sy <= sh;
+                end
             end
             // y >= 0: x + (y >> j), y - (x >> j), z + atan; y < 0: x - (y >> j), y + (x >> j), z - atan
             // (a - b as a + ~b + 1: the 1 as a carry in through an extra low bit)
@@ -593,7 +604,7 @@ module demod #(
             assign {cy_n, cy_cin} = {by, 1'b1} + {sx ^ {XW{~neg}}, ~neg};
             assign {cz_n, cz_cin} = {cz, 1'b1} + {at ^ {AW{neg}}, neg};
             wire step_en = ~pre | cx[XW-1];     // the pre-rotation only for x < 0
-            wire step    = (st == S_COR) && half && step_en;
+            wire step    = (st == S_COR) && (cp == CP_ADD) && step_en;
             wire ld_lpf  = (st == S_LPF) && lpf_v;        // li, lq into cx, cy (z stays 0)
             wire clr_all = rst || ((st == S_LPF) && !lpf_v);
             always @(posedge clk) begin
@@ -629,13 +640,14 @@ module demod #(
             always @(posedge clk) begin
                 if (rst) begin
                     st <= S_IDLE; rk <= R_D; add_go <= 1'b0; add_sin <= 1'b0; got_i <= 1'b0;
-                    j <= {JW{1'b0}}; pre <= 1'b0; half <= 1'b0;
+                    j <= {JW{1'b0}}; pre <= 1'b0; cp <= CP_X;
                     out_valid <= 1'b0;
                     i <= {DATA_W{1'b0}}; q <= {DATA_W{1'b0}};
                     amp <= {DATA_W{1'b0}}; phase <= {ANGLE_W{1'b0}};
                     ovf <= {(2*LPF_SECTIONS+3){1'b0}};
                 end else begin
                     out_valid <= 1'b0;
+                    cp <= (cp == CP_X) ? CP_Y : CP_X;   // outside the CORDIC: x, y shifted in turn
                     add_go  <= mac_valid && (rk == R_C || rk == R_M);
                     add_sin <= (rk == R_M);
                     if (mac_valid) rk <= rk + 3'd1;
@@ -656,11 +668,11 @@ module demod #(
                             if (got_i) st <= S_LPF;
                         end
                         S_LPF:  if (lpf_v) begin
-                            j <= {JW{1'b0}}; pre <= 1'b1; half <= 1'b0; st <= S_COR;
+                            j <= {JW{1'b0}}; pre <= 1'b1; cp <= CP_X; st <= S_COR;
                         end
                         S_COR:  begin
-                            half <= ~half;
-                            if (half) begin
+                            cp <= (cp == CP_ADD) ? CP_X : (cp == CP_X) ? CP_Y : CP_ADD;
+                            if (cp == CP_ADD) begin
                                 pre <= 1'b0;
                                 if (!pre) begin
                                     j <= j + {{(JW-1){1'b0}}, 1'b1};

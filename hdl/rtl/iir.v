@@ -104,8 +104,14 @@ module iir #(
     localparam integer AW0 = (ACC_W > PW) ? ACC_W : PW;
     localparam integer AW  = (AW0 > CE_W) ? AW0 : CE_W;
     localparam integer RW  = AW - OUT_SHIFT + 1;
+    /* verilator lint_off UNUSEDPARAM */  // read by the coefficient ROM's synthesis attribute only
+    localparam ROM_STYLE = (ARCH == 1) ? "block" : "logic";
+    /* verilator lint_on UNUSEDPARAM */
 
-    reg [COEF_W-1:0] coef [0:7*SECTIONS*COEF_SETS-1];
+    // ARCH = 1 reads it through a register: block RAM (in logic, the 35-bit words of the default
+    // config's 21-word shared engine cost ~50 LUT4 more); ARCH = 0 reads constant words (a block
+    // RAM style there fails the mapping)
+    (* rom_style = ROM_STYLE *) reg [COEF_W-1:0] coef [0:7*SECTIONS*COEF_SETS-1];
 
     genvar s;
     generate
@@ -266,12 +272,10 @@ module iir #(
             reg [HI_W-1:0]   sum_hi;    // the high half adds the low half's carry one cycle later
             reg [AW-1:0]     term_q;    // the aligned product, registered (inverted when subtracted)
             reg              sub_q;     // term_q is to be subtracted: ~t + 1 = -t, the 1 as carry in
-            reg              lo_go;     // the low half adds term_q this cycle ...
-            reg              lo_first;  // ... to 0: the section's first product
+            reg              lo_go;     // the low half adds term_q this cycle
             reg              c_q;       // carry out of the low half
             reg [HI_W-1:0]   th_q;      // high half of the term, for the next cycle
             reg              hi_go;     // the high half adds th_q + c_q this cycle
-            reg              hi_first;  // ... to 0: the section's first product
             wire signed [AW-1:0] sum = {sum_hi, sum_lo};
             reg signed [RW-1:0] r_q;    // round(sum)
             reg [DATA_W-1:0] out_q;     // fit(r_q) ...
@@ -404,8 +408,11 @@ module iir #(
             wire [LO_W-1:0] term_lo;
             wire [HI_W-1:0] term_hi;
             assign {term_hi, term_lo} = term_q;
-            wire [LO_W-1:0] lo_base = lo_first ? {LO_W{1'b0}} : sum_lo;
-            wire [HI_W-1:0] hi_base = hi_first ? {HI_W{1'b0}} : sum_hi;
+            // the section's first product adds to 0: sum is cleared (the flip-flops' synchronous reset,
+            // no multiplexer before the adders) at rst and in S_UPD, after the section's last use of it
+            // (res_q, r_q registered in S_FIT) and N + 3 cycles or more before the next section's first add
+            wire [LO_W-1:0] lo_base = sum_lo;
+            wire [HI_W-1:0] hi_base = sum_hi;
             // carries in through an extra low bit ({a, 1} + {b, c} = 2 (a + b + c) + 1 + ~c): one adder each
             wire [LO_W-1:0] lo_n;
             wire            lo_c;
@@ -457,7 +464,7 @@ module iir #(
             always @(posedge clk) begin
                 if (rst) begin
                     st <= S_IDLE; sec <= {SEC_W{1'b0}}; ch <= {CH_W{1'b0}}; k <= K_B0; rk <= K_B0;
-                    lo_go <= 1'b0; hi_go <= 1'b0;
+                    lo_go <= 1'b0; hi_go <= 1'b0; sum_lo <= {LO_W{1'b0}}; sum_hi <= {HI_W{1'b0}};
                     ra <= {RA_W{1'b0}}; rom_ok <= 1'b0; ovf_w <= {SLOTS{1'b0}};
                     out_valid <= 1'b0; y <= {(CHANNELS*DATA_W){1'b0}}; ovf <= {SLOTS{1'b0}};
                     ph <= {SLOTS{1'b0}}; vld0 <= {SLOTS{1'b0}}; vld1 <= {SLOTS{1'b0}};
@@ -473,16 +480,17 @@ module iir #(
                     if (mac_valid) begin
                         term_q   <= (rk == K_A1 || rk == K_A2) ? ~term : term;
                         sub_q    <= (rk == K_A1 || rk == K_A2);
-                        lo_first <= (rk == K_B0);
                         rk  <= (rk == K_C2) ? K_B0 : rk + 3'd1;
                     end
                     if (lo_go) begin
                         c_q      <= lo_c;
                         sum_lo   <= lo_n;
                         th_q     <= term_hi;
-                        hi_first <= lo_first;
                     end
                     if (hi_go) sum_hi <= hi_n;
+                    if (st == S_UPD) begin   // cleared for the next section's first product (lo_base)
+                        sum_lo <= {LO_W{1'b0}}; sum_hi <= {HI_W{1'b0}};
+                    end
                     case (st)
                         S_IDLE: if (in_valid) begin
                             v <= x_pass; sec <= {SEC_W{1'b0}}; ch <= pass_b ? CH_LAST : {CH_W{1'b0}};

@@ -34,6 +34,15 @@
 //   acc, 24-bit temperature: N = 4), 55 for k0 (ORDER 3, N = 6). Latency: that minus 1.
 //   EXT_MAC = 1: no multiplier here; the products go out on the mac_* bundle (fx_mac_port) to a
 //   multiplier shared with other blocks (chain_paper002's), the schedule unchanged.
+//   SETS = 2 (ARCH = 1 only): two coefficient engines in one. A second set of coefficients (and its
+//   own COEF_ALIGN_1, OUT_SHIFT_1, OUT_W_1, OUT_SIGNED_1; every other parameter and the breakpoints
+//   are shared) is evaluated on every sample right after the first: the first set's y, ovf leave
+//   with out_valid, the engine is idle for that one cycle and starts the second pass at the next
+//   edge on the same temp (registered at the take), whose y_1, ovf_1 leave with out_valid_1:
+//   2 (ORDER (N + 10) + 7) cycles per sample, the same as two engines started one after the other.
+//   in_ready stays low from the take to out_valid_1. SETS_FILE (read instead of COEF_FILE) holds set
+//   0's SEGMENTS (ORDER + 1) words, then set 1's. chain_paper002 ARCH = 1 runs SF(T) and bias(T) so
+//   (PW_SHARED). SETS = 1: out_valid_1 stays low, y_1 and ovf_1 are 0.
 `default_nettype none
 
 module piecewise #(
@@ -57,7 +66,13 @@ module piecewise #(
     parameter integer MAC_A_W    = 48,    // EXT_MAC = 1: the external multiplier's operand widths (>= ACC_W, T_W + 1)
     parameter integer MAC_B_W    = 32,    // (a: MAC_A_W bits, b: MAC_B_W bits; 3 x 2 limbs by default)
     parameter         COEF_FILE  = "piecewise_sf_coef.hex",
-    parameter         BP_FILE    = "piecewise_sf_bp.hex"
+    parameter         BP_FILE    = "piecewise_sf_bp.hex",
+    parameter integer SETS         = 1,     // 1; 2 (ARCH = 1): a second coefficient set per sample (y_1, ovf_1)
+    parameter [63:0]  COEF_ALIGN_1 = 64'h00a,   // SETS = 2: the second set's COEF_ALIGN ...
+    parameter integer OUT_SHIFT_1  = 12,        // ... OUT_SHIFT,
+    parameter integer OUT_W_1      = 18,        // ... OUT_W
+    parameter integer OUT_SIGNED_1 = 0,         // ... and OUT_SIGNED (the rest is the first set's)
+    parameter         SETS_FILE    = "piecewise_sets_coef.hex"   // SETS = 2: both sets' words, read instead of COEF_FILE
 ) (
     input  wire                  clk,
     input  wire                  rst,
@@ -67,6 +82,9 @@ module piecewise #(
     output reg                   out_valid,
     output reg  [OUT_W-1:0]      y,
     output reg  [2*ORDER+1:0]    ovf,
+    output reg                   out_valid_1,   // SETS = 2: the second set's result (SETS = 1: low, 0)
+    output reg  [OUT_W_1-1:0]    y_1,
+    output reg  [2*ORDER+1:0]    ovf_1,
     // the external multiplier (ARCH = 1 and EXT_MAC = 1; else the outputs are 0): fx_mac_port's bundle
     output wire                          mac_in_valid,
     input  wire                          mac_in_ready,
@@ -84,8 +102,20 @@ module piecewise #(
     localparam integer PW  = ACC_W + TW1;
     localparam [T_W-1:0] T0_C = T0[T_W-1:0];
 
-    reg [COEF_W-1:0] coef [0:SEGMENTS*NC-1];
-    initial $readmemh(COEF_FILE, coef);
+    localparam integer S1  = (SETS == 2) ? 1 : 0;    // a second set
+    reg [COEF_W-1:0] coef [0:SETS*SEGMENTS*NC-1];
+    generate
+        // the file of the sets (two parameters: a string conditional would pad the shorter name)
+        if (S1 != 0) begin : g_sets_file
+            initial $readmemh(SETS_FILE, coef);
+        end else begin : g_coef_file
+            initial $readmemh(COEF_FILE, coef);
+        end
+        if ((SETS != 1 && SETS != 2) || (SETS == 2 && ARCH != 1)) begin : g_bad_sets
+            initial begin $display("piecewise: SETS must be 1, or 2 with ARCH = 1, got %0d, ARCH %0d", SETS, ARCH);
+                          $finish; end
+        end
+    endgenerate
 
     // ---- segment select: count the breakpoints <= t_sel (the input: ARCH 0; registered: ARCH 1) ----
     /* verilator lint_off UNUSEDSIGNAL */  // one segment: no breakpoint reads it
@@ -134,6 +164,7 @@ module piecewise #(
         begin
             aa = {24'd0, ACC_ALIGN[8*kk +: 8]};
             ca = {24'd0, COEF_ALIGN[8*kk +: 8]};
+            if (S1 != 0 && {24'd0, COEF_ALIGN_1[8*kk +: 8]} > ca) ca = {24'd0, COEF_ALIGN_1[8*kk +: 8]};
             sum_w = ((ACC_W + aa > COEF_W + ca) ? ACC_W + aa : COEF_W + ca) + 1;
         end
     endfunction
@@ -160,6 +191,9 @@ module piecewise #(
     generate
     if (ARCH == 0) begin : g_par
     assign in_ready = 1'b1;
+    always @(posedge clk) begin     // one set (SETS = 1)
+        out_valid_1 <= 1'b0; y_1 <= {OUT_W_1{1'b0}}; ovf_1 <= {(2*ORDER+2){1'b0}};
+    end
     // no multiplier in this variant: the bundle unused
     assign mac_in_valid = 1'b0;
     assign mac_a = {MAC_A_W{1'b0}};
@@ -228,10 +262,15 @@ module piecewise #(
     end else begin : g_ser
         // ---- serial: one fx_mac_serial, one rounding or fit per cycle ----
         localparam integer KW   = (ORDER > 1) ? $clog2(ORDER) : 1;  // power index 0..ORDER-1
-        localparam integer RA_N = SEGMENTS * NC;
+        localparam integer RA_N = SETS * SEGMENTS * NC;
         localparam integer RA_W = (RA_N > 1) ? $clog2(RA_N) : 1;
         localparam integer ORW0 = (OUT_SHIFT > 0) ? ACC_W - OUT_SHIFT + 1 : ACC_W - OUT_SHIFT;
         localparam integer ORW  = (ORW0 < 2) ? 2 : ORW0;    // round(acc >> OUT_SHIFT)
+        localparam integer ORW1_0 = (OUT_SHIFT_1 > 0) ? ACC_W - OUT_SHIFT_1 + 1 : ACC_W - OUT_SHIFT_1;
+        localparam integer ORW1 = (ORW1_0 < 2) ? 2 : ORW1_0; // round(acc >> OUT_SHIFT_1)
+        localparam integer ORWM = (S1 != 0 && ORW1 > ORW) ? ORW1 : ORW;   // or_q: either set's
+        localparam integer SET1_I = SEGMENTS * NC;           // the second set's first ROM word
+        localparam [RA_W-1:0] SET1_A = SET1_I[RA_W-1:0];
         localparam integer SWM  = sum_w_max(0);             // the widest Horner sum over the powers
         localparam integer SRW  = SWM + 1;                  // its rounding (right shifts only)
         localparam integer NC_I = NC;
@@ -264,12 +303,14 @@ module piecewise #(
         reg signed [ACC_W-1:0]  acc_q;
         reg signed [SWM-1:0]    s_q;        // the Horner sum of power k
         reg signed [SRW-1:0]    sr_q;       // round(s_q)
-        reg signed [ORW-1:0]    or_q;       // round(acc >> OUT_SHIFT)
+        reg signed [ORWM-1:0]   or_q;       // round(acc >> OUT_SHIFT) (the second set: OUT_SHIFT_1)
+        reg                     set_q;      // the set of this pass (SETS = 2; else 0)
+        reg                     pend;       // SETS = 2: the sample's second set still to run
         reg                     ovf_top_q;
         reg [ORDER-1:0]         ovf_prod_q; // bit j: power ORDER-1-j, as the parallel variant
         reg [ORDER-1:0]         ovf_acc_q;
 
-        assign in_ready = (st == S_IDLE);
+        assign in_ready = (st == S_IDLE) && !pend;
         assign t_sel = temp_q;
         always @(posedge clk) coef_q <= coef[ra];
 
@@ -303,13 +344,14 @@ module piecewise #(
         wire signed [SWM-1:0] pe = {{(SWM-ACC_W){p_q[ACC_W-1]}}, p_q};
         wire signed [SWM-1:0] ce = {{(SWM-COEF_W){coef_q[COEF_W-1]}}, coef_q};
         wire [SWM-1:0] pal_k [0:ORDER-1];   // p << ACC_ALIGN[k]
-        wire [SWM-1:0] cal_k [0:ORDER-1];   // c[seg][k] << COEF_ALIGN[k]
+        wire [SWM-1:0] cal_k [0:ORDER-1];   // c[seg][k] << COEF_ALIGN[k] (the second set: COEF_ALIGN_1[k])
         wire [SRW-1:0] srnd_k [0:ORDER-1];  // round(s_q >> ACC_ALIGN[k])
         for (j = 0; j < ORDER; j = j + 1) begin : g_k
             localparam integer AA = {24'd0, ACC_ALIGN[8*j +: 8]};
             localparam integer CA = {24'd0, COEF_ALIGN[8*j +: 8]};
+            localparam integer CA1 = {24'd0, COEF_ALIGN_1[8*j +: 8]};
             assign pal_k[j] = pe <<< AA;
-            assign cal_k[j] = ce <<< CA;
+            assign cal_k[j] = (S1 != 0 && set_q) ? ce <<< CA1 : ce <<< CA;
             fx_round #(.IN_W(SWM), .SHIFT(AA), .ROUNDING(ROUNDING), .OUT_W(SRW)) u_srnd (.x(s_q), .y(srnd_k[j]));
         end
         reg signed [SWM-1:0] pal_q, cal_q;
@@ -318,29 +360,49 @@ module piecewise #(
         fx_fit #(.IN_W(SRW), .OUT_W(ACC_W), .OUT_SIGNED(1), .OVERFLOW(OVERFLOW)) u_sfit
             (.x(sr_q), .y(acc_c), .ovf(ovf_a));
 
-        // output: round, then fit
-        wire signed [ORW-1:0] or_c;
+        // output: round, then fit (the second set: its own shift and format, from the same or_q)
+        wire signed [ORW-1:0]  or_c;
+        wire signed [ORWM-1:0] or_m;        // round(acc >> OUT_SHIFT of the pass's set), sign-extended
         fx_round #(.IN_W(ACC_W), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(ORW)) u_ornd (.x(acc_q), .y(or_c));
         wire [OUT_W-1:0] y_c;
         wire             ovf_o;
-        fx_fit #(.IN_W(ORW), .OUT_W(OUT_W), .OUT_SIGNED(OUT_SIGNED), .OVERFLOW(OVERFLOW)) u_ofit
+        fx_fit #(.IN_W(ORWM), .OUT_W(OUT_W), .OUT_SIGNED(OUT_SIGNED), .OVERFLOW(OVERFLOW)) u_ofit
             (.x(or_q), .y(y_c), .ovf(ovf_o));
+        wire [OUT_W_1-1:0] y1_c;
+        wire               ovf1_o;
+        if (S1 != 0) begin : g_set1_out
+            wire signed [ORW1-1:0] or1_c;
+            fx_round #(.IN_W(ACC_W), .SHIFT(OUT_SHIFT_1), .ROUNDING(ROUNDING), .OUT_W(ORW1)) u_ornd1
+                (.x(acc_q), .y(or1_c));
+            wire signed [ORWM-1:0] or1_x = {{(ORWM-ORW1+1){or1_c[ORW1-1]}}, or1_c[ORW1-2:0]};   // sign-extended
+            wire signed [ORWM-1:0] or0_x = {{(ORWM-ORW+1){or_c[ORW-1]}}, or_c[ORW-2:0]};
+            assign or_m = set_q ? or1_x : or0_x;
+            fx_fit #(.IN_W(ORWM), .OUT_W(OUT_W_1), .OUT_SIGNED(OUT_SIGNED_1), .OVERFLOW(OVERFLOW)) u_ofit1
+                (.x(or_q), .y(y1_c), .ovf(ovf1_o));
+        end else begin : g_one_set
+            assign or_m = or_c;
+            assign y1_c = {OUT_W_1{1'b0}};
+            assign ovf1_o = 1'b0;
+        end
 
         wire [RA_W-1:0] seg_a = {{(RA_W > SEG_W ? RA_W - SEG_W : 0){1'b0}}, seg};   // valid from S_ADDR
         wire [KW-1:0]   j_of_k = K_TOP - k;   // the parallel variant's stage index of power k
 
         always @(posedge clk) begin
             if (rst) begin
-                st <= S_IDLE; ra <= {RA_W{1'b0}}; k <= {KW{1'b0}};
+                st <= S_IDLE; ra <= {RA_W{1'b0}}; k <= {KW{1'b0}}; set_q <= 1'b0; pend <= 1'b0;
                 out_valid <= 1'b0; y <= {OUT_W{1'b0}}; ovf <= {(2*ORDER+2){1'b0}};
+                out_valid_1 <= 1'b0; y_1 <= {OUT_W_1{1'b0}}; ovf_1 <= {(2*ORDER+2){1'b0}};
             end else begin
                 out_valid <= 1'b0;
+                out_valid_1 <= 1'b0;
                 case (st)
-                    S_IDLE: if (in_valid) begin
-                        temp_q <= temp; t_q <= t; st <= S_SEG;
+                    S_IDLE: if (in_valid || pend) begin   // a sample, or its second set (temp_q holds)
+                        if (!pend) begin temp_q <= temp; t_q <= t; end
+                        set_q <= pend; pend <= 1'b0; st <= S_SEG;
                     end
                     S_SEG:  st <= S_ADDR;   // the compares of temp_q are registered (le_q)
-                    S_ADDR: begin ra <= seg_a * NC_A + ORDER_A; st <= S_ROM; end
+                    S_ADDR: begin ra <= (set_q ? SET1_A : {RA_W{1'b0}}) + seg_a * NC_A + ORDER_A; st <= S_ROM; end
                     S_ROM:  st <= S_TOP;
                     S_TOP:  begin
                         acc_q <= acc_top; ovf_top_q <= ovf_top;
@@ -362,10 +424,15 @@ module piecewise #(
                             k <= k - 1'b1; ra <= ra - 1'b1; st <= S_ISSUE;
                         end
                     end
-                    S_ORND:  begin or_q <= or_c; st <= S_OFIT; end
-                    default: begin   // S_OFIT
-                        y <= y_c; ovf <= {ovf_o, ovf_prod_q, ovf_acc_q, ovf_top_q};
-                        out_valid <= 1'b1; st <= S_IDLE;
+                    S_ORND:  begin or_q <= or_m; st <= S_OFIT; end
+                    default: begin   // S_OFIT: the pass's set out (SETS = 2: set 0's starts set 1's)
+                        if (set_q) begin
+                            y_1 <= y1_c; ovf_1 <= {ovf1_o, ovf_prod_q, ovf_acc_q, ovf_top_q}; out_valid_1 <= 1'b1;
+                        end else begin
+                            y <= y_c; ovf <= {ovf_o, ovf_prod_q, ovf_acc_q, ovf_top_q}; out_valid <= 1'b1;
+                            pend <= (S1 != 0);
+                        end
+                        st <= S_IDLE;
                     end
                 endcase
             end

@@ -103,6 +103,8 @@ READY_PORT = {
 MAC_PORT = {"iir", "piecewise", "rtd", "demod"}
 # modules with the auxiliary low-pass channel (aux_*, read only with AUX_LPF = 1): tied off alone
 AUX_PORT = {"demod"}
+# modules with a second coefficient set's outputs (out_valid_1, y_1, ovf_1: SETS = 2): left open
+SET1_PORT = {"piecewise"}
 
 
 def is_serial(extra: dict | None) -> bool:
@@ -568,6 +570,8 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
     if module in AUX_PORT and not design.instances[name].members:
         w = design.instances[name].ports["i"].format.wl
         conns += [".aux_in_valid(1'b0)", f".aux_x({w}'d0)", ".aux_out_valid()", ".aux_y()", ".aux_ovf()"]
+    if module in SET1_PORT and not design.instances[name].members:
+        conns += [".out_valid_1()", ".y_1()", ".ovf_1()"]
     L.append(f"    wire [{n_ovf - 1}:0] ign = {n_ovf}'d{ovf_ignore(design, name)};")
     L.append(f"    {module} {pov} dut ({', '.join(conns)});")
     L.append("    always #5 clk = ~clk;")

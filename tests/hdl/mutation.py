@@ -181,7 +181,8 @@ MUTATIONS = [
     Mutation("pw_serial_stale_product", "piecewise.v", "S_WAIT:  if (mac_valid) st <= S_PFIT;", "S_WAIT:  st <= S_PFIT;",
              "serial: the product read before the MAC returns it (the previous one)",
              ((None, "piecewise_sf", False, SERIAL["piecewise_sf"]),)),
-    Mutation("pw_serial_missed_stall", "piecewise.v", "assign in_ready = (st == S_IDLE);", "assign in_ready = 1'b1;",
+    Mutation("pw_serial_missed_stall", "piecewise.v", "assign in_ready = (st == S_IDLE) && !pend;",
+             "assign in_ready = 1'b1;",
              "serial: in_ready high while a sample is computed (samples taken mid-schedule are lost)",
              (({}, "piecewise_sf", False, SERIAL["piecewise_sf"]),)),
     Mutation("f2t_serial_missed_stall", "freq2temp.v", "assign in_ready = ~busy | out_valid;", "assign in_ready = 1'b1;",
@@ -282,6 +283,25 @@ MUTATIONS = [
              "assign x_pass = pb ? x[CH_LAST_I*DATA_W +: DATA_W] : x_first;", "assign x_pass = x_first;",
              "split iir engine: the last channel's pass filters channel 0's input (the demodulator's I mixer) "
              "instead of its own",
+             ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
+    # ---- one coefficient engine: SF(T) and bias(T) as two sets of one piecewise (PW_SHARED) ----
+    # (in_ready high between the two passes is an equivalent mutant in the chain: the demodulator, the
+    # only one that waits for it, starts on the divider's out_valid, at least 7 cycles later)
+    Mutation("chain002_pw_wrong_set", "piecewise.v",
+             "ra <= (set_q ? SET1_A : {RA_W{1'b0}}) + seg_a * NC_A + ORDER_A;",
+             "ra <= {RA_W{1'b0}} + seg_a * NC_A + ORDER_A;",
+             "serial chain 002: the shared coefficient engine's bias pass reads SF's coefficients (wrong slot)",
+             ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
+    Mutation("chain002_pw_set1_alignment", "piecewise.v",
+             "assign cal_k[j] = (S1 != 0 && set_q) ? ce <<< CA1 : ce <<< CA;", "assign cal_k[j] = ce <<< CA;",
+             "serial chain 002: the bias pass aligns its coefficients by SF's COEF_ALIGN",
+             ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
+    Mutation("chain002_pw_set1_output_shift", "piecewise.v", "assign or_m = set_q ? or1_x : or0_x;",
+             "assign or_m = or0_x;", "serial chain 002: the bias pass rounds its output by SF's OUT_SHIFT",
+             ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
+    Mutation("chain002_pw_second_pass_lost", "piecewise.v", "pend <= (S1 != 0);", "pend <= 1'b0;",
+             "serial chain 002: the shared coefficient engine never starts the bias pass (the chain waits for "
+             "a bias that never comes)",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
     Mutation("demod_mac_valid_to_filter", "demod.v", ".mac_out_valid(sh_valid & lpf_own)",
              ".mac_out_valid(sh_valid)",

@@ -39,9 +39,11 @@ SHARED_ROUNDING = ("fx_round", "fx_convert", "fx_convert_reg")
 
 # (module, rule, construct as normalised text) -> (count, reason)
 ALLOWED: dict[tuple[str, str, str], tuple[int, str]] = {
-    # ARCH = 0 (unrolled): twice each; ARCH = 1 (one step per cycle): once each
-    ("demod", "right-shift", "cy>>>j"): (3, "CORDIC micro-rotation: floor shift by definition (blocks.demod.cordic_vector)"),
-    ("demod", "right-shift", "cx>>>j"): (3, "CORDIC micro-rotation: floor shift by definition (blocks.demod.cordic_vector)"),
+    # ARCH = 0 (unrolled): twice each; ARCH = 1 (one shifter for x and y): sh_in once
+    ("demod", "right-shift", "cy>>>j"): (2, "CORDIC micro-rotation: floor shift by definition (blocks.demod.cordic_vector)"),
+    ("demod", "right-shift", "cx>>>j"): (2, "CORDIC micro-rotation: floor shift by definition (blocks.demod.cordic_vector)"),
+    ("demod", "right-shift", "sh_in>>>j"): (
+        1, "CORDIC micro-rotation of x, then y, on one shifter: floor shift by definition (blocks.demod.cordic_vector)"),
     ("demod", "select", "atan_flat[ANGLE_W*j+:ANGLE_W]"): (1, "field of the flat arctan table, not a value"),
     # the NCO phase word's fields, read by nco.v and the serial demod (ARCH = 1) through nco_phase
     ("nco_phase", "select", "phase[PHASE_BITS-1-:2]"): (1, "quadrant = top two phase bits (model: Nco bin, a >> (L - 2))"),

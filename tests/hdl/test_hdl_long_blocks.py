@@ -73,17 +73,17 @@ def _chain_paper001_cycles_per_sample(_p: dict) -> int:
 
 def _demod_cycles_per_sample(p: dict) -> int:
     """The demod's edges from its accepting edge to its successor's (hdl/rtl/demod.v; for a serial
-    block with one sample in flight, its cycles per sample). ARCH = 1 (serial): 6 N + 29 + 2 ITERATIONS
+    block with one sample in flight, its cycles per sample). ARCH = 1 (serial): 6 N + 30 + 3 ITERATIONS
     + F, N the limb products of its shared MAC (a: max(DW, XW) bits, DW = INTERP_BITS + TWO_PI_W + 3,
     XW = max(IN_W, DATA_W + 3); b: max(TWO_PI_W + 1, NCO_W, INV_K_W + max(0, MIX_SHIFT - AMP_SHIFT))
     bits), F = 2 LPF_SECTIONS (7 M + 10) the two-channel serial iir's cycles (M its limb products);
-    189 at the default config."""
+    206 at the default config (the pre-rotation and every CORDIC step take three cycles: one shifter)."""
     dw = p["INTERP_BITS"] + 2 + p["TWO_PI_W"] + 1
     xw = max(p["IN_W"], p["DATA_W"] + 3)
     ikw = p["INV_K_W"] + max(0, p["MIX_SHIFT"] - p["AMP_SHIFT"])
     n = _limbs(max(dw, xw), max(p["TWO_PI_W"] + 1, p["NCO_W"], ikw))
     m = _limbs(max(p["LPF_COEF_W"], p["LPF_OUT_SHIFT"] + 2), p["DATA_W"])
-    return 6 * n + 29 + 2 * p["ITERATIONS"] + 2 * p["LPF_SECTIONS"] * (7 * m + 10)
+    return 6 * n + 30 + 3 * p["ITERATIONS"] + 2 * p["LPF_SECTIONS"] * (7 * m + 10)
 
 
 def _sf_divide_cycles_per_sample(p: dict) -> int:
