@@ -67,8 +67,8 @@
 //   Cycles per sample: 6 N + 30 + 3 ITERATIONS + 2 LPF_SECTIONS (7 M + 10), 206 at the default
 //   config (N = 4, M = 6, 16 iterations, 1 section), against 416 at 40 MHz and 96 kS/s.
 //   Latency: one cycle less (out_valid in the cycle in which the next sample may be taken).
-//   The shared multiplier: max(MA_W, the filters' a) x max(MB_W, DATA_W) bits (fx_mac_serial
-//   VAR_N = 1); EXT_MAC = 1: none here, its requests (the demodulator's and the filters') go out on
+//   The shared multiplier: max(MA_W, the filters' a) x max(MB_W, DATA_W) bits, each rounded up to
+//   whole 16-bit limbs (fx_mac_serial VAR_N = 1, whose products come back top-aligned in them); EXT_MAC = 1: none here, its requests (the demodulator's and the filters') go out on
 //   the mac_* bundle (fx_mac_port), e.g. to chain_paper002's one multiplier.
 //   AUX_LPF = 1 (ARCH = 1): the filter engine also runs an auxiliary low-pass of the same format
 //   (LPF_* parameters) with its own coefficients, as its third channel (iir CHANNELS = 3, COEF_SETS = 3,
@@ -314,8 +314,12 @@ module demod #(
             // the low-pass filters' operands (iir.v ARCH = 1: coefficient or error e, data or weight c)
             // and the multiplier shared with them: the wider of each
             localparam integer LA_W  = (LPF_COEF_W > LPF_OUT_SHIFT + 2) ? LPF_COEF_W : LPF_OUT_SHIFT + 2;
-            localparam integer DA_W  = (MA_W > LA_W) ? MA_W : LA_W;
-            localparam integer DB_W  = (MB_W > DATA_W) ? MB_W : DATA_W;
+            // in whole 16-bit limbs: the multiplier shared with the filters (VAR_N = 1) returns its
+            // products top-aligned in whole limbs (fx_mac_serial)
+            localparam integer DA_UP = ((MA_W > LA_W) ? MA_W : LA_W) + 15;
+            localparam integer DB_UP = ((MB_W > DATA_W) ? MB_W : DATA_W) + 15;
+            localparam integer DA_W  = 16 * (DA_UP / 16);
+            localparam integer DB_W  = 16 * (DB_UP / 16);
             localparam integer PL    = PHASE_BITS / 2;          // phase accumulator: low half ...
             localparam integer PH    = PHASE_BITS - PL;         // ... and high half
             localparam integer JW    = (ITERATIONS > 1) ? $clog2(ITERATIONS) : 1;

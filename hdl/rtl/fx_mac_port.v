@@ -8,9 +8,11 @@
 // EXT_MAC = 1: no multiplier here; the request goes out on the bundle: mac_in_valid = in_valid,
 //   in_ready = mac_in_ready, mac_a / mac_b = a / b sign-extended to MAC_A_W / MAC_B_W, mac_na /
 //   mac_nb = the product's limb counts (VAR_N = 1: na, nb; else ceil(A_W / 16), ceil(B_W / 16), the
-//   caller's own schedule: N = their product, latency N + 3), out_valid = mac_out_valid, p = the
-//   low A_W + B_W bits of mac_p (exact: the shared fx_mac_serial, VAR_N = 1, stores the product
-//   there; the bits above are not the caller's).
+//   caller's own schedule: N = their product, latency N + 3), out_valid = mac_out_valid, p = the low
+//   A_W + B_W bits of the top 16 (NA + NB) bits of mac_p (the caller's limbs NA, NB: the shared
+//   fx_mac_serial, VAR_N = 1, returns the product top-aligned in whole limbs; the bits below and the
+//   window's sign copies are not the caller's). With VAR_N = 1 (A_W, B_W whole limbs) p is that
+//   top-aligned window itself, passed on to the callers behind this port.
 // No arithmetic here: rounding none (no floor / half_up / half_even / toward_zero; the caller rounds
 // with fx_round), overflow none (no wrap / saturate: p holds every product exactly).
 `default_nettype none
@@ -82,13 +84,31 @@ module fx_mac_port #(
             assign mac_na = (VAR_N != 0) ? na : NA_C;
             assign mac_nb = (VAR_N != 0) ? nb : NB_C;
             assign out_valid = mac_out_valid;
-            if (MP_W > P_W) begin : g_cut
-                /* verilator lint_off UNUSEDSIGNAL */   // not the caller's product (see above)
-                wire [MP_W-P_W-1:0] p_above;
+            // the caller's window: the top WIN = 16 (NA + NB) bits of mac_p; its product in the low P_W
+            localparam integer WIN   = LIMB * (NA_I + NB_I);
+            localparam integer BELOW = MP_W - WIN;
+            if (WIN > MP_W) begin : g_bad_window
+                initial begin $display("fx_mac_port: %0d limbs exceed the external multiplier's %0d bits",
+                                       NA_I + NB_I, MP_W); $finish; end
+            end
+            /* verilator lint_off UNUSEDSIGNAL */   // not the caller's product (see above)
+            wire [WIN-1:0] win;
+            /* verilator lint_on UNUSEDSIGNAL */
+            if (BELOW > 0) begin : g_below
+                /* verilator lint_off UNUSEDSIGNAL */
+                wire [BELOW-1:0] p_below;
                 /* verilator lint_on UNUSEDSIGNAL */
-                assign {p_above, p} = mac_p;
+                assign {win, p_below} = mac_p;
+            end else begin : g_whole
+                assign win = mac_p;
+            end
+            if (WIN > P_W) begin : g_cut
+                /* verilator lint_off UNUSEDSIGNAL */   // the window's sign copies
+                wire [WIN-P_W-1:0] p_above;
+                /* verilator lint_on UNUSEDSIGNAL */
+                assign {p_above, p} = win;
             end else begin : g_all
-                assign p = mac_p;
+                assign p = win;
             end
         end
     endgenerate

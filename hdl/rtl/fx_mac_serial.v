@@ -26,14 +26,16 @@
 // Latency: N + 3 cycles. Cycles per product: N (in_ready is high when idle and in the cycle of the
 // last limb pair, so operands issued back to back keep the multiplier busy every cycle).
 // VAR_N = 1 (a multiplier shared by callers of different widths, e.g. chain_paper002 ARCH = 1):
-// A_W, B_W are the widest operands; each product runs on its own limb counts na (1..NA), nb (1..NB),
-// taken with a, b: the caller sign-extends its operands into a, b, and gets its own schedule (N = na
-// nb pairs, latency N + 3, in_ready as above). The top column of a product (nc = na + nb - 1 columns)
-// is stored at limb nc - 1 (its sum's low 32 bits: limbs nc - 1, nc), so p[0 +: caller's
-// product width] is the caller's exact product (that width <= 16 (na + nb)); the bits above are
-// left over from earlier products. p is valid in the out_valid cycle (the next product's first
-// limb pair overwrites limb 0 at the next edge); every caller reads it there. VAR_N = 0: na, nb
-// are not read (NA, NB), the logic is that of a fixed-width product.
+// A_W, B_W are the widest operands, whole limbs (multiples of 16); each product runs on its own limb
+// counts na (1..NA), nb (1..NB), taken with a, b: the caller sign-extends its operands into a, b, and
+// gets its own schedule (N = na nb pairs, latency N + 3, in_ready as above). p is then TOP-aligned:
+// the low 16 bits of each completed column shift in at the top of a shift register (no multiplexer
+// in front of any limb) and the top column's high half goes above it, so a product of nc = na + nb - 1
+// columns is p[P_W-1 -: 16 (na + nb)] (the caller's exact product sign-extended to na + nb limbs,
+// its value in the low bits of that window: fx_mac_port takes it there); the bits below are left
+// over from earlier products. p is valid in the out_valid cycle (the next product's first column
+// shifts the register at the next edge at the earliest); every caller reads it there. VAR_N = 0: na,
+// nb are not read (NA, NB), the logic is that of a fixed-width product, p = a * b in the usual place.
 `default_nettype none
 
 module fx_mac_serial #(
@@ -81,8 +83,9 @@ module fx_mac_serial #(
         if (A_W < 2 || B_W < 2) begin : g_bad_width
             initial begin $display("fx_mac_serial: A_W and B_W must be >= 2, got %0d, %0d", A_W, B_W); $finish; end
         end
-        if (VAR_N != 0 && (NA > 8 || NB > 8)) begin : g_bad_limbs
-            initial begin $display("fx_mac_serial: VAR_N = 1 takes up to 8 limbs, got %0d, %0d", NA, NB); $finish; end
+        if (VAR_N != 0 && (NA > 8 || NB > 8 || XA != A_W || XB != B_W)) begin : g_bad_limbs
+            initial begin $display("fx_mac_serial: VAR_N = 1 takes whole limbs, up to 8, got %0d x %0d bits", A_W, B_W);
+                          $finish; end
         end
     endgenerate
 
@@ -213,36 +216,31 @@ module fx_mac_serial #(
             assign jb_top = jb_top_q;
         end
         if (VAR_N != 0) begin : g_var_p
-            // limbs 0 .. NC: each column's low 16 bits stored as it completes (its last pair is
-            // accumulated: the next pair starts a new column, or it is the product's last), into limb
-            // ec (0 at the product's first pair); the last pair's sum (the top column) into limbs
-            // ec, ec + 1. One source per limb but the top's second limb: acc_n.
-            localparam integer VL  = NC + 1;
-            localparam integer VEW = $clog2(VL + 1);
-            reg  [LIMB*VL-1:0] res;
-            reg  [VEW-1:0]     ec;
+            // p = {hi, res}, NA + NB limbs: each column's low 16 bits shift in at the top of res as the
+            // column completes (its last pair is accumulated: the next pair starts a new column, or it
+            // is the product's last), the top column's high half into hi. One source per flip-flop (a
+            // stored limb, cost no LUT: the 5-limb store with a limb index was ~80 LUT4)
+            localparam integer RL = NC;                              // limbs of res
+            reg  [LIMB*RL-1:0] res;
+            reg  [LIMB-1:0]    hi;
             wire               colend = v_q[2] & (l_q[2] | n_q[1]);
-            wire [VEW-1:0]     ec_c   = f_q[2] ? {VEW{1'b0}} : ec;
-            wire [VEW-1:0]     ec_c1  = ec_c + {{(VEW-1){1'b0}}, 1'b1};
             /* verilator lint_off UNUSEDSIGNAL */   // above the top column's 32 bits: sign copies
             wire [ACC_W-2*LIMB-1:0] acc_n_hi;
             /* verilator lint_on UNUSEDSIGNAL */
             wire [LIMB-1:0]    acc_n_l0, acc_n_l1;
             assign {acc_n_hi, acc_n_l1, acc_n_l0} = acc_n;
-            wire [31:0]        ec_n   = {{(32-VEW){1'b0}}, ec_c};    // as numbers (compared with L)
-            wire [31:0]        ec_n1  = {{(32-VEW){1'b0}}, ec_c1};
-            integer L;
-            always @(posedge clk) begin
-                if (colend) ec <= ec_c1;
-                for (L = 0; L < VL; L = L + 1) begin
-                    if (colend && ec_n == L) res[LIMB*L +: LIMB] <= acc_n_l0;
-                    else if (v_q[2] && l_q[2] && ec_n1 == L) res[LIMB*L +: LIMB] <= acc_n_l1;
-                end
+            if (RL > 1) begin : g_shift
+                wire [LIMB*(RL-1)-1:0] res_up;              // res's upper limbs, which move down one
+                /* verilator lint_off UNUSEDSIGNAL */       // the lowest limb: shifted out
+                wire [LIMB-1:0]        res_out;
+                /* verilator lint_on UNUSEDSIGNAL */
+                assign {res_up, res_out} = res;
+                always @(posedge clk) if (colend) res <= {acc_n_l0, res_up};
+            end else begin : g_one_limb
+                always @(posedge clk) if (colend) res <= acc_n_l0;
             end
-            /* verilator lint_off UNUSEDSIGNAL */   // above P_W: no product is wider
-            wire [LIMB*VL-1:0] res_all = res;
-            /* verilator lint_on UNUSEDSIGNAL */
-            assign p = res_all[P_W-1:0];
+            always @(posedge clk) if (v_q[2] && l_q[2]) hi <= acc_n_l1;
+            assign p = {hi, res};
         end else if (NC > 1) begin : g_limbs
             reg [RES_W-1:0] res;    // p below the top column, one 16-bit limb per completed column
             reg [EW-1:0]    ec;     // the next limb to store

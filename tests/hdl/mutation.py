@@ -308,9 +308,15 @@ MUTATIONS = [
              "serial demod: the demodulator's products also counted as its low-pass filters' (out_valid not "
              "routed by the owner of the shared multiplier)",
              ((None, "demod", False, SERIAL["demod"]),)),
-    Mutation("mac_var_top_limb", "fx_mac_serial.v", "else if (v_q[2] && l_q[2] && ec_n1 == L)",
-             "else if (v_q[2] && l_q[2] && ec_n1 == L + 1)",
-             "shared MAC (VAR_N = 1): the top column's high half stored one limb too high",
+    Mutation("mac_var_top_limb", "fx_mac_serial.v", "if (v_q[2] && l_q[2]) hi <= acc_n_l1;",
+             "if (v_q[2] && l_q[2]) hi <= acc_n_l0;",
+             "shared MAC (VAR_N = 1): the top column's low half stored again as its high half (the top limb "
+             "of every top-aligned product wrong)",
+             ((None, "demod", False, SERIAL["demod"]),)),
+    Mutation("mac_var_column_not_shifted", "fx_mac_serial.v", "wire               colend = v_q[2] & (l_q[2] | n_q[1]);",
+             "wire               colend = v_q[2] & l_q[2];",
+             "shared MAC (VAR_N = 1): only the last column's low half shifts into the result (the lower columns "
+             "of every product lost: stale limbs)",
              ((None, "demod", False, SERIAL["demod"]),)),
 ]
 

@@ -29,7 +29,7 @@ VARIANTS = [
     ("fx_mac_serial", {"A_W": 39, "B_W": 24}),
     ("fx_mac_serial", {"A_W": 2, "B_W": 17}),
     ("fx_mac_serial", {"A_W": 48, "B_W": 32, "VAR_N": 1}),  # shared by callers of different widths
-    ("fx_mac_serial", {"A_W": 2, "B_W": 17, "VAR_N": 1}),
+    ("fx_mac_serial", {"A_W": 16, "B_W": 32, "VAR_N": 1}),   # VAR_N = 1: whole limbs
     # the external (shared) multiplier's bundle instead of an own fx_mac_serial
     ("fx_mac_port", {"EXT_MAC": 1}),
     ("fx_mac_port", {"EXT_MAC": 1, "VAR_N": 1, "A_W": 48, "B_W": 32}),
