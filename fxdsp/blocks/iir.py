@@ -122,6 +122,10 @@ class IirDatapath(Datapath):
     acc_w: int           # the bound acc_bits plus one bit: the RTL's signed accumulator register
     rules: Rules
     coef: Rom            # per section b0 b1 b2 a1 a2 c1 c2
+    acoef_w: int         # the serial engine's ROM word (ARCH = 1): the widest of the words below
+    acoef: Rom           # per section b0 b1 b2 << shift_b, -(a1 a2 << shift_a), c1 c2: each product
+    #                      then enters the accumulator as it is (the alignment and the subtraction of
+    #                      the a products are in the words: exact integers, the same sums)
     b: np.ndarray = info()   # sections x 3, num_format
     a: np.ndarray = info()   # sections x 2 (a1, a2), den_format
     c: np.ndarray = info()   # sections x 2 error-feedback weights (0 when off)
@@ -182,9 +186,14 @@ class Iir(Block):
         coef_w = max(num_format.wl, den_format.wl, 4)
         words = np.concatenate([self.b, self.a, self.c], axis=1)
         c_max = int(np.abs(self.c).max()) if self.c.size else 0
+        # the serial engine's words, in as many bits as the widest of them needs as a signed integer (at
+        # most num.wl + shift_b, den.wl + shift_a + 1: the negated den minimum); >= 4 for the c weights
+        awords = np.concatenate([self.b << shift_b, -(self.a << shift_a), self.c], axis=1)
+        acoef_w = max([4] + [int(w if w >= 0 else -w - 1).bit_length() + 1 for w in awords.ravel()])
         self.datapath = IirDatapath(
             data_w=data_format.wl, sections=int(self.b.shape[0]), coef_w=coef_w, shift_b=shift_b, shift_a=shift_a,
-            out_shift=out_shift, acc_w=self.acc_bits + 1, rules=rules, coef=Rom(words, coef_w), b=self.b, a=self.a,
+            out_shift=out_shift, acc_w=self.acc_bits + 1, rules=rules, coef=Rom(words, coef_w), acoef_w=acoef_w,
+            acoef=Rom(awords, acoef_w), b=self.b, a=self.a,
             c=self.c, c_w=max(2, c_max.bit_length() + 1), data_format=data_format,
             ovf=tuple(OvfField(f"section{s}", 1) for s in range(self.b.shape[0])))
         self.reset()

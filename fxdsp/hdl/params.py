@@ -138,8 +138,8 @@ SHARED_LPF_FILE = "chain_paper002_lpf_coef.hex"
 
 
 def _engine_params(dp) -> dict:
-    """An iir datapath's RTL parameters but its coefficient file: the engine's format."""
-    return {k: v for k, v in dp.verilog("lpf")[0].items() if k != "COEF_FILE"}
+    """An iir datapath's RTL parameters but its coefficient files: the engine's format."""
+    return {k: v for k, v in dp.verilog("lpf")[0].items() if k not in ("COEF_FILE", "ACOEF_FILE")}
 
 
 def lpf_shared(design: Design) -> bool:
@@ -152,9 +152,9 @@ def lpf_shared(design: Design) -> bool:
 
 def shared_lpf_rom(design: Design) -> str:
     """The shared engine's coefficient ROM: a set per channel, I and Q (the demodulator's low-pass),
-    then the output low-pass, as the iir reads them (COEF_SETS = CHANNELS)."""
-    lpf = design.instances["demod"].block.datapath.lpf.coef
-    out = design.instances["iir"].block.datapath.coef
+    then the output low-pass, as the serial iir reads them (its ACOEF words; COEF_SETS = CHANNELS)."""
+    lpf = design.instances["demod"].block.datapath.lpf.acoef
+    out = design.instances["iir"].block.datapath.acoef
     return hex_words(np.concatenate([lpf.words.ravel(), lpf.words.ravel(), out.words.ravel()]), lpf.width)
 
 

@@ -8,4 +8,6 @@
     .ACC_W(64),
     .ROUNDING(1),
     .OVERFLOW(1),
-    .COEF_FILE("iir_coef.hex")
+    .ACOEF_W(39),
+    .COEF_FILE("iir_coef.hex"),
+    .ACOEF_FILE("iir_acoef.hex")

@@ -39,7 +39,7 @@
 //   INV_K << ASH (MB_W = max(TWO_PI_W + 1, NCO_W, INV_K_W + ASH) bits, ASH = max(0, MIX_SHIFT -
 //   AMP_SHIFT)); every product takes N = ceil(max(DW, XW)/16) * ceil(MB_W/16) multiplier cycles
 //   (4 at the default config).
-//   The filters: M = ceil(max(LPF_COEF_W, LPF_OUT_SHIFT + 2)/16) * ceil(DATA_W/16) (6 at the
+//   The filters: M = ceil(max(LPF_ACOEF_W, LPF_OUT_SHIFT + 2)/16) * ceil(DATA_W/16) (6 at the
 //   default), F = 2 LPF_SECTIONS (7 M + 10) cycles for both channels (104 at the default).
 //   Schedule, in edges after the edge 0 that takes the sample (the ROM address is the phase's
 //   index k while idle):
@@ -99,6 +99,7 @@ module demod #(
     parameter integer OVERFLOW      = 1,
     parameter integer LPF_SECTIONS  = 1,
     parameter integer LPF_COEF_W    = 28,
+    parameter integer LPF_ACOEF_W   = 33,
     parameter integer LPF_SHIFT_B   = 0,
     parameter integer LPF_SHIFT_A   = 4,
     parameter integer LPF_OUT_SHIFT = 30,
@@ -113,6 +114,7 @@ module demod #(
     parameter integer AMP_SHIFT     = 17,
     parameter         QSIN_FILE     = "demod_qsin.hex",
     parameter         LPF_COEF_FILE = "demod_lpf_coef.hex",
+    parameter         LPF_ACOEF_FILE = "demod_lpf_acoef.hex",   // the serial engine's words (iir ACOEF_FILE)
     parameter         ATAN_FILE     = "demod_atan.hex",
     parameter integer ARCH          = 0,    // 0: one sample per cycle (in_ready tied high); 1: serial
     parameter integer EXT_MAC       = 0,    // ARCH = 1: 0 its own fx_mac_serial; 1 the external one on mac_* (fx_mac_port)
@@ -205,15 +207,17 @@ module demod #(
             wire [DATA_W-1:0] li, lq;
             wire [LPF_SECTIONS-1:0] ovf_li, ovf_lq;
             wire lv, lv_q;
-            iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .SHIFT_B(LPF_SHIFT_B),
+            iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .ACOEF_W(LPF_ACOEF_W), .SHIFT_B(LPF_SHIFT_B),
                   .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
-                  .OVERFLOW(LPF_OVERFLOW), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W), .COEF_FILE(LPF_COEF_FILE)) u_lpf_i
+                  .OVERFLOW(LPF_OVERFLOW), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W), .COEF_FILE(LPF_COEF_FILE),
+                  .ACOEF_FILE(LPF_ACOEF_FILE)) u_lpf_i
                 (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mi), .out_valid(lv), .y(li), .ovf(ovf_li),
                  .mac_in_valid(), .mac_in_ready(1'b0), .mac_a(), .mac_b(), .mac_na(), .mac_nb(),
                  .mac_out_valid(1'b0), .mac_p({(MAC_A_W+MAC_B_W){1'b0}}));
-            iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .SHIFT_B(LPF_SHIFT_B),
+            iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .ACOEF_W(LPF_ACOEF_W), .SHIFT_B(LPF_SHIFT_B),
                   .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
-                  .OVERFLOW(LPF_OVERFLOW), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W), .COEF_FILE(LPF_COEF_FILE)) u_lpf_q
+                  .OVERFLOW(LPF_OVERFLOW), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W), .COEF_FILE(LPF_COEF_FILE),
+                  .ACOEF_FILE(LPF_ACOEF_FILE)) u_lpf_q
                 (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mq), .out_valid(lv_q), .y(lq), .ovf(ovf_lq),
                  .mac_in_valid(), .mac_in_ready(1'b0), .mac_a(), .mac_b(), .mac_na(), .mac_nb(),
                  .mac_out_valid(1'b0), .mac_p({(MAC_A_W+MAC_B_W){1'b0}}));
@@ -313,7 +317,7 @@ module demod #(
             localparam integer MP_W  = MA_W + MB_W;
             // the low-pass filters' operands (iir.v ARCH = 1: coefficient or error e, data or weight c)
             // and the multiplier shared with them: the wider of each
-            localparam integer LA_W  = (LPF_COEF_W > LPF_OUT_SHIFT + 2) ? LPF_COEF_W : LPF_OUT_SHIFT + 2;
+            localparam integer LA_W  = (LPF_ACOEF_W > LPF_OUT_SHIFT + 2) ? LPF_ACOEF_W : LPF_OUT_SHIFT + 2;
             // in whole 16-bit limbs: the multiplier shared with the filters (VAR_N = 1) returns its
             // products top-aligned in whole limbs (fx_mac_serial)
             localparam integer DA_UP = ((MA_W > LA_W) ? MA_W : LA_W) + 15;
@@ -516,10 +520,10 @@ module demod #(
             wire [LCH*LPF_SECTIONS-1:0] lpf_oall;
             wire aux_go;
             wire [LCH*DATA_W-1:0] lpf_x;        // {[aux_x,] q, i}
-            iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .SHIFT_B(LPF_SHIFT_B),
+            iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .ACOEF_W(LPF_ACOEF_W), .SHIFT_B(LPF_SHIFT_B),
                   .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
                   .OVERFLOW(LPF_OVERFLOW), .ARCH(1), .CHANNELS(LCH), .COEF_SETS((AUX_LPF != 0) ? LCH : 1),
-                  .SPLIT(AUX_LPF), .EXT_MAC(1), .MAC_A_W(DA_W), .MAC_B_W(DB_W), .COEF_FILE(LPF_COEF_FILE),
+                  .SPLIT(AUX_LPF), .EXT_MAC(1), .MAC_A_W(DA_W), .MAC_B_W(DB_W), .COEF_FILE(LPF_COEF_FILE), .ACOEF_FILE(LPF_ACOEF_FILE),
                   .SETS_FILE(AUX_COEF_FILE)) u_lpf
                 (.clk(clk), .rst(rst), .in_valid(lpf_go | aux_go), .in_ready(), .x(lpf_x), .out_valid(lpf_done),
                  .y(lpf_yall), .ovf(lpf_oall), .mac_in_valid(lp_v), .mac_in_ready(sh_ready), .mac_a(lp_a), .mac_b(lp_b),

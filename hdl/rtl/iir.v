@@ -11,18 +11,18 @@
 //   Interface: in_valid / out_valid (in_ready is tied high). Latency: 1 cycle.
 // ARCH = 1: serial. The 7 products of every section run through ONE fx_mac_serial (one 16 x 16
 //   multiplier: one SB_MAC16), sequenced section after section by a small FSM; the coefficient
-//   ROM is read through a register (block RAM friendly). Interface: in_valid / in_ready /
-//   out_valid; in_ready is high only when idle, a sample is taken at an edge with in_valid &&
-//   in_ready. MAC operands: a = coefficient or error e (MA_W = max(COEF_W, OUT_SHIFT + 2) bits),
-//   b = data or error weight c (DATA_W bits); a product takes N = ceil(MA_W/16) * ceil(DATA_W/16)
+//   ROM (ACOEF_FILE, from the generator: b << SHIFT_B, -(a << SHIFT_A), c in ACOEF_W bits, so that
+//   every product is added as it comes) is read through a register (block RAM). Interface:
+//   in_valid / in_ready / out_valid; in_ready is high only when idle, a sample is taken at an edge
+//   with in_valid && in_ready. MAC operands: a = coefficient word or error e (MA_W = max(ACOEF_W,
+//   OUT_SHIFT + 2) bits), b = data or error weight c (DATA_W bits); a product takes N = ceil(MA_W/16) * ceil(DATA_W/16)
 //   multiplier cycles (fx_mac_serial latency N + 3). Schedule of a section, in edges after the
 //   one that takes the sample (section 0) or after the previous section's update:
 //     1 + k N, k = 0..6:   product k issued, in ROM order b0 v, b1 x1, b2 x2, a1 y1, a2 y2,
 //                          c1 e1, c2 e2 (v: the section's input); the ROM reads word k + 1 meanwhile
-//     (k + 1) N + 5:       product k registered, aligned (<< SHIFT_B for k < 3, << SHIFT_A for
-//                          k = 3, 4) and, for the a products, inverted (subtracted as ~t + 1)
+//     (k + 1) N + 5:       product k registered (already aligned, the a products negated: the words)
 //     (k + 1) N + 6, + 7:  added into the low, then the high half of sum (AW bits in two halves:
-//                          carry chains of AW/2 + 1 bits; the + 1 and the low carry as carries in)
+//                          carry chains of AW/2 + 1 bits; the low carry as the high half's carry in)
 //     7 N + 8:             r = round(sum) registered (fx_round, ROUNDING)
 //     7 N + 9:             fit(r) and its flag (fx_fit, OVERFLOW), error sum - (r << OUT_SHIFT)
 //     7 N + 10:            state update (e = 0 after an overflow); the output is the next
@@ -62,6 +62,7 @@ module iir #(
     parameter integer DATA_W    = 24,
     parameter integer SECTIONS  = 1,
     parameter integer COEF_W    = 28,
+    parameter integer ACOEF_W   = 33,    // ARCH = 1: the word of ACOEF_FILE (b << SHIFT_B, -(a << SHIFT_A), c)
     parameter integer SHIFT_B   = 0,
     parameter integer SHIFT_A   = 6,
     parameter integer OUT_SHIFT = 32,
@@ -75,8 +76,9 @@ module iir #(
     parameter integer EXT_MAC   = 0,     // ARCH = 1: 0 its own fx_mac_serial; 1 the external one on mac_* (fx_mac_port)
     parameter integer MAC_A_W   = 48,    // EXT_MAC = 1: the external multiplier's operand widths (>= MA_W, MB_W)
     parameter integer MAC_B_W   = 32,    // (a: MAC_A_W bits, b: MAC_B_W bits; 3 x 2 limbs by default)
-    parameter         COEF_FILE = "iir_coef.hex",
-    parameter         SETS_FILE = "iir_sets_coef.hex"   // COEF_SETS > 1: the file read instead (a set per channel)
+    parameter         COEF_FILE = "iir_coef.hex",       // ARCH = 0: b0 b1 b2 a1 a2 c1 c2 per section
+    parameter         ACOEF_FILE = "iir_acoef.hex",     // ARCH = 1: the same words aligned, the a's negated
+    parameter         SETS_FILE = "iir_sets_coef.hex"   // COEF_SETS > 1: read instead of ACOEF_FILE (a set per channel)
 ) (
     input  wire                         clk,
     input  wire                         rst,
@@ -104,23 +106,9 @@ module iir #(
     localparam integer AW0 = (ACC_W > PW) ? ACC_W : PW;
     localparam integer AW  = (AW0 > CE_W) ? AW0 : CE_W;
     localparam integer RW  = AW - OUT_SHIFT + 1;
-    /* verilator lint_off UNUSEDPARAM */  // read by the coefficient ROM's synthesis attribute only
-    localparam ROM_STYLE = (ARCH == 1) ? "block" : "logic";
-    /* verilator lint_on UNUSEDPARAM */
-
-    // ARCH = 1 reads it through a register: block RAM (in logic, the 35-bit words of the default
-    // config's 21-word shared engine cost ~50 LUT4 more); ARCH = 0 reads constant words (a block
-    // RAM style there fails the mapping)
-    (* rom_style = ROM_STYLE *) reg [COEF_W-1:0] coef [0:7*SECTIONS*COEF_SETS-1];
 
     genvar s;
     generate
-        // the file of the sets (two parameters: a string conditional would pad the shorter name)
-        if (COEF_SETS > 1) begin : g_sets_file
-            initial $readmemh(SETS_FILE, coef);
-        end else begin : g_coef_file
-            initial $readmemh(COEF_FILE, coef);
-        end
         if (CHANNELS < 1 || (CHANNELS > 1 && ARCH != 1)) begin : g_bad_channels
             initial begin $display("iir: CHANNELS > 1 needs ARCH = 1, got CHANNELS %0d, ARCH %0d", CHANNELS, ARCH);
                           $finish; end
@@ -143,6 +131,8 @@ module iir #(
             wire unused_mac = mac_in_ready ^ mac_out_valid ^ (^mac_p);
             /* verilator lint_on UNUSEDSIGNAL */
             wire [SECTIONS-1:0] ovf_c;
+            reg [COEF_W-1:0] coef [0:7*SECTIONS-1];     // read at constant addresses: constants
+            initial $readmemh(COEF_FILE, coef);
             for (s = 0; s < SECTIONS; s = s + 1) begin : g_sec
                 wire signed [COEF_W-1:0] b0 = coef[7*s+0];
                 wire signed [COEF_W-1:0] b1 = coef[7*s+1];
@@ -215,7 +205,7 @@ module iir #(
             end
         end else begin : g_ser
             // ---- serial: the 7 products of every section through one shared fx_mac_serial ----
-            localparam integer MA_W = (COEF_W > E_W) ? COEF_W : E_W;          // a: coefficient or error e
+            localparam integer MA_W = (ACOEF_W > E_W) ? ACOEF_W : E_W;        // a: coefficient word or error e
             localparam integer MB_W = DATA_W;                                // b: data or weight c
             localparam integer MP_W = MA_W + MB_W;
             localparam integer RA_W = (7 * SECTIONS * COEF_SETS > 1) ? $clog2(7 * SECTIONS * COEF_SETS) : 1;
@@ -265,13 +255,24 @@ module iir #(
             reg [2:0]        k;         // next product to issue (0..6; 7: all issued)
             reg [2:0]        rk;        // next product to come back from the MAC (0..6)
             reg [RA_W-1:0]   ra;        // ROM address of product k of section sec: 7 sec + k
-            reg [COEF_W-1:0] coef_q;    // registered ROM read
-            reg              rom_ok;    // coef_q is coef[ra] (one cycle after ra moves)
+            // the coefficient words as the products take them (ACOEF_FILE, or SETS_FILE: a set per
+            // channel): b << SHIFT_B, -(a << SHIFT_A), c, so every product is added as it comes (no
+            // alignment multiplexer, no inversion: ~64 LUT4 at the default config). Read through a
+            // register: block RAM (in logic, the 21 words of the paper 002 chain's shared engine cost
+            // ~50 LUT4 more)
+            (* rom_style = "block" *) reg [ACOEF_W-1:0] acoef [0:7*SECTIONS*COEF_SETS-1];
+            // the file of the sets (two parameters: a string conditional would pad the shorter name)
+            if (COEF_SETS > 1) begin : g_sets_file
+                initial $readmemh(SETS_FILE, acoef);
+            end else begin : g_acoef_file
+                initial $readmemh(ACOEF_FILE, acoef);
+            end
+            reg [ACOEF_W-1:0] coef_q;   // registered ROM read
+            reg              rom_ok;    // coef_q is acoef[ra] (one cycle after ra moves)
             reg signed [DATA_W-1:0] v;  // the section's input: x, then each section's output
             reg [LO_W-1:0]   sum_lo;    // the section's accumulator (the parallel variant's acc):
             reg [HI_W-1:0]   sum_hi;    // the high half adds the low half's carry one cycle later
-            reg [AW-1:0]     term_q;    // the aligned product, registered (inverted when subtracted)
-            reg              sub_q;     // term_q is to be subtracted: ~t + 1 = -t, the 1 as carry in
+            reg [AW-1:0]     term_q;    // the product, registered
             reg              lo_go;     // the low half adds term_q this cycle
             reg              c_q;       // carry out of the low half
             reg [HI_W-1:0]   th_q;      // high half of the term, for the next cycle
@@ -355,7 +356,7 @@ module iir #(
             end
 
             assign in_ready = (st == S_IDLE);
-            always @(posedge clk) coef_q <= coef[ra];
+            always @(posedge clk) coef_q <= acoef[ra];
 
             // ---- operands of product k of section sec: the state word read for k (one cycle ahead,
             // like the coefficient: both are read while k holds, rom_ok says when) ----
@@ -372,7 +373,7 @@ module iir #(
             end
             wire signed [DATA_W-1:0] s_xy = xy_q & {DATA_W{rd_ok_q}};
             wire signed [E_W-1:0]    s_e  = e_q & {E_W{rd_ok_q}};
-            wire signed [MA_W-1:0] ca  = {{(MA_W-COEF_W+1){coef_q[COEF_W-1]}}, coef_q[COEF_W-2:0]};
+            wire signed [MA_W-1:0] ca  = {{(MA_W-ACOEF_W+1){coef_q[ACOEF_W-1]}}, coef_q[ACOEF_W-2:0]};
             wire signed [MA_W-1:0] ea  = {{(MA_W-E_W+1){s_e[E_W-1]}}, s_e[E_W-2:0]};
             // the error-feedback weight: the low C_W bits of its ROM word, as the parallel variant
             wire signed [MB_W-1:0] cb  = {{(MB_W-C_W+1){coef_q[C_W-1]}}, coef_q[C_W-2:0]};
@@ -404,7 +405,6 @@ module iir #(
                 /* verilator lint_on UNUSEDSIGNAL */
                 assign pa = p_all[AW-1:0];
             end
-            wire signed [AW-1:0] term = (rk <= K_B2) ? (pa <<< SHIFT_B) : (rk <= K_A2) ? (pa <<< SHIFT_A) : pa;
             wire [LO_W-1:0] term_lo;
             wire [HI_W-1:0] term_hi;
             assign {term_hi, term_lo} = term_q;
@@ -413,14 +413,15 @@ module iir #(
             // (res_q, r_q registered in S_FIT) and N + 3 cycles or more before the next section's first add
             wire [LO_W-1:0] lo_base = sum_lo;
             wire [HI_W-1:0] hi_base = sum_hi;
-            // carries in through an extra low bit ({a, 1} + {b, c} = 2 (a + b + c) + 1 + ~c): one adder each
+            // the low half's carry into the high half through an extra low bit ({a, 1} + {b, c} = 2 (a +
+            // b + c) + 1 + ~c): one adder each
             wire [LO_W-1:0] lo_n;
             wire            lo_c;
             wire [HI_W-1:0] hi_n;
             /* verilator lint_off UNUSEDSIGNAL */
-            wire            lo_cin_bit, hi_cin_bit;
+            wire            hi_cin_bit;
             /* verilator lint_on UNUSEDSIGNAL */
-            assign {lo_c, lo_n, lo_cin_bit} = {1'b0, lo_base, 1'b1} + {1'b0, term_lo, sub_q};
+            assign {lo_c, lo_n} = {1'b0, lo_base} + {1'b0, term_lo};
             assign {hi_n, hi_cin_bit} = {hi_base, 1'b1} + {th_q, c_q};
 
             // ---- round, fit, error: the same primitives as the parallel variant ----
@@ -478,8 +479,7 @@ module iir #(
                     lo_go <= mac_valid;
                     hi_go <= lo_go;
                     if (mac_valid) begin
-                        term_q   <= (rk == K_A1 || rk == K_A2) ? ~term : term;
-                        sub_q    <= (rk == K_A1 || rk == K_A2);
+                        term_q   <= pa;
                         rk  <= (rk == K_C2) ? K_B0 : rk + 3'd1;
                     end
                     if (lo_go) begin

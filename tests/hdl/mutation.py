@@ -96,8 +96,10 @@ MUTATIONS = [
              "wire signed [DATA_W-1:0] s_xy = xy_q;",
              "serial: x, y words not written since rst read from the RAM as they are (not the model's zero state)",
              ((None, "iir", False, SERIAL["iir"]),)),
-    Mutation("iir_serial_wrong_alignment_slot", "iir.v", "(rk <= K_B2) ? (pa <<< SHIFT_B)",
-             "(rk < K_B2) ? (pa <<< SHIFT_B)", "serial: b2 x2 accumulated with the a products' alignment",
+    Mutation("iir_serial_wrong_coefficient_words", "iir.v", "initial $readmemh(ACOEF_FILE, acoef);",
+             "initial $readmemh(COEF_FILE, acoef);",
+             "serial: the products take the parallel variant's words (not aligned, the a products added instead "
+             "of subtracted)",
              ((None, "iir", False, SERIAL["iir"]),)),
     Mutation("iir_serial_stale_sum", "iir.v", "S_LO: st <= S_HI;", "S_LO: st <= S_ROUND;",
              "serial: rounding reads the accumulator's high half before the last product reaches it",

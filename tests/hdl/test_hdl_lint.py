@@ -22,8 +22,8 @@ VARIANTS = [
     ("iir", {"SECTIONS": 3, "ROUNDING": 3, "OVERFLOW": 0}),
     ("iir", {"ARCH": 1}),
     ("iir", {"ARCH": 1, "SECTIONS": 3, "ROUNDING": 3, "OVERFLOW": 0}),
-    ("iir", {"ARCH": 1, "DATA_W": 16, "COEF_W": 16, "OUT_SHIFT": 14, "ACC_W": 34}),  # one-limb operands
-    ("iir", {"ARCH": 1, "COEF_W": 20, "ACC_W": 50}),  # MAC product wider than the accumulator
+    ("iir", {"ARCH": 1, "DATA_W": 16, "COEF_W": 16, "ACOEF_W": 16, "OUT_SHIFT": 14, "ACC_W": 34}),  # one-limb operands
+    ("iir", {"ARCH": 1, "COEF_W": 20, "ACOEF_W": 20, "ACC_W": 50}),  # MAC product wider than the accumulator
     ("iir", {"ARCH": 1, "CHANNELS": 2}),  # the serial demod's two-channel low-pass engine
     ("iir", {"ARCH": 1, "CHANNELS": 3, "SECTIONS": 2, "ROUNDING": 2, "OVERFLOW": 0}),
     ("fx_mac_serial", {"A_W": 39, "B_W": 24}),

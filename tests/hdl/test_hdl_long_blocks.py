@@ -28,7 +28,7 @@ def test_long_stream_sf_divide_one_bit_per_cycle():
 def _iir_cycles_per_sample(p: dict) -> int:
     """The serial iir's documented schedule (hdl/rtl/iir.v): SECTIONS * (7 N + 10) + 1 cycles, N the
     16 x 16 limb products of one coefficient-or-error x data product."""
-    limbs = (max(p["COEF_W"], p["OUT_SHIFT"] + 2) + 15) // 16 * ((p["DATA_W"] + 15) // 16)
+    limbs = (max(p["ACOEF_W"], p["OUT_SHIFT"] + 2) + 15) // 16 * ((p["DATA_W"] + 15) // 16)
     return p["SECTIONS"] * (7 * limbs + 10) + 1
 
 
@@ -82,7 +82,7 @@ def _demod_cycles_per_sample(p: dict) -> int:
     xw = max(p["IN_W"], p["DATA_W"] + 3)
     ikw = p["INV_K_W"] + max(0, p["MIX_SHIFT"] - p["AMP_SHIFT"])
     n = _limbs(max(dw, xw), max(p["TWO_PI_W"] + 1, p["NCO_W"], ikw))
-    m = _limbs(max(p["LPF_COEF_W"], p["LPF_OUT_SHIFT"] + 2), p["DATA_W"])
+    m = _limbs(max(p["LPF_ACOEF_W"], p["LPF_OUT_SHIFT"] + 2), p["DATA_W"])
     return 6 * n + 30 + 3 * p["ITERATIONS"] + 2 * p["LPF_SECTIONS"] * (7 * m + 10)
 
 
