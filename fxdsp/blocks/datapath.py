@@ -58,6 +58,12 @@ def frozen_array(values, dtype=np.int64) -> np.ndarray:
     return a
 
 
+def signed_width(words, at_least: int = 1) -> int:
+    """Bits the widest of ``words`` needs as a signed integer (at least ``at_least``): the word of
+    a table the generator writes for the RTL in as few bits as its contents allow."""
+    return max([at_least] + [int(w if w >= 0 else -w - 1).bit_length() + 1 for w in np.ravel(words)])
+
+
 @dataclass(frozen=True, eq=False)
 class Rom:
     """A ROM table: stored integers (read-only) and the word width of the RTL memory (whether every

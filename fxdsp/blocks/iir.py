@@ -41,7 +41,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, quantize
 from ..fixed.kernels import fit, shift_right_round
 from .base import Block, corner_codes, random_codes
-from .datapath import Datapath, OvfField, Rom, info
+from .datapath import Datapath, OvfField, Rom, info, signed_width
 
 DESIGNS = ("butter", "cheby1", "bessel")
 BTYPES = ("lowpass", "highpass")
@@ -189,7 +189,7 @@ class Iir(Block):
         # the serial engine's words, in as many bits as the widest of them needs as a signed integer (at
         # most num.wl + shift_b, den.wl + shift_a + 1: the negated den minimum); >= 4 for the c weights
         awords = np.concatenate([self.b << shift_b, -(self.a << shift_a), self.c], axis=1)
-        acoef_w = max([4] + [int(w if w >= 0 else -w - 1).bit_length() + 1 for w in awords.ravel()])
+        acoef_w = signed_width(awords, 4)
         self.datapath = IirDatapath(
             data_w=data_format.wl, sections=int(self.b.shape[0]), coef_w=coef_w, shift_b=shift_b, shift_a=shift_a,
             out_shift=out_shift, acc_w=self.acc_bits + 1, rules=rules, coef=Rom(words, coef_w), acoef_w=acoef_w,

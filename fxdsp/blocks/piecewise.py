@@ -33,7 +33,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, product_format, quantize, sum_format
 from ..fixed.kernels import convert
 from .base import Block
-from .datapath import Datapath, OvfField, Rom, const, frozen_array, info, packed
+from .datapath import Datapath, OvfField, Rom, const, frozen_array, info, packed, signed_width
 
 
 @njit(cache=True)
@@ -91,6 +91,9 @@ class PiecewiseDatapath(Datapath):
     rules: Rules
     coef: Rom                # segments x (order + 1) coefficients, ascending powers
     bp: Rom                  # breakpoint codes (one 0 word when there is one segment)
+    acoef_w: int             # the serial engine's ROM word (ARCH = 1): the widest of the words below
+    acoef: Rom               # per segment c_k << coef_align[k] (k < order), then c_order as it is: the
+    #                          Horner sum adds the coefficient word as read (exact: the same integers)
     temp_format: Format = info()
     acc_format: Format = info()
     out_format: Format = info()
@@ -149,15 +152,19 @@ class Piecewise(Block):
         sums = [sum_format(acc_format, fmt) for fmt in coef_formats]
         # shifts of the datapath (right shift = rounding, negative = exact left shift)
         coef_w = max(f.wl for f in coef_formats)
+        coef_align = [sf.fl - cf.fl for sf, cf in zip(sums, coef_formats)]
+        awords = self.coef.copy()
+        for k in range(self.order):
+            awords[:, k] = self.coef[:, k] << coef_align[k]
         self.datapath = PiecewiseDatapath(
             t_w=temp_format.wl, order=self.order, segments=int(self.coef.shape[0]), coef_w=coef_w,
             acc_w=acc_format.wl, out_w=out_format.wl, out_signed=int(out_format.signed), t0=int(self.t0[0]),
             top_shift=coef_formats[-1].fl - acc_format.fl, prod_shift=p_fmt.fl - acc_format.fl,
             acc_align=frozen_array([sf.fl - acc_format.fl for sf in sums]),
-            coef_align=frozen_array([sf.fl - cf.fl for sf, cf in zip(sums, coef_formats)]),
+            coef_align=frozen_array(coef_align),
             out_shift=acc_format.fl - out_format.fl, rules=rules, coef=Rom(self.coef, coef_w),
             bp=Rom(self.breakpoints if self.breakpoints.size else [0], temp_format.wl),
-            temp_format=temp_format, acc_format=acc_format, out_format=out_format,
+            acoef_w=signed_width(awords, 2), acoef=Rom(awords, signed_width(awords, 2)), temp_format=temp_format, acc_format=acc_format, out_format=out_format,
             ovf=(OvfField("acc", self.order + 1), OvfField("product", self.order), OvfField("out", 1)))
         self.coef = self.datapath.coef.words
         self.inputs = {"temp": temp_format}

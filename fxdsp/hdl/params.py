@@ -102,8 +102,8 @@ def chain_params(design: Design) -> dict[str, dict[str, int | str]]:
 SHARED_PW_FILE = "chain_paper002_pw_coef.hex"
 # the piecewise parameters a second coefficient set has of its own (piecewise.v SETS = 2: the "_1"
 # parameters; OUT_W_1 is the chain's BIAS_W); the files are the sets' ROMs
-PW_OWN = ("COEF_ALIGN", "OUT_SHIFT", "OUT_W", "OUT_SIGNED")
-PW_FILES = ("COEF_FILE", "BP_FILE")
+PW_OWN = ("COEF_ALIGN", "OUT_SHIFT", "OUT_W", "OUT_SIGNED", "ACOEF_W")
+PW_FILES = ("COEF_FILE", "BP_FILE", "ACOEF_FILE")
 
 
 def pw_shared(design: Design) -> bool:
@@ -128,9 +128,10 @@ def shared_pw_params(design: Design) -> dict[str, int | str]:
 
 
 def shared_pw_rom(design: Design) -> str:
-    """The shared piecewise engine's coefficient ROM: the SF set, then the bias set (SETS_FILE)."""
-    sf, bias = (design.instances[n].block.datapath.coef for n in ("piecewise_sf", "piecewise_bias"))
-    return hex_words(np.concatenate([sf.words.ravel(), bias.words.ravel()]), sf.width)
+    """The shared piecewise engine's coefficient ROM: the SF set, then the bias set (SETS_FILE), as
+    the serial engine reads them (their ACOEF words, in the wider of the two words)."""
+    sf, bias = (design.instances[n].block.datapath.acoef for n in ("piecewise_sf", "piecewise_bias"))
+    return hex_words(np.concatenate([sf.words.ravel(), bias.words.ravel()]), max(sf.width, bias.width))
 
 
 # the coefficient sets of the filter engine shared by the demodulator and the output low-pass

@@ -21,4 +21,5 @@
     parameter PW_SETS_FILE = "chain_paper002_pw_coef.hex",
     parameter [63:0] PW1_COEF_ALIGN = 64'h0000000000000003,
     parameter integer PW1_OUT_SHIFT = 3,
-    parameter integer PW1_OUT_SIGNED = 1
+    parameter integer PW1_OUT_SIGNED = 1,
+    parameter integer PW1_ACOEF_W = 25

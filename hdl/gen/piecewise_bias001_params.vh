@@ -14,5 +14,7 @@
     .OUT_SHIFT(4),
     .ROUNDING(1),
     .OVERFLOW(1),
+    .ACOEF_W(26),
     .COEF_FILE("piecewise_bias001_coef.hex"),
-    .BP_FILE("piecewise_bias001_bp.hex")
+    .BP_FILE("piecewise_bias001_bp.hex"),
+    .ACOEF_FILE("piecewise_bias001_acoef.hex")

@@ -14,5 +14,7 @@
     .OUT_SHIFT(3),
     .ROUNDING(1),
     .OVERFLOW(1),
+    .ACOEF_W(25),
     .COEF_FILE("piecewise_bias_coef.hex"),
-    .BP_FILE("piecewise_bias_bp.hex")
+    .BP_FILE("piecewise_bias_bp.hex"),
+    .ACOEF_FILE("piecewise_bias_acoef.hex")

@@ -14,5 +14,7 @@
     .OUT_SHIFT(16),
     .ROUNDING(1),
     .OVERFLOW(1),
+    .ACOEF_W(34),
     .COEF_FILE("piecewise_k0_coef.hex"),
-    .BP_FILE("piecewise_k0_bp.hex")
+    .BP_FILE("piecewise_k0_bp.hex"),
+    .ACOEF_FILE("piecewise_k0_acoef.hex")

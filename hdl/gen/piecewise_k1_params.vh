@@ -14,5 +14,7 @@
     .OUT_SHIFT(14),
     .ROUNDING(1),
     .OVERFLOW(1),
+    .ACOEF_W(37),
     .COEF_FILE("piecewise_k1_coef.hex"),
-    .BP_FILE("piecewise_k1_bp.hex")
+    .BP_FILE("piecewise_k1_bp.hex"),
+    .ACOEF_FILE("piecewise_k1_acoef.hex")

@@ -14,5 +14,7 @@
     .OUT_SHIFT(7),
     .ROUNDING(1),
     .OVERFLOW(1),
+    .ACOEF_W(30),
     .COEF_FILE("piecewise_sf_coef.hex"),
-    .BP_FILE("piecewise_sf_bp.hex")
+    .BP_FILE("piecewise_sf_bp.hex"),
+    .ACOEF_FILE("piecewise_sf_acoef.hex")

@@ -63,7 +63,7 @@
 //   One coefficient engine: when SF(T) and bias(T) differ only in their coefficients and output
 //   stage (PW_SHARED, from the generator: the same breakpoints, formats and rules), they are the
 //   two coefficient sets of ONE piecewise engine (SETS = 2, the bias set's COEF_ALIGN, OUT_SHIFT,
-//   OUT_W, OUT_SIGNED from PW1_* and BIAS_W, both sets in PW_SETS_FILE): the bias pass starts as
+//   OUT_W, OUT_SIGNED, ACOEF_W from PW1_* and BIAS_W, both sets in PW_SETS_FILE): the bias pass starts as
 //   SF's out_valid leaves, as the bias engine of its own would, so the schedule above is unchanged;
 //   else (e.g. the random set half_even_narrow) two engines.
 `default_nettype none
@@ -143,7 +143,7 @@ module chain_paper002 #(
 `include "piecewise_sf_params.vh"
                 , .ARCH(ARCH), .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
                 , .SETS(2), .SETS_FILE(PW_SETS_FILE), .COEF_ALIGN_1(PW1_COEF_ALIGN), .OUT_SHIFT_1(PW1_OUT_SHIFT)
-                , .OUT_W_1(BIAS_W), .OUT_SIGNED_1(PW1_OUT_SIGNED)
+                , .OUT_W_1(BIAS_W), .OUT_SIGNED_1(PW1_OUT_SIGNED), .ACOEF_W_1(PW1_ACOEF_W)
             ) u_pw (.clk(clk), .rst(rst), .in_valid(ce_v), .in_ready(b_ready), .temp(ce_w), .out_valid(sf_v),
                     .y(sf_w), .ovf(ovf_sf), .out_valid_1(b_v), .y_1(b_w), .ovf_1(ovf_b),
                     .mac_in_valid(sf_req), .mac_in_ready(sh_ready), .mac_a(sf_a), .mac_b(sf_b), .mac_na(sf_na),

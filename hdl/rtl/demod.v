@@ -479,7 +479,7 @@ module demod #(
             // ---- NCO correction: R(p >> CORR_SHIFT) (fx_round, ROUNDING), added to mb or cb ----
             wire signed [CW-1:0] rc_c;
             fx_round #(.IN_W(NPW), .SHIFT(CORR_SHIFT), .ROUNDING(ROUNDING), .OUT_W(CW)) u_corr
-                (.x(p[NPW-1:0]), .y(rc_c));
+                (.x(p[NPW-1:0]), .cin(1'b0), .y(rc_c));
             reg signed [CW-1:0] rc_q;
             reg                 add_go;         // the correction in rc_q is added this cycle ...
             reg                 add_sin;        // ... to mb (-sin), else to cb = -ncb (cos: rc + ~ncb + 1)
@@ -506,7 +506,7 @@ module demod #(
                 assign cv_x = pm_x;
             end
             fx_convert_pipe #(.IN_W(CV_W), .SHIFT(CSH), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
-                              .OVERFLOW(OVERFLOW)) u_cv (.clk(clk), .rst(rst), .in_valid(mix_in | amp_in), .x(cv_x),
+                              .OVERFLOW(OVERFLOW)) u_cv (.clk(clk), .rst(rst), .in_valid(mix_in | amp_in), .x(cv_x), .cin(1'b0),
                                                          .out_valid(mix_v), .y(mix_y), .ovf(mix_o));
             reg [DATA_W-1:0] mi_q;              // i of the mixer, until q joins it
             reg              got_i, ovf_mi_q, ovf_mq_q;

@@ -61,7 +61,7 @@ module freq2temp #(
             fx_mac_serial #(.A_W(DW), .B_W(KINV_W)) u_mac (.clk(clk), .rst(rst), .in_valid(issue),
                 .in_ready(mac_ready), .a(d_q), .b(kinv), .na(4'd0), .nb(4'd0), .out_valid(mac_valid), .p(p));
             fx_convert_pipe #(.IN_W(PW), .SHIFT(SHIFT), .ROUNDING(ROUNDING), .OUT_W(TEMP_W), .OUT_SIGNED(1),
-                              .OVERFLOW(OVERFLOW)) u_out (.clk(clk), .rst(rst), .in_valid(mac_valid), .x(p),
+                              .OVERFLOW(OVERFLOW)) u_out (.clk(clk), .rst(rst), .in_valid(mac_valid), .x(p), .cin(1'b0),
                                                           .out_valid(out_valid), .y(temp), .ovf(ovf));
             always @(posedge clk) begin
                 if (rst) begin

@@ -19,7 +19,7 @@ module fx_convert #(
     localparam integer RW0 = (SHIFT > 0) ? IN_W - SHIFT + 1 : IN_W - SHIFT;
     localparam integer RW  = (RW0 < 2) ? 2 : RW0;
     wire signed [RW-1:0] r;
-    fx_round #(.IN_W(IN_W), .SHIFT(SHIFT), .ROUNDING(ROUNDING), .OUT_W(RW)) u_round (.x(x), .y(r));
+    fx_round #(.IN_W(IN_W), .SHIFT(SHIFT), .ROUNDING(ROUNDING), .OUT_W(RW)) u_round (.x(x), .cin(1'b0), .y(r));
     fx_fit #(.IN_W(RW), .OUT_W(OUT_W), .OUT_SIGNED(OUT_SIGNED), .OVERFLOW(OVERFLOW)) u_fit (.x(r), .y(y), .ovf(ovf));
 endmodule
 

@@ -1,7 +1,7 @@
 // fx_convert_pipe: fx_convert split over two registered stages, for the serial (ARCH = 1)
 // datapaths at 40 MHz: the rounding adder (fx_round, by ROUNDING: floor / half_up / half_even /
 // toward_zero) in one cycle, the range fit (fx_fit, by OVERFLOW: wrap / saturate, ovf flagged) in
-// the next. y and ovf load when the value reaches them and hold until the next one; out_valid is a
+// the next (x + cin rounded: cin is fx_round's carry in). y and ovf load when the value reaches them and hold until the next one; out_valid is a
 // one-cycle pulse. Synchronous reset clears the valid pipeline and the outputs.
 // Interface: in_valid / out_valid, one value per cycle. Latency: 2 cycles.
 `default_nettype none
@@ -12,12 +12,14 @@ module fx_convert_pipe #(
     parameter integer ROUNDING   = 1,    // 0 floor, 1 half_up, 2 half_even, 3 toward_zero
     parameter integer OUT_W      = 32,   // bits of the output
     parameter integer OUT_SIGNED = 1,    // 1: signed output format, 0: unsigned
-    parameter integer OVERFLOW   = 1     // 0 wrap, 1 saturate
+    parameter integer OVERFLOW   = 1,    // 0 wrap, 1 saturate
+    parameter integer CIN        = 0     // 1: cin added before the rounding (fx_round CIN)
 ) (
     input  wire                    clk,
     input  wire                    rst,
     input  wire                    in_valid,
     input  wire signed [IN_W-1:0]  x,
+    input  wire                    cin,        // CIN = 1: added to x before the rounding (fx_round's carry in)
     output reg                     out_valid,
     output reg         [OUT_W-1:0] y,
     output reg                     ovf
@@ -25,7 +27,7 @@ module fx_convert_pipe #(
     localparam integer RW0 = (SHIFT > 0) ? IN_W - SHIFT + 1 : IN_W - SHIFT;
     localparam integer RW  = (RW0 < 2) ? 2 : RW0;   // fx_convert's width rule
     wire signed [RW-1:0] r_c;
-    fx_round #(.IN_W(IN_W), .SHIFT(SHIFT), .ROUNDING(ROUNDING), .OUT_W(RW)) u_round (.x(x), .y(r_c));
+    fx_round #(.IN_W(IN_W), .SHIFT(SHIFT), .ROUNDING(ROUNDING), .OUT_W(RW), .CIN(CIN)) u_round (.x(x), .cin(cin), .y(r_c));
     reg signed [RW-1:0] r_q;
     reg                 r_v;
     wire [OUT_W-1:0] y_c;

@@ -159,6 +159,8 @@ module fx_mac_serial #(
     reg  signed [PP_W-1:0] pp;
     reg  [2:0] v_q, f_q, n_q, l_q;  // valid / first / new column / last of stages 1..3
 
+    wire [LIMB-1:0] prod_hi, prod_lo;
+    assign {prod_hi, prod_lo} = prod;
     wire signed [LIMB+1:0] au_x = {2'b00, au};
     wire signed [LIMB+1:0] bs_x = {sb & bu[LIMB-1], sb & bu[LIMB-1], bu};
     always @(posedge clk) begin
@@ -168,7 +170,9 @@ module fx_mac_serial #(
         sb   <= (jb == jb_top) & b_l[LIMB-1];
         prod <= au * bu;
         corr <= (sb ? au_x : {(LIMB+2){1'b0}}) + (sa ? bs_x : {(LIMB+2){1'b0}});
-        pp   <= $signed({2'b00, prod}) - $signed({corr, {LIMB{1'b0}}});
+        // prod - (corr << 16): the correction has no bit below 16, so those are prod's as they are
+        // (a full-width subtraction kept ~26 LUT4 on a carry chain whose low operand bits are 0)
+        pp   <= {$signed({2'b00, prod_hi}) - corr, prod_lo};
     end
 
     always @(posedge clk) begin

@@ -168,7 +168,7 @@ module iir #(
                 wire signed [AW-1:0] efb = {{(AW-CE_W){pc1[CE_W-1]}}, pc1} + {{(AW-CE_W){pc2[CE_W-1]}}, pc2};
                 wire signed [AW-1:0] acc = (num <<< SHIFT_B) - (den <<< SHIFT_A) + efb;
                 wire signed [RW-1:0] r;
-                fx_round #(.IN_W(AW), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(RW)) u_round (.x(acc), .y(r));
+                fx_round #(.IN_W(AW), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(RW)) u_round (.x(acc), .cin(1'b0), .y(r));
                 wire [DATA_W-1:0] out;
                 fx_fit #(.IN_W(RW), .OUT_W(DATA_W), .OUT_SIGNED(1), .OVERFLOW(OVERFLOW)) u_fit
                     (.x(r), .y(out), .ovf(ovf_c[s]));
@@ -426,15 +426,30 @@ module iir #(
 
             // ---- round, fit, error: the same primitives as the parallel variant ----
             wire signed [RW-1:0] r_c;
-            fx_round #(.IN_W(AW), .ROUNDING(ROUNDING), .SHIFT(OUT_SHIFT), .OUT_W(RW)) u_round (.x(sum), .y(r_c));
+            fx_round #(.IN_W(AW), .ROUNDING(ROUNDING), .SHIFT(OUT_SHIFT), .OUT_W(RW)) u_round (.x(sum), .cin(1'b0), .y(r_c));
             wire [DATA_W-1:0] out_c;
             wire              ovf_c;
             fx_fit #(.IN_W(RW), .OUT_W(DATA_W), .OUT_SIGNED(1), .OVERFLOW(OVERFLOW)) u_fit
                 (.x(r_q), .y(out_c), .ovf(ovf_c));
-            wire signed [AW-1:0] r_x = {{(AW-RW+1){r_q[RW-1]}}, r_q[RW-2:0]};
-            /* verilator lint_off UNUSEDSIGNAL */
-            wire signed [AW-1:0] res = sum - (r_x <<< OUT_SHIFT);
-            /* verilator lint_on UNUSEDSIGNAL */
+            // the error sum - (r_q << OUT_SHIFT) in E_W = OUT_SHIFT + 2 bits: r_q << OUT_SHIFT has no bit
+            // below OUT_SHIFT, so those are sum's as they are and only the two above them subtract (a
+            // full-width subtraction kept ~37 LUT4 on a carry chain whose low operand bits are 0)
+            wire [E_W-1:0] res;
+            if (OUT_SHIFT > 0) begin : g_err
+                /* verilator lint_off UNUSEDSIGNAL */   // above the error's two top bits
+                wire [AW-OUT_SHIFT-1:0] sum_up;
+                wire [RW-1:0]           r_all = r_q;
+                /* verilator lint_on UNUSEDSIGNAL */
+                wire [OUT_SHIFT-1:0]    sum_low;
+                assign {sum_up, sum_low} = sum;
+                wire [1:0] e_top = sum_up[1:0] - r_all[1:0];
+                assign res = {e_top, sum_low};
+            end else begin : g_err_none
+                /* verilator lint_off UNUSEDSIGNAL */
+                wire [AW-1:0] res_all = sum - {{(AW-RW+1){r_q[RW-1]}}, r_q[RW-2:0]};
+                /* verilator lint_on UNUSEDSIGNAL */
+                assign res = res_all[E_W-1:0];
+            end
             wire signed [E_W-1:0] e_c = ovf_q ? {E_W{1'b0}} : res_q;
             reg [SLOTS-1:0] ovf_n;      // the flags with this section's
             always @* begin
@@ -447,7 +462,7 @@ module iir #(
             always @(posedge clk) begin
                 out_q <= out_c;
                 ovf_q <= ovf_c;
-                res_q <= res[E_W-1:0];
+                res_q <= res;
             end
 
             // the state writes, over the slot's older words (~ph): x = the section's input once its

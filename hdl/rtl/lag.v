@@ -102,7 +102,7 @@ module lag #(
     wire signed [PW-1:0]      p = d * m;
 
     wire signed [RW-1:0] step;
-    fx_round #(.IN_W(PW), .SHIFT(ALPHA_S), .ROUNDING(ROUNDING), .OUT_W(RW)) u_step (.x(p), .y(step));
+    fx_round #(.IN_W(PW), .SHIFT(ALPHA_S), .ROUNDING(ROUNDING), .OUT_W(RW)) u_step (.x(p), .cin(1'b0), .y(step));
     /* verilator lint_off UNUSEDSIGNAL */
     wire signed [SW-1:0] sum = {{(SW-STATE_W){base[STATE_W-1]}}, base} + {{(SW-RW){step[RW-1]}}, step};
     /* verilator lint_on UNUSEDSIGNAL */
@@ -204,7 +204,7 @@ module lag #(
 
             // ---- step = round(p >> ALPHA_S): the same primitive as the parallel variant ----
             wire signed [RW-1:0] step_c;
-            fx_round #(.IN_W(PW), .ROUNDING(ROUNDING), .SHIFT(ALPHA_S), .OUT_W(RW)) u_step_s (.x(p), .y(step_c));
+            fx_round #(.IN_W(PW), .ROUNDING(ROUNDING), .SHIFT(ALPHA_S), .OUT_W(RW)) u_step_s (.x(p), .cin(1'b0), .y(step_c));
             // the state update is modulo 2**STATE_W (the result is in range): step at STATE_W bits
             wire [STATE_W-1:0] step_s;
             if (RW >= STATE_W) begin : g_step_cut
@@ -229,7 +229,7 @@ module lag #(
 
             // ---- te = fit(round(sv >> GUARD)): the same primitives, one stage each ----
             wire signed [TW-1:0] r_c;
-            fx_round #(.IN_W(STATE_W), .ROUNDING(ROUNDING), .SHIFT(GUARD), .OUT_W(TW)) u_te_round (.x(sv), .y(r_c));
+            fx_round #(.IN_W(STATE_W), .ROUNDING(ROUNDING), .SHIFT(GUARD), .OUT_W(TW)) u_te_round (.x(sv), .cin(1'b0), .y(r_c));
             wire [TEMP_W-1:0] te_c;
             wire              ovf_c;
             fx_fit #(.IN_W(TW), .OUT_W(TEMP_W), .OUT_SIGNED(1), .OVERFLOW(OVERFLOW)) u_te_fit

@@ -84,8 +84,8 @@ module nco #(
     wire signed [NCO_W-1:0] ncb = -cb;                 // cb >= -max: fits
     wire signed [PW-1:0] pm = ncb * d;
     wire signed [CW-1:0] rc, rm;
-    fx_round #(.IN_W(PW), .SHIFT(CORR_SHIFT), .ROUNDING(ROUNDING), .OUT_W(CW)) u_rc (.x(pc), .y(rc));
-    fx_round #(.IN_W(PW), .SHIFT(CORR_SHIFT), .ROUNDING(ROUNDING), .OUT_W(CW)) u_rm (.x(pm), .y(rm));
+    fx_round #(.IN_W(PW), .SHIFT(CORR_SHIFT), .ROUNDING(ROUNDING), .OUT_W(CW)) u_rc (.x(pc), .cin(1'b0), .y(rc));
+    fx_round #(.IN_W(PW), .SHIFT(CORR_SHIFT), .ROUNDING(ROUNDING), .OUT_W(CW)) u_rm (.x(pm), .cin(1'b0), .y(rm));
 
     /* verilator lint_off UNUSEDSIGNAL */  // the top bit of the sums: the model proves it is a sign copy
     wire signed [SW-1:0] c_sum = {{(SW-NCO_W){cb[NCO_W-1]}}, cb} + {{(SW-CW){rc[CW-1]}}, rc};

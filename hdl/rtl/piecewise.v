@@ -26,8 +26,9 @@
 //     per power k = ORDER-1 .. 0, from edge b (b = 4 for the first):
 //       b + 1:          acc * t issued to the MAC;  b + N + 4: product registered by the MAC
 //       b + N + 5, + 6: round(product >> PROD_SHIFT), then its fit (product flag)
-//       b + N + 7:      p << ACC_ALIGN[k] and c[seg][k] << COEF_ALIGN[k] registered
-//       b + N + 8:      their sum registered
+//       b + N + 7:      p << ACC_ALIGN[k] registered
+//       b + N + 8:      its sum with c[seg][k] << COEF_ALIGN[k] (the ROM word as read: ACOEF_FILE,
+//                       the generator's aligned copy of the coefficients) registered
 //       b + N + 9, +10: round(sum >> ACC_ALIGN[k]), then acc = its fit (acc flag), next address
 //     then round(acc >> OUT_SHIFT), then y = its fit with out_valid (out flag).
 //   Cycles per sample: ORDER * (N + 10) + 7, e.g. 35 for the paper 001 bias (ORDER 2, 32-bit
@@ -50,6 +51,7 @@ module piecewise #(
     parameter integer ORDER      = 1,
     parameter integer SEGMENTS   = 4,
     parameter integer COEF_W     = 20,
+    parameter integer ACOEF_W    = 24,    // ARCH = 1: the word of ACOEF_FILE (c_k << COEF_ALIGN[k], c_ORDER)
     parameter integer ACC_W      = 32,
     parameter integer OUT_W      = 18,
     parameter integer OUT_SIGNED = 0,
@@ -65,14 +67,16 @@ module piecewise #(
     parameter integer EXT_MAC    = 0,     // ARCH = 1: 0 its own fx_mac_serial; 1 the external one on mac_* (fx_mac_port)
     parameter integer MAC_A_W    = 48,    // EXT_MAC = 1: the external multiplier's operand widths (>= ACC_W, T_W + 1)
     parameter integer MAC_B_W    = 32,    // (a: MAC_A_W bits, b: MAC_B_W bits; 3 x 2 limbs by default)
-    parameter         COEF_FILE  = "piecewise_sf_coef.hex",
+    parameter         COEF_FILE  = "piecewise_sf_coef.hex",     // ARCH = 0: the coefficients
+    parameter         ACOEF_FILE = "piecewise_sf_acoef.hex",    // ARCH = 1: the same, aligned (ACOEF_W bits)
     parameter         BP_FILE    = "piecewise_sf_bp.hex",
     parameter integer SETS         = 1,     // 1; 2 (ARCH = 1): a second coefficient set per sample (y_1, ovf_1)
     parameter [63:0]  COEF_ALIGN_1 = 64'h00a,   // SETS = 2: the second set's COEF_ALIGN ...
     parameter integer OUT_SHIFT_1  = 12,        // ... OUT_SHIFT,
     parameter integer OUT_W_1      = 18,        // ... OUT_W
-    parameter integer OUT_SIGNED_1 = 0,         // ... and OUT_SIGNED (the rest is the first set's)
-    parameter         SETS_FILE    = "piecewise_sets_coef.hex"   // SETS = 2: both sets' words, read instead of COEF_FILE
+    parameter integer OUT_SIGNED_1 = 0,         // ... OUT_SIGNED and
+    parameter integer ACOEF_W_1    = 24,        // ... ACOEF_W (the rest is the first set's)
+    parameter         SETS_FILE    = "piecewise_sets_coef.hex"   // SETS = 2: both sets' aligned words, read instead of ACOEF_FILE
 ) (
     input  wire                  clk,
     input  wire                  rst,
@@ -103,14 +107,9 @@ module piecewise #(
     localparam [T_W-1:0] T0_C = T0[T_W-1:0];
 
     localparam integer S1  = (SETS == 2) ? 1 : 0;    // a second set
-    reg [COEF_W-1:0] coef [0:SETS*SEGMENTS*NC-1];
+    reg [COEF_W-1:0] coef [0:SEGMENTS*NC-1];         // ARCH = 0 (read at the selected segment)
+    initial $readmemh(COEF_FILE, coef);
     generate
-        // the file of the sets (two parameters: a string conditional would pad the shorter name)
-        if (S1 != 0) begin : g_sets_file
-            initial $readmemh(SETS_FILE, coef);
-        end else begin : g_coef_file
-            initial $readmemh(COEF_FILE, coef);
-        end
         if ((SETS != 1 && SETS != 2) || (SETS == 2 && ARCH != 1)) begin : g_bad_sets
             initial begin $display("piecewise: SETS must be 1, or 2 with ARCH = 1, got %0d, ARCH %0d", SETS, ARCH);
                           $finish; end
@@ -268,7 +267,6 @@ module piecewise #(
         localparam integer ORW  = (ORW0 < 2) ? 2 : ORW0;    // round(acc >> OUT_SHIFT)
         localparam integer ORW1_0 = (OUT_SHIFT_1 > 0) ? ACC_W - OUT_SHIFT_1 + 1 : ACC_W - OUT_SHIFT_1;
         localparam integer ORW1 = (ORW1_0 < 2) ? 2 : ORW1_0; // round(acc >> OUT_SHIFT_1)
-        localparam integer ORWM = (S1 != 0 && ORW1 > ORW) ? ORW1 : ORW;   // or_q: either set's
         localparam integer SET1_I = SEGMENTS * NC;           // the second set's first ROM word
         localparam [RA_W-1:0] SET1_A = SET1_I[RA_W-1:0];
         localparam integer SWM  = sum_w_max(0);             // the widest Horner sum over the powers
@@ -298,12 +296,23 @@ module piecewise #(
         reg [T_W-1:0]           temp_q;     // the sample
         reg signed [TW1-1:0]    t_q;        // t = temp - T0
         reg [RA_W-1:0]          ra;         // ROM address: seg NC + k
-        reg [COEF_W-1:0]        coef_q;     // registered ROM read
+        // the coefficient words as the Horner sum adds them (ACOEF_FILE, or SETS_FILE: both sets'):
+        // c_k << COEF_ALIGN[k] (the set's), c_ORDER as it is: no alignment multiplexer, no register
+        // between the ROM's and the adder (~26 LUT4 of the paper 002 chain's shared engine)
+        localparam integer RWD = (S1 != 0 && ACOEF_W_1 > ACOEF_W) ? ACOEF_W_1 : ACOEF_W;
+        reg [RWD-1:0] acoef [0:SETS*SEGMENTS*NC-1];
+        // the file of the sets (two parameters: a string conditional would pad the shorter name)
+        if (S1 != 0) begin : g_sets_file
+            initial $readmemh(SETS_FILE, acoef);
+        end else begin : g_acoef_file
+            initial $readmemh(ACOEF_FILE, acoef);
+        end
+        reg [RWD-1:0]           coef_q;     // registered ROM read
         reg [KW-1:0]            k;          // the power being added
         reg signed [ACC_W-1:0]  acc_q;
         reg signed [SWM-1:0]    s_q;        // the Horner sum of power k
         reg signed [SRW-1:0]    sr_q;       // round(s_q)
-        reg signed [ORWM-1:0]   or_q;       // round(acc >> OUT_SHIFT) (the second set: OUT_SHIFT_1)
+        reg signed [ORW-1:0]    or_q;       // round(acc >> OUT_SHIFT) (the second set: its own below)
         reg                     set_q;      // the set of this pass (SETS = 2; else 0)
         reg                     pend;       // SETS = 2: the sample's second set still to run
         reg                     ovf_top_q;
@@ -312,7 +321,7 @@ module piecewise #(
 
         assign in_ready = (st == S_IDLE) && !pend;
         assign t_sel = temp_q;
-        always @(posedge clk) coef_q <= coef[ra];
+        always @(posedge clk) coef_q <= acoef[ra];
 
         // the multiplier: acc * t, exact
         wire mac_ready, mac_valid;
@@ -325,7 +334,7 @@ module piecewise #(
         // top coefficient into the accumulator (a short path: COEF_W bits)
         wire [ACC_W-1:0] acc_top;
         wire             ovf_top;
-        fx_convert #(.IN_W(COEF_W), .SHIFT(TOP_SHIFT), .ROUNDING(ROUNDING), .OUT_W(ACC_W), .OUT_SIGNED(1),
+        fx_convert #(.IN_W(RWD), .SHIFT(TOP_SHIFT), .ROUNDING(ROUNDING), .OUT_W(ACC_W), .OUT_SIGNED(1),
                      .OVERFLOW(OVERFLOW)) u_top (.x(coef_q), .y(acc_top), .ovf(ovf_top));
 
         // product: round (as the MAC returns it), then fit (in S_PFIT); held from S_ALGN on
@@ -335,52 +344,48 @@ module piecewise #(
         wire             p_v;
         /* verilator lint_on UNUSEDSIGNAL */
         fx_convert_pipe #(.IN_W(PW), .SHIFT(PROD_SHIFT), .ROUNDING(ROUNDING), .OUT_W(ACC_W), .OUT_SIGNED(1),
-                          .OVERFLOW(OVERFLOW)) u_prod (.clk(clk), .rst(rst), .in_valid(mac_valid), .x(prod),
+                          .OVERFLOW(OVERFLOW)) u_prod (.clk(clk), .rst(rst), .in_valid(mac_valid), .x(prod), .cin(1'b0),
                                                        .out_valid(p_v), .y(p_q), .ovf(ovf_p));
 
         // Horner sum and its rounding, one alignment per power (selected by k): the aligned
         // operands are registered first, so the sum is one adder from registers (not one per power
         // behind a multiplexer: that was the 39 MHz path of a third-order engine)
         wire signed [SWM-1:0] pe = {{(SWM-ACC_W){p_q[ACC_W-1]}}, p_q};
-        wire signed [SWM-1:0] ce = {{(SWM-COEF_W){coef_q[COEF_W-1]}}, coef_q};
+        // c[seg][k] << COEF_ALIGN[k]: the word as read (coef_q holds c[seg][k] from the ROM read after
+        // the address moved to it until the next power's, long past S_SUM)
+        wire signed [SWM-1:0] ce = {{(SWM-RWD+1){coef_q[RWD-1]}}, coef_q[RWD-2:0]};
         wire [SWM-1:0] pal_k [0:ORDER-1];   // p << ACC_ALIGN[k]
-        wire [SWM-1:0] cal_k [0:ORDER-1];   // c[seg][k] << COEF_ALIGN[k] (the second set: COEF_ALIGN_1[k])
         wire [SRW-1:0] srnd_k [0:ORDER-1];  // round(s_q >> ACC_ALIGN[k])
         for (j = 0; j < ORDER; j = j + 1) begin : g_k
             localparam integer AA = {24'd0, ACC_ALIGN[8*j +: 8]};
-            localparam integer CA = {24'd0, COEF_ALIGN[8*j +: 8]};
-            localparam integer CA1 = {24'd0, COEF_ALIGN_1[8*j +: 8]};
             assign pal_k[j] = pe <<< AA;
-            assign cal_k[j] = (S1 != 0 && set_q) ? ce <<< CA1 : ce <<< CA;
-            fx_round #(.IN_W(SWM), .SHIFT(AA), .ROUNDING(ROUNDING), .OUT_W(SRW)) u_srnd (.x(s_q), .y(srnd_k[j]));
+            fx_round #(.IN_W(SWM), .SHIFT(AA), .ROUNDING(ROUNDING), .OUT_W(SRW)) u_srnd (.x(s_q), .cin(1'b0), .y(srnd_k[j]));
         end
-        reg signed [SWM-1:0] pal_q, cal_q;
+        reg signed [SWM-1:0] pal_q;
         wire [ACC_W-1:0] acc_c;
         wire             ovf_a;
         fx_fit #(.IN_W(SRW), .OUT_W(ACC_W), .OUT_SIGNED(1), .OVERFLOW(OVERFLOW)) u_sfit
             (.x(sr_q), .y(acc_c), .ovf(ovf_a));
 
-        // output: round, then fit (the second set: its own shift and format, from the same or_q)
+        // output: round, then fit (the second set: its own shift and format, its own register: both
+        // rounded results are registered in S_ORND, each fit reads its own, no multiplexer)
         wire signed [ORW-1:0]  or_c;
-        wire signed [ORWM-1:0] or_m;        // round(acc >> OUT_SHIFT of the pass's set), sign-extended
-        fx_round #(.IN_W(ACC_W), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(ORW)) u_ornd (.x(acc_q), .y(or_c));
+        fx_round #(.IN_W(ACC_W), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(ORW)) u_ornd (.x(acc_q), .cin(1'b0), .y(or_c));
         wire [OUT_W-1:0] y_c;
         wire             ovf_o;
-        fx_fit #(.IN_W(ORWM), .OUT_W(OUT_W), .OUT_SIGNED(OUT_SIGNED), .OVERFLOW(OVERFLOW)) u_ofit
+        fx_fit #(.IN_W(ORW), .OUT_W(OUT_W), .OUT_SIGNED(OUT_SIGNED), .OVERFLOW(OVERFLOW)) u_ofit
             (.x(or_q), .y(y_c), .ovf(ovf_o));
         wire [OUT_W_1-1:0] y1_c;
         wire               ovf1_o;
         if (S1 != 0) begin : g_set1_out
             wire signed [ORW1-1:0] or1_c;
+            reg  signed [ORW1-1:0] or1_q;   // round(acc >> OUT_SHIFT_1)
             fx_round #(.IN_W(ACC_W), .SHIFT(OUT_SHIFT_1), .ROUNDING(ROUNDING), .OUT_W(ORW1)) u_ornd1
-                (.x(acc_q), .y(or1_c));
-            wire signed [ORWM-1:0] or1_x = {{(ORWM-ORW1+1){or1_c[ORW1-1]}}, or1_c[ORW1-2:0]};   // sign-extended
-            wire signed [ORWM-1:0] or0_x = {{(ORWM-ORW+1){or_c[ORW-1]}}, or_c[ORW-2:0]};
-            assign or_m = set_q ? or1_x : or0_x;
-            fx_fit #(.IN_W(ORWM), .OUT_W(OUT_W_1), .OUT_SIGNED(OUT_SIGNED_1), .OVERFLOW(OVERFLOW)) u_ofit1
-                (.x(or_q), .y(y1_c), .ovf(ovf1_o));
+                (.x(acc_q), .cin(1'b0), .y(or1_c));
+            always @(posedge clk) if (st == S_ORND) or1_q <= or1_c;
+            fx_fit #(.IN_W(ORW1), .OUT_W(OUT_W_1), .OUT_SIGNED(OUT_SIGNED_1), .OVERFLOW(OVERFLOW)) u_ofit1
+                (.x(or1_q), .y(y1_c), .ovf(ovf1_o));
         end else begin : g_one_set
-            assign or_m = or_c;
             assign y1_c = {OUT_W_1{1'b0}};
             assign ovf1_o = 1'b0;
         end
@@ -412,9 +417,9 @@ module piecewise #(
                     S_WAIT:  if (mac_valid) st <= S_PFIT;   // the product is rounded at this edge ...
                     S_PFIT:  st <= S_ALGN;                  // ... and fitted at this one (u_prod)
                     S_ALGN:  begin
-                        pal_q <= pal_k[k]; cal_q <= cal_k[k]; ovf_prod_q[j_of_k] <= ovf_p; st <= S_SUM;
+                        pal_q <= pal_k[k]; ovf_prod_q[j_of_k] <= ovf_p; st <= S_SUM;
                     end
-                    S_SUM:   begin s_q <= pal_q + cal_q; st <= S_SRND; end
+                    S_SUM:   begin s_q <= pal_q + ce; st <= S_SRND; end
                     S_SRND:  begin sr_q <= srnd_k[k]; st <= S_SFIT; end
                     S_SFIT:  begin
                         acc_q <= acc_c; ovf_acc_q[j_of_k] <= ovf_a;
@@ -424,7 +429,7 @@ module piecewise #(
                             k <= k - 1'b1; ra <= ra - 1'b1; st <= S_ISSUE;
                         end
                     end
-                    S_ORND:  begin or_q <= or_m; st <= S_OFIT; end
+                    S_ORND:  begin or_q <= or_c; st <= S_OFIT; end
                     default: begin   // S_OFIT: the pass's set out (SETS = 2: set 0's starts set 1's)
                         if (set_q) begin
                             y_1 <= y1_c; ovf_1 <= {ovf1_o, ovf_prod_q, ovf_acc_q, ovf_top_q}; out_valid_1 <= 1'b1;

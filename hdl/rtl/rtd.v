@@ -164,7 +164,7 @@ module rtd #(
 
             // ---- round (in S_ROUND), fit (in S_FIT): the parallel variant's fx_convert, pipelined ----
             fx_convert_pipe #(.IN_W(EW), .SHIFT(SHIFT), .ROUNDING(ROUNDING), .OUT_W(TEMP_W), .OUT_SIGNED(1),
-                              .OVERFLOW(OVERFLOW)) u_out (.clk(clk), .rst(rst), .in_valid(st == S_ROUND), .x(ex_q),
+                              .OVERFLOW(OVERFLOW)) u_out (.clk(clk), .rst(rst), .in_valid(st == S_ROUND), .x(ex_q), .cin(1'b0),
                                                           .out_valid(out_valid), .y(temp), .ovf(ovf));
 
             always @(posedge clk) begin

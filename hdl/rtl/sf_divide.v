@@ -11,13 +11,15 @@
 // ARCH = 0: the sign, rounding and fit of the quotient in the cycle of the last division step.
 //   Latency: ceil((IN_W + NUM_SHIFT) / UNROLL) + 1 cycles from acceptance to out_valid; a new
 //   sample may be accepted in the cycle out_valid is high (one sample per latency cycles).
+// The sign: the quotient bits enter nq XORed with neg, so nq holds q, or ~q for a negative
+//   result, and q_s = sign * q = {neg, nq} + neg: the + neg is the rounding adder's carry in
+//   (fx_round cin), so no negation adder of its own (it was ~79 LUT4 of the paper 002 chain).
 // ARCH = 1: the same bits, the output path pipelined for 40 MHz on an iCE40UP5K (in ARCH = 0 the
-//   last restoring step, the NW-bit negation, the rounding adder and the fit are one path: 18.5
-//   MHz): after the last step (quotient and sign held in nq, neg), q_s = sign * q is computed
-//   in two registered halves (the low half's carry registered between), then fx_convert_pipe
-//   rounds (one cycle) and fits (one cycle), then the output register. Latency:
-//   ceil((IN_W + NUM_SHIFT) / UNROLL) + 6 cycles; in_ready is high again in the out_valid cycle
-//   (one sample per latency cycles, as ARCH = 0).
+//   last restoring step, the rounding adder and the fit are one path): after the last step
+//   (nq and neg hold), two cycles of delay (the schedule of the earlier two-stage negation), then
+//   fx_convert_pipe rounds {neg, nq} + neg (one cycle) and fits (one cycle), then the output
+//   register. Latency: ceil((IN_W + NUM_SHIFT) / UNROLL) + 6 cycles; in_ready is high again in the
+//   out_valid cycle (one sample per latency cycles, as ARCH = 0).
 `default_nettype none
 
 module sf_divide #(
@@ -80,12 +82,13 @@ module sf_divide #(
             if (c_v != {CW{1'b0}}) begin
                 sh_v = {r_v, nq_v[NW-1]};
                 t_v  = {1'b0, sh_v} - {2'b00, dmag};
+                // the quotient bit, inverted for a negative result (nq ends as ~q: see the header)
                 if (!t_v[DW+1]) begin
                     r_v  = t_v[DW-1:0];
-                    nq_v = {nq_v[NW-2:0], 1'b1};
+                    nq_v = {nq_v[NW-2:0], ~neg};
                 end else begin
                     r_v  = sh_v[DW-1:0];
-                    nq_v = {nq_v[NW-2:0], 1'b0};
+                    nq_v = {nq_v[NW-2:0], neg};
                 end
                 c_v = c_v - {{(CW-1){1'b0}}, 1'b1};
             end
@@ -128,11 +131,16 @@ module sf_divide #(
 
     generate
         if (ARCH == 0) begin : g_comb
-            wire signed [NW:0] qs = neg ? -$signed({1'b0, nq_v}) : $signed({1'b0, nq_v});
+            // q_s = {neg, nq} + neg rounded (the + neg as fx_round's carry in), then fitted
+            localparam integer RW0 = (OUT_SHIFT > 0) ? NW + 1 - OUT_SHIFT + 1 : NW + 1 - OUT_SHIFT;
+            localparam integer RW  = (RW0 < 2) ? 2 : RW0;       // fx_convert's width rule
+            wire signed [NW:0] qx = {neg, nq_v};
+            wire signed [RW-1:0] r_c;
+            fx_round #(.IN_W(NW+1), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(RW), .CIN(1)) u_round
+                (.x(qx), .cin(neg), .y(r_c));
             wire [OUT_W-1:0] y_c;
             wire             o_c;
-            fx_convert #(.IN_W(NW+1), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(OUT_W), .OUT_SIGNED(1),
-                         .OVERFLOW(OVERFLOW)) u_out (.x(qs), .y(y_c), .ovf(o_c));
+            fx_fit #(.IN_W(RW), .OUT_W(OUT_W), .OUT_SIGNED(1), .OVERFLOW(OVERFLOW)) u_out (.x(r_c), .y(y_c), .ovf(o_c));
             assign fin = 1'b0;
             always @(posedge clk) begin
                 if (rst) begin
@@ -146,35 +154,20 @@ module sf_divide #(
                 end
             end
         end else begin : g_pipe
-            // after the last step nq and neg hold the quotient and its sign (fin keeps in_ready low);
-            // stages 1, 2: q_s = sign * q = (q ^ sign) + sign in two halves, the low half's carry
-            // registered between them (no NW-bit carry chain: it held this path to 37 MHz);
-            // 3, 4: fx_convert_pipe (round, then fit); 5: the output register (with the
+            // after the last step nq and neg hold (fin keeps in_ready low until out_valid); stages 1, 2:
+            // delay only (the schedule is that of the two-stage negation it replaces); 3, 4:
+            // fx_convert_pipe rounds {neg, nq} + neg, then fits; 5: the output register (with the
             // division-by-zero value)
-            localparam integer QW = NW + 1;                  // q_s: the magnitude with a sign bit
-            localparam integer LO = QW / 2;
-            localparam integer HI = QW - LO;
-            wire [QW-1:0]      q_x = {1'b0, nq} ^ {QW{neg}};  // q, or its ones' complement
-            wire [HI-1:0]      q_x_hi;
-            wire [LO-1:0]      q_x_lo;
-            assign {q_x_hi, q_x_lo} = q_x;                 // its two halves (no bit dropped)
-            reg  [LO-1:0]      s_lo;
-            reg  [HI-1:0]      x_hi;                      // the high half of q_x, for stage 2
-            reg                s_c;                       // carry out of the low half
             reg                q_v, h_v, fin_r;
-            reg signed [NW:0]  q_s;
             reg                s_v;
             wire               c_v2;
             wire [OUT_W-1:0]   y_c;
             wire               o_c;
+            wire signed [NW:0] q_x = {neg, nq};           // q, or ~q with the sign: q_s - neg
             assign fin = fin_r;
             fx_convert_pipe #(.IN_W(NW+1), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(OUT_W),
-                              .OUT_SIGNED(1), .OVERFLOW(OVERFLOW)) u_out
-                (.clk(clk), .rst(rst), .in_valid(s_v), .x(q_s), .out_valid(c_v2), .y(y_c), .ovf(o_c));
-            always @(posedge clk) begin
-                if (q_v) begin {s_c, s_lo} <= {1'b0, q_x_lo} + {{LO{1'b0}}, neg}; x_hi <= q_x_hi; end
-                if (h_v) q_s <= {x_hi + {{(HI-1){1'b0}}, s_c}, s_lo};
-            end
+                              .OUT_SIGNED(1), .OVERFLOW(OVERFLOW), .CIN(1)) u_out
+                (.clk(clk), .rst(rst), .in_valid(s_v), .x(q_x), .cin(neg), .out_valid(c_v2), .y(y_c), .ovf(o_c));
             always @(posedge clk) begin
                 if (rst) begin
                     q_v <= 1'b0; h_v <= 1'b0; s_v <= 1'b0; fin_r <= 1'b0;

@@ -133,6 +133,9 @@ MUTATIONS = [
              "restoring step takes r >= d as r > d", ((None, "sf_divide", False),)),
     Mutation("divide_by_zero_sign", "sf_divide.v", "(xneg ? full_neg : full_pos)", "full_pos",
              "x / 0 saturates positive whatever the sign of x", ((None, "sf_divide", False),)),
+    Mutation("divide_quotient_sign_dropped", "sf_divide.v", "nq_v = {nq_v[NW-2:0], ~neg};",
+             "nq_v = {nq_v[NW-2:0], 1'b1};", "a negative quotient's bits not inverted as they enter (the "
+             "sign applied to a wrong magnitude)", ((None, "sf_divide", False),)),
     Mutation("lag_no_guard_bits", "lag.v", "st     <= st_next;", "st     <= (st_next >>> GUARD) <<< GUARD;",
              "lag: state guard bits dropped (state kept at the code LSB: dead band)", ((None, "lag", False),)),
     Mutation("lag_step_floor", "lag.v", ".SHIFT(ALPHA_S), .ROUNDING(ROUNDING)", ".SHIFT(ALPHA_S), .ROUNDING(0)",
@@ -174,8 +177,9 @@ MUTATIONS = [
              "serial rtd: in_ready high while a sample is computed (samples taken mid-schedule are lost)",
              (({}, "rtd", False, SERIAL["rtd"]),)),
     # ---- serial piecewise, freq2temp, chain_paper001 (ARCH = 1) ----
-    Mutation("pw_serial_wrong_slot", "piecewise.v", "cal_q <= cal_k[k];", "cal_q <= cal_k[0];",
-             "serial: every coefficient aligned as power 0's (the alignment of the wrong slot)",
+    Mutation("pw_serial_wrong_slot", "piecewise.v", "+ seg_a * NC_A + ORDER_A;", "+ seg_a * NC_A;",
+             "serial: the top coefficient read from the segment's c0 slot, every lower power one slot below "
+             "its own (the previous segment's words)",
              ((None, "piecewise_k0", False, SERIAL["piecewise_k0"]),)),
     Mutation("pw_serial_stale_coefficient", "piecewise.v", "k <= K_TOP; ra <= ra - 1'b1;", "k <= K_TOP; ra <= ra;",
              "serial: the first Horner step adds the top coefficient again (ROM address not advanced)",
@@ -197,11 +201,9 @@ MUTATIONS = [
              "assign in_ready = 1'b1;", "serial chain: in_ready high while a sample is in flight",
              (({}, "chain_paper001", False, SERIAL["chain_paper001"]),)),
     # ---- sf_divide with its output path pipelined (ARCH = 1) ----
-    Mutation("divide_serial_stale_quotient", "sf_divide.v",
-             "if (h_v) q_s <= {x_hi + {{(HI-1){1'b0}}, s_c}, s_lo};",
-             "if (q_v) q_s <= {x_hi + {{(HI-1){1'b0}}, s_c}, s_lo};",
-             "pipelined divider: the signed quotient's high half added a cycle early, with the previous "
-             "quotient's half and carry (stale operand)",
+    Mutation("divide_serial_no_carry_in", "sf_divide.v", ".x(q_x), .cin(neg)", ".x(q_x), .cin(1'b0)",
+             "pipelined divider: the rounding adder's carry in dropped (a negative quotient rounded as ~q, "
+             "one LSB below -q)",
              ((None, "sf_divide", False, SERIAL["sf_divide"]),)),
     Mutation("divide_serial_missed_stall", "sf_divide.v", "assign in_ready = ~busy & ~fin;",
              "assign in_ready = ~busy;",
@@ -287,6 +289,8 @@ MUTATIONS = [
              "instead of its own",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
     # ---- one coefficient engine: SF(T) and bias(T) as two sets of one piecewise (PW_SHARED) ----
+    # (the bias set's own alignment is in its ROM words now, the generator's: a wrong alignment is
+    # the wrong set's words, chain002_pw_wrong_set)
     # (in_ready high between the two passes is an equivalent mutant in the chain: the demodulator, the
     # only one that waits for it, starts on the divider's out_valid, at least 7 cycles later)
     Mutation("chain002_pw_wrong_set", "piecewise.v",
@@ -294,12 +298,9 @@ MUTATIONS = [
              "ra <= {RA_W{1'b0}} + seg_a * NC_A + ORDER_A;",
              "serial chain 002: the shared coefficient engine's bias pass reads SF's coefficients (wrong slot)",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
-    Mutation("chain002_pw_set1_alignment", "piecewise.v",
-             "assign cal_k[j] = (S1 != 0 && set_q) ? ce <<< CA1 : ce <<< CA;", "assign cal_k[j] = ce <<< CA;",
-             "serial chain 002: the bias pass aligns its coefficients by SF's COEF_ALIGN",
-             ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
-    Mutation("chain002_pw_set1_output_shift", "piecewise.v", "assign or_m = set_q ? or1_x : or0_x;",
-             "assign or_m = or0_x;", "serial chain 002: the bias pass rounds its output by SF's OUT_SHIFT",
+    Mutation("chain002_pw_set1_output_shift", "piecewise.v", ".SHIFT(OUT_SHIFT_1), .ROUNDING(ROUNDING), .OUT_W(ORW1)",
+             ".SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(ORW1)",
+             "serial chain 002: the bias pass rounds its output by SF's OUT_SHIFT",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
     Mutation("chain002_pw_second_pass_lost", "piecewise.v", "pend <= (S1 != 0);", "pend <= 1'b0;",
              "serial chain 002: the shared coefficient engine never starts the bias pass (the chain waits for "

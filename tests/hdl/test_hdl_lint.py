@@ -76,7 +76,7 @@ VARIANTS = [
     ("piecewise", {"ARCH": 1, "ORDER": 3, "SEGMENTS": 1, "ACC_ALIGN": 0, "COEF_ALIGN": 0, "TOP_SHIFT": -2,
                    "OUT_SHIFT": -1, "PROD_SHIFT": -1}),
     ("piecewise", {"ARCH": 1, "ORDER": 2, "SEGMENTS": 6, "ROUNDING": 2, "OVERFLOW": 0, "OUT_SIGNED": 1}),
-    ("piecewise", {"ARCH": 1, "T_W": 12, "ACC_W": 16, "COEF_W": 12, "OUT_W": 10}),  # one-limb operands
+    ("piecewise", {"ARCH": 1, "T_W": 12, "ACC_W": 16, "COEF_W": 12, "ACOEF_W": 12, "OUT_W": 10}),  # one-limb operands
     ("freq2temp", {"ARCH": 1}),
     ("freq2temp", {"ARCH": 1, "FREQ_W": 15, "KINV_W": 16, "SHIFT": 4, "ROUNDING": 3, "OVERFLOW": 0}),
     ("chain_paper001", {"ARCH": 1}),
