@@ -414,11 +414,11 @@ module demod #(
 
             // ---- bin centre by quadrant symmetry (nco.v): -cb from the first word, mb from the second ----
             //   -cb = ca in quadrants 1, 2 (cb = -ca), else -ca;  mb = ma in quadrants 2, 3, else -ma
-            // one negator: the word in tq is ca in S_RD, ma in S_NB
+            // negated on the correction's adder (add_s below: ~tw + 1, rc_q 0 then): the word in tq is
+            // ca in S_RD, ma in S_NB
             wire signed [NCO_W-1:0] tw  = {tq[LUT_W-1], tq};
-            wire signed [NCO_W-1:0] ntw = -tw;
             wire keep = (st == S_RD) ? (quad_q[1] ^ quad_q[0]) : quad_q[1];
-            wire signed [NCO_W-1:0] tw_s = keep ? tw : ntw;
+            wire ld_word = (st == S_RD) || (st == S_NB);   // the table word through the adder
             reg signed [NCO_W-1:0] ncb_q;       // -cb, then cos = cb + R(mb d) = R(mb d) - (-cb)
             reg signed [NCO_W-1:0] mb_q;        // mb, then -sin = mb + R(-cb d)
 
@@ -480,11 +480,13 @@ module demod #(
             wire signed [CW-1:0] rc_c;
             fx_round #(.IN_W(NPW), .SHIFT(CORR_SHIFT), .ROUNDING(ROUNDING), .OUT_W(CW)) u_corr
                 (.x(p[NPW-1:0]), .cin(1'b0), .y(rc_c));
-            reg signed [CW-1:0] rc_q;
+            reg signed [CW-1:0] rc_q;           // 0 from the take until the first correction
             reg                 add_go;         // the correction in rc_q is added this cycle ...
             reg                 add_sin;        // ... to mb (-sin), else to cb = -ncb (cos: rc + ~ncb + 1)
-            wire signed [NCO_W-1:0] add_a = add_sin ? mb_q : ~ncb_q;
-            wire                    add_c = ~add_sin;
+            // the one adder: the table word as it is or negated (~tw + 1) in S_RD, S_NB (rc_q = 0),
+            // the corrections after
+            wire signed [NCO_W-1:0] add_a = ld_word ? (keep ? tw : ~tw) : (add_sin ? mb_q : ~ncb_q);
+            wire                    add_c = ld_word ? ~keep : ~add_sin;
             /* verilator lint_off UNUSEDSIGNAL */  // the top bit: the model proves it is a sign copy; the carry-in bit
             wire signed [SW-1:0] add_s;
             wire                 add_cin;
@@ -631,14 +633,11 @@ module demod #(
                     k_q    <= k_first;
                     quad_q <= quad;
                 end
-                if (st == S_RD) ncb_q <= tw_s;
-                if (st == S_NB) mb_q  <= tw_s;
                 if (mac_valid && rk == R_D) dr <= p[DW-1:0];
-                if (mac_valid && (rk == R_C || rk == R_M)) rc_q <= rc_c;
-                if (add_go) begin
-                    if (add_sin) mb_q <= add_s[NCO_W-1:0];
-                    else         ncb_q <= add_s[NCO_W-1:0];
-                end
+                if (take) rc_q <= {CW{1'b0}};
+                else if (mac_valid && (rk == R_C || rk == R_M)) rc_q <= rc_c;
+                if ((st == S_RD) || (add_go && !add_sin)) ncb_q <= add_s[NCO_W-1:0];
+                if ((st == S_NB) || (add_go && add_sin))  mb_q  <= add_s[NCO_W-1:0];
                 if (st == S_WMIX && mix_v && !got_i) begin
                     mi_q <= mix_y; ovf_mi_q <= mix_o;
                 end
