@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from fxdsp.hdl import hwreport
+from fxdsp.hdl import hwreport, report_cli
 from fxdsp.hdl.hwreport import hw_report_path, load_hw_report, report_json, synthesised_cost
 from fxdsp.hdl.report_cli import UP5K, XC7A35T, markdown
 
@@ -29,7 +29,7 @@ def test_json_is_written_from_the_rows_hw_report_collects(tmp_path):
     path.write_text(report_json(rows, 40.0, UP5K))
     got = load_hw_report(path)["rows"]
     assert got[0] == {"name": "rtd", "module": "rtd", "LUT": 301, "MAC16": 2, "FF": 20, "BRAM": 0, "fmax": 21.83,
-                      "note": "", "sha256": None, "xc7": {"LUT": None, "DSP48E1": None, "FF": None, "BRAM36": None, "BRAM18": None,
+                      "fmax_seeds": None, "note": "", "sha256": None, "xc7": {"LUT": None, "DSP48E1": None, "FF": None, "BRAM36": None, "BRAM18": None,
                                           "LUTRAM": None, "SRL": None, "note": ""}}
     assert got[1]["LUT"] is None and got[1]["fmax"] is None and got[1]["note"].startswith("timed out")
     rows[0]["xc7"] = {"LUT": 150, "DSP48E1": 2, "FF": 20, "BRAM36": 0, "BRAM18": 1, "LUTRAM": 0, "SRL": 0,
@@ -172,7 +172,7 @@ def test_only_reruns_its_rows_and_keeps_the_reports_other_current_rows(tmp_path,
     monkeypatch.setattr(report_cli, "synth", lambda *a, **k: {"LUT": 1, "MAC16": 0, "FF": 1, "BRAM": 0, "CARRY": 0})
     monkeypatch.setattr(report_cli, "synth_xc7", lambda *a, **k: {"LUT": 1, "DSP48E1": 0, "FF": 1, "BRAM36": 0,
                                                                  "BRAM18": 0, "LUTRAM": 0, "SRL": 0})
-    monkeypatch.setattr(report_cli, "place_route", lambda *a, **k: (99.0, ""))
+    monkeypatch.setattr(report_cli, "place_route", lambda *a, **k: (99.0, "", {1: 99.0}))
     parser = argparse.ArgumentParser()
     report_cli.configure(parser)
 
@@ -193,3 +193,19 @@ def test_only_reruns_its_rows_and_keeps_the_reports_other_current_rows(tmp_path,
     rows = rerun("--only", "rtd")
     assert "iir" not in rows and "iir (ARCH=1)" in rows
     assert "iir: not in --only" in capsys.readouterr().err
+
+
+def test_a_budget_row_is_judged_on_its_slowest_seed():
+    """A chain's budget row is placed with several seeds; its Fmax target holds only when every seed
+    meets it (one seed is one draw of the placer), and a seed that did not place fails it."""
+    row = {"name": "chain_paper002 (ARCH=1)", "module": "chain_paper002", "LUT": 2500, "MAC16": 1, "FF": 2000,
+           "BRAM": 19, "fmax": 41.2, "fmax_seeds": {"1": 41.2, "2": 39.6, "3": 40.8}, "note": ""}
+    text = markdown([row], 40.0)
+    assert "| 41.2 (seed 1: 41.2, seed 2: 39.6, seed 3: 40.8) |" in text
+    assert "Fmax NOT met (39.6, the lowest over seeds 1, 2, 3)" in text
+    row["fmax_seeds"]["2"] = 40.1
+    assert "Fmax met (40.1, the lowest over seeds 1, 2, 3)" in markdown([row], 40.0)
+    row["fmax_seeds"]["3"] = None
+    assert "Fmax NOT met (-" in markdown([row], 40.0)
+    assert report_cli.seeds_of("chain_paper002 (ARCH=1)") == report_cli.SEED_SWEEP
+    assert report_cli.seeds_of("demod (ARCH=1)") == (1,)

@@ -3,8 +3,10 @@ beside the Markdown table (``hdl/HW_REPORT.md``) from the same rows, and read by
 synthesised cost (``fxdsp budget --optimise``) without parsing Markdown.
 
 Each row: ``name`` (block instance or top), ``module``, ``LUT`` (SB_LUT4), ``MAC16`` (SB_MAC16),
-``FF``, ``BRAM`` (SB_RAM40_4K), ``fmax`` (MHz after place and route) and ``note``; a count is
-null when its tool run failed, ``fmax`` when the design does not place. ``xc7`` (nested) holds the
+``FF``, ``BRAM`` (SB_RAM40_4K), ``fmax`` (MHz after place and route, nextpnr seed 1),
+``fmax_seeds`` (the chains' budget rows only: seed -> MHz over several placer seeds, null
+elsewhere) and ``note``; a count is null when its tool run failed, ``fmax`` when the design does
+not place. ``xc7`` (nested) holds the
 yosys ``synth_xilinx -family xc7`` estimate of the same bare module for an Artix-7 (synthesis only,
 not Vivado, no timing): ``LUT`` (LUT1..LUT6), ``DSP48E1``, ``FF`` (FDRE/FDSE/FDCE/FDPE), ``BRAM36``
 (RAMB36E1), ``BRAM18`` (RAMB18E1), ``LUTRAM`` (distributed-RAM cells), ``SRL`` and ``note``; a
@@ -31,7 +33,7 @@ from ..outputs import json_text
 # hdl/ of the checkout this package runs from (RTL sources and reports): the one place that knows it
 HDL_DIR = Path(__file__).resolve().parents[2] / "hdl"
 REPORT_NAME = "HW_REPORT.json"
-COLUMNS = ("name", "module", "LUT", "MAC16", "FF", "BRAM", "fmax", "note", "sha256")
+COLUMNS = ("name", "module", "LUT", "MAC16", "FF", "BRAM", "fmax", "fmax_seeds", "note", "sha256")
 XC7_COLUMNS = ("LUT", "DSP48E1", "FF", "BRAM36", "BRAM18", "LUTRAM", "SRL", "note")
 
 

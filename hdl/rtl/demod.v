@@ -447,8 +447,10 @@ module demod #(
                 endcase
             end
             wire mac_ready, mac_valid;
-            wire mac_in = (st == S_RD) ||
-                          (((st == S_PC) || (st == S_PM) || (st == S_PI) || (st == S_PQ) || (st == S_PA)) && mac_ready);
+            // a request is the issuing state alone (valid/ready: the multiplier takes it with its in_ready,
+            // the FSM moves on with the same in_ready), not gated by in_ready: in_ready -> request ->
+            // the shared multiplier's take was the chain's 39 MHz path
+            wire mac_in = (st == S_RD) || (st == S_PC) || (st == S_PM) || (st == S_PI) || (st == S_PQ) || (st == S_PA);
             /* verilator lint_off UNUSEDSIGNAL */  // each product is exact in its own width: its top bits copy the sign
             wire signed [MP_W-1:0] p;
             /* verilator lint_on UNUSEDSIGNAL */

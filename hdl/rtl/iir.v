@@ -388,10 +388,13 @@ module iir #(
             end
 
             wire mac_ready, mac_valid;
-            wire issue = (st == S_MAC) && (k != K_END) && rom_ok && mac_ready;
+            // the request: product k's operands are there (not gated by in_ready: see demod.v); issued
+            // at the edge where the multiplier's in_ready is high too
+            wire mac_req = (st == S_MAC) && (k != K_END) && rom_ok;
+            wire issue = mac_req && mac_ready;
             wire signed [MP_W-1:0] p;
             fx_mac_port #(.A_W(MA_W), .B_W(MB_W), .EXT_MAC(EXT_MAC), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)) u_mac
-                (.clk(clk), .rst(rst), .in_valid(issue), .in_ready(mac_ready), .a(a_op), .b(b_op), .na(4'd0), .nb(4'd0),
+                (.clk(clk), .rst(rst), .in_valid(mac_req), .in_ready(mac_ready), .a(a_op), .b(b_op), .na(4'd0), .nb(4'd0),
                  .out_valid(mac_valid), .p(p), .mac_in_valid(mac_in_valid), .mac_in_ready(mac_in_ready), .mac_a(mac_a), .mac_b(mac_b),
                      .mac_na(mac_na), .mac_nb(mac_nb), .mac_out_valid(mac_out_valid), .mac_p(mac_p));
 

@@ -314,12 +314,18 @@ module piecewise #(
         reg signed [SRW-1:0]    sr_q;       // round(s_q)
         reg signed [ORW-1:0]    or_q;       // round(acc >> OUT_SHIFT) (the second set: its own below)
         reg                     set_q;      // the set of this pass (SETS = 2; else 0)
+        reg                     out0_q;     // this cycle is S_OFIT of set 0's pass / set 1's: the output
+        reg                     out1_q;     // registers' enables, decoded a cycle early (short paths)
         reg                     pend;       // SETS = 2: the sample's second set still to run
         reg                     ovf_top_q;
         reg [ORDER-1:0]         ovf_prod_q; // bit j: power ORDER-1-j, as the parallel variant
         reg [ORDER-1:0]         ovf_acc_q;
 
         assign in_ready = (st == S_IDLE) && !pend;
+        always @(posedge clk) begin
+            out0_q <= !rst && (st == S_ORND) && !set_q;
+            out1_q <= !rst && (st == S_ORND) && set_q;
+        end
         assign t_sel = temp_q;
         always @(posedge clk) coef_q <= acoef[ra];
 
@@ -430,16 +436,16 @@ module piecewise #(
                         end
                     end
                     S_ORND:  begin or_q <= or_c; st <= S_OFIT; end
-                    default: begin   // S_OFIT: the pass's set out (SETS = 2: set 0's starts set 1's)
-                        if (set_q) begin
-                            y_1 <= y1_c; ovf_1 <= {ovf1_o, ovf_prod_q, ovf_acc_q, ovf_top_q}; out_valid_1 <= 1'b1;
-                        end else begin
-                            y <= y_c; ovf <= {ovf_o, ovf_prod_q, ovf_acc_q, ovf_top_q}; out_valid <= 1'b1;
-                            pend <= (S1 != 0);
-                        end
-                        st <= S_IDLE;
-                    end
+                    default: st <= S_IDLE;   // S_OFIT: the pass's set out (below)
                 endcase
+                // the pass's outputs, enabled by the registered S_OFIT decode (SETS = 2: set 0's starts set 1's)
+                if (out1_q) begin
+                    y_1 <= y1_c; ovf_1 <= {ovf1_o, ovf_prod_q, ovf_acc_q, ovf_top_q}; out_valid_1 <= 1'b1;
+                end
+                if (out0_q) begin
+                    y <= y_c; ovf <= {ovf_o, ovf_prod_q, ovf_acc_q, ovf_top_q}; out_valid <= 1'b1;
+                    pend <= (S1 != 0);
+                end
             end
         end
     end

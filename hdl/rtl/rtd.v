@@ -155,7 +155,7 @@ module rtd #(
             wire issue = (st == S_MAC) && mac_ready;
             wire signed [EW-1:0] p;
             fx_mac_port #(.A_W(DW), .B_W(FW), .EXT_MAC(EXT_MAC), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)) u_mac
-                (.clk(clk), .rst(rst), .in_valid(issue), .in_ready(mac_ready), .a(diff_q), .b(fr), .na(4'd0), .nb(4'd0),
+                (.clk(clk), .rst(rst), .in_valid(st == S_MAC), .in_ready(mac_ready), .a(diff_q), .b(fr), .na(4'd0), .nb(4'd0),
                  .out_valid(mac_valid), .p(p), .mac_in_valid(mac_in_valid), .mac_in_ready(mac_in_ready), .mac_a(mac_a), .mac_b(mac_b),
                      .mac_na(mac_na), .mac_nb(mac_nb), .mac_out_valid(mac_out_valid), .mac_p(mac_p));
 
