@@ -23,8 +23,8 @@
 // ARCH = 1: every block that has a serial variant in it, .ARCH(1): rtd, [lag,] piecewise_sf,
 //   piecewise_bias, iir, demod (the rtd LUT and the demod's NCO table in block RAM), sf_divide
 //   (iterative in both; ARCH = 1 pipelines its output path); bias_subtract is one registered stage.
-//   ONE fx_mac_serial (one SB_MAC16, MAC_A_W x MAC_B_W operands, VAR_N = 1) serves rtd, both
-//   piecewise engines, demod (its own products and its low-pass filters') and iir: they run one
+//   ONE fx_mac_serial (one SB_MAC16, MAC_A_W x MAC_B_W operands, VAR_N = 1) serves rtd, the
+//   piecewise engine(s), demod (its own products and its low-pass filters') and iir: they run one
 //   after another, so each gets EXT_MAC = 1 and issues on its mac_* bundle (fx_mac_port) with its own
 //   limb counts, i.e. its own schedule; the requests (at most one at a time, a simulation check
 //   says so) select the operands, out_valid goes to the block that issued (own, set at the take).

@@ -45,9 +45,9 @@
 //   index k while idle):
 //     0:              tq = cb's word; x (into the CORDIC x), delta, the address, quadrant
 //                     registered; phase low half advanced
-//     1:              tq = mb's word (complement address); -cb registered (quadrant sign, one
-//                     negator); delta * TWO_PI issued; phase high half
-//     2:              mb registered (the same negator)
+//     1:              tq = mb's word (complement address); -cb registered (quadrant sign: the
+//                     word or ~word + 1 on the correction's adder); delta * TWO_PI issued; phase high half
+//     2:              mb registered (the same adder)
 //     N + 5:          d registered (the MAC's out_valid cycle)
 //     N + 6, 2N + 6:  mb * d, then -cb * d issued (back to back)
 //     2N + 10, + 11:  round(mb * d) (fx_round), then cos = cb + it registered
