@@ -156,6 +156,7 @@ class Piecewise(Block):
         awords = self.coef.copy()
         for k in range(self.order):
             awords[:, k] = self.coef[:, k] << coef_align[k]
+        acoef = Rom(awords, signed_width(awords, 2))
         self.datapath = PiecewiseDatapath(
             t_w=temp_format.wl, order=self.order, segments=int(self.coef.shape[0]), coef_w=coef_w,
             acc_w=acc_format.wl, out_w=out_format.wl, out_signed=int(out_format.signed), t0=int(self.t0[0]),
@@ -164,7 +165,7 @@ class Piecewise(Block):
             coef_align=frozen_array(coef_align),
             out_shift=acc_format.fl - out_format.fl, rules=rules, coef=Rom(self.coef, coef_w),
             bp=Rom(self.breakpoints if self.breakpoints.size else [0], temp_format.wl),
-            acoef_w=signed_width(awords, 2), acoef=Rom(awords, signed_width(awords, 2)), temp_format=temp_format, acc_format=acc_format, out_format=out_format,
+            acoef_w=acoef.width, acoef=acoef, temp_format=temp_format, acc_format=acc_format, out_format=out_format,
             ovf=(OvfField("acc", self.order + 1), OvfField("product", self.order), OvfField("out", 1)))
         self.coef = self.datapath.coef.words
         self.inputs = {"temp": temp_format}

@@ -106,15 +106,18 @@ PW_OWN = ("COEF_ALIGN", "OUT_SHIFT", "OUT_W", "OUT_SIGNED", "ACOEF_W")
 PW_FILES = ("COEF_FILE", "BP_FILE", "ACOEF_FILE")
 
 
+def _params_but(dp, skip) -> dict:
+    """A datapath's RTL parameters but those named in ``skip``: what two uses of one engine share."""
+    return {k: v for k, v in dp.verilog("engine")[0].items() if k not in skip}
+
+
 def pw_shared(design: Design) -> bool:
     """Whether SF(T) ("piecewise_sf") and bias(T) ("piecewise_bias") can share one piecewise engine:
     every RTL parameter equal but the coefficients and the output stage (:data:`PW_OWN`), and the
     same breakpoints (the segment compares are the engine's)."""
     sf, bias = (design.instances[n].block.datapath for n in ("piecewise_sf", "piecewise_bias"))
-    skip = set(PW_OWN) | set(PW_FILES)
-    same = {k: v for k, v in sf.verilog("sf")[0].items() if k not in skip} == \
-        {k: v for k, v in bias.verilog("bias")[0].items() if k not in skip}
-    return same and np.array_equal(sf.bp.words, bias.bp.words)
+    skip = PW_OWN + PW_FILES
+    return _params_but(sf, skip) == _params_but(bias, skip) and np.array_equal(sf.bp.words, bias.bp.words)
 
 
 def shared_pw_params(design: Design) -> dict[str, int | str]:
@@ -138,17 +141,13 @@ def shared_pw_rom(design: Design) -> str:
 SHARED_LPF_FILE = "chain_paper002_lpf_coef.hex"
 
 
-def _engine_params(dp) -> dict:
-    """An iir datapath's RTL parameters but its coefficient files: the engine's format."""
-    return {k: v for k, v in dp.verilog("lpf")[0].items() if k not in ("COEF_FILE", "ACOEF_FILE")}
-
-
 def lpf_shared(design: Design) -> bool:
     """Whether the output low-pass ("iir") and the demodulator's I / Q low-pass have one format
     (every iir parameter but the coefficients equal): then one filter engine runs all three, the
     output filter as its third channel with a coefficient set of its own (demod ``AUX_LPF``)."""
-    return _engine_params(design.instances["iir"].block.datapath) == \
-        _engine_params(design.instances["demod"].block.datapath.lpf)
+    skip = ("COEF_FILE", "ACOEF_FILE")
+    return _params_but(design.instances["iir"].block.datapath, skip) == \
+        _params_but(design.instances["demod"].block.datapath.lpf, skip)
 
 
 def shared_lpf_rom(design: Design) -> str:

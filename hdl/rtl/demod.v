@@ -197,9 +197,9 @@ module demod #(
             wire [DATA_W-1:0] mi, mq;
             wire ovf_mi, ovf_mq;
             fx_convert #(.IN_W(MW), .SHIFT(MIX_SHIFT), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
-                         .OVERFLOW(OVERFLOW)) u_mix_i (.x(pi_), .y(mi), .ovf(ovf_mi));
+                         .OVERFLOW(OVERFLOW)) u_mix_i (.x(pi_), .cin(1'b0), .y(mi), .ovf(ovf_mi));
             fx_convert #(.IN_W(MW), .SHIFT(MIX_SHIFT), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
-                         .OVERFLOW(OVERFLOW)) u_mix_q (.x(pq_), .y(mq), .ovf(ovf_mq));
+                         .OVERFLOW(OVERFLOW)) u_mix_q (.x(pq_), .cin(1'b0), .y(mq), .ovf(ovf_mq));
             reg [1:0] ovf_mix_d;
             always @(posedge clk) if (in_valid) ovf_mix_d <= {ovf_mq, ovf_mi};
 
@@ -270,7 +270,7 @@ module demod #(
             wire [DATA_W-1:0] amp_c;
             wire ovf_amp;
             fx_convert #(.IN_W(PW), .SHIFT(AMP_SHIFT), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
-                         .OVERFLOW(OVERFLOW)) u_amp (.x(ap), .y(amp_c), .ovf(ovf_amp));
+                         .OVERFLOW(OVERFLOW)) u_amp (.x(ap), .cin(1'b0), .y(amp_c), .ovf(ovf_amp));
             /* verilator lint_off UNUSEDSIGNAL */
             wire signed [AW-1:0] zfin = cz;
             /* verilator lint_on UNUSEDSIGNAL */

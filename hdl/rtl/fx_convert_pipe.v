@@ -1,8 +1,8 @@
 // fx_convert_pipe: fx_convert split over two registered stages, for the serial (ARCH = 1)
 // datapaths at 40 MHz: the rounding adder (fx_round, by ROUNDING: floor / half_up / half_even /
 // toward_zero) in one cycle, the range fit (fx_fit, by OVERFLOW: wrap / saturate, ovf flagged) in
-// the next (x + cin rounded: cin is fx_round's carry in). y and ovf load when the value reaches them and hold until the next one; out_valid is a
-// one-cycle pulse. Synchronous reset clears the valid pipeline and the outputs.
+// the next (CIN = 1: x + cin rounded, cin as fx_round's carry in). y and ovf load when the value
+// reaches them and hold until the next one; out_valid is a one-cycle pulse. Synchronous reset clears the valid pipeline and the outputs.
 // Interface: in_valid / out_valid, one value per cycle. Latency: 2 cycles.
 `default_nettype none
 

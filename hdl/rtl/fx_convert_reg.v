@@ -23,7 +23,7 @@ module fx_convert_reg #(
     wire [OUT_W-1:0] y_c;
     wire             o_c;
     fx_convert #(.IN_W(IN_W), .SHIFT(SHIFT), .ROUNDING(ROUNDING), .OUT_W(OUT_W), .OUT_SIGNED(OUT_SIGNED),
-                 .OVERFLOW(OVERFLOW)) u_convert (.x(x), .y(y_c), .ovf(o_c));
+                 .OVERFLOW(OVERFLOW)) u_convert (.x(x), .cin(1'b0), .y(y_c), .ovf(o_c));
 
     always @(posedge clk) begin
         if (rst) begin

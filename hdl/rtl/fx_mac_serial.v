@@ -10,14 +10,16 @@
 // SB_MAC16 cannot switch its operand signedness per cycle); the correction is a small adder.
 // Summation, least significant column first (columns c = i + j = 0 .. NA+NB-2):
 //   acc = (first pair ? 0 : new column ? acc >> 16 : acc) + a_i * b_j
-// and when a column is complete its low 16 bits are final: they are stored as bits 16c.. of p
-// before the shift. The adder is only ACC_W (~38) bits wide whatever A_W and B_W are (a carry
+// and when a column is complete its low 16 bits are final: they shift in at the top of a register
+// of limbs (one source per flip-flop, no limb index) before the shift of acc; the top column's high
+// half goes above them, so after the last column the register holds the product. The adder is only ACC_W (~38) bits wide whatever A_W and B_W are (a carry
 // chain short enough for 40 MHz on an iCE40UP5K); the top column's sum is the top of p. Exact:
 // the column sums and the carries never leave ACC_W bits.
 // Rounding: none (no floor / half_up / half_even / toward_zero here; the caller rounds with
 // fx_round). Overflow: none (P_W = A_W + B_W holds every product).
 // Interface: in_valid / in_ready; out_valid is a one-cycle pulse, p is registered and valid in
-// that cycle (and until the next product's second limb pair is accumulated).
+// that cycle (the next product's first column shifts the register at the next edge at the earliest:
+// every caller reads p there).
 // Schedule, in edges after the edge that accepts (a, b) (N = NA * NB limb pairs):
 //   edge t = 1..N: limb pair t-1 registered (au, bu, signs: the SB_MAC16 input registers)
 //   edge t + 1:    32-bit unsigned product registered (the SB_MAC16 output register), correction beside it
@@ -29,13 +31,11 @@
 // A_W, B_W are the widest operands, whole limbs (multiples of 16); each product runs on its own limb
 // counts na (1..NA), nb (1..NB), taken with a, b: the caller sign-extends its operands into a, b, and
 // gets its own schedule (N = na nb pairs, latency N + 3, in_ready as above). p is then TOP-aligned:
-// the low 16 bits of each completed column shift in at the top of a shift register (no multiplexer
-// in front of any limb) and the top column's high half goes above it, so a product of nc = na + nb - 1
-// columns is p[P_W-1 -: 16 (na + nb)] (the caller's exact product sign-extended to na + nb limbs,
-// its value in the low bits of that window: fx_mac_port takes it there); the bits below are left
-// over from earlier products. p is valid in the out_valid cycle (the next product's first column
-// shifts the register at the next edge at the earliest); every caller reads it there. VAR_N = 0: na,
-// nb are not read (NA, NB), the logic is that of a fixed-width product, p = a * b in the usual place.
+// the register of limbs is NA + NB limbs, so a product of nc = na + nb - 1 columns is
+// p[P_W-1 -: 16 (na + nb)] (the caller's exact product sign-extended to na + nb limbs, its value in
+// the low bits of that window: fx_mac_port takes it there); the bits below are left over from
+// earlier products. VAR_N = 0: na, nb are not read (NA, NB), the logic is that of a fixed-width
+// product, p = a * b (the register's low P_W bits: every column is the product's).
 `default_nettype none
 
 module fx_mac_serial #(
@@ -68,12 +68,9 @@ module fx_mac_serial #(
     localparam integer NC    = NA + NB - 1;                  // columns
     // column sum + carry from the column below: < min(NA, NB) 2**33 + 2**(ACC_W-17), with margin
     localparam integer ACC_W = PP_W + $clog2(NA + NB) + 1;
-    localparam integer RES_W = LIMB * (NC - 1);              // p below the top column: stored limbs
-    localparam integer TOP_W = P_W - RES_W;                  // p from the top column's sum (<= 32)
     localparam integer IW    = (NA > 1) ? $clog2(NA) : 1;    // limb index widths
     localparam integer JW    = (NB > 1) ? $clog2(NB) : 1;
     localparam integer CW    = $clog2(NA + NB) + 1;          // column number i + j, one spare bit
-    localparam integer EW    = (NC > 2) ? $clog2(NC - 1) : 1; // stored-limb index
     localparam integer IA_TOP_I = NA - 1;
     localparam integer JB_TOP_I = NB - 1;
     localparam [IW-1:0] IA_TOP = IA_TOP_I[IW-1:0];
@@ -219,53 +216,35 @@ module fx_mac_serial #(
             assign ia_top = ia_top_q;
             assign jb_top = jb_top_q;
         end
-        if (VAR_N != 0) begin : g_var_p
-            // p = {hi, res}, NA + NB limbs: each column's low 16 bits shift in at the top of res as the
-            // column completes (its last pair is accumulated: the next pair starts a new column, or it
-            // is the product's last), the top column's high half into hi. One source per flip-flop (a
-            // stored limb, cost no LUT: the 5-limb store with a limb index was ~80 LUT4)
-            localparam integer RL = NC;                              // limbs of res
-            reg  [LIMB*RL-1:0] res;
-            reg  [LIMB-1:0]    hi;
-            wire               colend = v_q[2] & (l_q[2] | n_q[1]);
-            /* verilator lint_off UNUSEDSIGNAL */   // above the top column's 32 bits: sign copies
-            wire [ACC_W-2*LIMB-1:0] acc_n_hi;
+        // p: each column's low 16 bits shift in at the top of res as the column completes (its last
+        // pair is accumulated: the next pair starts a new column, or it is the product's last), the top
+        // column's high half into hi. {hi, res} is NA + NB limbs and a product of nc columns lies at its
+        // top: VAR_N = 0, nc = NC, the whole of it (p its low P_W bits); VAR_N = 1, whole limbs, p all of
+        // it, top-aligned. One source per flip-flop (a limb store with a limb index was ~80 LUT4)
+        localparam integer RL = NC;                              // limbs of res
+        reg  [LIMB*RL-1:0] res;
+        reg  [LIMB-1:0]    hi;
+        wire               colend = v_q[2] & (l_q[2] | n_q[1]);
+        /* verilator lint_off UNUSEDSIGNAL */   // above the top column's 32 bits: sign copies
+        wire [ACC_W-2*LIMB-1:0] acc_n_hi;
+        /* verilator lint_on UNUSEDSIGNAL */
+        wire [LIMB-1:0]    acc_n_l0, acc_n_l1;
+        assign {acc_n_hi, acc_n_l1, acc_n_l0} = acc_n;
+        if (RL > 1) begin : g_shift
+            wire [LIMB*(RL-1)-1:0] res_up;              // res's upper limbs, which move down one
+            /* verilator lint_off UNUSEDSIGNAL */       // the lowest limb: shifted out
+            wire [LIMB-1:0]        res_out;
             /* verilator lint_on UNUSEDSIGNAL */
-            wire [LIMB-1:0]    acc_n_l0, acc_n_l1;
-            assign {acc_n_hi, acc_n_l1, acc_n_l0} = acc_n;
-            if (RL > 1) begin : g_shift
-                wire [LIMB*(RL-1)-1:0] res_up;              // res's upper limbs, which move down one
-                /* verilator lint_off UNUSEDSIGNAL */       // the lowest limb: shifted out
-                wire [LIMB-1:0]        res_out;
-                /* verilator lint_on UNUSEDSIGNAL */
-                assign {res_up, res_out} = res;
-                always @(posedge clk) if (colend) res <= {acc_n_l0, res_up};
-            end else begin : g_one_limb
-                always @(posedge clk) if (colend) res <= acc_n_l0;
-            end
-            always @(posedge clk) if (v_q[2] && l_q[2]) hi <= acc_n_l1;
-            assign p = {hi, res};
-        end else if (NC > 1) begin : g_limbs
-            reg [RES_W-1:0] res;    // p below the top column, one 16-bit limb per completed column
-            reg [EW-1:0]    ec;     // the next limb to store
-            reg signed [TOP_W-1:0] p_top;
-            always @(posedge clk) if (v_q[2] && l_q[2]) p_top <= acc_n[TOP_W-1:0];
-            always @(posedge clk) begin
-                if (v_q[2] && (f_q[2] || n_q[2])) begin
-                    if (f_q[2]) begin
-                        ec <= {EW{1'b0}};
-                    end else begin
-                        res[LIMB*ec +: LIMB] <= acc[LIMB-1:0];
-                        ec <= ec + {{(EW-1){1'b0}}, 1'b1};
-                    end
-                end
-            end
-            assign p = {p_top, res};
-        end else begin : g_one
-            reg signed [TOP_W-1:0] p_top;
-            always @(posedge clk) if (v_q[2] && l_q[2]) p_top <= acc_n[TOP_W-1:0];
-            assign p = p_top;
+            assign {res_up, res_out} = res;
+            always @(posedge clk) if (colend) res <= {acc_n_l0, res_up};
+        end else begin : g_one_limb
+            always @(posedge clk) if (colend) res <= acc_n_l0;
         end
+        always @(posedge clk) if (v_q[2] && l_q[2]) hi <= acc_n_l1;
+        /* verilator lint_off UNUSEDSIGNAL */       // VAR_N = 0: above P_W, the product's sign copies
+        wire [LIMB*(RL+1)-1:0] field = {hi, res};
+        /* verilator lint_on UNUSEDSIGNAL */
+        assign p = field[P_W-1:0];
     endgenerate
 endmodule
 

@@ -38,7 +38,7 @@
 //   section 0 at the end of a channel). y's slice of channel c loads at the end of channel c; all
 //   of y and ovf are valid with out_valid. Cycles per sample: CHANNELS * SECTIONS * (7 N + 10) + 1;
 //   latency CHANNELS * SECTIONS * (7 N + 10). CHANNELS = 1 is the single-channel engine above.
-//   COEF_SETS (CHANNELS > 1): 1 = every channel filters with the same coefficients (COEF_FILE holds
+//   COEF_SETS (CHANNELS > 1): 1 = every channel filters with the same coefficients (ACOEF_FILE holds
 //   one set: 7 SECTIONS words); CHANNELS = one set per channel (SETS_FILE, read instead: 7 SECTIONS
 //   CHANNELS words, channel c's from word 7 SECTIONS c), e.g. two different filters through one engine.
 //   SPLIT = 1 (CHANNELS > 1): the last channel is a pass of its own. A sample then takes two passes,
@@ -71,7 +71,7 @@ module iir #(
     parameter integer OVERFLOW  = 1,
     parameter integer ARCH      = 0,     // 0: one sample per cycle; 1: serial, one shared multiplier
     parameter integer CHANNELS  = 1,     // signals through the engine (> 1: ARCH = 1 only)
-    parameter integer COEF_SETS = 1,     // coefficient sets in COEF_FILE: 1 (shared) or CHANNELS (one per channel)
+    parameter integer COEF_SETS = 1,     // coefficient sets: 1 (ACOEF_FILE, shared) or CHANNELS (SETS_FILE, one per channel)
     parameter integer SPLIT     = 0,     // 1: the last channel runs as a pass of its own (CHANNELS > 1)
     parameter integer EXT_MAC   = 0,     // ARCH = 1: 0 its own fx_mac_serial; 1 the external one on mac_* (fx_mac_port)
     parameter integer MAC_A_W   = 48,    // EXT_MAC = 1: the external multiplier's operand widths (>= MA_W, MB_W)
@@ -383,7 +383,7 @@ module iir #(
                 case (k)
                     K_B0: begin a_op = ca;  b_op = v;  end
                     K_C1, K_C2: begin a_op = ea; b_op = cb; end
-                    default: begin a_op = ca; b_op = s_xy; end   // x1, x2, y1, y2 (the a's subtracted when accumulated)
+                    default: begin a_op = ca; b_op = s_xy; end   // x1, x2, y1, y2 (the a's words negated)
                 endcase
             end
 

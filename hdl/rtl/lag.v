@@ -111,7 +111,7 @@ module lag #(
     wire [TEMP_W-1:0] te_c;
     wire              ovf_c;
     fx_convert #(.IN_W(STATE_W), .SHIFT(GUARD), .ROUNDING(ROUNDING), .OUT_W(TEMP_W), .OUT_SIGNED(1),
-                 .OVERFLOW(OVERFLOW)) u_out (.x(st_next), .y(te_c), .ovf(ovf_c));
+                 .OVERFLOW(OVERFLOW)) u_out (.x(st_next), .cin(1'b0), .y(te_c), .ovf(ovf_c));
 
     always @(posedge clk) begin
         if (rst) begin

@@ -36,12 +36,12 @@
 //   EXT_MAC = 1: no multiplier here; the products go out on the mac_* bundle (fx_mac_port) to a
 //   multiplier shared with other blocks (chain_paper002's), the schedule unchanged.
 //   SETS = 2 (ARCH = 1 only): two coefficient engines in one. A second set of coefficients (and its
-//   own COEF_ALIGN_1, OUT_SHIFT_1, OUT_W_1, OUT_SIGNED_1; every other parameter and the breakpoints
+//   own COEF_ALIGN_1, OUT_SHIFT_1, OUT_W_1, OUT_SIGNED_1, ACOEF_W_1; every other parameter and the breakpoints
 //   are shared) is evaluated on every sample right after the first: the first set's y, ovf leave
 //   with out_valid, the engine is idle for that one cycle and starts the second pass at the next
 //   edge on the same temp (registered at the take), whose y_1, ovf_1 leave with out_valid_1:
 //   2 (ORDER (N + 10) + 7) cycles per sample, the same as two engines started one after the other.
-//   in_ready stays low from the take to out_valid_1. SETS_FILE (read instead of COEF_FILE) holds set
+//   in_ready stays low from the take to out_valid_1. SETS_FILE (read instead of ACOEF_FILE) holds set
 //   0's SEGMENTS (ORDER + 1) words, then set 1's. chain_paper002 ARCH = 1 runs SF(T) and bias(T) so
 //   (PW_SHARED). SETS = 1: out_valid_1 stays low, y_1 and ovf_1 are 0.
 `default_nettype none
@@ -209,7 +209,7 @@ module piecewise #(
     wire             ovf_top;
     wire signed [COEF_W-1:0] c_top = c_of(seg, ORDER);
     fx_convert #(.IN_W(COEF_W), .SHIFT(TOP_SHIFT), .ROUNDING(ROUNDING), .OUT_W(ACC_W), .OUT_SIGNED(1),
-                 .OVERFLOW(OVERFLOW)) u_top (.x(c_top), .y(acc_top), .ovf(ovf_top));
+                 .OVERFLOW(OVERFLOW)) u_top (.x(c_top), .cin(1'b0), .y(acc_top), .ovf(ovf_top));
 
     // ---- Horner stages, j = 0 .. ORDER-1 handles power k = ORDER-1-j ----
     wire [ACC_W-1:0] acc_fin;
@@ -229,21 +229,21 @@ module piecewise #(
             wire signed [PW-1:0] prod = acc_in * t;
             wire signed [ACC_W-1:0] p;
             fx_convert #(.IN_W(PW), .SHIFT(PROD_SHIFT), .ROUNDING(ROUNDING), .OUT_W(ACC_W), .OUT_SIGNED(1),
-                         .OVERFLOW(OVERFLOW)) u_prod (.x(prod), .y(p), .ovf(ovf_prod[j]));
+                         .OVERFLOW(OVERFLOW)) u_prod (.x(prod), .cin(1'b0), .y(p), .ovf(ovf_prod[j]));
             wire signed [COEF_W-1:0] ck = c_of(seg, K);
             wire signed [SW-1:0] pe  = {{(SW-ACC_W){p[ACC_W-1]}}, p};
             wire signed [SW-1:0] ce  = {{(SW-COEF_W){ck[COEF_W-1]}}, ck};
             wire signed [SW-1:0] sum = (pe <<< AA) + (ce <<< CA);
             wire [ACC_W-1:0] acc_out;
             fx_convert #(.IN_W(SW), .SHIFT(AA), .ROUNDING(ROUNDING), .OUT_W(ACC_W), .OUT_SIGNED(1),
-                         .OVERFLOW(OVERFLOW)) u_sum (.x(sum), .y(acc_out), .ovf(ovf_acc[j]));
+                         .OVERFLOW(OVERFLOW)) u_sum (.x(sum), .cin(1'b0), .y(acc_out), .ovf(ovf_acc[j]));
         end
     assign acc_fin = g_h[ORDER-1].acc_out;
 
     wire [OUT_W-1:0] y_c;
     wire             ovf_out;
     fx_convert #(.IN_W(ACC_W), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(OUT_W), .OUT_SIGNED(OUT_SIGNED),
-                 .OVERFLOW(OVERFLOW)) u_out (.x(acc_fin), .y(y_c), .ovf(ovf_out));
+                 .OVERFLOW(OVERFLOW)) u_out (.x(acc_fin), .cin(1'b0), .y(y_c), .ovf(ovf_out));
 
     always @(posedge clk) begin
         if (rst) begin
@@ -337,11 +337,11 @@ module piecewise #(
              .nb(4'd0), .out_valid(mac_valid), .p(prod), .mac_in_valid(mac_in_valid), .mac_in_ready(mac_in_ready), .mac_a(mac_a), .mac_b(mac_b),
                  .mac_na(mac_na), .mac_nb(mac_nb), .mac_out_valid(mac_out_valid), .mac_p(mac_p));
 
-        // top coefficient into the accumulator (a short path: COEF_W bits)
+        // top coefficient into the accumulator (a short path: its word, not aligned)
         wire [ACC_W-1:0] acc_top;
         wire             ovf_top;
         fx_convert #(.IN_W(RWD), .SHIFT(TOP_SHIFT), .ROUNDING(ROUNDING), .OUT_W(ACC_W), .OUT_SIGNED(1),
-                     .OVERFLOW(OVERFLOW)) u_top (.x(coef_q), .y(acc_top), .ovf(ovf_top));
+                     .OVERFLOW(OVERFLOW)) u_top (.x(coef_q), .cin(1'b0), .y(acc_top), .ovf(ovf_top));
 
         // product: round (as the MAC returns it), then fit (in S_PFIT); held from S_ALGN on
         wire [ACC_W-1:0] p_q;
@@ -353,9 +353,9 @@ module piecewise #(
                           .OVERFLOW(OVERFLOW)) u_prod (.clk(clk), .rst(rst), .in_valid(mac_valid), .x(prod), .cin(1'b0),
                                                        .out_valid(p_v), .y(p_q), .ovf(ovf_p));
 
-        // Horner sum and its rounding, one alignment per power (selected by k): the aligned
-        // operands are registered first, so the sum is one adder from registers (not one per power
-        // behind a multiplexer: that was the 39 MHz path of a third-order engine)
+        // Horner sum and its rounding, one alignment per power (selected by k): the aligned product is
+        // registered first, so the sum is one adder from registers (not one per power behind a
+        // multiplexer: that was the 39 MHz path of a third-order engine)
         wire signed [SWM-1:0] pe = {{(SWM-ACC_W){p_q[ACC_W-1]}}, p_q};
         // c[seg][k] << COEF_ALIGN[k]: the word as read (coef_q holds c[seg][k] from the ROM read after
         // the address moved to it until the next power's, long past S_SUM)

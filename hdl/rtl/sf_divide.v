@@ -132,15 +132,11 @@ module sf_divide #(
     generate
         if (ARCH == 0) begin : g_comb
             // q_s = {neg, nq} + neg rounded (the + neg as fx_round's carry in), then fitted
-            localparam integer RW0 = (OUT_SHIFT > 0) ? NW + 1 - OUT_SHIFT + 1 : NW + 1 - OUT_SHIFT;
-            localparam integer RW  = (RW0 < 2) ? 2 : RW0;       // fx_convert's width rule
             wire signed [NW:0] qx = {neg, nq_v};
-            wire signed [RW-1:0] r_c;
-            fx_round #(.IN_W(NW+1), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(RW), .CIN(1)) u_round
-                (.x(qx), .cin(neg), .y(r_c));
             wire [OUT_W-1:0] y_c;
             wire             o_c;
-            fx_fit #(.IN_W(RW), .OUT_W(OUT_W), .OUT_SIGNED(1), .OVERFLOW(OVERFLOW)) u_out (.x(r_c), .y(y_c), .ovf(o_c));
+            fx_convert #(.IN_W(NW+1), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(OUT_W), .OUT_SIGNED(1),
+                         .OVERFLOW(OVERFLOW), .CIN(1)) u_out (.x(qx), .cin(neg), .y(y_c), .ovf(o_c));
             assign fin = 1'b0;
             always @(posedge clk) begin
                 if (rst) begin
