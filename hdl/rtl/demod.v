@@ -461,6 +461,8 @@ module demod #(
             // is issued after). So S_LPF selects the iir's request and routes the out_valid to it
             // (every other state: the demodulator's). Each keeps its own limb counts (VAR_N = 1) and so
             // its schedule: N = 4 and M = 6 at the default config.
+            // the requests need no select: the iir requests only in S_LPF or the aux pass, the
+            // demodulator never there, so they are ORed (lpf_own off the path into the multiplier's take)
             wire lpf_own = (st == S_LPF) || aux_busy;
             wire                dm_v, lp_v, sh_ready, sh_valid;
             wire [DA_W-1:0]     dm_a, lp_a;
@@ -473,7 +475,7 @@ module demod #(
                  .mac_b(dm_b), .mac_na(dm_na), .mac_nb(dm_nb), .mac_out_valid(sh_valid & ~lpf_own), .mac_p(sh_p));
             // the shared multiplier: its own (EXT_MAC = 0) or the external one on this module's mac_*
             fx_mac_port #(.A_W(DA_W), .B_W(DB_W), .VAR_N(1), .EXT_MAC(EXT_MAC), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)) u_mac
-                (.clk(clk), .rst(rst), .in_valid(lpf_own ? lp_v : dm_v), .in_ready(sh_ready), .a(lpf_own ? lp_a : dm_a),
+                (.clk(clk), .rst(rst), .in_valid(lp_v | dm_v), .in_ready(sh_ready), .a(lpf_own ? lp_a : dm_a),
                  .b(lpf_own ? lp_b : dm_b), .na(lpf_own ? lp_na : dm_na), .nb(lpf_own ? lp_nb : dm_nb),
                  .out_valid(sh_valid), .p(sh_p), .mac_in_valid(mac_in_valid), .mac_in_ready(mac_in_ready), .mac_a(mac_a),
                  .mac_b(mac_b), .mac_na(mac_na), .mac_nb(mac_nb), .mac_out_valid(mac_out_valid), .mac_p(mac_p));
