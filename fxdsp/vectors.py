@@ -125,10 +125,19 @@ def write_or_check(files: dict[str, str], out: Path, check_only: bool,
 
 def load(out: Path, name: str) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict]:
     """Read one block's committed vectors: (inputs, expected outputs, manifest entry)."""
-    manifest = json.loads((out / MANIFEST).read_text())
+    return _load(lambda rel: (Path(out) / rel).read_text(), name)
+
+
+def load_generated(files: dict[str, str], name: str) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict]:
+    """One block's vectors from a set :func:`generate` returned (the texts it writes), as :func:`load`."""
+    return _load(files.__getitem__, name)
+
+
+def _load(read, name: str):
+    manifest = json.loads(read(MANIFEST))
     entry = manifest["blocks"][name]
     data = {}
     for kind in ("inputs", "outputs"):
-        data[kind] = {port: from_hex_lines((out / spec["file"]).read_text(), Format.parse(spec["format"]))
+        data[kind] = {port: from_hex_lines(read(spec["file"]), Format.parse(spec["format"]))
                       for port, spec in entry[kind].items()}
     return data["inputs"], data["outputs"], entry

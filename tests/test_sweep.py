@@ -315,6 +315,13 @@ def test_rtl_shards_build_apart_match_serially_and_on_the_cluster_and_catch_a_mu
         assert (tmp_path / "builds" / shard / "bias_subtract" / "summary.json").exists()
     recs = records(tmp_path / "serial")
     assert recs[0]["result"]["changes"] != recs[1]["result"]["changes"]   # two different parameter sets
+    # the report says what each shard verified: every randomised setting, with its value, per shard
+    page = (tmp_path / "serial" / "report.md").read_text()
+    for rec in recs:
+        section = page.split(f"### Shard {rec['params']['shard']} ")[1].split("### Shard")[0]
+        assert rec["result"]["changes"], "a shard that changed nothing verified the config itself"
+        for key, value in rec["result"]["changes"].items():
+            assert f"- `{key}` = `{value}`" in section
     mutated = tmp_path / "rtl"
     shutil.copytree(rtl.RTL_DIR, mutated)
     src = mutated / "bias_subtract.v"

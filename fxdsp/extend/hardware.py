@@ -47,7 +47,7 @@ def _per_update_lag(config: Config):
 def regression(design, chain: str, has_lag: bool, build_root: Path | None = None, seed: int = 0,
                rtl_dir: Path | None = None, only: tuple[str, ...] | None = None) -> dict:
     """Per block: ok, samples, cycles, first errors. ValueError when Icarus or cocotb is missing.
-    ``rtl_dir``: other Verilog sources (default: the checkout's); ``only``: these labels."""
+    ``rtl_dir``: other Verilog sources (default: the package's); ``only``: these labels."""
     from fxdsp.hdl import params as hp
     from fxdsp.sweep.rtl import RTL_DIR, check_tools, run_block
 

@@ -17,7 +17,8 @@ def PATHS(args) -> dict:
 
 def configure(parser) -> None:
     parser.add_argument("--config", help="TOML config (default: the built-in one)")
-    parser.add_argument("--out", default="hdl/gen", help="directory of the generated files (default: hdl/gen)")
+    parser.add_argument("--out", required=True, metavar="DIR",
+                        help="directory of the generated files (the project's own: hdl/gen, `make hdl-gen`)")
     parser.add_argument("--check", action="store_true",
                         help="regenerate in memory and compare with --out; exit 1 on any difference")
 

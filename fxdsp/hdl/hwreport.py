@@ -29,19 +29,16 @@ import re
 from pathlib import Path
 
 from ..outputs import json_text
+from . import HW_REPORT_JSON, RTL_DIR
 
-# hdl/ of the checkout this package runs from (RTL sources and reports): the one place that knows it
-HDL_DIR = Path(__file__).resolve().parents[2] / "hdl"
-REPORT_NAME = "HW_REPORT.json"
 COLUMNS = ("name", "module", "LUT", "MAC16", "FF", "BRAM", "fmax", "fmax_seeds", "note", "sha256")
 XC7_COLUMNS = ("LUT", "DSP48E1", "FF", "BRAM36", "BRAM18", "LUTRAM", "SRL", "note")
 
 
 def hw_report_path() -> Path:
-    """The committed JSON hardware report: the checkout's ``hdl/HW_REPORT.json``, else (package
-    installed elsewhere) ``hdl/HW_REPORT.json`` under the working directory."""
-    path = HDL_DIR / REPORT_NAME
-    return path if path.is_file() else Path("hdl") / REPORT_NAME
+    """The committed JSON hardware report of the default config, shipped in the package (in a
+    checkout, a link to ``hdl/HW_REPORT.json``)."""
+    return HW_REPORT_JSON
 
 
 def source_hash(design, files: dict[str, str] | None = None) -> str:
@@ -53,7 +50,7 @@ def source_hash(design, files: dict[str, str] | None = None) -> str:
     if files is None:
         files = generate(design)
     h = hashlib.sha256()
-    items = [(f"rtl/{p.name}", p.read_text(encoding="utf-8")) for p in sorted((HDL_DIR / "rtl").glob("*.v"))]
+    items = [(f"rtl/{p.name}", p.read_text(encoding="utf-8")) for p in sorted(RTL_DIR.glob("*.v"))]
     items += [(f"gen/{name}", text) for name, text in sorted(files.items())]
     for name, text in items:
         h.update(name.encode() + b"\0" + text.encode() + b"\0")
@@ -73,11 +70,11 @@ def rtl_closure(module: str) -> list[Path]:
     """The RTL files a synthesis of ``module`` reads: its own file and, transitively, the file of
     every module whose name appears in the code (comments stripped) of one already taken. Naming a
     module is enough to count it: an over-approximation (a row re-run for nothing), never a miss."""
-    files = sorted((HDL_DIR / "rtl").glob("*.v"))
+    files = sorted(RTL_DIR.glob("*.v"))
     code = {p: _code(p.read_text(encoding="utf-8")) for p in files}
     defined = {m: p for p in files for m in _MODULE.findall(code[p])}
     if module not in defined:
-        raise ValueError(f"module: {module!r} is defined in no file of {HDL_DIR / 'rtl'}")
+        raise ValueError(f"module: {module!r} is defined in no file of {RTL_DIR}")
     todo, seen = [defined[module]], set()
     while todo:
         p = todo.pop()

@@ -36,10 +36,10 @@ from pathlib import Path
 
 from ..chains import build
 from ..outputs import IN, OUT_FILE, check_output, staged
-from .hwreport import HDL_DIR, load_hw_report, report_json, row_hash, source_hash
+from . import RTL_DIR as RTL
+from .hwreport import load_hw_report, report_json, row_hash, source_hash
 from .params import generate, instance, iverilog_params
 
-RTL = HDL_DIR / "rtl"
 UP5K = {"LUT": 5280, "MAC16": 8, "FF": 5280, "BRAM": 30}
 # the Artix-7 the xc7 columns are read against (a common small one); yosys estimates, not Vivado
 XC7A35T = {"name": "XC7A35T", "LUT": 20800, "DSP48E1": 90, "FF": 41600, "BRAM36": 50}
@@ -74,8 +74,9 @@ def seeds_of(row_name: str) -> tuple[int, ...]:
 
 def configure(parser) -> None:
     parser.add_argument("--config", help="TOML config (default: the built-in one)")
-    parser.add_argument("--out", default=str(HDL_DIR / "HW_REPORT.md"),
-                        help="Markdown report to write (its JSON twin goes beside it, suffix .json)")
+    parser.add_argument("--out", required=True, metavar="REPORT.md",
+                        help="Markdown report to write (its JSON twin goes beside it, suffix .json); "
+                             "the project's own is hdl/HW_REPORT.md (`make hw-report`)")
     parser.add_argument("--only", nargs="*", help="re-run only these instances' rows (default: every block and chain); "
                         "the report's other rows are kept while they are current")
     parser.add_argument("--freq", type=float, default=40.0, help="nextpnr target clock in MHz (default 40)")

@@ -9,7 +9,7 @@ sweeps that outgrow one machine, on Dask (see :mod:`fxdsp.sweep.engine`).
 
 ``--workers N`` (default: one per CPU) starts a local Dask cluster of N processes that lives as long
 as the command; ``--workers 0`` runs serially in this process; ``--scheduler ADDR`` uses a running
-Dask cluster (its workers need this package, and for ``rtl`` the same checkout). The results are
+Dask cluster (its workers need this package, the same version). The results are
 the same bytes in every case.
 
 Outputs in DIR: ``results.jsonl`` (one line per task, in task order: index, seed, params and result
@@ -94,7 +94,7 @@ def configure(parser) -> None:
     _common(rt)
     rt.add_argument("--shards", type=int, default=8, metavar="N", help="random parameter sets (default 8)")
     rt.add_argument("--blocks", metavar="A,B", help="blocks and chains to run per shard (default: all)")
-    rt.add_argument("--rtl", metavar="DIR", help="Verilog sources (default: hdl/rtl of this checkout)")
+    rt.add_argument("--rtl", metavar="DIR", help="Verilog sources (default: the RTL shipped in the package)")
     rt.add_argument("--build-dir", metavar="DIR", help="keep every shard's build here (default: temporary)")
 
 
@@ -247,7 +247,8 @@ def _prepare_rtl(args) -> dict:
         text = rtl.format_summary(s)
         print(text)
         _write(stage, out, sweep, {"kind": "rtl", "config": cfg.name, "seed": seed, **s},
-               f"# Random-parameter RTL regressions\n\nConfig `{cfg.name}`, sweep seed {seed}.\n\n```\n{text}\n```\n")
+               f"# Random-parameter RTL regressions\n\nConfig `{cfg.name}`, sweep seed {seed}.\n\n```\n{text}\n```\n\n"
+               + rtl.settings_markdown(s))
         return 1 if s["failed_shards"] else 0
 
     return {"settings": settings, "seed": seed, "run": go}

@@ -7,32 +7,28 @@ seed) a rounding mode and an overflow mode for every table of the config, the or
 low-passes, and small word-length changes (-2..+2 bits) on a random subset of the word-length
 search's knobs (the widths the optimiser may move), redrawing until the design builds and the RTL
 generator accepts it. Each block (and both chain tops) of the shard is then streamed through its
-RTL under Icarus with the generic cocotb driver of ``tests/hdl/cocotb_stream.py`` (gapped valid),
-against the bit-exact model's outputs and overflow count.
+RTL under Icarus through the package's harness (:mod:`fxdsp.hdl.harness`: the generic cocotb
+driver, gapped valid), against the bit-exact model's outputs and overflow count.
 
 Every shard builds in ``<build root>/shard_NNNN/<block>``: a fresh temporary folder on the worker
-(removed afterwards), or ``--build-dir`` to keep them. The RTL and the driver are read from the
-checkout this package runs from (``hdl/rtl``, ``tests/hdl``), as ``fxdsp hw-report`` reads ``hdl/``;
-on a cluster every worker needs the same checkout. A shard's result records the drawn changes and,
-per block, pass/fail, cycles and the driver's first errors: no path, time or host.
+(removed afterwards), or ``--build-dir`` to keep them. The RTL is the package's (or ``--rtl``); on a
+cluster every worker needs the same package. A shard's result records every setting it drew that
+differs from the base config (``changes``, listed per shard in the report) and, per block,
+pass/fail, cycles and the driver's first errors: no path, time or host.
 """
 
 from __future__ import annotations
 
 import copy
-import importlib.util
 import json
 import shutil
-import sys
 import tempfile
 from functools import partial
 from pathlib import Path
 
 import numpy as np
 
-CHECKOUT = Path(__file__).resolve().parents[2]
-RTL_DIR = CHECKOUT / "hdl" / "rtl"
-DRIVER_DIR = CHECKOUT / "tests" / "hdl"     # cocotb_stream.py
+from ..hdl.harness import RTL_DIR  # noqa: F401  (the default --rtl of `sweep rtl`)
 ROUNDINGS = ("floor", "half_up", "half_even", "toward_zero")
 OVERFLOWS = ("wrap", "saturate")
 ORDERS = (2, 4)
@@ -41,21 +37,18 @@ KNOB_DELTA = (-2, 2)
 MAX_DRAWS = 200
 BLOCKS = ("rtd", "iir", "demod", "piecewise_sf", "piecewise_bias", "piecewise_bias001", "piecewise_k0", "sf_divide",
           "bias_subtract", "bias_subtract001", "freq2temp", "lag", "chain_paper001", "chain_paper002")
-MAX_SAMPLES = {"chain_paper002": 1200, "demod": 2500, "iir": 3000, "lag": 4000}
 EXTRA = {"chain_paper002": {"DIV_UNROLL": 14}, "sf_divide": {"UNROLL": 3}}
 GAP = 0.25
 
 
-def check_tools(rtl_dir: Path) -> None:
-    """ValueError when this machine cannot run a shard (it is the one that checks, before work)."""
-    if shutil.which("iverilog") is None or shutil.which("vvp") is None:
-        raise ValueError("rtl: iverilog (Icarus Verilog) is not installed: `make hdl-tools` or apt-get install iverilog")
-    if importlib.util.find_spec("cocotb_tools") is None:
-        raise ValueError("rtl: cocotb is not installed (pip install -e '.[test]')")
+def check_tools(rtl_dir: Path, sim: str = "icarus") -> None:
+    """InputError when this machine cannot run a shard (it is the one that checks, before work)."""
+    from ..errors import InputError
+    from ..hdl.simulators import require_simulator
+
+    require_simulator(sim)
     if not sorted(Path(rtl_dir).glob("*.v")):
-        raise ValueError(f"--rtl: no Verilog sources (*.v) in {rtl_dir}")
-    if not (DRIVER_DIR / "cocotb_stream.py").exists():
-        raise ValueError(f"rtl: the cocotb driver {DRIVER_DIR / 'cocotb_stream.py'} is missing (needs a checkout)")
+        raise InputError(f"--rtl: no Verilog sources (*.v) in {rtl_dir}")
 
 
 def settings(config_data: dict, shards: int, blocks, rtl_dir: Path) -> dict:
@@ -143,88 +136,40 @@ def draw(base: dict, seed: int):
 # ----------------------------------------------------------------------------------------------
 # One block through the RTL
 # ----------------------------------------------------------------------------------------------
-def random_stimulus(design, name: str, seed: int) -> dict:
-    """The block's stimulus (corners first) cut to MAX_SAMPLES: the head and a random tail."""
-    block = design.all[name]
-    rng = np.random.default_rng(seed)
-    stim = block.stimulus(rng, 400)
-    n = len(next(iter(stim.values())))
-    m = MAX_SAMPLES.get(name, n)
-    if n > m:  # keep the head (corners) and a random tail
-        keep = np.r_[np.arange(m // 2), np.sort(rng.choice(np.arange(m // 2, n), m - m // 2, replace=False))]
-        stim = {k: v[keep] for k, v in stim.items()}
-    return stim
-
-
-def _unsigned(values, wl: int) -> list[int]:
-    mask = (1 << wl) - 1
-    return [int(v) & mask for v in np.asarray(values, dtype=np.int64)]
-
-
 def run_block(design, files: dict, name: str, build: Path, rtl_dir: Path, seed: int) -> dict:
-    """Stream the block's stimulus through its RTL in ``build`` (``files``: the design's generated
-    RTL files, as :func:`draw` returns them); pass/fail, cycles, first errors."""
-    from cocotb_tools.runner import get_runner
+    """Stream the block's random stimulus (:func:`fxdsp.hdl.stimuli.random_stimulus`, gapped valid)
+    through its RTL on Icarus in ``build`` (``files``: unused, the harness generates the design's
+    headers itself; kept for the callers' signature); pass/fail, samples, cycles, first errors."""
+    from ..hdl import harness as hh
+    from ..hdl.stimuli import random_stimulus
 
-    from ..hdl import params as hp
-
-    block = design.all[name]
-    inst = design.instances[name]
     stim = random_stimulus(design, name, seed)
-    res = block.run(**stim)
-    seg = {"inputs": {p: _unsigned(stim[p], block.inputs[p].wl) for p in block.inputs},
-           "outputs": {p: _unsigned(res.outputs[p], block.outputs[p].wl) for p in block.outputs},
-           "ovf_total": int(res.overflows.total)}
+    seg = hh.segment(design, name, stim)
+    samples = len(next(iter(seg["outputs"].values())))
+    build = Path(build)
     build.mkdir(parents=True, exist_ok=True)
-    for rel, text in files.items():
-        (build / rel).write_text(text, encoding="ascii")
-    # the paper 002 top raises the demod's amp flags; the model never computes amp there
-    ignore = (1 << design.ovf_bit(name, "demod.amp")) if name == "chain_paper002" else 0
-    spec = {"segments": [seg], "inputs": [p.name for p in inst.inputs], "outputs": [p.name for p in inst.outputs],
-            "ready": inst.has_ready, "gap": GAP, "seed": int(seed % 2**31), "ovf_ignore": ignore,
-            "summary": str(build / "summary.json")}
-    (build / "spec.json").write_text(json.dumps(spec))
-    params = dict(EXTRA.get(name, {}))
-    if not inst.members:
-        params = {**hp.iverilog_params(hp.instance(design, name)), **params}
-    runner = get_runner("icarus")
-    samples = len(seg["outputs"][spec["outputs"][0]])
     try:
-        runner.build(sources=sorted(Path(rtl_dir).glob("*.v")), hdl_toplevel=inst.module, includes=[build],
-                     build_dir=build, parameters=params, always=True, build_args=["-Wall"],
-                     timescale=("1ns", "1ps"), log_file=build / "build.log")
-    except (RuntimeError, SystemExit):
+        got = hh.run_cocotb(design, name, [seg], build, build / "models", gap=GAP, seed=int(seed % 2**31),
+                            extra_params=EXTRA.get(name), sim="icarus", rtl=Path(rtl_dir))
+    except hh.BuildFailed:
         return {"ok": False, "samples": samples, "cycles": None,
                 "errors": ["build failed: " + _first_error(build / "build.log", rtl_dir, build)]}
-    env = {"FXDSP_SPEC": str(build / "spec.json"), "COCOTB_REWRITE_ASSERTION_FILES": ""}
-    # the runner hands this process' sys.path to the simulator's Python as its PYTHONPATH
-    added = [p for p in (str(DRIVER_DIR), str(CHECKOUT)) if p not in sys.path]
-    sys.path[:0] = added
-    try:
-        runner.test(test_module="cocotb_stream", hdl_toplevel=inst.module, build_dir=build, test_dir=build,
-                    extra_env=env, log_file=build / "sim.log")
-    except (RuntimeError, SystemExit):
-        pass   # a failing stream (under pytest the runner exits): the driver's summary says why
-    finally:
-        for p in added:
-            sys.path.remove(p)
-    summary = build / "summary.json"
-    if not summary.exists():
-        return {"ok": False, "samples": samples, "cycles": None,
-                "errors": ["the simulation ended without a summary: " + _first_error(build / "sim.log", rtl_dir,
-                                                                                      build)]}
-    got = json.loads(summary.read_text())
-    return {"ok": not got["errors"], "samples": samples, "cycles": got["cycles"], "errors": got["errors"][:3]}
+    errors = [_strip(e, rtl_dir, build) for e in got["errors"][:3]]
+    return {"ok": not got["errors"], "samples": samples, "cycles": got["cycles"], "errors": errors}
 
 
 def _first_error(log: Path, rtl_dir, build: Path) -> str:
     """The first line of a tool's log that looks like an error, without folder names."""
     text = log.read_text(errors="replace") if log.exists() else ""
     lines = [line for line in text.splitlines() if "error" in line.lower()] or text.splitlines()[-1:] or ["no log"]
-    line = lines[0]
+    return _strip(lines[0], rtl_dir, build)[:300]
+
+
+def _strip(line: str, rtl_dir, build: Path) -> str:
+    """``line`` without the folder names of this run (a shard's record names no path)."""
     for folder in (str(Path(rtl_dir).resolve()), str(Path(rtl_dir)), str(build)):
-        line = line.replace(folder + "/", "")
-    return line.strip()[:300]
+        line = line.replace(folder + "/", "").replace(folder, "")
+    return line.strip()
 
 
 def _task(settings: dict, rtl_dir: str, build_root: str | None, params: dict, seed: int) -> dict:
@@ -258,7 +203,10 @@ def summarise(settings: dict, records: list[dict]) -> dict:
             "failed_shards": [{"index": r["index"], "shard": r["params"]["shard"], "changes": r["result"]["changes"],
                                "blocks": {k: v["errors"] for k, v in r["result"]["blocks"].items() if not v["ok"]}}
                               for r in good if not r["result"]["passed"]],
-            "failed": failed_records(records)}
+            "failed": failed_records(records),
+            # what each shard verified: every setting it drew that differs from the config given
+            "shard_settings": [{"shard": r["params"]["shard"], "passed": r["result"]["passed"],
+                                "changes": r["result"]["changes"]} for r in good]}
 
 
 def format_summary(s: dict) -> str:
@@ -269,4 +217,18 @@ def format_summary(s: dict) -> str:
             lines.append(f"  shard {f['shard']} {block}: {errors[0] if errors else 'failed'}")
     for f in s["failed"]:
         lines.append(f"  task {f['index']} {f['params']}: {f['error']}")
+    return "\n".join(lines)
+
+
+def settings_markdown(s: dict) -> str:
+    """Every setting each shard randomised (it verified that design, not the config given), as Markdown."""
+    lines = ["## Settings drawn per shard", "",
+             "Each shard verifies the config given with these settings changed (rounding and overflow of "
+             "every table, the low-pass orders, word lengths of a random subset of the optimiser's knobs).", ""]
+    for sh in s.get("shard_settings", []):
+        lines.append(f"### Shard {sh['shard']} ({'pass' if sh['passed'] else 'FAIL'}): "
+                     f"{len(sh['changes'])} settings changed")
+        lines.append("")
+        lines += [f"- `{k}` = `{v}`" for k, v in sorted(sh["changes"].items())] or ["- none"]
+        lines.append("")
     return "\n".join(lines)

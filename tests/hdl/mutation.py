@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from fxdsp.vectors import load
-from hdl_util import RTL, SERIAL, icarus_window, VECTORS, HarnessTimeout, build_dir, design_of, generate_into, model_run, \
+from hdl_util import RTL, SERIAL, icarus_window, VECTORS, BuildFailed, HarnessTimeout, build_dir, design_of, generate_into, model_run, \
     mutated_rtl, rtl_sources, run_harness
 
 
@@ -350,11 +350,8 @@ def _check(rtl: Path, overrides, name: str, gapped: bool, tag: str, extra: dict 
         got, ovf, _, _ = run_harness(d, name, ins, tag, unroll=unroll, gap=gapped, rtl=rtl, extra=extra)
     except HarnessTimeout:  # fewer outputs than samples (e.g. samples lost to a missed stall)
         return True, "harness stopped at its cycle limit: fewer outputs than samples"
-    except subprocess.CalledProcessError as exc:
-        if Path(str(exc.cmd[0])).name == "iverilog":  # the harness did not compile: broken, not caught
-            raise MutantBroken(f"{tag}: the {name} harness does not compile on {rtl.name}:\n"
-                               f"{(exc.stderr or '')[-2000:]}") from exc
-        return True, f"simulation failed ({exc.returncode})"
+    except BuildFailed as exc:  # the harness did not compile: broken, not caught
+        raise MutantBroken(f"{tag}: the {name} harness does not compile on {rtl.name}:\n{str(exc)[-2000:]}") from exc
     except ValueError as exc:  # an output word with x/z bits
         return True, f"undefined output word ({exc})"
     bad = {p: int(np.count_nonzero(got[p] != outs[p])) for p in outs}

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fxdsp.blocks.base import corner_codes, tie_codes
+from fxdsp.hdl.stimuli import corners
 from hdl_util import SERIAL, SIMULATORS, design_of, icarus_samples, icarus_window, run_cocotb, segment
 
 _NARROW = {
@@ -46,77 +46,6 @@ def design(key):
     if key not in _designs:
         _designs[key] = design_of(DESIGNS[key])
     return _designs[key]
-
-
-def rtd_ties(block) -> np.ndarray:
-    """Every ADC code whose exact interpolated value sits on a rounding tie (searched exhaustively)."""
-    fmt, s, shift = block.adc_format, block.datapath.frac_bits, block.datapath.shift
-    code = np.arange(fmt.min_int, fmt.max_int + 1, dtype=np.int64)
-    u = code - fmt.min_int
-    idx = u >> s
-    base = block.lut[idx]
-    exact = (base << s) + (block.lut[idx + 1] - base) * (u & ((1 << s) - 1))
-    if shift <= 0:
-        return code[:0]
-    tie = (exact & ((1 << shift) - 1)) == (1 << (shift - 1))
-    return code[tie][:200]
-
-
-def corners(d, name, rng) -> dict[str, np.ndarray]:
-    block = d.all[name]
-    head = {k: v[:400] for k, v in block.stimulus(rng, 32).items()}
-    extra: dict[str, np.ndarray] = {}
-    if name == "rtd":
-        extra = {"code": rtd_ties(block)}
-    elif name.startswith("piecewise"):
-        bp = block.breakpoints
-        t0 = int(block.t0[0])
-        fmt = block.temp_format
-        vals = np.concatenate([bp, bp - 1, bp + 1, [t0 - 1, t0, t0 + 1], corner_codes(fmt)])
-        extra = {"temp": np.clip(vals, fmt.min_int, fmt.max_int).astype(np.int64)}
-    elif name == "sf_divide":
-        cx = corner_codes(block.in_format)
-        fs = block.sf_format
-        sfs = np.array([0, 1, 2, 3, fs.max_int, fs.max_int - 1, 1 << fs.fl, (1 << fs.fl) + 1]
-                       + ([-1, -2, fs.min_int] if fs.signed else []), dtype=np.int64)
-        sfs = sfs[(sfs >= fs.min_int) & (sfs <= fs.max_int)]
-        extra = {"x": np.repeat(cx, sfs.size), "sf": np.tile(sfs, cx.size)}
-    elif name.startswith("bias_subtract"):
-        ties = tie_codes(block.in_format, 2)
-        extra = {"x": ties, "bias": np.zeros(ties.size, np.int64)}
-    elif name == "freq2temp":
-        f0 = block.f0
-        extra = {"f": np.array([f0 - 2, f0 - 1, f0, f0 + 1, f0 + 2], np.int64)}
-    elif name == "lag":
-        # starts away from 0 and from where the aborted first stream leaves the state, so the
-        # state must be primed again on the first sample after the reset; full-scale alternation
-        # and steps (slew over the whole range), then +-1 code steps (rounding of tiny d)
-        fmt = block.temp_format
-        alt = np.where(np.arange(200) % 2 == 0, fmt.max_int, fmt.min_int)
-        small = np.repeat(np.array([1, 0, -1, 0, 2, -2, 0]), 12)
-        extra = {"temp": np.r_[np.full(20, 3 * fmt.max_int // 4), alt, np.full(60, fmt.max_int),
-                               np.full(60, fmt.min_int), np.full(30, 0), small].astype(np.int64)}
-    elif name in ("iir", "demod"):
-        fmt = block.inputs["x"]
-        alt = np.where(np.arange(600) % 2 == 0, fmt.max_int, fmt.min_int)
-        steps = np.r_[np.full(300, fmt.max_int), np.full(300, fmt.min_int), np.full(50, 0)]
-        extra = {"x": np.r_[alt, steps].astype(np.int64)}
-    elif name == "chain_paper002":
-        fv, fc = block.inputs["vsa"], block.inputs["rtd_code"]
-        codes = np.r_[corner_codes(fc), (np.arange(32) << block.rtd.s) + fc.min_int]
-        vs = np.resize(np.r_[corner_codes(fv), fv.max_int, fv.min_int], codes.size)
-        extra = {"vsa": vs.astype(np.int64), "rtd_code": codes.astype(np.int64)}
-    elif name == "chain_paper001":
-        ff, fr = block.inputs["f"], block.inputs["rate_in"]
-        f0 = block.f2t.f0
-        fs = np.r_[corner_codes(ff), [f0 - 1, f0, f0 + 1]]
-        extra = {"f": fs.astype(np.int64), "rate_in": np.resize(corner_codes(fr), fs.size).astype(np.int64)}
-    out = {}
-    for k, v in head.items():
-        e = extra.get(k)
-        out[k] = np.concatenate([e, v]) if e is not None and len(e) else v
-    n = min(len(v) for v in out.values())
-    return {k: v[:n] for k, v in out.items()}
 
 
 @pytest.mark.hdl

@@ -11,7 +11,8 @@ import pytest
 
 from hdl_util import SERIAL, design_of, icarus_samples, icarus_window, run_cocotb, segment
 
-from fxdsp.sweep.rtl import BLOCKS, EXTRA, random_stimulus  # the sweep's RTL shards draw the same way
+from fxdsp.hdl.stimuli import random_stimulus  # fxdsp rtl and the sweep's RTL shards draw the same way
+from fxdsp.sweep.rtl import BLOCKS, EXTRA
 
 PARAM_SETS = {
     # every rounding floor, every overflow wrap, default word lengths

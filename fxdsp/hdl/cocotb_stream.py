@@ -1,6 +1,7 @@
-"""Generic cocotb stream driver for every fxdsp RTL block and top (cocotb 2.x API).
+"""Generic cocotb stream driver for every fxdsp RTL block and top (cocotb 2.x API): the test module
+the simulator imports (``fxdsp.hdl.cocotb_stream``) for :func:`fxdsp.hdl.harness.run_cocotb`.
 
-The pytest wrapper writes ``spec.json`` (path in ``FXDSP_SPEC``): input words, expected output
+The harness writes ``spec.json`` (path in ``FXDSP_SPEC``): input words, expected output
 words (unsigned, masked to the port width) and the model's overflow count, per *segment*; a
 synchronous reset is applied before every segment, so a segment after another one is a reset in
 mid-stream. ``abort_after`` cuts a segment after that many accepted samples and resets while
@@ -81,6 +82,7 @@ async def stream(dut):
     t0 = time.perf_counter()
     sim0 = get_sim_time(unit="ns")
     errors: list[str] = []
+    mismatches: list[dict] = []   # per (segment, port): the first wrong word, for the report
     for s_i, seg in enumerate(spec["segments"]):
         dut.in_valid.value = 0
         for p in ins:
@@ -94,6 +96,7 @@ async def stream(dut):
         n_feed = min(n, seg.get("abort_after", n))
         exp = seg["outputs"]
         got = {p: [] for p in outs}
+        out_time: list[int] = []   # simulation time (ns) of each output, to place a waveform window
         ovf_seen = 0
         idx = 0
         driving = False
@@ -116,6 +119,7 @@ async def stream(dut):
             if int(dut.out_valid.value) == 1:
                 for p in outs:
                     got[p].append(_u(out_h[p]))
+                out_time.append(int(now))
                 ovf_seen += _popcount(_u(dut.ovf) & ~ignore)
                 last_progress = now
             if "abort_after" in seg:
@@ -138,6 +142,9 @@ async def stream(dut):
             bad = [k for k, (a, b) in enumerate(zip(got[p], want)) if a != b]
             if bad:
                 k = bad[0]
+                mismatches.append({"segment": s_i, "port": p, "sample": k, "got": got[p][k],
+                                   "expected": want[k], "count": len(bad), "of": len(want),
+                                   "time_ns": out_time[k]})
                 errors.append(f"segment {s_i} port {p}: {len(bad)} mismatch(es), first at sample {k}: "
                               f"got {got[p][k]:#x}, expected {want[k]:#x}")
         if seg.get("ovf_total") is not None and "abort_after" not in seg and ovf_seen != seg["ovf_total"]:
@@ -145,7 +152,7 @@ async def stream(dut):
     seconds = time.perf_counter() - t0
     cycles = round((get_sim_time(unit="ns") - sim0) / PERIOD_NS)
     with open(spec["summary"], "w") as f:
-        json.dump({"cycles": cycles, "seconds": seconds, "errors": errors}, f)
+        json.dump({"cycles": cycles, "seconds": seconds, "errors": errors, "mismatches": mismatches}, f)
     for e in errors[:20]:
         dut._log.error(e)
     assert not errors, f"{len(errors)} error(s): {errors[0]}"

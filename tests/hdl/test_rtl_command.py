@@ -1,0 +1,114 @@
+"""``fxdsp rtl``: the RTL regression of exactly the config given, through the package's harness.
+
+* On a user's config (the sense ADC at 18 bits) it verifies that design: the vectors and headers it
+  writes are those of the config (compared with ``fxdsp vectors`` / ``fxdsp hdl-gen`` of the same
+  file, and the formats read back from the manifest are the user's), and both variants pass.
+* With an injected RTL fault it exits 1, names the DUT and the first mismatch (checked against the
+  model's own word at that sample, not against a number copied from the command), and leaves a
+  waveform of a window around it that holds the DUT's signals.
+* Bad input (an unknown block, a folder without Verilog) is one line and exit 2.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import tomllib
+
+import pytest
+
+from fxdsp.cli import main
+from fxdsp.config import default_config_text
+from fxdsp.hdl import RTL_DIR
+from fxdsp.vectors import load
+from hdl_util import require_simulator
+
+# a user's own design: the sense ADC at 18 bits (the divider's input word), the rest as built in
+ADC18 = default_config_text().replace('in_format = "s16.15"      # sense ADC', 'in_format = "s18.17"      # sense ADC', 1)
+LONG = ["--long", "400"]
+
+
+def _config(tmp_path):
+    assert ADC18 != default_config_text(), "the default config no longer has the divider's s16.15 input"
+    path = tmp_path / "adc18.toml"
+    path.write_text(ADC18)
+    assert tomllib.loads(ADC18)["sf_divide"]["in_format"] == "s18.17"
+    return path
+
+
+@pytest.mark.hdl
+def test_rtl_verifies_the_users_config(tmp_path, capsys):
+    require_simulator("icarus")
+    cfg = _config(tmp_path)
+    out = tmp_path / "rtl"
+    assert main(["rtl", "--config", str(cfg), "--only", "sf_divide", "--sim", "icarus", *LONG,
+                 "--out", str(out)]) == 0
+    report = json.loads((out / "report.json").read_text())
+    assert report["passed"] and [r["dut"] for r in report["duts"]] == ["sf_divide", "sf_divide (serial)"]
+    for row in report["duts"]:
+        assert set(row["streams"]) == {"golden", "random", "corners", "long"}
+        assert all(s["ok"] and s["samples"] > 0 for s in row["streams"].values())
+        assert row["cycles_per_sample"] and row["cycles_per_sample"] >= 1
+    # what it verified is the user's design: its vectors and headers are those of the same config
+    assert main(["vectors", "--config", str(cfg), "--out", str(tmp_path / "vec")]) == 0
+    assert main(["hdl-gen", "--config", str(cfg), "--out", str(tmp_path / "gen")]) == 0
+    for sub, ref in (("vectors", tmp_path / "vec"), ("hdl", tmp_path / "gen")):
+        mine = sorted(p.relative_to(out / sub) for p in (out / sub).rglob("*") if p.is_file())
+        theirs = sorted(p.relative_to(ref) for p in ref.rglob("*") if p.is_file())
+        assert mine == theirs
+        assert all((out / sub / p).read_bytes() == (ref / p).read_bytes() for p in mine)
+    ins, _, entry = load(out / "vectors", "sf_divide")
+    assert entry["inputs"]["x"]["format"] == "s18.17"
+    assert "MISMATCH" not in capsys.readouterr().out
+
+
+@pytest.mark.hdl
+def test_an_injected_fault_is_named_with_its_first_mismatch_and_a_waveform(tmp_path, capsys):
+    require_simulator("icarus")
+    rtl = tmp_path / "rtl_src"
+    shutil.copytree(RTL_DIR, rtl)
+    src = rtl / "sf_divide.v"
+    text = src.read_text()
+    site = "if (!t_v[DW+1]) begin"     # the restoring step takes r >= d as r > d
+    assert text.count(site) == 1
+    src.write_text(text.replace(site, "if (!t_v[DW+1] && t_v[DW:0] != 0) begin"))
+    out = tmp_path / "out"
+    capsys.readouterr()
+    assert main(["rtl", "--only", "sf_divide", "--rtl", str(rtl), *LONG, "--out", str(out)]) == 1
+    printed = capsys.readouterr().out
+    report = json.loads((out / "report.json").read_text())
+    assert not report["passed"]
+    row = report["duts"][0]
+    m = row["first_mismatch"]
+    assert m["dut"] == "sf_divide" and m["stream"] == "golden" and m["port"] == "y"
+    # the expected word is the model's, read from the golden vectors the command wrote
+    _, outs, _ = load(out / "vectors", "sf_divide")
+    assert m["expected_value"] == int(outs["y"][m["sample"]]) != m["got_value"]
+    assert f"MISMATCH sf_divide: golden stream, sample {m['sample']}, port y: got {m['got_value']}" in printed
+    # a waveform around it, holding the DUT's signals over the window
+    waves = [w for w in row["waves"] if w["stream"] == "golden"]
+    assert waves and waves[0]["outputs"][0] <= m["sample"] <= waves[0]["outputs"][1]
+    vcd = (out / waves[0]["file"]).read_text()
+    assert "$scope module dut $end" in vcd and re.search(r"\$var \w+ \d+ \S+ out_valid \$end", vcd)
+    assert len(re.findall(r"^#\d+", vcd, re.M)) > 20
+    assert "sf_divide" in (out / "report.md").read_text() and "First mismatches" in (out / "report.md").read_text()
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--only", "sf_divid"], ("--only", "sf_divide")),
+    (["--only", ","], ("--only",)),
+    (["--long", "0"], ("--long",)),
+])
+def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, argv, words):
+    rc = main(["rtl", *argv, "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert rc == 2 and len(err.strip().splitlines()) == 1 and all(w in err for w in words)
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_folder_without_verilog_is_bad_input(tmp_path, capsys):
+    (tmp_path / "empty").mkdir()
+    rc = main(["rtl", "--rtl", str(tmp_path / "empty"), "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "--rtl" in err and len(err.strip().splitlines()) == 1

@@ -1,0 +1,122 @@
+"""The package as a user gets it: a wheel built from this source, installed into a fresh venv outside
+the checkout, its commands run from another folder. Every command must find what it needs in the
+installed package (the RTL, the cocotb driver, the hardware report, the log format), never in a
+checkout: the test asserts the package imported is the wheel's.
+
+The fresh venv takes the wheel alone (``pip install --no-deps --no-index``); its third-party
+dependencies are this test environment's, reached through a ``.pth`` line (a plain path: the
+editable install's finder there is not activated), so the test needs no network and no minutes of
+downloads. The simulators and synthesis tools are the machine's; each step that needs one is
+skipped with the reason when it is absent, the others still run.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import sysconfig
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _run(cmd, cwd, env, timeout=600) -> subprocess.CompletedProcess:
+    proc = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
+    assert proc.returncode == 0, f"{' '.join(map(str, cmd))}: exit {proc.returncode}\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
+    return proc
+
+
+@pytest.fixture(scope="module")
+def installed(tmp_path_factory):
+    """(venv bin folder, environment, a work folder outside the checkout) with the wheel installed."""
+    tmp = tmp_path_factory.mktemp("wheel")
+    src = tmp / "src"   # the package's sources alone (links resolved), so the build writes nothing here
+    src.mkdir()
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copyfile(ROOT / name, src / name)
+    shutil.copytree(ROOT / "fxdsp", src / "fxdsp", ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+    dist = tmp / "dist"
+    _run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation", "-w", str(dist), str(src)],
+         cwd=tmp, env=dict(os.environ))
+    wheel = next(dist.glob("fxdsp-*.whl"))
+    venv = tmp / "venv"
+    _run([sys.executable, "-m", "venv", str(venv)], cwd=tmp, env=dict(os.environ))
+    py = venv / "bin" / "python"
+    purelib = Path(subprocess.run([str(py), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+                                  capture_output=True, text=True, check=True).stdout.strip())
+    (purelib / "_fxdsp_test_dependencies.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    _run([str(py), "-m", "pip", "install", "-q", "--no-deps", "--no-index", str(wheel)], cwd=tmp, env=dict(os.environ))
+    work = tmp / "work"
+    work.mkdir()
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    env["PATH"] = os.pathsep.join([str(venv / "bin"), env.get("PATH", "")])
+    env["XDG_CACHE_HOME"] = str(tmp / "cache")
+    where = _run([str(py), "-c", "import fxdsp, sys; print(fxdsp.__file__)"], cwd=work, env=env).stdout.strip()
+    assert Path(where).is_relative_to(venv) and not Path(where).is_relative_to(ROOT), where
+    return venv / "bin", env, work, wheel
+
+
+def fxdsp(installed, *args, timeout=600) -> subprocess.CompletedProcess:
+    bin_dir, env, work, _ = installed
+    return _run([str(bin_dir / "fxdsp"), *map(str, args)], cwd=work, env=env, timeout=timeout)
+
+
+def test_the_wheel_carries_the_rtl_the_report_and_the_log_format(installed):
+    import zipfile
+
+    names = zipfile.ZipFile(installed[3]).namelist()
+    rtl = sorted(n for n in names if n.startswith("fxdsp/hdl/rtl/") and n.endswith(".v"))
+    assert [Path(n).name for n in rtl] == sorted(p.name for p in (ROOT / "fxdsp" / "hdl" / "rtl").glob("*.v"))
+    assert "fxdsp/hdl/cocotb_stream.py" in names and "fxdsp/hdl/HW_REPORT.json" in names
+    assert "fxdsp/docs/log-format.md" in names
+    with zipfile.ZipFile(installed[3]) as z:
+        assert json.loads(z.read("fxdsp/hdl/HW_REPORT.json"))["rows"]       # the report's content, not a link
+    assert not any(n.startswith("tests/") for n in names)
+
+
+def test_demo_vectors_and_hdl_gen_from_another_folder(installed):
+    work = installed[2]
+    fxdsp(installed, "demo")
+    assert (work / "vectors" / "manifest.json").is_file()
+    fxdsp(installed, "vectors", "--out", "v2")
+    assert (work / "v2" / "manifest.json").read_bytes() == (work / "vectors" / "manifest.json").read_bytes()
+    fxdsp(installed, "hdl-gen", "--out", "gen")
+    assert sorted(p.name for p in (work / "gen").glob("*.vh")) == sorted(p.name for p in (ROOT / "hdl" / "gen").glob("*.vh"))
+
+
+def test_rtl_of_one_block_from_the_installed_package(installed):
+    if shutil.which("iverilog") is None:
+        pytest.skip("iverilog (Icarus Verilog) is not installed")
+    proc = fxdsp(installed, "rtl", "--only", "bias_subtract", "--sim", "icarus", "--long", "300", "--out", "rtl")
+    report = json.loads((installed[2] / "rtl" / "report.json").read_text())
+    assert report["passed"] and report["duts"][0]["dut"] == "bias_subtract", proc.stdout
+
+
+def test_extend_with_and_without_rtl(installed):
+    work = installed[2]
+    # a thermometer-chain log (a chamber ramp, no rate table, no frequency): a lag to compensate
+    fxdsp(installed, "simulate", "--scenario", "ramp", "--effect", "thermal_lag.tau_s=1500", "--columns",
+          "ref_temp_c", "--seed", "1", "--out", "log.csv")
+    fxdsp(installed, "extend", "log.csv", "--no-rtl", "--out", "ext_nortl")
+    report = json.loads((work / "ext_nortl" / "report.json").read_text())
+    assert report["regression"] is None and "lag" in [r["stage"] for r in report["remedies"]]
+    if shutil.which("iverilog") is None:
+        pytest.skip("iverilog (Icarus Verilog) is not installed: extend without RTL only")
+    proc = fxdsp(installed, "extend", "log.csv", "--out", "ext")
+    report = json.loads((work / "ext" / "report.json").read_text())
+    assert report["regression"]["passed"], proc.stdout
+    assert "RTL bit-exact" in proc.stdout
+
+
+def test_hw_report_of_one_small_block(installed):
+    missing = [t for t in ("yosys", "nextpnr-ice40") if shutil.which(t) is None]
+    if missing:
+        pytest.skip(f"{' and '.join(missing)} not installed: no synthesis here")
+    fxdsp(installed, "hw-report", "--only", "bias_subtract", "--no-xc7", "--out", "HW.md", timeout=900)
+    rows = {r["name"]: r for r in json.loads((installed[2] / "HW.json").read_text())["rows"]}
+    assert rows["bias_subtract"]["LUT"] and rows["bias_subtract"]["fmax"]
