@@ -26,7 +26,8 @@ from fxdsp.extend.evaluate import compensate002, heldout_rows_paper002
 
 ROOT = Path(__file__).parents[1]
 TCKIT_REL = "data/tckit/hp3458abx_hp34420a_tcsweep_1vdc_nplc100_test2_oct2024.dsv"
-# vbl6: the channel the diagnosis names thermal_lag alone (vbl5 adds a warm-up, which has no remedy)
+# vbl6: the channel the diagnosis names thermal_lag alone (vbl5 adds a warm-up, which has no remedy:
+# tests/test_extend_user_design.py extends it and checks the warm-up is reported uncompensated)
 TCKIT_ARGS = ["--map", "time_s=date", "--map", "temp_c=box_temp", "--map", "output=vbl6", "--delimiter", ";",
               "--time-format", "%d/%m/%Y-%H:%M:%S"]
 needs_icarus = pytest.mark.skipif(shutil.which("iverilog") is None, reason="iverilog is not installed")
@@ -151,9 +152,11 @@ def test_extend_a_paper001_log_whose_resonator_turns_over(logs, tmp_path, capsys
     assert rep["applied"]["gain"] > 1.5, rep["applied"]   # fitted on run 1, applied to run 2
 
 
-def test_a_cause_without_a_remedy_is_one_line_and_exit_2(logs, tmp_path, capsys):
+def test_a_cause_without_a_remedy_is_one_line_and_exit_2_with_strict(logs, tmp_path, capsys):
+    """--strict keeps the refusal (without it the cause is reported uncompensated and the run goes
+    on: tests/test_extend_user_design.py)."""
     out = tmp_path / "ext"
-    code, _, err = extend([logs["hysteresis"], "--out", out, "--no-rtl"], capsys)
+    code, _, err = extend([logs["hysteresis"], "--strict", "--out", out, "--no-rtl"], capsys)
     assert code == 2 and err.count("\n") == 1 and "hysteresis has no hardware remedy" in err, err
     assert not out.exists()   # nothing half-written
 

@@ -1,61 +1,92 @@
-"""The extended config: the chain's calibration from the log, plus every planned remedy.
+"""The extended config: the chain's calibration from the log, plus every planned remedy, in the
+user's design (:mod:`fxdsp.extend.design`).
 
 Written as a copy of the base config (``--config``, default: the built-in one) with only the
 calibrated and remedied keys rewritten in place (:func:`fxdsp.repro.calconfig.config_text`), so a
-diff against the base shows exactly what the extension changed.
+diff against the base shows exactly what the extension changed: the calibrated coefficients
+(:data:`fxdsp.extend.design.CALIBRATED`), the remedies' keys (``REMEDY_KEYS``), and with ``--widen``
+the formats listed in the report's ``changes``. Every format, rounding and overflow rule stays the
+base's; a calibrated value or a remedy that does not fit it is an InputError naming the field.
 
 * paper002: the paper's SF and bias segments from the log's rate-table sequences
-  (:func:`fxdsp.repro.calibrate.calibrate002`, quadratic segments with the ``order`` remedy);
-  ``lag``: ``[lag] tau_s`` and ``[chain_paper002] stages = ["lag"]`` (the lag then updates at the
-  base's ``[lag] rate_hz``, a divisor of ``fs_hz``); ``trim``: ``[demod] phase_trim_rad``.
+  (:func:`fxdsp.repro.calibrate.calibrate002`, quadratic segments with the ``order`` remedy)
+  in the base's ``[piecewise.sf]`` / ``[piecewise.bias]`` formats, t0 and order;
+  ``[system] rate_full_scale_dps`` = 4096 mV / SF(25 C) (the quotient's scale); ``lag``:
+  ``[lag] tau_s`` and ``[chain_paper002] stages = ["lag"]`` (the lag then updates at the base's
+  ``[lag] rate_hz``, a divisor of ``fs_hz``); ``trim``: ``[demod] phase_trim_rad``; ``cvd``: the
+  ``[rtd]`` law and its coefficients.
 * paper001: f0/k of the resonator thermometer against the reference and the bias polynomial in the
   frequency's temperature (a cubic instead of the paper's quadratic with the ``order`` remedy, for
-  a resonator whose frequency turns over).
+  a resonator whose frequency turns over: one format added for the new power).
 * thermometer (an instrument read against a thermometer, such as the tckit voltmeter): the log's
-  temperature code -> ``lag`` (at the log's own rate) -> a cubic bias polynomial in T
+  temperature code -> ``lag`` (at the log's own rate) -> a bias polynomial in T
   (``[piecewise.bias001]``) -> ``bias_subtract001``. The blocks are paper 001's bias engine and
-  subtractor with formats chosen for the log's output; the temperature enters in the RTD's
-  temperature format (``[freq2temp] temp_format`` is set to it, so the bias engine reads that code).
+  subtractor; the temperature enters in the RTD's temperature format, which ``[freq2temp]
+  temp_format`` must equal (the bias engine reads that code). With ``--config`` the polynomial
+  has the config's order, t0 and formats; without it (the built-in config has no thermometer design)
+  a cubic with formats chosen for the log's output, each listed in the report's ``changes``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from fxdsp.config import default_config_text
+from fxdsp.extend.design import Design, Fitting
 from fxdsp.extend.plan import parameter
+from fxdsp.errors import InputError
 from fxdsp.fixed import Format
-from fxdsp.repro.calconfig import acc_width, config_from_text, config_text, fit_format, paper002_tables, \
-    piecewise_table
+from fxdsp.repro.calconfig import FS_MV, acc_width, config_from_text, config_text, fit_format, \
+    paper001_coefficients, paper002_coefficients, piecewise_table
 from fxdsp.repro.calibrate import calibrate002
 
-THERMO_ORDER = 3          # the thermometer chain's bias polynomial: a cubic in T - t0
+THERMO_ORDER = 3          # the thermometer chain's bias polynomial without --config: a cubic in T - t0
 THERMO_OUT_WL = 32        # the instrument's output word: 32 bits with one bit of headroom
 # the bias polynomial's coefficients: its constant term is the whole reading (1 V), subtracted to
 # leave microvolts, so it needs the output word's resolution, not the 24 bits of a paper's tempco
 THERMO_COEF_WL = 32
+NO_THERMOMETER_DESIGN = ("no --config, and the built-in config has no thermometer design (its [piecewise.bias001] "
+                         "and [bias_subtract001] are paper 001's gyro bias, in deg/h): chosen for the log's output")
 
 
 def _stages(remedies) -> set[str]:
     return {r.stage for r in remedies}
 
 
-def remedy_tables(remedies, chain: str, base_text: str | None = None) -> dict:
-    """Config tables of the lag, trim and CVD remedies (calibration tables apart)."""
+def _design(design) -> Design:
+    """A Design from a Design, a base config text or None (the built-in)."""
+    return design if isinstance(design, Design) else Design(design)
+
+
+def lag_rate_hz(design: Design, chain: str, log_rate_hz: float | None = None) -> float:
+    """The rate the lag updates at: the log's rows (thermometer chain), else the base's [lag]
+    rate_hz (left out: [system] fs_hz)."""
+    if chain == "thermometer":
+        return float(log_rate_hz)
+    return float(design.value("lag.rate_hz", design.value("system.fs_hz")))
+
+
+def remedy_tables(remedies, chain: str, design=None, fitting: Fitting | None = None,
+                  log_rate_hz: float | None = None) -> dict:
+    """Config tables of the lag, trim and CVD remedies (calibration tables apart). ``fitting``: the
+    lag's guard bits are checked against the design (widened with --widen)."""
+    design = _design(design)
     tables: dict = {}
     stages = _stages(remedies)
     if "cvd" in stages:
         # the element R0 (1 + A T + B T^2) that the linear law R0 (1 + beta T) has been reading:
         # A = beta, and B/A = b makes the readout's T + b T^2 the curvature the log showed (its
         # affine part, T + b (T - 25)^2 against T + b T^2, the calibration's segments absorb)
-        import tomllib
-
-        beta = float(tomllib.loads(base_text if base_text is not None else default_config_text())["rtd"]
-                     .get("beta_per_c", 2.183e-3))
+        beta = float(design.value("rtd.beta_per_c", 2.183e-3))
         b = parameter(remedies, "cvd", "b_per_c")
         tables["rtd"] = {"law": "cvd", "cvd_a": beta, "cvd_b": b * beta, "cvd_c": 0.0}
     if "lag" in stages:
-        tables["lag"] = {"tau_s": parameter(remedies, "lag", "tau_s")}
+        tau = parameter(remedies, "lag", "tau_s")
+        rate = lag_rate_hz(design, chain, log_rate_hz)
+        tables["lag"] = {"tau_s": tau}
+        if chain == "thermometer":
+            tables["lag"]["rate_hz"] = rate
+        if fitting is not None:
+            tables["lag"].update(fitting.lag(tau, rate))
         if chain == "paper002":
             tables["chain_paper002"] = {"stages": ["lag"]}
     if "trim" in stages:
@@ -63,42 +94,80 @@ def remedy_tables(remedies, chain: str, base_text: str | None = None) -> dict:
     return tables
 
 
-def paper002_config(columns: dict, remedies, base_text: str | None = None, output=None,
-                    temp_c=None) -> tuple[str, dict]:
-    """(config text, calibration) of the chain with ``remedies`` in place. The calibration reads what
-    the engines will see with them: ``output`` after the trim's rotation and ``temp_c`` after the lag
-    (None: the log's columns), so the tables do not absorb what a remedy removes."""
-    order = 2 if "order" in _stages(remedies) else 1
+def paper002_config(columns: dict, remedies, design=None, output=None, temp_c=None) -> tuple[str, dict, list]:
+    """(config text, calibration, changes) of the chain with ``remedies`` in place. The calibration
+    reads what the engines will see with them: ``output`` after the trim's rotation and ``temp_c``
+    after the lag (None: the log's columns), so the tables do not absorb what a remedy removes. The
+    coefficients go into the design's formats (:meth:`fxdsp.extend.design.Fitting.piecewise`)."""
+    design = _design(design)
+    # the segments' order is the user's (the lower of the two tables': the calibration fits both at
+    # one order; the other is padded with zero coefficients)
+    order = min(len(design.table(t)["coefficients"][0]) - 1 for t in ("piecewise.sf", "piecewise.bias"))
+    order = max(order, 2 if "order" in _stages(remedies) else 1)
     cal = calibrate002(columns if output is None else {**columns, "output": output}, order, temp=temp_c)
+    fit = design.fitting()
+    values = paper002_coefficients(cal)
+    temps = columns["temp_c"] if temp_c is None else temp_c
+    tables = {name: fit.piecewise(name, values[name]["coefficients"], values[name]["breakpoints_c"], temps)
+              for name in ("piecewise.sf", "piecewise.bias")}
+    tables["system"] = values["system"]
+    x = np.asarray(columns["output"] if output is None else output, float) / FS_MV
+    user_in = design.table("sf_divide")["in_format"]
+    in_fmt = fit.holding("sf_divide.in_format", user_in, x, f"the log's output / {FS_MV:g} mV (the divider's input)")
+    if in_fmt != user_in:
+        tables["sf_divide"] = {"in_format": in_fmt}
+    tables.update(remedy_tables(remedies, "paper002", design, fit))
     what = "; ".join(r.what for r in remedies) or "no remedy"
-    text = config_text({**paper002_tables(cal), **remedy_tables(remedies, "paper002", base_text)}, base_text,
-                       provenance=f"calibrated by fxdsp extend (paper 002): {what}", add_missing=True)
-    return text, cal
+    text = config_text(tables, design.text, provenance=f"calibrated by fxdsp extend (paper 002): {what}",
+                       add_missing=True)
+    return text, cal, fit.changes
 
 
-def paper001_config(columns: dict, remedies, base_text: str | None = None) -> tuple[str, dict]:
-    """(config text, calibration) of paper 001's chain: f0/k of the resonator thermometer against the
-    reference, then the bias polynomial (cubic with the ``order`` remedy) in T from f. The
-    thermometer is checked bit-exactly against the calibration points (a failing f0/k raises)."""
-    from fxdsp.repro.calconfig import paper001_tables
+def paper001_config(columns: dict, remedies, design=None) -> tuple[str, dict, list]:
+    """(config text, calibration, changes) of paper 001's chain: f0/k of the resonator thermometer
+    against the reference, then the bias polynomial (cubic with the ``order`` remedy) in T from f,
+    in the design's formats. The thermometer is checked bit-exactly against the calibration points
+    (a failing f0/k raises)."""
     from fxdsp.repro.paper001 import THERMO_TOL_C, check_thermometer
     from fxdsp.sim.calibration import calibrate_paper001
 
+    design = _design(design)
     cal = calibrate_paper001(columns, bias_order=3 if "order" in _stages(remedies) else 2)
+    values = paper001_coefficients(cal)
+    fit = design.fitting()
+    f2t = design.table("freq2temp")
+    freq = np.asarray(columns["freq_hz"], float)
+    temps = (freq - cal["f0_hz"]) / cal["k_hz_per_c"]
+    tables = {"freq2temp": dict(values["freq2temp"])}
+    for key, vals, what in (("freq_format", [cal["f0_hz"], *freq], "the log's freq_hz and the calibrated f0"),
+                            ("kinv_format", [1.0 / cal["k_hz_per_c"]], "1/k of the calibrated thermometer"),
+                            ("temp_format", temps, "the temperature the calibrated f0/k read from freq_hz")):
+        got = fit.holding(f"freq2temp.{key}", f2t[key], vals, what)
+        if got != f2t[key]:
+            tables["freq2temp"][key] = got
+    order = next((r.what for r in remedies if r.stage == "order"), None)
+    coef = values["piecewise.bias001"]
+    tables["piecewise.bias001"] = fit.piecewise("piecewise.bias001", coef["coefficients"], coef["breakpoints_c"],
+                                                temps, remedy=order and "the order remedy (cubic bias)")
+    sub_in = design.table("bias_subtract001")["in_format"]
+    got = fit.holding("bias_subtract001.in_format", sub_in, columns["output"], "the log's output")
+    if got != sub_in:
+        tables["bias_subtract001"] = {"in_format": got}
     what = "; ".join(r.what for r in remedies) or "no remedy"
-    text = config_text(paper001_tables(cal), base_text, provenance=f"calibrated by fxdsp extend (paper 001): {what}")
+    text = config_text(tables, design.text, provenance=f"calibrated by fxdsp extend (paper 001): {what}")
     pts = cal["points"]
     check = check_thermometer(config_from_text(text), pts["temp_c"], pts["freq_hz"])
     if not check["ok"]:
         raise ValueError(f"freq2temp: calibrated f0/k put the calibration points {check['mean_error_c']:+.3f} C "
                          f"off the reference (limit {THERMO_TOL_C} C)")
     cal["thermometer_check"] = check
-    return text, cal
+    return text, cal, fit.changes
 
 
 def thermometer_tables(temp_c, te_c, output, rate_hz: float, temp_format: str) -> dict:
-    """The thermometer chain's tables: bias(T) = cubic least squares of ``output`` on ``te_c`` (the
-    temperature the engine sees), centred at the mean temperature; formats from the data."""
+    """The thermometer chain's tables without a user design: bias(T) = cubic least squares of
+    ``output`` on ``te_c`` (the temperature the engine sees), centred at the mean temperature;
+    formats from the data."""
     te = np.asarray(te_c, float)
     y = np.asarray(output, float)
     t0 = float(np.round(np.mean(te), 1))
@@ -111,17 +180,57 @@ def thermometer_tables(temp_c, te_c, output, rate_hz: float, temp_format: str) -
     bias["coef_format"] = [str(Format(True, f.wl, min(f.fl, acc_fl))) for f in map(Format.parse, bias["coef_format"])]
     word = fit_format([np.abs(y).max()], THERMO_OUT_WL, 1, True, "bias_subtract001.in")
     bias["out_format"] = word    # subtracted word for word from the output: the same format
-    return {"freq2temp": {"temp_format": temp_format}, "lag": {"rate_hz": float(rate_hz)},
+    return {"freq2temp": {"temp_format": temp_format},
             "piecewise.bias001": bias, "bias_subtract001": {"in_format": word, "out_format": word},
             "_fit": {"t0_c": t0, "coefficients": [float(c) for c in coef], "coef_wl": THERMO_COEF_WL}}
 
 
-def thermometer_config(tables: dict, remedies, base_text: str | None = None) -> str:
-    fit = {k: v for k, v in tables.items() if not k.startswith("_")}
-    text = base_text if base_text is not None else default_config_text()
+def user_thermometer_tables(fit: Fitting, te_c, output) -> dict:
+    """The thermometer chain's tables in the user's design (``--config``): a least-squares
+    polynomial of the config's ``[piecewise.bias001]`` order about its t0_c, in its formats."""
+    design = fit.design
+    user = design.table("piecewise.bias001")
+    rtd_fmt, f2t_fmt = design.table("rtd")["temp_format"], design.table("freq2temp")["temp_format"]
+    if Format.parse(f2t_fmt, "freq2temp.temp_format") != Format.parse(rtd_fmt, "rtd.temp_format"):
+        raise InputError(f"freq2temp.temp_format: the thermometer chain's bias engine reads the lag's temperature "
+                         f"code, in rtd.temp_format {rtd_fmt}; the config has {f2t_fmt} (set it to {rtd_fmt})")
+    order = len(user["coefficients"][0]) - 1
+    t0 = float(user.get("t0_c", 0.0))
+    te = np.asarray(te_c, float)
+    y = np.asarray(output, float)
+    coef = np.polynomial.polynomial.polyfit(te - t0, y, order)
+    bias = fit.piecewise("piecewise.bias001", [coef], [], te, t0_fit=t0)
+    tables = {"piecewise.bias001": bias}
+    sub_in = design.table("bias_subtract001")["in_format"]
+    got = fit.holding("bias_subtract001.in_format", sub_in, y, "the log's output")
+    if got != sub_in:
+        tables["bias_subtract001"] = {"in_format": got}
+    fmts = bias.get("coef_format", user["coef_format"])
+    widest = max(Format.parse(f).wl for f in ([fmts] if isinstance(fmts, str) else fmts))
+    tables["_fit"] = {"t0_c": t0, "coefficients": [float(c) for c in coef], "coef_wl": widest}
+    return tables
+
+
+def thermometer_config(te_c, output, remedies, design=None, log_rate_hz: float | None = None,
+                       temp_format: str | None = None) -> tuple[str, dict, list]:
+    """(config text, the float fit, changes) of the thermometer chain with ``remedies``: the user's
+    design with ``--config``, else the log's (every key that differs from the built-in listed)."""
+    design = _design(design)
+    fit = design.fitting()
+    if design.given:
+        tables = user_thermometer_tables(fit, te_c, output)
+    else:
+        tables = thermometer_tables(te_c, te_c, output, log_rate_hz, temp_format)
+        for table, keys in tables.items():
+            if table.startswith("_"):
+                continue
+            for key, value in keys.items():
+                dotted = f"{table}.{key}"
+                was = design.value(dotted)
+                if dotted not in ("piecewise.bias001.coefficients", "piecewise.bias001.breakpoints_c") and was != value:
+                    fit.record(dotted, was, value, NO_THERMOMETER_DESIGN)
+    fitted = tables.pop("_fit")
+    tables.update(remedy_tables(remedies, "thermometer", design, fit, log_rate_hz))
     what = "; ".join(r.what for r in remedies) or "no remedy"
-    return config_text({**fit, **remedy_tables(remedies, "thermometer")}, text,
-                       provenance=f"thermometer chain by fxdsp extend: {what}")
-
-
-__all__ = ["paper002_config", "thermometer_tables", "thermometer_config", "remedy_tables", "config_from_text"]
+    text = config_text(tables, design.text, provenance=f"thermometer chain by fxdsp extend: {what}")
+    return text, fitted, fit.changes

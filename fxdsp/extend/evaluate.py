@@ -135,25 +135,27 @@ def _curvature_rms(temp_c, ref_c) -> float:
     return float(np.sqrt(np.mean(resid**2)))
 
 
-def paper002_variants(columns: dict, remedies, base_text: str | None) -> dict:
+def paper002_variants(columns: dict, remedies, design) -> dict:
     """Per variant (a set of stages): its own calibration with those stages in place, its config
-    and its bit-exact held-out error. "after" is the extended config; "before" the plain
-    calibration (order 1, no stage)."""
-    from fxdsp.extend.configure import config_from_text, config_text, paper002_config, remedy_tables
+    (in the user's ``design``, :class:`fxdsp.extend.design.Design`) and its bit-exact held-out
+    error. "after" is the extended config; "before" the plain calibration (no stage)."""
+    from fxdsp.extend.configure import _design, config_from_text, config_text, paper002_config, remedy_tables
     from fxdsp.repro.bitexact import Compensator002
 
+    design = _design(design)
     stages = {r.stage for r in remedies}
     held = heldout_rows_paper002(columns)
     # the remedies' own words (trim word, lag word lengths) do not depend on the calibration
-    probe = Compensator002(config_from_text(config_text(remedy_tables(remedies, "paper002", base_text), base_text,
-                                                        add_missing=True)))
+    words = remedy_tables(remedies, "paper002", design, design.fitting())
+    probe = Compensator002(config_from_text(config_text(words, design.text, add_missing=True)))
     theta = trim_angle(probe.design.blocks["demod"].nco) if "trim" in stages else 0.0
-    results, series, configs, cals = {}, {}, {}, {}
+    results, series, configs, cals, changes = {}, {}, {}, {}, {}
     for name, on in _variants(stages).items():
         chosen = [r for r in remedies if r.stage in on]
         code, x = stage_inputs(probe, columns, on, tau_of(remedies), theta)
-        text, cal = paper002_config(columns, chosen, base_text, output=x,
-                                    temp_c=to_float(code, probe.rtd.temp_format) if on & {"lag", "cvd"} else None)
+        text, cal, changes[name] = paper002_config(columns, chosen, design, output=x,
+                                                   temp_c=to_float(code, probe.rtd.temp_format)
+                                                   if on & {"lag", "cvd"} else None)
         # the variant's own RTD table reads the log (the probe's is CVD whenever any variant's is)
         err, n_ovf = compensate002(columns, text, on, tau_of(remedies), theta)
         err = err * float(cal["sf_nominal"])
@@ -168,7 +170,7 @@ def paper002_variants(columns: dict, remedies, base_text: str | None) -> dict:
     return {"unit": "mV (output unit; deg/s x the variant's calibrated SF at 25 C)",
             "heldout": "rows outside the calibration's rate-table windows", "heldout_rows": int(held.sum()),
             "rows": int(held.size), "variants": results, "trim_rad": theta if "trim" in stages else None,
-            "_series": series, "_held": held, "_configs": configs, "_cals": cals}
+            "_series": series, "_held": held, "_configs": configs, "_cals": cals, "_changes": changes}
 
 
 def compensate001(columns: dict, config_text_: str) -> tuple[np.ndarray, int]:
@@ -196,7 +198,7 @@ def paper001_applied(columns: dict, variants: dict) -> dict:
                           len(columns["time_s"]))
 
 
-def paper001_variants(columns: dict, remedies, base_text: str | None) -> dict:
+def paper001_variants(columns: dict, remedies, design) -> dict:
     """paper 001: before (the paper's quadratic bias) and after (with the remedies), each calibrated
     on the plateaus; error = the bit-exact chain_paper001's output minus the applied rate (deg/h at
     the nominal 3600 deg/h per deg/s) on the rows outside the calibration's plateaus."""
@@ -208,16 +210,16 @@ def paper001_variants(columns: dict, remedies, base_text: str | None) -> dict:
     for rows in find_plateaus(columns["time_s"], thermometer):
         held[rows] = False
     stages = {r.stage for r in remedies}
-    results, series, configs, cals = {}, {}, {}, {}
+    results, series, configs, cals, changes = {}, {}, {}, {}, {}
     for name, on in _variants(stages).items():
-        text, cal = paper001_config(columns, [r for r in remedies if r.stage in on], base_text)
+        text, cal, changes[name] = paper001_config(columns, [r for r in remedies if r.stage in on], design)
         err, n_ovf = compensate001(columns, text)
         results[name] = {"stages": sorted(on), "rms": float(np.sqrt(np.mean(err[held] ** 2))),
                          "max_abs": float(np.abs(err[held]).max()), "overflows": n_ovf}
         series[name], configs[name], cals[name] = err, text, cal
     return {"unit": "deg/h (output unit)", "heldout": "rows outside the calibration's temperature plateaus",
             "heldout_rows": int(held.sum()), "rows": int(held.size), "variants": results, "_series": series,
-            "_held": held, "_configs": configs, "_cals": cals}
+            "_held": held, "_configs": configs, "_cals": cals, "_changes": changes}
 
 
 def thermometer_codes(lag_block, columns: dict, tau_s: float | None) -> dict[str, np.ndarray]:
@@ -230,19 +232,36 @@ def thermometer_codes(lag_block, columns: dict, tau_s: float | None) -> dict[str
     return codes
 
 
-def thermometer_errors(columns: dict, codes: dict, fmt, remedies, folds: np.ndarray) -> dict:
-    """Held-out rms of the cubic-compensated output, with and without the lag (float fits on the
-    bit-exact temperature ``codes`` of :func:`thermometer_codes`, in ``fmt``)."""
+def heldout_poly_residual(y: np.ndarray, temp: np.ndarray, folds: np.ndarray, order: int = 3) -> np.ndarray:
+    """Per row: the output minus a polynomial of ``order`` in temp fitted on the other folds (order 3:
+    :func:`fxdsp.diagnose.extension.heldout_residual` without a rate)."""
+    if order == 3:
+        return heldout_residual(y, temp, None, folds)
+    t = (temp - temp.mean()) / max(temp.std(), 1e-12)
+    X = np.column_stack([t**k for k in range(order + 1)])
+    resid = np.empty_like(y)
+    for f in np.unique(folds):
+        train, test = folds != f, folds == f
+        coef, *_ = np.linalg.lstsq(X[train], y[train], rcond=None)
+        resid[test] = y[test] - X[test] @ coef
+    return resid
+
+
+def thermometer_errors(columns: dict, codes: dict, fmt, remedies, folds: np.ndarray, order: int = 3) -> dict:
+    """Held-out rms of the output compensated by a polynomial of ``order`` (the config's bias
+    polynomial), with and without the lag (float fits on the bit-exact temperature ``codes`` of
+    :func:`thermometer_codes`, in ``fmt``)."""
     stages = {r.stage for r in remedies}
     y = np.asarray(columns["output"], float)
     results, series = {}, {}
     for name, on in _variants(stages).items():
         te = to_float(codes["Te"] if "lag" in on else codes["T"], fmt)
-        resid = heldout_residual(y, te, None, folds)
+        resid = heldout_poly_residual(y, te, folds, order)
         rms = float(np.sqrt(np.mean(resid**2)))
         results[name] = {"stages": sorted(on), "rms": rms, "max_abs": float(np.abs(resid).max()), "overflows": 0}
         series[name] = resid
-    return {"unit": "output unit", "heldout": "time-blocked folds of the diagnosis (fit on the others)",
+    return {"unit": "output unit", "heldout": f"time-blocked folds of the diagnosis (a polynomial of order {order} "
+            "in T fitted on the others)",
             "heldout_rows": int(y.size), "rows": int(y.size), "variants": results, "_series": series,
             "_held": np.ones(y.size, dtype=bool)}
 
@@ -277,3 +296,30 @@ def thermometer_applied(columns: dict, configs: dict, remedies) -> dict:
         got = thermometer_bitexact(design, codes.get("Te", codes["T"]), columns["output"], None)
         errors[name] = (got["_series"] - got["_series"].mean(), got["overflows"])
     return applied_result(errors, len(columns["time_s"]))
+
+
+CHANNEL_UNITS = {"output": "output units", "freq_hz": "Hz", "temp_c": "C"}   # the log's units
+
+
+def uncompensated_sizes(diag, missing) -> list[dict]:
+    """Each named cause left uncompensated ((cause, reason) pairs), with its held-out size in the
+    log's units: sqrt(rms_without^2 - rms_with^2) of the diagnosis's held-out residuals (every row
+    predicted by a fit on the other time-blocked folds) in the channel the cause acts on, the
+    diagnosed model with all its causes against the same model without this one. That is the rms
+    of the error the cause leaves that nothing else in the model takes up (its share of the
+    compensated output's held-out error, added in quadrature)."""
+    from fxdsp.diagnose.candidates import affected_channels
+    from fxdsp.diagnose.results import heldout_residuals
+
+    ctx, state = diag.context, diag.state
+    out = []
+    for cause, reason in missing:
+        channel = affected_channels(ctx, cause)[0]
+        rms = lambda st: float(np.sqrt(np.mean(heldout_residuals(ctx, st, channel) ** 2)))  # noqa: E731
+        with_, without = rms(state), rms({k: v for k, v in state.items() if k != cause})
+        out.append({"cause": cause, "reason": reason,
+                    "heldout_size": float(np.sqrt(max(without**2 - with_**2, 0.0))),
+                    "unit": CHANNEL_UNITS.get(channel, channel), "channel": channel,
+                    "heldout_rms_with": with_, "heldout_rms_without": without,
+                    "parameters": dict(diag.parameters.get(cause, {}))})
+    return out

@@ -8,11 +8,12 @@ from pathlib import Path
 import numpy as np
 
 from fxdsp.chains import build
-from fxdsp.config import default_config_text
 from fxdsp.errors import InputError
 from fxdsp.fixed import to_float
 from fxdsp.ramps import sample_interval
 from fxdsp.extend import configure, evaluate, hardware, plan as planning, report as rp
+from fxdsp.extend.design import CALIBRATED, Design, allowed_keys, merge_changes
+from fxdsp.repro.calconfig import config_text
 from fxdsp.outputs import json_text
 
 
@@ -79,63 +80,77 @@ def auto_chain(columns: dict) -> str:
 
 
 def extend_log(path, mapping=None, delimiter=",", time_format=None, chain="auto", base_text=None,
-               rtl: bool = True, build_root=None) -> Extension:
+               rtl: bool = True, build_root=None, widen: bool = False, strict: bool = False,
+               base_name: str | None = None) -> Extension:
     from fxdsp.diagnose.api import diagnose_log
     from fxdsp.diagnose.logio import read_log
 
     diag = diagnose_log(read_log(path, mapping, delimiter, time_format))
-    return extend_diagnosis(diag, Path(str(path)).name, chain, base_text, rtl, build_root)
+    return extend_diagnosis(diag, Path(str(path)).name, chain, base_text, rtl, build_root, widen=widen,
+                            strict=strict, base_name=base_name)
 
 
 def extend_diagnosis(diag, log_name: str, chain="auto", base_text=None, rtl: bool = True,
-                     build_root=None) -> Extension:
+                     build_root=None, widen: bool = False, strict: bool = False,
+                     base_name: str | None = None) -> Extension:
+    """``base_text``: the user's design (None: the built-in config), kept but for the calibrated
+    coefficients and the remedies' keys (:mod:`fxdsp.extend.design`); ``widen``: a format that is
+    too narrow for them is widened and listed instead of refused; ``strict``: a named cause without
+    a hardware remedy stops the extension instead of being reported uncompensated."""
     columns = columns_of(diag.context.series)
     if chain == "auto":
         chain = auto_chain(columns)
-    remedies = planning.plan(diag, chain)
+    remedies, missing = planning.plan(diag, chain, strict)
     stages = {r.stage for r in remedies}
+    design = Design(base_text, widen, base_name)
     extra = {}
     if chain == "paper002":
-        errors = evaluate.paper002_variants(columns, remedies, base_text)
+        errors = evaluate.paper002_variants(columns, remedies, design)
         base, ext, cal = errors["_configs"]["before"], errors["_configs"]["after"], errors["_cals"]["after"]
-        ext_cfg = configure.config_from_text(ext)
         extra["calibration"] = {"order": cal["order"], "sf_nominal_mv_per_dps": cal["sf_nominal"],
                                 "points": len(cal["points"]["temp_c"])}
     elif chain == "paper001":
         if "freq_hz" not in columns:
             raise InputError("log: the paper001 chain needs the freq_hz column (the resonator thermometer)")
-        errors = evaluate.paper001_variants(columns, remedies, base_text)
+        errors = evaluate.paper001_variants(columns, remedies, design)
         base, ext, cal = errors["_configs"]["before"], errors["_configs"]["after"], errors["_cals"]["after"]
-        ext_cfg = configure.config_from_text(ext)
         extra["calibration"] = {"f0_hz": cal["f0_hz"], "k_hz_per_c": cal["k_hz_per_c"],
                                 "bias_poly": cal["bias_poly"], "thermometer_check": cal["thermometer_check"]}
     else:
-        text0 = base_text if base_text is not None else default_config_text()
-        template = build(configure.config_from_text(text0), chains=False)
-        fmt = template.blocks["lag"].temp_format
         rate_hz = 1.0 / sample_interval(columns["time_s"])
+        # the lag's words (guard bits: widened with --widen) before its codes are computed
+        lag_words = configure.remedy_tables(remedies, "thermometer", design, design.fitting(), rate_hz)
+        template = build(configure.config_from_text(config_text(lag_words, design.text) if lag_words
+                                                    else design.text), chains=False)
+        fmt = template.blocks["lag"].temp_format
         codes = evaluate.thermometer_codes(template.blocks["lag"], columns, evaluate.tau_of(remedies))
         te_code = codes.get("Te", codes["T"])
         temp, te = to_float(codes["T"], fmt), to_float(te_code, fmt)
-        tables_base = configure.thermometer_tables(temp, temp, columns["output"], rate_hz, str(fmt))
-        tables_ext = configure.thermometer_tables(temp, te, columns["output"], rate_hz, str(fmt))
-        base = configure.thermometer_config(tables_base, [], text0)
-        ext = configure.thermometer_config(tables_ext, remedies, text0)
-        ext_cfg = configure.config_from_text(ext)
-        design = build(ext_cfg)
-        errors = evaluate.thermometer_errors(columns, codes, fmt, remedies, diag.context.blocks.row_fold())
-        bx = evaluate.thermometer_bitexact(design, te_code, columns["output"], tables_ext["_fit"])
+        base, _, ch_base = configure.thermometer_config(temp, columns["output"], [], design, rate_hz, str(fmt))
+        ext, fit, ch_ext = configure.thermometer_config(te, columns["output"], remedies, design, rate_hz, str(fmt))
+        errors = evaluate.thermometer_errors(columns, codes, fmt, remedies, diag.context.blocks.row_fold(),
+                                             order=len(fit["coefficients"]) - 1)
+        errors["_changes"] = {"before": ch_base, "after": ch_ext}
+        bx = evaluate.thermometer_bitexact(build(configure.config_from_text(ext)), te_code, columns["output"], fit)
         extra["bitexact_chain"] = rp.public(bx)
-        extra["fit"] = tables_ext["_fit"]
-    design = build(ext_cfg)
-    files = hardware.artefacts(design)
+        extra["fit"] = fit
+    ext_cfg = configure.config_from_text(ext)
+    design_built = build(ext_cfg)
+    files = hardware.artefacts(design_built)
+    changes = merge_changes({"config.toml": errors["_changes"]["after"],
+                             "config_base.toml": errors["_changes"]["before"]})
     report = {"log": log_name, "chain": chain,
+              "base_config": design.name,
               "diagnosis": {"causes": list(diag.causes), "parameters": diag.parameters,
                             "gain": float(diag.gain["ratio"])},
               "remedies": [{"cause": r.cause, "stage": r.stage, "what": r.what, "parameters": r.parameters}
                            for r in remedies],
+              "uncompensated": evaluate.uncompensated_sizes(diag, missing),
+              "design": {"calibrated_keys": list(CALIBRATED[chain]),
+                         "remedy_keys": sorted(allowed_keys(chain, stages) - set(CALIBRATED[chain])),
+                         "widen": bool(widen), "changes": changes},
               "heldout": rp.public(errors), "summary": rp.summary(errors), **extra,
-              "regression": hardware.regression(design, chain, "lag" in stages, build_root) if rtl else None,
+              "regression": hardware.regression(design_built, chain, "lag" in stages, build_root) if rtl else None,
               "cost": hardware.cost(chain, "lag" in stages)}
     from fxdsp.diagnose.report import replay_model
 

@@ -6,8 +6,11 @@ before the coefficient engines (``thermal_lag``), a phase trim of the demodulato
 curvature, read with the linear law), a higher polynomial order (``frequency_nonlinearity`` in
 the paper 001 chain: a resonator that turns over bends its linear frequency thermometer).
 A cause with no remedy in the chosen chain (hysteresis, ramp rate, aging, warm-up, a rate-cubic SF
-non-linearity, ...) stops the extension with one line naming it: compensating the rest would
-hand the user a config that silently leaves that error in.
+non-linearity, ...) does not stop the others: :func:`plan` returns the remedies it has and the
+causes it leaves uncompensated, and the report states each of those with its held-out size in the
+log's units (:func:`fxdsp.extend.evaluate.uncompensated_sizes`), so the config never silently leaves
+an error in. ``strict`` (``fxdsp extend --strict``) keeps the refusal: an InputError (exit 2)
+naming the causes that have none. A cause the chain absorbs (:data:`ABSORBED`) needs nothing.
 """
 
 from __future__ import annotations
@@ -73,15 +76,17 @@ def parameter(remedies, stage: str, key: str):
     return next((r.parameters[key] for r in remedies if r.stage == stage), None)
 
 
-def plan(diag, chain: str) -> list[Remedy]:
-    """The remedies of every named cause, in the diagnosis's order; InputError (exit 2) naming the
-    causes that have none in ``chain``."""
+def plan(diag, chain: str, strict: bool = False) -> tuple[list[Remedy], list[tuple[str, str]]]:
+    """(the remedies of every named cause that has one in ``chain``, in the diagnosis's order; the
+    named causes left uncompensated, as (cause, reason)). ``strict``: InputError (exit 2) naming the
+    causes that have no remedy instead."""
     if chain not in REMEDIES:
         raise InputError(f"--chain: unknown chain {chain!r}; expected one of {', '.join(CHAINS)}")
     table, absorbed = REMEDIES[chain], ABSORBED.get(chain, {})
     missing = [c for c in diag.causes if c not in table and c not in absorbed and c != "none"]
-    if missing:
+    if missing and strict:
         raise InputError(f"extend: {', '.join(missing)} {'has' if len(missing) == 1 else 'have'} no hardware "
                          f"remedy in the {chain} chain (remedies: {', '.join(sorted(table))}); "
-                         f"diagnosed causes: {', '.join(diag.causes)}")
-    return [table[c](diag) for c in diag.causes if c in table]
+                         f"diagnosed causes: {', '.join(diag.causes)} (--strict)")
+    reason = f"no hardware remedy in the {chain} chain (remedies: {', '.join(sorted(table))})"
+    return [table[c](diag) for c in diag.causes if c in table], [(c, reason) for c in missing]

@@ -30,6 +30,26 @@ def markdown(rep: dict) -> str:
          f"Chain: **{rep['chain']}**. Diagnosis: causes **{', '.join(rep['diagnosis']['causes']) or 'none'}** "
          f"(held-out gain of the model {rep['diagnosis']['gain']:.3g}).", "", "## Remedies", ""]
     L += [f"* {r['cause']}: {r['what']}" for r in rep["remedies"]] or ["* none: the calibrated chain as it is"]
+    if rep.get("uncompensated"):
+        L += ["", "## Uncompensated", "",
+              "Named causes this chain has no hardware remedy for: the extended config leaves their error in. Held-out "
+              "size: sqrt(rms_without^2 - rms_with^2) of the diagnosis's held-out residuals (each row predicted by a "
+              "fit on the other time-blocked folds), the diagnosed model without and with the cause.", "",
+              "| cause | held-out size | unit | held-out rms with / without it | why |", "|---|---:|---|---|---|"]
+        L += [f"| {u['cause']} | {u['heldout_size']:.4g} | {u['unit']} | {u['heldout_rms_with']:.4g} / "
+              f"{u['heldout_rms_without']:.4g} | {u['reason']} |" for u in rep["uncompensated"]]
+    d = rep.get("design")
+    if d:
+        L += ["", "## Design", "",
+              f"Base: {rep.get('base_config', 'the built-in config')}. The extended config is the base with the calibrated "
+              f"coefficients ({', '.join(d['calibrated_keys'])})"
+              + (f" and the remedies' keys ({', '.join(d['remedy_keys'])})" if d["remedy_keys"] else "")
+              + " rewritten; every other setting is the base's"
+              + (", except:" if d["changes"] else "."), ""]
+        if d["changes"]:
+            L += ["| field | from | to | in | why |", "|---|---|---|---|---|"]
+            L += [f"| {c['field']} | {'-' if c['from'] is None else c['from']} | {c['to']} | {', '.join(c['in'])} | "
+                  f"{c['why']} |" for c in d["changes"]]
     L += ["", "## Held-out compensated-output error", "",
           f"Unit: {e['unit']}. Held out: {e['heldout']} ({e['heldout_rows']} of {e['rows']} rows).", "",
           "| variant | stages | rms | max abs | overflows |", "|---|---|---:|---:|---:|"]

@@ -153,16 +153,34 @@ def lag_table(tau_s: float, rate_hz: float) -> dict:
     return {"lag": {"tau_s": float(tau_s), "rate_hz": float(rate_hz)}}
 
 
-def paper002_tables(cal: dict, order: int = 1) -> dict:
-    """SF and bias tables of a paper 002 calibration (:func:`fxdsp.repro.calibrate.calibrate002`).
-
-    ``cal`` holds ``sf`` and ``bias`` as ``{"breakpoints_c": inner, "coefficients": [[c0, c1, ...]]}``
-    in absolute T (C), SF in mV/(deg/s), bias in deg/s, and ``sf_nominal`` (SF at 25 C)."""
+def paper002_coefficients(cal: dict) -> dict:
+    """The calibrated values of a paper 002 calibration in the config's units, and nothing else (no
+    format): ``{table: {key: value}}`` with the SF and bias segments (breakpoints and ascending
+    coefficients in absolute T, t0 = 0) and ``[system] rate_full_scale_dps``. SF is normalised to
+    the calibrated SF at 25 C (``sf_nominal``), the bias is in FS units after the division."""
     sfn = float(cal["sf_nominal"])
     if not sfn > 0:
         raise ValueError(f"sf_nominal: must be > 0, got {sfn!r}")
     sf_coef = np.asarray(cal["sf"]["coefficients"], float) / sfn
     bias_coef = np.asarray(cal["bias"]["coefficients"], float) * sfn / FS_MV
+    return {"piecewise.sf": {"breakpoints_c": [float(b) for b in cal["sf"]["breakpoints_c"]],
+                             "coefficients": [[float(c) for c in row] for row in sf_coef]},
+            "piecewise.bias": {"breakpoints_c": [float(b) for b in cal["bias"]["breakpoints_c"]],
+                               "coefficients": [[float(c) for c in row] for row in bias_coef]},
+            # 1 FS of the quotient = FS_MV / sf_nominal deg/s: the config's own rate scale
+            "system": {"rate_full_scale_dps": FS_MV / sfn}}
+
+
+def paper002_tables(cal: dict, order: int = 1) -> dict:
+    """SF and bias tables of a paper 002 calibration (:func:`fxdsp.repro.calibrate.calibrate002`),
+    with formats chosen for the coefficients (``fxdsp calibrate``, ``fxdsp repro``; ``fxdsp
+    extend`` keeps the user's formats instead: :mod:`fxdsp.extend.design`).
+
+    ``cal`` holds ``sf`` and ``bias`` as ``{"breakpoints_c": inner, "coefficients": [[c0, c1, ...]]}``
+    in absolute T (C), SF in mV/(deg/s), bias in deg/s, and ``sf_nominal`` (SF at 25 C)."""
+    values = paper002_coefficients(cal)
+    sf_coef = values["piecewise.sf"]["coefficients"]
+    bias_coef = values["piecewise.bias"]["coefficients"]
     acc_wl = acc_width(_default("rtd", "temp_format"))
     sf = piecewise_table(sf_coef, cal["sf"]["breakpoints_c"], 0.0, out_signed=False, out_wl=18, acc_wl=acc_wl,
                          name="piecewise.sf")
@@ -172,20 +190,26 @@ def paper002_tables(cal: dict, order: int = 1) -> dict:
     bias = piecewise_table(bias_coef, cal["bias"]["breakpoints_c"], 0.0, out_wl=24, acc_wl=acc_wl,
                            name="piecewise.bias")
     bias["out_format"] = _default("piecewise.bias", "out_format")  # finer than the rate word it is subtracted from
-    # 1 FS of the quotient = FS_MV / sf_nominal deg/s: the config's own rate scale
     return {"piecewise.sf": sf, "piecewise.bias": bias, "sf_divide": {"in_format": LOG_IN_FORMAT},
-            "system": {"rate_full_scale_dps": FS_MV / sfn}}
+            "system": values["system"]}
+
+
+def paper001_coefficients(cal: dict) -> dict:
+    """The calibrated values of a paper 001 calibration (no format): the resonator thermometer's f0
+    and k, and the bias polynomial (ascending in absolute T, one segment, t0 = 0)."""
+    return {"freq2temp": {"f0_hz": float(cal["f0_hz"]), "k_hz_per_c": float(cal["k_hz_per_c"])},
+            "piecewise.bias001": {"breakpoints_c": [], "coefficients": [[float(c) for c in cal["bias_poly"]]]}}
 
 
 def paper001_tables(cal: dict) -> dict:
-    q = [float(c) for c in cal["bias_poly"]]
+    values = paper001_coefficients(cal)
+    q = values["piecewise.bias001"]["coefficients"][0]
     if len(q) == 2:
         q.append(0.0)
     bias = piecewise_table([q], [], 0.0, out_wl=24, acc_wl=acc_width(_default("freq2temp", "temp_format")),
                            name="piecewise.bias001")
     bias["out_format"] = _default("piecewise.bias001", "out_format")  # deg/h, finer than the rate input word
-    return {"freq2temp": {"f0_hz": float(cal["f0_hz"]), "k_hz_per_c": float(cal["k_hz_per_c"])},
-            "piecewise.bias001": bias}
+    return {"freq2temp": values["freq2temp"], "piecewise.bias001": bias}
 
 
 def paper000_tables(cal: dict) -> dict:
