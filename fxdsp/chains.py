@@ -33,6 +33,9 @@ from .fixed import Format, OverflowLog, Rules, quantize
 
 
 class Paper002Chain(Block):
+    """Paper 002's chain as one block: ``vsa`` (sense ADC) and ``rtd_code`` -> ``temp`` and
+    ``rate``, through rtd, [lag], SF(T), divide, demod, bias(T), subtract and the final low-pass."""
+
     name = "chain_paper002"
 
     # members in the order of the chain's ovf vector (bit 0 first), by instance name; a chain with the
@@ -159,6 +162,9 @@ def paper002_stages(cfg: Config) -> tuple[str, ...]:
 
 
 class Paper001Chain(Block):
+    """Paper 001's chain as one block: frequency word ``f`` and ``rate_in`` -> ``temp`` and ``rate``,
+    through freq2temp, the quadratic bias(T) and the subtraction."""
+
     name = "chain_paper001"
 
     MEMBERS = ("freq2temp", "piecewise_bias001", "bias_subtract001")

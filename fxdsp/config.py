@@ -4,11 +4,19 @@ Every block reads its own table through a :class:`Section`, which validates each
 in and, once the block is built, rejects any key it did not read (a typo in a config is an error
 naming the field, with the nearest valid key suggested). The built-in default lives in
 ``fxdsp/configs/default.toml``.
+
+A misspelt key is named as such even when it is a required one, whose absence stops the block
+before the unknown-key check: the error of a missing key first looks in its table for an unknown key
+close to it (``sf_divide.in_fromat: unknown key (did you mean 'in_format'?)``). Which keys a table
+may hold is learnt from the built-in default: the keys of its table there and every key the design
+reads from it (optional ones included), so a valid sibling such as ``r2_ohm`` is never taken for a
+misspelt ``r1_ohm``.
 """
 
 from __future__ import annotations
 
 import difflib
+import functools
 import math
 import re
 import tomllib
@@ -29,7 +37,12 @@ def default_config_text() -> str:
 
 
 def load_config(path: str | Path | None = None) -> "Config":
-    """Parse a TOML config (the built-in default when ``path`` is None)."""
+    """Parse a TOML config file into a :class:`Config` (the built-in default when ``path`` is None).
+
+    Only the TOML is read here; the values are checked when a design is built from it
+    (:func:`fxdsp.build`), where any bad value, unknown key or table is an error naming its
+    dotted path (``rtd.lut_index_bitz: unknown key (did you mean 'lut_index_bits'?)``).
+    FileNotFoundError for a missing file, ValueError for text that is not TOML."""
     if path is None:
         return Config(tomllib.loads(default_config_text()), source="<default>")
     p = Path(path)
@@ -44,6 +57,27 @@ def load_config(path: str | Path | None = None) -> "Config":
     return Config(data, source=str(p))
 
 
+def nearest(name: str, choices) -> str | None:
+    """The valid name closest to a misspelt one, or None: a name one edit away (a character
+    changed, added, dropped, or two neighbours swapped: ``0r_ohm`` is ``r0_ohm``, not ``r4_ohm``;
+    short names such as ``fs``/``sf`` fall below difflib's cutoff), else difflib's best match."""
+    choices = sorted(set(choices))
+    one = [c for c in choices if _one_edit(name, c)]
+    near = difflib.get_close_matches(name, one or choices, n=1, cutoff=0.0 if one else 0.6)
+    return near[0] if near else None
+
+
+def _one_edit(a: str, b: str) -> bool:
+    if a == b or abs(len(a) - len(b)) > 1:
+        return False
+    if len(a) == len(b):
+        diff = [i for i in range(len(a)) if a[i] != b[i]]
+        return len(diff) == 1 or (len(diff) == 2 and diff[1] == diff[0] + 1
+                                  and a[diff[0]] == b[diff[1]] and a[diff[1]] == b[diff[0]])
+    short, long_ = (a, b) if len(a) < len(b) else (b, a)
+    return any(long_[:i] + long_[i + 1:] == short for i in range(len(long_)))
+
+
 class Section:
     """A config table read field by field; every error names ``path.key``."""
 
@@ -53,6 +87,7 @@ class Section:
         self.data = data
         self.path = path
         self._read: set[str] = set()
+        self._children: dict[str, Section] = {}
 
     def field(self, key: str) -> str:
         return f"{self.path}.{key}" if self.path else key
@@ -65,8 +100,22 @@ class Section:
         if key in self.data:
             return self.data[key]
         if default is _REQUIRED:
-            raise ValueError(f"{self.field(key)}: missing")
+            raise self._missing(key, "missing")
         return default
+
+    def _missing(self, key: str, what: str) -> ValueError:
+        """The error for a required ``key`` (or sub-table) that is absent. When the table holds an
+        unknown key (not read, and not one this table may hold) close to it, that key is the typo to
+        name; a table the built-in default does not know is not guessed at."""
+        known = _known_keys(self.path)
+        if known is not None:
+            unknown = [k for k in self.data if k not in self._read and k not in known]
+            typo = [k for k in unknown if nearest(k, [key]) is not None]
+            if typo:
+                return ValueError(f"{self.field(typo[0])}: unknown key (did you mean {key!r}?)")
+            if unknown:
+                return ValueError(f"{self.field(key)}: {what} (the table has the unknown key {unknown[0]!r})")
+        return ValueError(f"{self.field(key)}: {what}")
 
     def format(self, key: str, default: Any = None) -> Format:
         value = self._get(key, _REQUIRED if default is None else default)
@@ -171,33 +220,86 @@ class Section:
         return rows
 
     def sub(self, key: str) -> "Section":
+        """The sub-table ``key`` (one Section per sub-table: reading it twice gives the same one, and
+        :meth:`done` checks it with this table)."""
         self._read.add(key)
-        if key not in self.data:
-            raise ValueError(f"{self.field(key)}: missing table")
-        return Section(self.data[key], self.field(key))
+        if key not in self._children:
+            if key not in self.data:
+                raise self._missing(key, "missing table")
+            self._children[key] = Section(self.data[key], self.field(key))
+        return self._children[key]
+
+    def optional_sub(self, key: str) -> "Section | None":
+        """The sub-table ``key``, or None when absent (its name still counts as a valid key here,
+        so a misspelt one is reported with it suggested)."""
+        self._read.add(key)
+        return self.sub(key) if key in self.data else None
 
     def done(self) -> None:
-        """Reject keys nobody read: they are typos or options that do not exist."""
+        """Reject keys nobody read: they are typos or options that do not exist. Sub-tables read
+        through :meth:`sub` first, then this table's own keys."""
+        for child in self._children.values():
+            child.done()
         unknown = [k for k in self.data if k not in self._read]
         if unknown:
             key = unknown[0]
-            near = difflib.get_close_matches(key, sorted(self._read), n=1)
-            hint = f" (did you mean {near[0]!r}?)" if near else ""
+            # the key meant is most likely one the table does not set already
+            near = nearest(key, self._read - set(self.data)) or nearest(key, self._read)
+            hint = f" (did you mean {near!r}?)" if near else ""
             raise ValueError(f"{self.field(key)}: unknown key{hint}")
 
 
 _REQUIRED = object()
 
 
+_SCHEMA_BUSY = False
+
+
+@functools.cache
+def _default_schema() -> dict[str, frozenset[str]]:
+    """Table path -> the keys that table may hold: its keys in the built-in default and every key
+    a design built from the default reads there (optional keys read with their default included)."""
+    global _SCHEMA_BUSY
+    from .chains import build   # the design reads the config; imported here, when an error needs it
+
+    _SCHEMA_BUSY = True
+    try:
+        cfg = Config(tomllib.loads(default_config_text()), source="<default>")
+        build(cfg)
+    finally:
+        _SCHEMA_BUSY = False
+    schema: dict[str, frozenset[str]] = {}
+
+    def walk(sec: Section) -> None:
+        schema[sec.path] = frozenset(sec._read) | frozenset(sec.data)
+        for child in sec._children.values():
+            walk(child)
+
+    walk(cfg.root)
+    return schema
+
+
+def _known_keys(path: str) -> frozenset[str] | None:
+    """The keys a table at ``path`` may hold, None when unknown (a table the default lacks, or
+    while the default itself is being read)."""
+    if _SCHEMA_BUSY:
+        return None
+    try:
+        return _default_schema().get(path)
+    except Exception:  # noqa: BLE001 - an error message is being made: without the schema, no guess
+        return None
+
+
 class Config:
-    """The parsed TOML. ``section('rtd')`` hands a block its table; ``check_all_read`` after all
-    blocks are built rejects unknown top-level tables and keys."""
+    """A parsed TOML config (:func:`load_config`, or ``Config(dict)`` from data in memory).
+
+    ``section('rtd')`` hands a block its table; ``check_all_read`` after all blocks are built rejects
+    unknown tables and keys, at every depth. Pass it to :func:`fxdsp.build` to get the design."""
 
     def __init__(self, data: dict[str, Any], source: str = "<dict>"):
         self.data = data
         self.source = source
         self.root = Section(data, "")
-        self._sections: dict[str, Section] = {}
 
     @property
     def name(self) -> str:
@@ -206,26 +308,22 @@ class Config:
         return self.source if self.source.startswith("<") else Path(self.source).name
 
     def section(self, dotted: str) -> Section:
-        node, prefix = self.root, ""
+        node = self.root
         for part in dotted.split("."):
-            prefix = f"{prefix}.{part}" if prefix else part
-            if prefix not in self._sections:
-                self._sections[prefix] = node.sub(part)
-            node = self._sections[prefix]
+            node = node.sub(part)
         return node
 
     def optional_section(self, dotted: str) -> Section | None:
-        node = self.data
+        node = self.root
         for part in dotted.split("."):
-            if not isinstance(node, dict) or part not in node:
+            node = node.optional_sub(part)
+            if node is None:
                 return None
-            node = node[part]
-        return self.section(dotted)
+        return node
 
     def check_all_read(self) -> None:
-        """Every key of every table a block read, and every top-level table, must have been used."""
-        for sec in self._sections.values():
-            sec.done()
+        """Every key of every table read (nested ones too), and every top-level table, must have been
+        used."""
         self.root.done()
 
 

@@ -135,3 +135,88 @@ def test_fuzz_one_bad_leaf_is_one_line_or_a_working_config(leaf, value):
         if rc == 2:
             assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
             assert not (Path(tmp) / "gen").exists()
+
+
+# ---- every key of the shipped config misspelt: the error names the typo and suggests the key ------
+def _misspelt(key: str, siblings) -> str:
+    """``key`` with its first two different neighbouring characters swapped (``in_format`` ->
+    ``ni_format``, ``sf`` -> ``fs``), never another key of the same table."""
+    for i in range(len(key) - 1):
+        if key[i] != key[i + 1]:
+            typo = key[:i] + key[i + 1] + key[i] + key[i + 2:]
+            if typo not in siblings:
+                return typo
+    raise AssertionError(f"no misspelling of {key!r}")
+
+
+def _every_key(node, prefix=()):
+    """(table path, key) of every key of every table, sub-table names included, at every depth."""
+    for k, v in node.items():
+        yield prefix, k
+        if isinstance(v, dict):
+            yield from _every_key(v, prefix + (k,))
+
+
+_KEYS = list(_every_key(default_data()))
+
+
+def test_the_generated_cases_cover_every_table_and_every_leaf():
+    tables = {p for p, _ in _KEYS} - {()}
+    assert {p + (k,) for p, k in _KEYS} >= set(config_leaves(default_data()))
+    assert len(tables) >= 15 and ("demod", "lpf") in tables and ("piecewise", "k0") in tables
+
+
+@pytest.mark.parametrize("path,key", _KEYS, ids=[".".join(p + (k,)) for p, k in _KEYS])
+def test_every_misspelt_key_is_named_with_the_right_one(path, key):
+    data = copy.deepcopy(default_data())
+    table = data
+    for p in path:
+        table = table[p]
+    typo = _misspelt(key, table)
+    # same position in the table (a rename keeps the order of the keys after it)
+    items = list(table.items())
+    table.clear()
+    table.update((typo if k == key else k, v) for k, v in items)
+    field = ".".join(path + (typo,))
+    with pytest.raises(ValueError) as info:
+        build(Config(data, source="<test>"), chains=False)
+    assert str(info.value) == f"{field}: unknown key (did you mean {key!r}?)"
+
+
+@pytest.mark.parametrize("edit,message", [
+    # the case of the issue: a required key misspelt, which used to read "sf_divide.in_format: missing"
+    (("sf_divide", "in_format", "in_fromat"), "sf_divide.in_fromat: unknown key (did you mean 'in_format'?)"),
+    # a misspelt nested table (checked with its parent: a typo inside [demod.lpf] was ignored before)
+    (("demod", "lpf", "lpff"), "demod.lpff: unknown key (did you mean 'lpf'?)"),
+    # an optional table whose name is misspelt
+    ((None, "chain_paper002", "chain_paper02"), "chain_paper02: unknown key (did you mean 'chain_paper002'?)"),
+    # a name far from every key: the missing key is named, and the stray one beside it
+    (("iir", "num_format", "numerator"), "iir.num_format: missing (the table has the unknown key 'numerator')"),
+])
+def test_a_renamed_key_is_reported_as_a_typo_not_as_missing(edit, message):
+    table_name, key, typo = edit
+    data = copy.deepcopy(default_data())
+    table = data if table_name is None else data[table_name]
+    table[typo] = table.pop(key)
+    with pytest.raises(ValueError) as info:
+        build(Config(data, source="<test>"))
+    assert str(info.value) == message
+
+
+def test_a_valid_sibling_is_never_taken_for_a_typo():
+    # r2_ohm and out_format are close to the missing r1_ohm / in_format, but they are valid keys
+    for table, key in (("rtd", "r1_ohm"), ("sf_divide", "in_format"), ("iir", "num_format")):
+        data = copy.deepcopy(default_data())
+        del data[table][key]
+        if table == "rtd":   # r1_ohm has a default: make a required key missing beside a near valid one
+            data[table]["temp_fromat"] = data[table].pop("temp_format")
+            with pytest.raises(ValueError, match=r"^rtd\.temp_fromat: unknown key \(did you mean 'temp_format'\?\)$"):
+                build(Config(data, source="<test>"))
+            continue
+        with pytest.raises(ValueError, match=rf"^{table}\.{key}: missing$"):
+            build(Config(data, source="<test>"))
+
+
+def test_a_stray_key_in_a_nested_table_is_an_error():
+    with pytest.raises(ValueError, match=r"^demod\.lpf\.bogus: unknown key"):
+        build(Config(_edited({"demod.lpf.bogus": 1}), source="<test>"))

@@ -1,12 +1,19 @@
 """What every block shares: named, formatted ports; a bit-exact ``run`` on stored integers; a float
-``reference`` on real values; and a stimulus that always includes the corner cases."""
+``reference`` on real values; and a stimulus that always includes the corner cases.
+
+The two kinds of value are never mixed silently: ``run`` refuses floats (stored integers are
+expected: quantise real values first, or call ``run_real``), ``reference`` refuses integer arrays
+(real values are expected: ``run_float`` feeds it the real values of stored integers), and an
+unknown input name is named with the nearest port."""
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..config import nearest
 from ..fixed import Format, OverflowLog, check_in_format, to_float
 
 
@@ -35,16 +42,36 @@ class Block:
     inputs: dict[str, Format]
     outputs: dict[str, Format]
 
+    def __init_subclass__(cls, **kwargs):
+        # every block's own float reference gets the same guard on its inputs (see _checked_reference)
+        super().__init_subclass__(**kwargs)
+        if "reference" in cls.__dict__:
+            cls.reference = _checked_reference(cls.__dict__["reference"])
+
+    def _check_names(self, given, what: str = "input") -> None:
+        """An unknown input is named first, with the nearest port; then a missing one."""
+        extra = [k for k in given if k not in self.inputs]
+        if extra:
+            near = nearest(extra[0], self.inputs)
+            hint = f" (did you mean {near!r}?)" if near else ""
+            raise ValueError(f"{self.name}: unknown {what} {extra[0]!r}{hint}; inputs: {', '.join(self.inputs)}")
+        missing = [k for k in self.inputs if k not in given]
+        if missing:
+            raise ValueError(f"{self.name}: missing {what} {missing[0]!r}; inputs: {', '.join(self.inputs)}")
+
     def run(self, log: OverflowLog | None = None, state=None, **inputs) -> Result:
         """Bit-exact model: stored integers in, stored integers out (every input checked against
         its port format, so a caller cannot feed an out-of-range word silently), from the reset
-        state or from ``state`` (a previous result's ``state``)."""
-        missing = set(self.inputs) - set(inputs)
-        if missing:
-            raise ValueError(f"{self.name}: missing input {sorted(missing)[0]!r}")
-        extra = set(inputs) - set(self.inputs)
-        if extra:
-            raise ValueError(f"{self.name}: unknown input {sorted(extra)[0]!r}")
+        state or from ``state`` (a previous result's ``state``). Floats are refused: quantise real
+        values first (:func:`fxdsp.quantize` with the port's format, ``block.inputs[name]``) or call
+        :meth:`run_real`."""
+        self._check_names(inputs)
+        for k, v in inputs.items():
+            kind = np.asarray(v).dtype.kind
+            if kind in "fc":
+                raise TypeError(f"{self.name}.{k}: stored integers expected, got {np.asarray(v).dtype} values; "
+                                f"quantize real values first (fxdsp.quantize(values, {str(self.inputs[k])!r})) "
+                                f"or call {self.name}.run_real({k}=...)")
         checked = {k: check_in_format(v, self.inputs[k], f"{self.name}.{k}") for k, v in inputs.items()}
         log = OverflowLog() if log is None else log
         self.reset()
@@ -57,12 +84,30 @@ class Block:
             self.reset()
         return Result(outputs, log, final)
 
+    def run_real(self, rounding: str = "half_up", overflow: str | None = None, log: OverflowLog | None = None,
+                 state=None, **real) -> Result:
+        """``run`` on real values: each input quantised into its port format by :func:`fxdsp.quantize`
+        (``rounding``; ``overflow`` None: a value outside the port's range is an error naming it,
+        ``saturate`` or ``wrap``: fitted and counted in the result's overflows under
+        ``<block>.<input>``). Outputs are stored integers as from ``run``: ``real_outputs(result)``
+        gives their real values."""
+        from ..api import quantize
+
+        self._check_names(real)
+        log = OverflowLog() if log is None else log
+        stored = {k: quantize(v, self.inputs[k], rounding, overflow, log=log, where=f"{self.name}.{k}")
+                  for k, v in real.items()}
+        return self.run(log=log, state=state, **stored)
+
     def run_float(self, **inputs) -> dict[str, np.ndarray]:
         """The float reference fed with the real values of the same stored inputs."""
-        real = {k: to_float(v, self.inputs[k]) for k, v in inputs.items()}
+        self._check_names(inputs)
+        real = {k: to_float(check_in_format(v, self.inputs[k], f"{self.name}.{k}"), self.inputs[k])
+                for k, v in inputs.items()}
         return self.reference(**real)
 
     def real_outputs(self, result: Result) -> dict[str, np.ndarray]:
+        """The real values of a run's stored outputs (stored integer x 2**-fl of each port's format)."""
         return {k: to_float(v, self.outputs[k]) for k, v in result.outputs.items()}
 
     def reset(self) -> None:
@@ -82,6 +127,7 @@ class Block:
         raise NotImplementedError
 
     def reference(self, **inputs) -> dict[str, np.ndarray]:  # pragma: no cover
+        """The float model on real values (floats, in the ports' units), not stored integers."""
         raise NotImplementedError
 
     def stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:  # pragma: no cover
@@ -94,6 +140,27 @@ class Block:
     def parameters(self) -> dict:
         """What the vectors' manifest records about this block (formats, rules, coefficients)."""
         return {}
+
+
+def _checked_reference(method):
+    """A block's ``reference`` behind the guard every block shares: inputs by name (an unknown one
+    named with the nearest port) and real values only. An integer array is refused: it is most
+    likely a run's stored integers, which ``reference`` would read 2**fl times too large."""
+
+    @functools.wraps(method)
+    def reference(self, *args, **inputs):
+        if args:
+            raise TypeError(f"{self.name}.reference: pass the inputs by name ({', '.join(self.inputs)})")
+        self._check_names(inputs)
+        for k, v in inputs.items():
+            dtype = np.asarray(v).dtype
+            if dtype.kind in "biu":
+                raise TypeError(f"{self.name}.reference: {k!r} holds integers ({dtype}): reference takes real "
+                                f"values as floats; for stored integers call run_float(...), or convert them "
+                                f"with fxdsp.to_real(stored, {str(self.inputs[k])!r})")
+        return method(self, **inputs)
+
+    return reference
 
 
 def corner_codes(fmt: Format) -> np.ndarray:

@@ -48,6 +48,8 @@ class BiasSubtractDatapath(Datapath):
 
 
 class BiasSubtract(Block):
+    """Bias compensation ``y = fit(round(x - bias))`` (module docstring)."""
+
     name = "bias_subtract"
 
     def __init__(self, in_format: Format, bias_format: Format, out_format: Format, rules: Rules,

@@ -277,6 +277,9 @@ class DemodDatapath(Datapath):
 
 
 class Demod(Block):
+    """Synchronous demodulator: NCO, two mixers, two ``Iir`` low-passes and a CORDIC; ``x`` ->
+    ``i``, ``q``, ``amp``, ``phase`` (module docstring)."""
+
     name = "demod"
 
     def __init__(self, nco: Nco, in_format: Format, data_format: Format, lpf_i: Iir, lpf_q: Iir,

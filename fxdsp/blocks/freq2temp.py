@@ -45,6 +45,9 @@ class Freq2TempDatapath(Datapath):
 
 
 class Freq2Temp(Block):
+    """Resonator thermometer (paper 001): frequency word ``f`` -> temperature ``temp``,
+    T = (f - f0) / k (module docstring)."""
+
     name = "freq2temp"
 
     def __init__(self, freq_format: Format, temp_format: Format, kinv_format: Format, f0_hz: float,

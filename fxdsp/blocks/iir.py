@@ -135,6 +135,9 @@ class IirDatapath(Datapath):
 
 
 class Iir(Block):
+    """Biquad cascade in direct form I with error feedback: ``x`` -> ``y`` in ``data_format``; the
+    float reference is scipy's ``sosfilt`` of the unquantised design (module docstring)."""
+
     name = "iir"
 
     def __init__(self, sos: np.ndarray, data_format: Format, num_format: Format, den_format: Format,

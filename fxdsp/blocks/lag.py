@@ -92,6 +92,9 @@ class LagDatapath(Datapath):
 
 
 class Lag(Block):
+    """Thermal-lag compensation: a first-order low-pass ``temp`` -> ``te``, the die-temperature
+    estimate the coefficient engines see (module docstring)."""
+
     name = "lag"
 
     def __init__(self, temp_format: Format, tau_s: float, rate_hz: float, alpha_bits: int, state_guard_bits: int,

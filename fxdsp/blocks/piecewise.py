@@ -101,6 +101,9 @@ class PiecewiseDatapath(Datapath):
 
 
 class Piecewise(Block):
+    """Piecewise-polynomial coefficient engine: temperature ``temp`` -> ``y`` by segment select and
+    a Horner polynomial of order 1..3 (SF(T), bias(T), K0/K1; module docstring)."""
+
     def __init__(self, breakpoints_c, coefficients, temp_format: Format, coef_format: Format | list[Format],
                  acc_format: Format, out_format: Format, rules: Rules, t0_c: float = 0.0, name: str = "piecewise"):
         self.name = name

@@ -130,6 +130,9 @@ class RtdDatapath(Datapath):
 
 
 class Rtd(Block):
+    """RTD readout (paper 002): bridge ADC word ``code`` (a fraction of full scale) -> temperature
+    ``temp`` (C) by LUT and linear interpolation (module docstring)."""
+
     name = "rtd"
 
     def __init__(self, physics: RtdPhysics, adc_format: Format, lut_format: Format, temp_format: Format,

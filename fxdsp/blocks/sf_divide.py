@@ -68,6 +68,9 @@ class SfDivideDatapath(Datapath):
 
 
 class SfDivide(Block):
+    """Scale-factor compensation ``y = x / sf`` by an exact integer divider and the paper's rescale
+    (module docstring)."""
+
     name = "sf_divide"
 
     def __init__(self, in_format: Format, sf_format: Format, out_format: Format, guard_bits: int, rules: Rules):

@@ -37,6 +37,10 @@ def check_overflow(name: str, field: str = "overflow") -> str:
 
 @dataclass(frozen=True, slots=True)
 class Rules:
+    """How a result is brought into a format (MATLAB's fimath): ``rounding`` (floor, half_up,
+    half_even, toward_zero) drops fraction bits, ``overflow`` (wrap, saturate) fits the range. The
+    names are the config's; an unknown one is a ValueError listing the valid ones."""
+
     rounding: str = "half_up"
     overflow: str = "saturate"
 

@@ -1,0 +1,77 @@
+"""Real values <-> stored integers for the library API (``fxdsp.quantize``, ``fxdsp.to_real``).
+
+A real value v and its stored integer q in format ``s<wl>.<fl>``/``u<wl>.<fl>`` are related by
+v = q * 2**-fl. The blocks' bit-exact ``run`` takes and returns stored integers, their float
+``reference`` takes and returns real values; these two functions are the crossing, and each refuses
+the other kind, so that a stored code is never read as a real value or the other way round. Both
+use the project's one implementation of every rounding and overflow mode
+(:mod:`fxdsp.fixed.kernels`), with the names the config uses.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .fixed import ops
+from .fixed.format import Format
+from .fixed.ops import OverflowLog
+from .fixed.rules import Rules, check_overflow, check_rounding
+
+
+def _shaped(out: np.ndarray, shape: tuple):
+    """``out`` in the caller's shape; a scalar in, a numpy scalar out."""
+    return out.reshape(shape)[()]
+
+
+def quantize(values, fmt: Format | str, rounding: str = "half_up", overflow: str | None = None, *,
+             log: OverflowLog | None = None, where: str = "quantize"):
+    """Real values -> stored integers (int64) of ``fmt`` (a :class:`Format` or ``"s16.15"``).
+
+    ``rounding``: ``floor``, ``half_up`` (ties toward +inf, the default), ``half_even`` or
+    ``toward_zero``, decided on the exact binary fraction (never ``np.round``). ``overflow``:
+    None (the default) raises ValueError naming the first value that lands outside ``fmt``;
+    ``saturate`` clamps it to the format's ends and ``wrap`` keeps its low ``wl`` bits, each
+    overflowing value counted in ``log`` (an :class:`OverflowLog`, under ``where``) when one is given.
+    The result has the shape of ``values`` (a scalar gives a numpy int64 scalar); NaN and infinity
+    are refused. Back to real values: :func:`to_real`."""
+    fmt = Format.parse(fmt, "fmt")
+    check_rounding(rounding, "rounding")
+    if overflow is not None:
+        check_overflow(overflow, "overflow")
+    arr = np.asarray(values)
+    if arr.dtype.kind not in "iufO":
+        raise TypeError(f"{where}: real values expected (numbers), got {arr.dtype}")
+    shape = arr.shape
+    if overflow is not None:
+        return _shaped(ops.quantize(arr, fmt, Rules(rounding, overflow), log, where), shape)
+    probe = OverflowLog()
+    out = ops.quantize(arr, fmt, Rules(rounding, "saturate"), probe, where)
+    if probe.total:
+        flat = np.atleast_1d(arr.astype(float)).ravel()
+        # only a value beyond the format's real range can round outside it; find the first that does
+        for i in np.flatnonzero((flat > fmt.max_value) | (flat < fmt.min_value)):
+            one = OverflowLog()
+            ops.quantize(flat[i:i + 1], fmt, Rules(rounding, "saturate"), one, where)
+            if one.total:
+                at = f" (index {i})" if flat.size > 1 else ""
+                raise ValueError(f"{where}: {float(flat[i])!r}{at} is outside {fmt} [{fmt.min_value!r}, "
+                                 f"{fmt.max_value!r}] after {rounding} rounding; pass overflow='saturate' or "
+                                 f"'wrap' to fit it (counted in log)")
+        raise ValueError(f"{where}: {probe.total} value(s) outside {fmt}")  # pragma: no cover
+    if log is not None:
+        log.add(where, 0)
+    return _shaped(out, shape)
+
+
+def to_real(stored, fmt: Format | str):
+    """Stored integers of ``fmt`` (a :class:`Format` or ``"s16.15"``) -> real values (float64,
+    exact for wl <= 53): stored x 2**-fl. Floats are refused (they are real values already, or
+    codes that lost their integer type), and so is an integer outside ``fmt``: a code of another
+    format. The result has the shape of ``stored``. The other way: :func:`quantize`."""
+    fmt = Format.parse(fmt, "fmt")
+    arr = np.asarray(stored)
+    if arr.dtype.kind not in "iuO":
+        raise TypeError(f"to_real: stored integers expected, got {arr.dtype} values (real values need no "
+                        f"conversion; quantize(values, {str(fmt)!r}) makes stored integers)")
+    q = ops.check_in_format(arr, fmt, "to_real")
+    return _shaped(ops.to_float(q, fmt), arr.shape)
