@@ -29,10 +29,11 @@ def _heldout_rms(y: np.ndarray, temp: np.ndarray, rate: np.ndarray | None, folds
 
 
 def heldout_residual(y: np.ndarray, temp: np.ndarray, rate: np.ndarray | None, folds: np.ndarray,
-                     extra: np.ndarray | None = None) -> np.ndarray:
-    """Per row: the output minus a cubic bias (and SF, with a rate) in temp fitted on the other folds."""
+                     extra: np.ndarray | None = None, order: int = 3) -> np.ndarray:
+    """Per row: the output minus a bias (and SF, with a rate) polynomial of ``order`` in temp (a cubic
+    by default) fitted on the other folds."""
     t = (temp - temp.mean()) / max(temp.std(), 1e-12)
-    cols = [np.ones_like(t), t, t**2, t**3]
+    cols = [np.ones_like(t)] + [t**k for k in range(1, order + 1)]
     if rate is not None and np.any(rate != 0):
         cols += [rate * c for c in cols]
     if extra is not None:

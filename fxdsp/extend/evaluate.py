@@ -233,18 +233,9 @@ def thermometer_codes(lag_block, columns: dict, tau_s: float | None) -> dict[str
 
 
 def heldout_poly_residual(y: np.ndarray, temp: np.ndarray, folds: np.ndarray, order: int = 3) -> np.ndarray:
-    """Per row: the output minus a polynomial of ``order`` in temp fitted on the other folds (order 3:
-    :func:`fxdsp.diagnose.extension.heldout_residual` without a rate)."""
-    if order == 3:
-        return heldout_residual(y, temp, None, folds)
-    t = (temp - temp.mean()) / max(temp.std(), 1e-12)
-    X = np.column_stack([t**k for k in range(order + 1)])
-    resid = np.empty_like(y)
-    for f in np.unique(folds):
-        train, test = folds != f, folds == f
-        coef, *_ = np.linalg.lstsq(X[train], y[train], rcond=None)
-        resid[test] = y[test] - X[test] @ coef
-    return resid
+    """Per row: the output minus a polynomial of ``order`` in temp fitted on the other folds
+    (:func:`fxdsp.diagnose.extension.heldout_residual` without a rate)."""
+    return heldout_residual(y, temp, None, folds, order=order)
 
 
 def thermometer_errors(columns: dict, codes: dict, fmt, remedies, folds: np.ndarray, order: int = 3) -> dict:
