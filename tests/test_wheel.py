@@ -89,12 +89,38 @@ def test_demo_vectors_and_hdl_gen_from_another_folder(installed):
     assert sorted(p.name for p in (work / "gen").glob("*.vh")) == sorted(p.name for p in (ROOT / "hdl" / "gen").glob("*.vh"))
 
 
-def test_rtl_of_one_block_from_the_installed_package(installed):
+def test_rtl_of_a_users_config_and_of_a_faulty_rtl_from_the_installed_package(installed):
+    """The issue's case: the sense ADC at 18 bits, the divider alone, passes; the packaged RTL with
+    a fault injected (a copy, --rtl) exits 1 naming the DUT and its first mismatch, with a waveform."""
     if shutil.which("iverilog") is None:
         pytest.skip("iverilog (Icarus Verilog) is not installed")
-    proc = fxdsp(installed, "rtl", "--only", "bias_subtract", "--sim", "icarus", "--long", "300", "--out", "rtl")
-    report = json.loads((installed[2] / "rtl" / "report.json").read_text())
-    assert report["passed"] and report["duts"][0]["dut"] == "bias_subtract", proc.stdout
+    bin_dir, env, work, _ = installed
+    from fxdsp.config import default_config_text
+
+    text = default_config_text()
+    site = 'in_format = "s16.15"      # sense ADC'
+    assert text.count(site) == 1
+    (work / "adc18.toml").write_text(text.replace(site, 'in_format = "s18.17"      # sense ADC'))
+    proc = fxdsp(installed, "rtl", "--config", "adc18.toml", "--only", "sf_divide", "--sim", "icarus", "--long",
+                 "300", "--out", "rtl18")
+    report = json.loads((work / "rtl18" / "report.json").read_text())
+    assert report["passed"] and [r["dut"] for r in report["duts"]] == ["sf_divide", "sf_divide (serial)"], proc.stdout
+    # the RTL the installed package carries, with the subtraction's sign flipped
+    rtl = work / "faulty_rtl"
+    packaged = Path(_run([str(bin_dir / "python"), "-c", "from fxdsp.hdl import RTL_DIR; print(RTL_DIR)"],
+                         cwd=work, env=env).stdout.strip())
+    assert packaged.is_relative_to(bin_dir.parent)
+    shutil.copytree(packaged, rtl)
+    src = rtl / "bias_subtract.v"
+    assert src.read_text().count("- (be <<< B_ALIGN)") == 1
+    src.write_text(src.read_text().replace("- (be <<< B_ALIGN)", "+ (be <<< B_ALIGN)"))
+    proc = subprocess.run([str(bin_dir / "fxdsp"), "rtl", "--only", "bias_subtract", "--rtl", str(rtl), "--long", "300",
+                           "--out", "faulty"], cwd=work, env=env, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    row = json.loads((work / "faulty" / "report.json").read_text())["duts"][0]
+    m = row["first_mismatch"]
+    assert f"MISMATCH bias_subtract: {m['stream']} stream, sample {m['sample']}, port {m['port']}" in proc.stdout
+    assert row["waves"] and (work / "faulty" / row["waves"][0]["file"]).stat().st_size > 1000
 
 
 def test_extend_with_and_without_rtl(installed):
