@@ -44,23 +44,18 @@ def quantize(values, fmt: Format | str, rounding: str = "half_up", overflow: str
     shape = arr.shape
     if overflow is not None:
         return _shaped(ops.quantize(arr, fmt, Rules(rounding, overflow), log, where), shape)
-    probe = OverflowLog()
-    out = ops.quantize(arr, fmt, Rules(rounding, "saturate"), probe, where)
-    if probe.total:
+    # rounded once, unfitted: the first value outside ``fmt`` is named, else those are the stored integers
+    q, beyond = ops.round_unfitted(arr, fmt.fl, rounding, f"{where} into {fmt}")
+    outside = np.flatnonzero(beyond | (q < fmt.min_int) | (q > fmt.max_int))
+    if outside.size:
+        i = int(outside[0])
         flat = np.atleast_1d(arr.astype(float)).ravel()
-        # only a value beyond the format's real range can round outside it; find the first that does
-        for i in np.flatnonzero((flat > fmt.max_value) | (flat < fmt.min_value)):
-            one = OverflowLog()
-            ops.quantize(flat[i:i + 1], fmt, Rules(rounding, "saturate"), one, where)
-            if one.total:
-                at = f" (index {i})" if flat.size > 1 else ""
-                raise ValueError(f"{where}: {float(flat[i])!r}{at} is outside {fmt} [{fmt.min_value!r}, "
-                                 f"{fmt.max_value!r}] after {rounding} rounding; pass overflow='saturate' or "
-                                 f"'wrap' to fit it (counted in log)")
-        raise ValueError(f"{where}: {probe.total} value(s) outside {fmt}")  # pragma: no cover
+        at = f" (index {i})" if flat.size > 1 else ""
+        raise ValueError(f"{where}: {float(flat[i])!r}{at} is outside {fmt} [{fmt.min_value!r}, {fmt.max_value!r}] "
+                         f"after {rounding} rounding; pass overflow='saturate' or 'wrap' to fit it (counted in log)")
     if log is not None:
         log.add(where, 0)
-    return _shaped(out, shape)
+    return _shaped(q, shape)
 
 
 def to_real(stored, fmt: Format | str):

@@ -129,6 +129,16 @@ def json_text(data, what: str, **kw) -> str:
         raise ValueError(f"{what}: the result holds a non-finite number (nan or inf); nothing written") from None
 
 
+def write_tree(folder: Path, tree: dict[str, dict[str, str]], encoding: str = "ascii") -> None:
+    """``{subfolder: {relative path: text}}`` written under ``folder`` (a staged folder: see
+    :class:`Stage`), the folders made as needed."""
+    for sub, files in tree.items():
+        for rel, text in files.items():
+            path = Path(folder) / sub / rel
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(text, encoding=encoding)
+
+
 class Stage:
     """Staged outputs: :meth:`path` gives where to write the file that will become ``final``."""
 

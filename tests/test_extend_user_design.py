@@ -24,10 +24,9 @@ import pytest
 
 from conftest import SHARED, needs_shared
 from fxdsp.cli import main
-from fxdsp.config import default_config_text
 from fxdsp.errors import InputError
 from fxdsp.extend.design import CALIBRATED, REMEDY_KEYS, Design, allowed_keys
-from fxdsp.repro.calconfig import set_table_keys
+from user_configs import adc18_text
 
 TCKIT_REL = "data/tckit/hp3458abx_hp34420a_tcsweep_1vdc_nplc100_test2_oct2024.dsv"
 VBL5_ARGS = ["--map", "time_s=date", "--map", "temp_c=box_temp", "--map", "output=vbl5", "--delimiter", ";",
@@ -54,16 +53,6 @@ def diff(base: dict, new: dict) -> tuple[set, set, set]:
     """(changed, added, removed) dotted paths from base to new."""
     a, b = leaves(base), leaves(new)
     return ({k for k in a.keys() & b.keys() if a[k] != b[k]}, set(b) - set(a), set(a) - set(b))
-
-
-def adc18_text(**edits) -> str:
-    """The built-in config with an 18-bit sense ADC: the SF divider's input word, nothing else follows
-    (the divider's numerator and quotient formats are derived from it)."""
-    text = set_table_keys(default_config_text(), "sf_divide", {"in_format": "s18.17"})
-    for dotted, value in edits.items():
-        table, _, key = dotted.rpartition(".")
-        text = set_table_keys(text, table, {key: value})
-    return text
 
 
 def simulate(path: Path, *effects: str, seed: int) -> Path:

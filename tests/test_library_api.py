@@ -246,3 +246,15 @@ def test_the_log_format_agrees_with_the_contract_in_its_own_words():
     spans = {" ".join(words[i:i + 8]) for i in range(len(words) - 8)}
     flat = " ".join(re.findall(r"\S+", doc))
     assert not [s for s in spans if s in flat]
+
+
+def test_quantize_names_a_value_beyond_the_widest_format_and_keeps_its_ends():
+    """The range check holds at the 63-bit ends too (values no narrower format can hold)."""
+    lo = -(2 ** 62)
+    assert int(fxdsp.quantize(float(lo), "s63.0")) == lo                     # the format's own end
+    assert int(fxdsp.quantize(2.0 ** 62 - 1024, "s63.0")) == 2 ** 62 - 1024   # the largest float inside
+    for v in (2.0 ** 62, -(2.0 ** 62) - 1024, 1e30):
+        with pytest.raises(ValueError, match="outside s63.0"):
+            fxdsp.quantize(v, "s63.0")
+    with pytest.raises(ValueError, match="index 1"):
+        fxdsp.quantize([0.5, 4.0, 9.0], "s4.1")                               # 4.0 is 8 LSBs: s4 ends at 7

@@ -21,6 +21,7 @@ import sysconfig
 from pathlib import Path
 
 import pytest
+from user_configs import adc18_text
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -95,12 +96,7 @@ def test_rtl_of_a_users_config_and_of_a_faulty_rtl_from_the_installed_package(in
     if shutil.which("iverilog") is None:
         pytest.skip("iverilog (Icarus Verilog) is not installed")
     bin_dir, env, work, _ = installed
-    from fxdsp.config import default_config_text
-
-    text = default_config_text()
-    site = 'in_format = "s16.15"      # sense ADC'
-    assert text.count(site) == 1
-    (work / "adc18.toml").write_text(text.replace(site, 'in_format = "s18.17"      # sense ADC'))
+    (work / "adc18.toml").write_text(adc18_text())
     proc = fxdsp(installed, "rtl", "--config", "adc18.toml", "--only", "sf_divide", "--sim", "icarus", "--long",
                  "300", "--out", "rtl18")
     report = json.loads((work / "rtl18" / "report.json").read_text())

@@ -45,6 +45,7 @@ import numpy as np
 from fxdsp.config import default_config_text
 from fxdsp.errors import InputError
 from fxdsp.fixed import Format
+from fxdsp.fixed.ops import round_unfitted
 
 # chain -> the dotted keys the calibration writes (values only: never a format)
 CALIBRATED = {
@@ -82,7 +83,7 @@ def needed_format(fmt: Format, values) -> Format:
     v = v[np.isfinite(v)]
     if v.size == 0:
         return fmt
-    q = np.floor(v * 2.0 ** fmt.fl + 0.5)
+    q, _ = round_unfitted(v, fmt.fl, "half_up")     # the engines' own rounding, not a second one
     lo, hi = int(q.min()), int(q.max())
     if fmt.min_int <= lo and hi <= fmt.max_int:
         return fmt

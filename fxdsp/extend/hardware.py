@@ -29,14 +29,6 @@ CHAIN_BLOCKS = {
 }
 
 
-def artefacts(design) -> dict[str, dict[str, str]]:
-    """{"vectors": {relative path: text}, "hdl": {file name: text}} of a design."""
-    from fxdsp import vectors
-    from fxdsp.hdl import params as hp
-
-    return {"vectors": vectors.generate(design), "hdl": hp.generate(design)}
-
-
 def _per_update_lag(config: Config):
     """The design with the chain's lag stage removed: its lag is the config's at decimation 1."""
     data = copy.deepcopy(config.data)
@@ -48,7 +40,6 @@ def regression(design, chain: str, has_lag: bool, build_root: Path | None = None
                rtl_dir: Path | None = None, only: tuple[str, ...] | None = None) -> dict:
     """Per block: ok, samples, cycles, first errors. ValueError when Icarus or cocotb is missing.
     ``rtl_dir``: other Verilog sources (default: the package's); ``only``: these labels."""
-    from fxdsp.hdl import params as hp
     from fxdsp.sweep.rtl import RTL_DIR, check_tools, run_block
 
     rtl_dir = RTL_DIR if rtl_dir is None else Path(rtl_dir)
@@ -58,14 +49,12 @@ def regression(design, chain: str, has_lag: bool, build_root: Path | None = None
         lag_design = _per_update_lag(design.config) if chain == "paper002" else design
         runs.append(("lag (per update)" if chain == "paper002" else "lag", lag_design, "lag"))
     runs = [r for r in runs if only is None or r[0] in only]
-    files = {id(d): hp.generate(d) for _, d, _ in runs}
     results = {}
     with tempfile.TemporaryDirectory(prefix="fxdsp-extend-") as tmp:
         root = Path(tmp) if build_root is None else Path(build_root)
         for k, (label, d, name) in enumerate(runs):
             block_seed = int(np.random.SeedSequence([seed, k]).generate_state(1)[0])
-            results[label] = run_block(d, files[id(d)], name, root / name.replace(" ", "_") / str(k), rtl_dir,
-                                       block_seed)
+            results[label] = run_block(d, name, root / name.replace(" ", "_") / str(k), rtl_dir, block_seed)
     return {"simulator": "icarus", "blocks": results, "passed": all(r["ok"] for r in results.values())}
 
 

@@ -14,7 +14,8 @@ from fxdsp.ramps import sample_interval
 from fxdsp.extend import configure, evaluate, hardware, plan as planning, report as rp
 from fxdsp.extend.design import CALIBRATED, Design, allowed_keys, merge_changes
 from fxdsp.repro.calconfig import config_text
-from fxdsp.outputs import json_text
+from fxdsp.hdl.params import design_files
+from fxdsp.outputs import json_text, write_tree
 
 
 @dataclass
@@ -50,11 +51,7 @@ class Extension:
         folder.mkdir(parents=True, exist_ok=True)
         (folder / "config.toml").write_text(self.config_text, encoding="utf-8")
         (folder / "config_base.toml").write_text(self.base_config_text, encoding="utf-8")
-        for sub, files in self.files.items():
-            for rel, text in files.items():
-                path = folder / sub / rel
-                path.parent.mkdir(parents=True, exist_ok=True)
-                path.write_text(text, encoding="ascii")
+        write_tree(folder, self.files)
         (folder / "model.json").write_text(json_text(self.model, "model.json", indent=1), encoding="utf-8")
         (folder / "report.json").write_text(json_text(self.report, "report.json", indent=1), encoding="utf-8")
         (folder / "report.md").write_text(rp.markdown(self.report), encoding="utf-8")
@@ -136,7 +133,7 @@ def extend_diagnosis(diag, log_name: str, chain="auto", base_text=None, rtl: boo
         extra["fit"] = fit
     ext_cfg = configure.config_from_text(ext)
     design_built = build(ext_cfg)
-    files = hardware.artefacts(design_built)
+    files = design_files(design_built)
     changes = merge_changes({"config.toml": errors["_changes"]["after"],
                              "config_base.toml": errors["_changes"]["before"]})
     report = {"log": log_name, "chain": chain,

@@ -45,7 +45,11 @@ def read_hex_words(text: str, wl: int, signed: bool) -> np.ndarray:
             raise ValueError(f"line {ln}: {line!r} is not a hex word") from None
         if w >> wl:
             raise ValueError(f"line {ln}: {line!r} does not fit {wl} bits")
-        if signed and w >> (wl - 1):
-            w -= 1 << wl
-        vals.append(w)
+        vals.append(word_value(w, wl, signed))
     return np.array(vals, dtype=np.int64)
+
+
+def word_value(word: int, wl: int, signed: bool) -> int:
+    """A ``wl``-bit word (bits above it ignored) as the integer it stores: sign-extended when ``signed``."""
+    w = int(word) & ((1 << wl) - 1)
+    return w - (1 << wl) if signed and w >> (wl - 1) else w

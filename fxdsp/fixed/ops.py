@@ -92,6 +92,21 @@ def quantize(x, fmt: Format, rules: Rules = Rules(), log: OverflowLog | None = N
     return out
 
 
+def round_unfitted(x, fl: int, rounding: str = "half_up", where: str = "round_unfitted") -> tuple[np.ndarray, np.ndarray]:
+    """Real values rounded (by ``rounding``, as :func:`quantize` rounds) to integers of ``2**-fl``
+    with no format's range applied: (stored integers of the widest signed format ``s63.fl``, a mask
+    of the values beyond even that one, left saturated there). For asking what range values need
+    before choosing or checking a format, without rounding them a second way."""
+    wide = Format(True, MAX_SIGNED_WL, fl)
+    xs = np.atleast_1d(np.asarray(x, dtype=float)).ravel()
+    if not np.all(np.isfinite(xs)):     # named here: the wide format is no format of the caller's
+        raise ValueError(f"{where}: cannot quantize NaN or infinity")
+    q = quantize(xs, wide, Rules(rounding, "saturate"), where=where)
+    with np.errstate(over="ignore"):
+        v = xs * 2.0 ** fl      # exact; near 2**62 floats are 1024 apart: no rounding decides the ends
+    return q, (v >= wide.max_int + 1.0) | (v < float(wide.min_int))
+
+
 def to_float(q, fmt: Format) -> np.ndarray:
     """Stored integers -> real values (float64; exact for wl <= 53)."""
     return stored(q).astype(float) * fmt.lsb

@@ -50,11 +50,28 @@ HARNESS_QUIET = 4000
 
 
 class BuildFailed(RuntimeError):
-    """The simulator could not build the DUT (the log's path and its last lines)."""
+    """The simulator could not build the DUT: ``reason`` is the tool's first error line (what a
+    report quotes), the message adds the log's path and its error lines."""
+
+    def __init__(self, what: str, log_text: str, log_path: Path | None = None):
+        self.reason = first_error(log_text)
+        where = f"; see {log_path}" if log_path is not None else ""
+        super().__init__(f"{what}: {self.reason}{where}\n{_error_lines(log_text)}")
+
+
+def first_error(text: str) -> str:
+    """The first line of a tool's output that reports an error (else its last line)."""
+    lines = [line.strip() for line in text.splitlines() if "error" in line.lower()] or \
+        [line.strip() for line in text.splitlines()[-1:]] or ["no output"]
+    return lines[0]
 
 
 class HarnessTimeout(AssertionError):
     """The file-driven harness stopped at its cycle limit before every output came out."""
+
+
+class UndefinedWord(ValueError):
+    """An output word of the file-driven harness with x or z bits (the RTL drove no value)."""
 
 
 def rtl_sources(rtl: Path | None = None) -> list[Path]:
@@ -130,21 +147,27 @@ def segment(design, name, inputs, outputs=None, ovf_total=None, abort_after=None
     return seg
 
 
-def _log_tail(path: Path, keep=("Error", "error", "FAIL", "mismatch"), limit: int = 4000) -> str:
-    text = path.read_text(errors="replace") if path.exists() else ""
+def _read(path: Path) -> str:
+    return path.read_text(errors="replace") if path.exists() else ""
+
+
+def _error_lines(text: str, keep=("Error", "error", "FAIL", "mismatch"), limit: int = 4000) -> str:
     lines = [l for l in text.splitlines() if any(k in l for k in keep)] or text.splitlines()[-20:]
     return "\n".join(lines)[-limit:]
 
 
 # ---- cocotb -----------------------------------------------------------------------------------
-def run_cocotb(design, name: str, segments: list[dict], d: Path, models: Path, gap: float = 0.0, seed: int = 1,
+def run_cocotb(design, name: str, segments: list[dict], d: Path, models: Path | None = None, gap: float = 0.0,
+               seed: int = 1,
                extra_params: dict | None = None, sim: str = "icarus", rtl: Path | None = None) -> dict:
     """Build the DUT of ``name`` from the sources in ``rtl`` (default: the packaged RTL) and stream
     ``segments`` through it with the generic cocotb driver on ``sim``, in the empty folder ``d``;
-    Verilator models are cached under ``models``. Returns the driver's summary: cycles, seconds,
-    errors (empty: bit for bit), mismatches (the first wrong word per segment and port, with its
-    simulation time), plus ``build_seconds``. BuildFailed when the DUT does not build."""
+    Verilator models are cached under ``models`` (required for Verilator). Returns the driver's
+    summary: cycles, seconds, errors (empty: bit for bit), mismatches (the first wrong word per
+    segment and port), plus ``build_seconds``. BuildFailed when the DUT does not build."""
     require_simulator(sim)
+    if sim == "verilator" and models is None:
+        raise ValueError("models: Verilator needs a folder for its model cache")
     from cocotb_tools.runner import get_runner
 
     d = Path(d)
@@ -162,8 +185,8 @@ def run_cocotb(design, name: str, segments: list[dict], d: Path, models: Path, g
             runner.build(sources=sources, hdl_toplevel=module, includes=[d], build_dir=d, parameters=params,
                          always=True, build_args=["-Wall"], timescale=("1ns", "1ps"), log_file=d / "build.log")
         except (RuntimeError, SystemExit, subprocess.CalledProcessError) as e:
-            raise BuildFailed(f"Icarus build of {module} failed ({e}); see {d / 'build.log'}\n"
-                              f"{_log_tail(d / 'build.log')}") from None
+            raise BuildFailed(f"Icarus build of {module} failed", _read(d / "build.log") or str(e),
+                              d / "build.log") from None
         build_s = time.perf_counter() - t0
         model = d
     else:
@@ -175,8 +198,8 @@ def run_cocotb(design, name: str, segments: list[dict], d: Path, models: Path, g
                     sources=sources, hdl_toplevel=module, includes=[d], build_dir=model_dir, parameters=params,
                     always=True, timescale=("1ns", "1ps"), log_file=model_dir / "build.log")
             except (RuntimeError, SystemExit, subprocess.CalledProcessError) as e:
-                raise BuildFailed(f"Verilator build of {module} failed ({e}); see {model_dir / 'build.log'}\n"
-                                  f"{_log_tail(model_dir / 'build.log')}") from None
+                raise BuildFailed(f"Verilator build of {module} failed", _read(model_dir / "build.log") or str(e),
+                                  model_dir / "build.log") from None
 
         key = [module, params, inputs_digest(sources, d)]
         model, build_s = verilator_model("cocotb", module, key, build, wheel, models)
@@ -193,7 +216,7 @@ def run_cocotb(design, name: str, segments: list[dict], d: Path, models: Path, g
     if not summary_path.exists():
         summary = {"cycles": None, "seconds": None, "mismatches": [],
                    "errors": [f"the simulation ended without a summary; see {d / 'sim.log'}: "
-                              + _log_tail(d / "sim.log", limit=300).replace("\n", " | ")]}
+                              + _error_lines(_read(d / "sim.log"), limit=300).replace("\n", " | ")]}
     else:
         summary = json.loads(summary_path.read_text())
     summary["build_seconds"] = round(build_s, 2)
@@ -312,22 +335,26 @@ def _harness_model_verilator(d: Path, sources: list[Path], models: Path, trace: 
         with open(model / "build.log", "w") as log:
             for cmd in [verilate, *copy_runtime(prebuilt, model), make]:
                 if subprocess.run(cmd, cwd=model, env=env, stdout=log, stderr=subprocess.STDOUT).returncode:
-                    raise BuildFailed(f"Verilator build of the harness failed ({Path(cmd[0]).name}); see "
-                                      f"{model / 'build.log'}\n{_log_tail(model / 'build.log')}")
+                    raise BuildFailed(f"Verilator build of the harness failed ({Path(cmd[0]).name})",
+                                      _read(model / "build.log"), model / "build.log")
 
     key = [(d / "tb.v").read_text(), inputs_digest(sources, d), trace]
     # a traced model's run-time library differs (verilated_vcd_c): its own kind
     return verilator_model("harness-trace" if trace else "harness", d.name, key, build, wheel, models)
 
 
-def run_harness(design, name: str, inputs: dict[str, np.ndarray], d: Path, models: Path, unroll: int | None = None,
+def run_harness(design, name: str, inputs: dict[str, np.ndarray], d: Path, models: Path | None = None,
+                unroll: int | None = None,
                 gap: bool = False, rtl: Path | None = None, sim: str = "icarus", extra: dict | None = None,
                 waves: tuple[int, int] | None = None):
     """Compile and run the file-driven harness on ``sim`` in the empty folder ``d`` (``extra``,
     ``waves``: as :func:`harness_text`); returns (outputs by port, flagged overflows, cycles,
     seconds of simulation, seconds of build). With ``waves`` the run stops after the window:
-    outputs and counts are None, the waveform is ``d/waves.vcd``."""
+    outputs and counts are None, the waveform is ``d/waves.vcd``. An output word with x/z bits is
+    :class:`UndefinedWord`. Verilator models are cached under ``models`` (required for Verilator)."""
     require_simulator(sim)
+    if sim == "verilator" and models is None:
+        raise ValueError("models: Verilator needs a folder for its model cache")
     from ..vectors import from_hex_lines, to_hex_lines
 
     d = Path(d)
@@ -344,7 +371,7 @@ def run_harness(design, name: str, inputs: dict[str, np.ndarray], d: Path, model
         t0 = time.perf_counter()
         proc = subprocess.run(cmd, cwd=d, capture_output=True, text=True)
         if proc.returncode:
-            raise BuildFailed(f"Icarus build of the harness of {name} failed:\n{(proc.stdout + proc.stderr)[-4000:]}")
+            raise BuildFailed(f"Icarus build of the harness of {name} failed", proc.stdout + proc.stderr)
         build_s = time.perf_counter() - t0
         run = ["vvp", "-n", str(d / "tb.vvp")]
     else:
@@ -359,10 +386,13 @@ def run_harness(design, name: str, inputs: dict[str, np.ndarray], d: Path, model
     if m is None:
         raise HarnessTimeout(f"harness did not finish (fewer outputs than samples): {proc.stdout[-2000:]}"
                              f"{proc.stderr[-2000:]}")
-    outs = {p: from_hex_lines((d / f"out_{p}.hex").read_text(), fmt) for p, fmt in block.outputs.items()}
+    try:
+        outs = {p: from_hex_lines((d / f"out_{p}.hex").read_text(), fmt) for p, fmt in block.outputs.items()}
+    except ValueError as e:   # $writememh wrote x/z digits
+        raise UndefinedWord(str(e)) from None
     ovf = int(m.group(2)) if m.group(2).isdigit() else -1  # -1: unknown (x) flags
     return outs, ovf, int(m.group(1)), seconds, build_s
 
 
-__all__ = ["SIMULATORS", "RTL_DIR", "BuildFailed", "HarnessTimeout", "run_cocotb", "run_harness", "segment",
+__all__ = ["SIMULATORS", "RTL_DIR", "BuildFailed", "HarnessTimeout", "UndefinedWord", "run_cocotb", "run_harness", "segment",
            "harness_text", "ports_of", "model_run", "serial_variant"]

@@ -233,3 +233,12 @@ def generate(design: Design) -> dict[str, str]:
         if p.get("PW_SHARED"):
             files[p["PW_SETS_FILE"]] = shared_pw_rom(design)
     return files
+
+
+def design_files(design: Design) -> dict[str, dict[str, str]]:
+    """Everything generated from a design, by folder: ``{"vectors": {...}, "hdl": {...}}`` (its golden
+    vectors with their manifest, and these headers and ROMs), as ``fxdsp rtl`` and ``fxdsp extend``
+    write them (:func:`fxdsp.outputs.write_tree`)."""
+    from ..vectors import generate as generate_vectors
+
+    return {"vectors": generate_vectors(design), "hdl": generate(design)}

@@ -24,12 +24,14 @@ from __future__ import annotations
 import shutil
 import tempfile
 import time
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
+from ..fixed.hexfile import word_value
 from . import harness as hh
 from . import stimuli
 
@@ -101,114 +103,110 @@ def duts(design, only=None) -> list[Dut]:
     return out
 
 
-def _stream_inputs(design, dut: Dut, stream: str, files: dict, sim: str, seed: int, long_n: int | None):
-    """(segments for cocotb or the long stream's inputs, gap) of one stream."""
+def _stream(design, dut: Dut, stream: str, files: dict, sim: str, seed: int, long_n: int | None):
+    """(segments, their stored inputs, gap) of one Python-driven stream, or the long stream's stored
+    inputs alone as (None, inputs, 0.0)."""
     from ..vectors import load_generated
 
     name = dut.name
     module = design.instances[name].module
     window = dut.extra is not None and sim == "icarus"
+
+    def cut(stim):
+        return stimuli.icarus_window(stim, stimuli.icarus_samples(module)) if window else stim
+
     if stream == "golden":
         ins, outs, entry = load_generated(files, name)
-        if window:
-            return [hh.segment(design, name, stimuli.icarus_window(ins, stimuli.icarus_samples(module)))], 0.0
-        return [hh.segment(design, name, ins, outs, sum(entry["overflows"].values()))], 0.0
+        if window:   # the model runs on the window
+            ins = cut(ins)
+            return [hh.segment(design, name, ins)], [ins], 0.0
+        return [hh.segment(design, name, ins, outs, sum(entry["overflows"].values()))], [ins], 0.0
     if stream == "random":
-        stim = stimuli.random_stimulus(design, name, seed)
-        if window:
-            stim = stimuli.icarus_window(stim, stimuli.icarus_samples(module))
-        return [hh.segment(design, name, stim)], RANDOM_GAP
+        stim = cut(stimuli.random_stimulus(design, name, seed))
+        return [hh.segment(design, name, stim)], [stim], RANDOM_GAP
     if stream == "corners":
-        stim = stimuli.corners(design, name, np.random.default_rng(seed))
-        if window:
-            stim = stimuli.icarus_window(stim, stimuli.icarus_samples(module))
+        stim = cut(stimuli.corners(design, name, np.random.default_rng(seed)))
         n = len(next(iter(stim.values())))
         first = {k: v[: max(8, n // 3)] for k, v in stim.items()}
-        return [hh.segment(design, name, first, abort_after=max(4, n // 4)),   # reset with samples in flight
-                hh.segment(design, name, stim, gap=0.0),                       # back to back from reset
-                hh.segment(design, name, stim, gap=0.5)], 0.0                  # gapped valid from reset
+        return ([hh.segment(design, name, first, abort_after=max(4, n // 4)),   # reset with samples in flight
+                 hh.segment(design, name, stim, gap=0.0),                       # back to back from reset
+                 hh.segment(design, name, stim, gap=0.5)],                      # gapped valid from reset
+                [first, stim, stim], 0.0)
     n = long_n or LONG_SAMPLES[(sim, dut.extra is not None)]
     stim = design.all[name].stimulus(np.random.default_rng([seed, 2026]), n)
-    return {k: v[:max(n, 1)] for k, v in stim.items()}, 0.0
+    return None, [{k: v[:n] for k, v in stim.items()}], 0.0
 
 
-def _mismatch_of(summary: dict, segments: list[dict]) -> dict | None:
-    ms = sorted(summary.get("mismatches") or [], key=lambda m: (m["segment"], m["sample"]))
-    return ms[0] if ms else None
+def _long(design, dut: Dut, inputs: dict, d: Path, models, sim: str, rtl) -> tuple[dict, dict | None]:
+    """The long stream through the file-driven harness: (stream record, first mismatch or None)."""
+    expected, ovf_model = hh.model_run(design, dut.name, inputs)
+    n = len(next(iter(inputs.values())))
+    try:
+        got, ovf_rtl, cycles, _, _ = hh.run_harness(design, dut.name, inputs, d, models, sim=sim, extra=dut.extra,
+                                                    rtl=rtl)
+    except hh.HarnessTimeout as e:
+        return {"samples": n, "cycles": None, "ok": False, "errors": [f"timeout: {str(e).splitlines()[0]}"]}, None
+    except hh.UndefinedWord as e:
+        return {"samples": n, "cycles": None, "ok": False, "errors": [f"undefined output word ({e})"]}, None
+    errors, mismatch = [], None
+    for port, want in expected.items():
+        bad = np.flatnonzero(got[port] != want)
+        if bad.size:
+            errors.append(f"port {port}: {bad.size} mismatch(es) of {n}, first at sample {bad[0]}")
+            if mismatch is None or bad[0] < mismatch["sample"]:
+                i = int(bad[0])
+                mismatch = {"segment": 0, "port": port, "sample": i, "got": int(got[port][i]),
+                            "expected": int(want[i]), "count": int(bad.size), "of": n}
+    if ovf_rtl != ovf_model:
+        errors.append(f"{ovf_rtl if ovf_rtl >= 0 else 'x'} overflow flags, model counted {ovf_model}")
+    return {"samples": n, "cycles": cycles, "ok": not errors, "errors": errors[:5]}, mismatch
 
 
-def _signed(word: int, wl: int, signed: bool) -> int:
-    return word - (1 << wl) if signed and word >> (wl - 1) & 1 else word
-
-
-def run_dut(design, dut: Dut, files: dict, sim: str, work: Path, models: Path, out: Path, seed: int = 1,
+def run_dut(design, dut: Dut, files: dict, sim: str, work: Path, models: Path | None, out: Path, seed: int = 1,
             waves: bool = False, rtl: Path | None = None, long_n: int | None = None, streams=STREAMS,
             progress=None) -> DutResult:
-    """Run the streams of one DUT; the result says per stream whether it matched, and where first not."""
-    name = dut.name
-    module = design.instances[name].module
-    block = design.all[name]
-    res = DutResult(dut.label, module)
+    """Run the streams of one DUT; the result says per stream whether it matched, and where first not.
+    A DUT that does not build fails its streams with the simulator's words (never an exception)."""
+    block = design.all[dut.name]
+    res = DutResult(dut.label, design.instances[dut.name].module)
     for k, stream in enumerate(streams):
         if progress is not None:
             progress.set_postfix_str(stream)
         d = Path(work) / f"{dut.slug}_{stream}"
         shutil.rmtree(d, ignore_errors=True)
         d.mkdir(parents=True)
-        stream_seed = int(np.random.SeedSequence([seed, k, sum(map(ord, dut.slug))]).generate_state(1)[0] % 2**31)
-        spec, gap = _stream_inputs(design, dut, stream, files, sim, stream_seed, long_n)
-        mismatch = None
-        if stream == "long":
-            expected, ovf_model = hh.model_run(design, name, spec)
-            n = len(next(iter(spec.values())))
-            try:
-                got, ovf_rtl, cycles, _, _ = hh.run_harness(design, name, spec, d, models, sim=sim, extra=dut.extra,
-                                                            rtl=rtl)
-                errors = []
-                for port, want in expected.items():
-                    bad = np.flatnonzero(got[port] != want)
-                    if bad.size and (mismatch is None or bad[0] < mismatch["sample"]):
-                        i = int(bad[0])
-                        mismatch = {"segment": 0, "port": port, "sample": i, "got": int(got[port][i]),
-                                    "expected": int(want[i]), "count": int(bad.size), "of": n}
-                    if bad.size:
-                        errors.append(f"port {port}: {bad.size} mismatch(es) of {n}, first at sample {bad[0]}")
-                if ovf_rtl != ovf_model:
-                    errors.append(f"{ovf_rtl if ovf_rtl >= 0 else 'x'} overflow flags, model counted {ovf_model}")
-            except hh.HarnessTimeout as e:
-                cycles, errors = None, [f"timeout: {str(e).splitlines()[0]}"]
-            except ValueError as e:          # an output word with x/z bits
-                cycles, errors = None, [f"undefined output word ({e})"]
-            res.streams[stream] = {"samples": n, "cycles": cycles, "ok": not errors, "errors": errors[:5]}
-            segment_inputs, segment_gap = spec, False
-        else:
-            summary = hh.run_cocotb(design, name, spec, d, models, gap=gap, seed=stream_seed, extra_params=dut.extra,
-                                    sim=sim, rtl=rtl)
-            n = sum(len(next(iter(s["inputs"].values()))) for s in spec)
-            res.streams[stream] = {"samples": n, "cycles": summary["cycles"], "ok": not summary["errors"],
-                                   "errors": summary["errors"][:5]}
-            mismatch = _mismatch_of(summary, spec)
-            seg = spec[mismatch["segment"]] if mismatch else spec[-1]
-            segment_inputs = {p: np.array([_signed(w, block.inputs[p].wl, block.inputs[p].signed)
-                                           for w in seg["inputs"][p]], dtype=np.int64) for p in block.inputs}
-            segment_gap = bool(seg.get("gap", gap))
+        stream_seed = zlib.crc32(f"{seed}:{dut.slug}:{stream}".encode()) & 0x7FFFFFFF
+        segments, stored, gap = _stream(design, dut, stream, files, sim, stream_seed, long_n)
+        try:
+            if segments is None:
+                record, mismatch = _long(design, dut, stored[0], d, models, sim, rtl)
+                failing_inputs, failing_gap = stored[0], False
+            else:
+                summary = hh.run_cocotb(design, dut.name, segments, d, models, gap=gap, seed=stream_seed,
+                                        extra_params=dut.extra, sim=sim, rtl=rtl)
+                record = {"samples": sum(len(next(iter(s.values()))) for s in stored), "cycles": summary["cycles"],
+                          "ok": not summary["errors"], "errors": summary["errors"][:5]}
+                mismatch = min(summary["mismatches"], key=lambda m: (m["segment"], m["sample"]), default=None)
+                at = mismatch["segment"] if mismatch else -1
+                failing_inputs, failing_gap = stored[at], bool(segments[at].get("gap", gap))
+        except hh.BuildFailed as e:
+            res.streams[stream] = {"samples": 0, "cycles": None, "ok": False,
+                                   "errors": [f"build failed: {e.reason}"]}
+            if progress is not None:
+                progress.update(1)
+            continue
+        res.streams[stream] = record
         if mismatch is not None:
-            port_fmt = block.outputs[mismatch["port"]]
+            fmt = block.outputs[mismatch["port"]]
             mismatch = {"dut": dut.label, "stream": stream, **mismatch,
-                        "got_value": _signed(mismatch["got"] & ((1 << port_fmt.wl) - 1), port_fmt.wl, port_fmt.signed),
-                        "expected_value": _signed(mismatch["expected"] & ((1 << port_fmt.wl) - 1), port_fmt.wl,
-                                                  port_fmt.signed)}
-            if res.first_mismatch is None:
-                res.first_mismatch = mismatch
-        failed = not res.streams[stream]["ok"]
-        if failed or (waves and stream == "golden"):
-            at = mismatch["sample"] if mismatch else (0 if not failed else None)
-            window = (max(0, at - WAVE_BEFORE), at + WAVE_AFTER) if at is not None else None
-            if not failed:
-                window = (0, WAVE_GOLDEN)
-            if window is None:   # a failure without a mismatching word (timeout, flags): the stream's start
-                window = (0, WAVE_GOLDEN)
-            path = _waves(design, dut, segment_inputs, segment_gap, window, d, models, sim, rtl, out, stream)
+                        "got_value": word_value(mismatch["got"], fmt.wl, fmt.signed),
+                        "expected_value": word_value(mismatch["expected"], fmt.wl, fmt.signed)}
+            res.first_mismatch = res.first_mismatch or mismatch
+        if not record["ok"] or (waves and stream == "golden"):
+            # around the first mismatch; a pass (--waves) or a failure without a wrong word: the start
+            window = (max(0, mismatch["sample"] - WAVE_BEFORE), mismatch["sample"] + WAVE_AFTER) if mismatch \
+                else (0, WAVE_GOLDEN)
+            path = _waves(design, dut, failing_inputs, failing_gap, window, d, models, sim, rtl, out, stream)
             if path is not None:
                 res.waves.append({"stream": stream, "file": path, "outputs": list(window)})
         if progress is not None:
@@ -216,7 +214,7 @@ def run_dut(design, dut: Dut, files: dict, sim: str, work: Path, models: Path, o
     return res
 
 
-def _waves(design, dut: Dut, inputs, gap: bool, window, d: Path, models: Path, sim: str, rtl, out: Path,
+def _waves(design, dut: Dut, inputs, gap: bool, window, d: Path, models: Path | None, sim: str, rtl, out: Path,
            stream: str) -> str | None:
     """Re-run ``inputs`` from reset in the file-driven harness with every DUT signal dumped over the
     window of outputs; the VCD goes to ``out/waves/``; returns its path relative to ``out``."""
@@ -238,37 +236,36 @@ def _waves(design, dut: Dut, inputs, gap: bool, window, d: Path, models: Path, s
     return rel.as_posix()
 
 
-def regression(design, out: Path, sim: str = "icarus", only=None, waves: bool = False, rtl: Path | None = None,
-               models: Path | None = None, seed: int = 1, long_n: int | None = None, streams=STREAMS,
-               show_progress: bool | None = None) -> dict:
-    """Run every DUT of the design (or ``only``) on ``sim``; waveforms into ``out/waves``. Returns the
-    report as data: per DUT the samples, cycles per sample, pass/fail, first mismatch and waveforms."""
+def regression(design, vectors: dict[str, str], out: Path, sim: str = "icarus", only=None, waves: bool = False,
+               rtl: Path | None = None, models: Path | None = None, seed: int = 1, long_n: int | None = None,
+               streams=STREAMS, show_progress: bool | None = None) -> dict:
+    """Run every DUT of the design (or ``only``) on ``sim``, its golden stream from ``vectors`` (the
+    set :func:`fxdsp.vectors.generate` made of it); waveforms into ``out/waves``. Returns the report
+    as data: per DUT the samples, cycles per sample, pass/fail, first mismatch and waveforms."""
     from tqdm import tqdm
 
     from .simulators import require_simulator
 
     require_simulator(sim)
     todo = duts(design, only)
-    from ..vectors import generate
-
-    files = generate(design)
     out = Path(out)
     t_start = time.perf_counter()
     results = []
     with tempfile.TemporaryDirectory(prefix="fxdsp-rtl-") as tmp:
-        models = Path(models) if models is not None else Path(tmp) / "models"
+        if models is None and sim == "verilator":
+            models = Path(tmp) / "models"
         for dut in todo:
             t0 = time.perf_counter()
             with tqdm(total=len(streams), desc=dut.label, unit="stream", leave=True,
                       disable=None if show_progress is None else not show_progress) as bar:
-                r = run_dut(design, dut, files, sim, Path(tmp) / "runs", models, out, seed, waves, rtl, long_n,
+                r = run_dut(design, dut, vectors, sim, Path(tmp) / "runs", models, out, seed, waves, rtl, long_n,
                             streams, bar)
             row = r.as_dict()
             row["seconds"] = round(time.perf_counter() - t0, 1)
             results.append(row)
     return {"generator": "fxdsp rtl", "config": design.config.name, "simulator": sim, "seed": seed,
             "streams": list(streams), "passed": all(r["passed"] for r in results),
-            "duts": results, "seconds": round(time.perf_counter() - t_start, 1), "vectors": files}
+            "duts": results, "seconds": round(time.perf_counter() - t_start, 1)}
 
 
 def markdown(report: dict) -> str:

@@ -47,8 +47,8 @@ def configure(parser) -> None:
 def run(args) -> int:
     from ..chains import build
     from ..errors import InputError
-    from ..hdl import params as hp
-    from ..outputs import json_text, staged
+    from ..outputs import json_text, staged, write_tree
+    from .params import design_files
     from .regression import markdown, regression
 
     only = [n.strip() for n in args.only.split(",") if n.strip()] if args.only is not None else None
@@ -63,26 +63,21 @@ def run(args) -> int:
     if args.sim == "verilator":
         models = Path(args.cache) if args.cache else _cache_default()
         models.mkdir(parents=True, exist_ok=True)
+    files = design_files(design)        # what is written is what the golden streams check
     with staged() as stage:
         out = stage.dir(args.out)
-        report = regression(design, out, sim=args.sim, only=only, waves=args.waves,
+        report = regression(design, files["vectors"], out, sim=args.sim, only=only, waves=args.waves,
                             rtl=Path(args.rtl) if args.rtl else None, models=models, seed=args.seed, long_n=args.long)
-        vectors = report.pop("vectors")
-        for rel, text in vectors.items():
-            path = out / "vectors" / rel
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(text, encoding="ascii")
-        for rel, text in hp.generate(design).items():
-            path = out / "hdl" / rel
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(text, encoding="ascii")
+        write_tree(out, files)
         (out / "report.json").write_text(json_text(report, "report.json", indent=1), encoding="utf-8")
         (out / "report.md").write_text(markdown(report), encoding="utf-8")
     bad = [r for r in report["duts"] if not r["passed"]]
     for r in bad:
         m = r["first_mismatch"]
+        failing = [(s, v) for s, v in r["streams"].items() if not v["ok"]]
         where = (f"{m['stream']} stream, sample {m['sample']}, port {m['port']}: got {m['got_value']}, expected "
-                 f"{m['expected_value']}") if m else "; ".join(e for s in r["streams"].values() for e in s["errors"][:1])
+                 f"{m['expected_value']}") if m else f"{failing[0][0]} stream: {failing[0][1]['errors'][0]}" + \
+            (f" (and {len(failing) - 1} more stream(s))" if len(failing) > 1 else "")
         sys.stdout.write(f"rtl: MISMATCH {r['dut']}: {where}"
                          + (f"; waveform {Path(args.out) / r['waves'][0]['file']}" if r["waves"] else "") + "\n")
     sys.stdout.write(f"rtl: {len(report['duts']) - len(bad)} of {len(report['duts'])} DUTs bit-exact on "

@@ -95,7 +95,7 @@ def _leaves(node, path=""):
 
 
 def draw(base: dict, seed: int):
-    """(config data, design, its generated RTL files {relative path: text}, changes from ``base`` as
+    """(config data, design, changes from ``base`` as
     {dotted path: value}, draws needed) of a random parameter set that builds and that the RTL
     generator accepts."""
     from ..budget.optimise import KNOBS, _field_defaults, knob_value, set_knob
@@ -124,22 +124,22 @@ def draw(base: dict, seed: int):
                     set_knob(data, knob, value, defaults)
         try:
             design = build(Config(data, source="<sweep rtl>"))
-            files = hp.generate(design)
+            hp.generate(design)     # the RTL generator must accept the draw too
         except (ValueError, TypeError, AssertionError, OverflowError, ZeroDivisionError):
             continue
         before = dict(_leaves(base))
         changes = {k: v for k, v in _leaves(data) if before.get(k) != v}
-        return data, design, files, changes, attempt
+        return data, design, changes, attempt
     raise ValueError(f"rtl: no parameter set that builds in {MAX_DRAWS} draws (seed {seed})")
 
 
 # ----------------------------------------------------------------------------------------------
 # One block through the RTL
 # ----------------------------------------------------------------------------------------------
-def run_block(design, files: dict, name: str, build: Path, rtl_dir: Path, seed: int) -> dict:
+def run_block(design, name: str, build: Path, rtl_dir: Path, seed: int) -> dict:
     """Stream the block's random stimulus (:func:`fxdsp.hdl.stimuli.random_stimulus`, gapped valid)
-    through its RTL on Icarus in ``build`` (``files``: unused, the harness generates the design's
-    headers itself; kept for the callers' signature); pass/fail, samples, cycles, first errors."""
+    through its RTL on Icarus in ``build`` (the harness writes the design's headers there); pass/fail,
+    samples, cycles, first errors (a DUT that does not build is a failure, named)."""
     from ..hdl import harness as hh
     from ..hdl.stimuli import random_stimulus
 
@@ -149,20 +149,13 @@ def run_block(design, files: dict, name: str, build: Path, rtl_dir: Path, seed: 
     build = Path(build)
     build.mkdir(parents=True, exist_ok=True)
     try:
-        got = hh.run_cocotb(design, name, [seg], build, build / "models", gap=GAP, seed=int(seed % 2**31),
+        got = hh.run_cocotb(design, name, [seg], build, gap=GAP, seed=int(seed % 2**31),
                             extra_params=EXTRA.get(name), sim="icarus", rtl=Path(rtl_dir))
-    except hh.BuildFailed:
+    except hh.BuildFailed as e:
         return {"ok": False, "samples": samples, "cycles": None,
-                "errors": ["build failed: " + _first_error(build / "build.log", rtl_dir, build)]}
+                "errors": ["build failed: " + _strip(e.reason, rtl_dir, build)[:300]]}
     errors = [_strip(e, rtl_dir, build) for e in got["errors"][:3]]
     return {"ok": not got["errors"], "samples": samples, "cycles": got["cycles"], "errors": errors}
-
-
-def _first_error(log: Path, rtl_dir, build: Path) -> str:
-    """The first line of a tool's log that looks like an error, without folder names."""
-    text = log.read_text(errors="replace") if log.exists() else ""
-    lines = [line for line in text.splitlines() if "error" in line.lower()] or text.splitlines()[-1:] or ["no log"]
-    return _strip(lines[0], rtl_dir, build)[:300]
 
 
 def _strip(line: str, rtl_dir, build: Path) -> str:
@@ -174,7 +167,7 @@ def _strip(line: str, rtl_dir, build: Path) -> str:
 
 def _task(settings: dict, rtl_dir: str, build_root: str | None, params: dict, seed: int) -> dict:
     """One shard: draw its parameter set, run every block of ``settings["blocks"]``."""
-    data, design, files, changes, draws = draw(settings["config"], seed)
+    data, design, changes, draws = draw(settings["config"], seed)
     shard = f"shard_{params['shard']:04d}"
     if build_root is None:
         root = Path(tempfile.mkdtemp(prefix=f"fxdsp-rtl-{shard}-"))
@@ -187,7 +180,7 @@ def _task(settings: dict, rtl_dir: str, build_root: str | None, params: dict, se
             if d.exists():
                 shutil.rmtree(d)
             block_seed = int(np.random.SeedSequence([seed, b + 1]).generate_state(1)[0])
-            blocks[name] = run_block(design, files, name, d, Path(rtl_dir), block_seed)
+            blocks[name] = run_block(design, name, d, Path(rtl_dir), block_seed)
     finally:
         if build_root is None:
             shutil.rmtree(root, ignore_errors=True)

