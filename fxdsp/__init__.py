@@ -46,8 +46,7 @@ _EXPORTS: dict[str, str] = {
     "BiasSubtract": "fxdsp.blocks.bias_subtract",
     "Iir": "fxdsp.blocks.iir",
     "Freq2Temp": "fxdsp.blocks.freq2temp",
-    "Paper002Chain": "fxdsp.chains",
-    "Paper001Chain": "fxdsp.chains",
+    "Chain": "fxdsp.chains",
 }
 
 __all__ = [*_EXPORTS]
@@ -63,7 +62,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs; at run time the names load lazi
     from .blocks.piecewise import Piecewise
     from .blocks.rtd import Rtd
     from .blocks.sf_divide import SfDivide
-    from .chains import Design, Paper001Chain, Paper002Chain, build
+    from .chains import Chain, Design, build
     from .config import Config, load_config
     from .fixed.format import Format
     from .fixed.ops import OverflowLog

@@ -1,212 +1,143 @@
-"""The signal chains of the papers, composed from the blocks, and the design built from one config.
+"""Chains composed from the blocks by the netlists the config declares, and the design built from one config.
 
-* paper 002 (RTD path, its figure 4): RTD code -> temperature -> SF(T) -> sense / SF(T) -> demod (I)
-  -> I - bias(T) -> final low-pass -> rate. Optional stages, chosen by the config (absent = the
-  paper's chain, bit for bit): ``[chain_paper002] stages = ["lag"]`` puts the ``lag`` block between
-  the RTD readout and the SF/bias engines (they see the die-temperature estimate Te; the ``temp``
-  port stays the thermometer's reading), and ``[demod] phase_trim_rad`` rotates the NCO reference.
-* paper 001 (frequency path): frequency word -> T = (f - f0)/k -> q(T) quadratic -> rate - q(T).
-* paper 000 (QVBA): K0(t), K1(t) cubic in t = T - 25 C are configurations of the same piecewise
-  engine (``piecewise.k0``, ``piecewise.k1``).
+A chain is a ``[chain.<name>]`` table (:mod:`fxdsp.netlist`): its instances (block tables), wires,
+inputs and outputs. :class:`Chain` runs any valid netlist as one block: bit-exact ``run`` on stored
+integers, the float ``reference`` composed from the blocks' own references, and the stimulus of
+its ``sensor`` (:mod:`fxdsp.sensors`). The papers' chains are configs in the built-in default:
 
-Every chain is a Block: bit-exact ``run`` on stored integers, float ``reference`` built from the
-blocks' own references, and a physically meaningful stimulus (temperature sweep, rate steps).
+* ``chain.paper002`` (RTD path, its figure 4): RTD code -> temperature -> SF(T) -> sense / SF(T)
+  -> demod (I) -> I - bias(T) -> final low-pass -> rate; the thermal lag is a netlist edit
+  (:func:`fxdsp.netlist.insert_stage`: rtd.temp -> lag -> the SF and bias engines);
+* ``chain.paper001`` (frequency path): frequency word -> T = (f - f0)/k -> q(T) -> rate - q(T);
+* ``chain.paper000`` (QVBA): temperature -> K0(t), K1(t) cubic in t = T - 25 C -> (Df - K0) / K1 in g.
 """
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .blocks.base import Block
-from .blocks.bias_subtract import BiasSubtract
-from .blocks.demod import Demod
-from .blocks.freq2temp import Freq2Temp
-from .blocks.iir import Iir
-from .blocks.lag import Lag
-from .blocks.piecewise import Piecewise
-from .blocks.rtd import Rtd
-from .blocks.sf_divide import SfDivide
+from .blocks.datapath import RtlPorts
+from .blocks.kinds import Context, Wired, block_tables, kind_of
 from .config import Config, load_config
-from .fixed import Format, OverflowLog, Rules, quantize
+from .errors import InputError
+from .fixed import Format, OverflowLog
+from .netlist import STAGES, Endpoint, Netlist, WiringError, parse
 
 
-class Paper002Chain(Block):
-    """Paper 002's chain as one block: ``vsa`` (sense ADC) and ``rtd_code`` -> ``temp`` and
-    ``rate``, through rtd, [lag], SF(T), divide, demod, bias(T), subtract and the final low-pass."""
+class Chain(Block):
+    """A netlist of blocks as one block: its inputs and outputs are the netlist's, its overflow
+    counters its members' (members in the order of ``instances``, which is the RTL ovf order)."""
 
-    name = "chain_paper002"
+    def __init__(self, netlist: Netlist, blocks: dict[str, Block], kinds: dict[str, str]):
+        from .sensors import sensor_for
 
-    # members in the order of the chain's ovf vector (bit 0 first), by instance name; a chain with the
-    # lag stage has "lag" after "rtd" (its instance attribute MEMBERS)
-    MEMBERS = ("rtd", "piecewise_sf", "piecewise_bias", "sf_divide", "demod", "bias_subtract", "iir")
-    STAGES = ("lag",)   # the optional stages a config may choose ([chain_paper002] stages)
+        self.netlist = netlist
+        self.name = netlist.instance_name
+        self.members = {p: blocks[p] for p in netlist.instances}
+        self.kinds = {p: kinds[p] for p in netlist.instances}
+        self.MEMBERS = tuple(p.replace(".", "_") for p in netlist.instances)
+        self.inputs = {n: self.members[dsts[0].instance].inputs[dsts[0].port] for n, dsts in netlist.inputs.items()}
+        self.outputs = {n: self.members[e.instance].outputs[e.port] for n, e in netlist.outputs.items()}
+        self._stateful = {p: b for p, b in self.members.items() if type(b).get_state is not Block.get_state}
+        self.sensor = sensor_for(self)
 
-    def __init__(self, rtd: Rtd, sf: Piecewise, divide: SfDivide, demod: Demod, bias: Piecewise,
-                 subtract: BiasSubtract, lpf: Iir, lag: Lag | None = None):
-        """The blocks must already be connected wire to wire (``build`` derives each input format from
-        the output it is wired to). ``lag``: the optional thermal-lag stage between the RTD readout
-        and the SF / bias engines, fed once per chain sample (it updates every ``lag.decimation``)."""
-        self.rtd, self.sf, self.divide, self.demod = rtd, sf, divide, demod
-        self.bias, self.subtract, self.lpf = bias, subtract, lpf
-        self.lag = lag
-        if lag is not None:
-            if lag.temp_format != rtd.temp_format:
-                raise ValueError(f"{self.name}: lag.temp_format {lag.temp_format} must be rtd.temp_format "
-                                 f"{rtd.temp_format}")
-            self.MEMBERS = ("rtd", "lag", *type(self).MEMBERS[1:])
-        self.stages = ("lag",) if lag is not None else ()
-        # the blocks that carry state across calls, by their key in get_state / set_state
-        self._stateful: dict[str, Block] = {"demod": demod, "iir": lpf, **({"lag": lag} if lag is not None else {})}
-        self.inputs = {"vsa": divide.in_format, "rtd_code": rtd.adc_format}
-        self.outputs = {"temp": rtd.temp_format, "rate": lpf.data_format}
+    def wanted(self) -> dict[str, set[str]]:
+        """The outputs of each member that something reads (the rest need not be computed)."""
+        wanted: dict[str, set[str]] = {p: set() for p in self.netlist.instances}
+        for src in [*self.netlist.drivers.values(), *self.netlist.outputs.values()]:
+            if isinstance(src, Endpoint):
+                wanted[src.instance].add(src.port)
+        return wanted
+
+    def evaluate(self, step, inputs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """Run the netlist with ``step(instance, block, inputs, wanted) -> outputs`` for each member in
+        order: the one composition behind ``stream``, ``reference`` and the budget's hybrid runs."""
+        values: dict[Endpoint, np.ndarray] = {}
+        wanted = self.wanted()
+        for inst in self.netlist.order:
+            block = self.members[inst]
+            ins = {}
+            for port in block.inputs:
+                src = self.netlist.driver(inst, port)
+                ins[port] = inputs[src] if isinstance(src, str) else values[src]
+            outs = step(inst, block, ins, wanted[inst])
+            values.update({Endpoint(inst, p): outs[p] for p in wanted[inst]})
+        return {name: values[e] for name, e in self.netlist.outputs.items()}
+
+    def stream(self, log: OverflowLog, **inputs) -> dict[str, np.ndarray]:
+        return self.evaluate(lambda inst, b, ins, wanted: b.stream_outputs(log, wanted, **ins), inputs)
+
+    def reference(self, **inputs) -> dict[str, np.ndarray]:
+        return self.evaluate(lambda inst, b, ins, wanted: b.reference(**ins), inputs)
 
     def reset(self) -> None:
         for block in self._stateful.values():
             block.reset()
 
-    def get_state(self) -> dict:
-        return {key: block.get_state() for key, block in self._stateful.items()}
+    def get_state(self) -> dict | None:
+        return {p.replace(".", "_"): b.get_state() for p, b in self._stateful.items()} or None
 
     def set_state(self, state) -> None:
-        keys = set(self._stateful)
+        keys = {p.replace(".", "_") for p in self._stateful}
+        if not keys:
+            return super().set_state(state)
         if not isinstance(state, dict) or set(state) != keys:
             raise ValueError(f"{self.name}: state: expected a previous result's state {{{', '.join(sorted(keys))}}}")
-        for key, block in self._stateful.items():
-            block.set_state(state[key])
+        for p, block in self._stateful.items():
+            block.set_state(state[p.replace(".", "_")])
 
-    def stream(self, log: OverflowLog, vsa: np.ndarray, rtd_code: np.ndarray) -> dict[str, np.ndarray]:
-        temp = self.rtd.stream(log, code=rtd_code)["temp"]
-        te = self.lag.stream(log, temp=temp)["te"] if self.lag is not None else temp  # what the engines see
-        sf = self.sf.stream(log, temp=te)["y"]
-        v = self.divide.stream(log, x=vsa, sf=sf)["y"]
-        i, _ = self.demod.iq(log, v)
-        b = self.bias.stream(log, temp=te)["y"]
-        r = self.subtract.stream(log, x=i, bias=b)["y"]
-        rate = self.lpf.stream(log, x=r)["y"]
-        return {"temp": temp, "rate": rate}
+    def counts(self, counter: str) -> bool:
+        """Whether a run counts ``counter`` (False for a member output's counter when nothing reads
+        that output, e.g. the demodulator's amp when the chain uses I only)."""
+        from .fixed import OverflowLog
 
-    def reference(self, vsa: np.ndarray, rtd_code: np.ndarray) -> dict[str, np.ndarray]:
-        temp = self.rtd.reference(code=rtd_code)["temp"]
-        te = self.lag.reference(temp=temp)["te"] if self.lag is not None else temp
-        sf = self.sf.reference(temp=te)["y"]
-        v = self.divide.reference(x=vsa, sf=sf)["y"]
-        i = self.demod.reference(x=v)["i"]
-        b = self.bias.reference(temp=te)["y"]
-        r = self.subtract.reference(x=i, bias=b)["y"]
-        return {"temp": temp, "rate": self.lpf.reference(x=r)["y"]}
+        log = OverflowLog()
+        self.reset()
+        try:
+            self.stream(log, **{k: np.zeros(1, np.int64) for k in self.inputs})
+        finally:
+            self.reset()
+        return counter in dict(log)
 
-    def sensor_analog(self, t_c: np.ndarray, rate_fs: np.ndarray, quad_fs: float = 0.0,
-                      rng: np.random.Generator | None = None, noise_fs: float = 0.0) -> dict:
-        """A device whose SF and bias follow this config's own calibration exactly, before its ADCs:
-        sense = SF(T) * (rate + bias(T)) on the in-phase carrier (+ quadrature, + white noise), and
-        the RTD bridge's ADC input. ``analog`` with the noise, ``clean`` without it."""
-        n = len(t_c)
-        sf = self.sf.reference(temp=t_c)["y"]
-        bias = self.bias.reference(temp=t_c)["y"]
-        clean = self.demod.carrier(sf * (rate_fs + bias), 0.0, n) + self.demod.carrier(sf * quad_fs, np.pi / 2, n)
-        x = clean + rng.normal(0.0, noise_fs, n) if rng is not None and noise_fs else clean
-        frac = self.rtd.adc_fraction(t_c)
-        return {"analog": {"vsa": x, "rtd_frac": frac}, "clean": {"vsa": clean, "rtd_frac": frac}}
+    @property
+    def stages(self) -> tuple[str, ...]:
+        """The insertable stages (:data:`fxdsp.netlist.STAGES`) the netlist has."""
+        return tuple(s for s in STAGES if any(self.kinds[p] == s for p in self.members))
 
-    def digitise(self, analog: dict) -> dict[str, np.ndarray]:
-        """The chain's ADCs: sense ADC (nearest, saturating) and the RTD bridge ADC."""
-        return {"vsa": quantize(analog["vsa"], self.divide.in_format, Rules("half_up", "saturate")),
-                "rtd_code": self.rtd.adc_quantize(analog["rtd_frac"])}
-
-    def sensor_inputs(self, t_c: np.ndarray, rate_fs: np.ndarray, quad_fs: float = 0.0,
-                      rng: np.random.Generator | None = None, noise_fs: float = 0.0) -> dict[str, np.ndarray]:
-        """The ADC codes of :meth:`sensor_analog`."""
-        return self.digitise(self.sensor_analog(t_c, rate_fs, quad_fs, rng, noise_fs)["analog"])
-
-    def nominal_analog(self, rng: np.random.Generator, n: int) -> dict:
-        """Temperature swept -20..60 C, rate stepping through +-0.3 FS and zero, a quadrature term,
-        white noise: the analog signals, the programme (``t_c``, ``rate_fs``) and the ADC codes."""
-        n = max(n, 8192)
-        t_c = np.linspace(-20.0, 60.0, n)
-        steps = np.array([0.0, 0.3, -0.3, 0.1, 0.0, -0.05, 0.2, 0.0])
-        rate = np.repeat(steps, -(-n // steps.size))[:n]
-        out = self.sensor_analog(t_c, rate, quad_fs=0.05, rng=rng, noise_fs=1e-3)
-        out.update(t_c=t_c, rate_fs=rate, codes=self.digitise(out["analog"]))
-        return out
+    def member(self, kind: str) -> Block | None:
+        """The member of ``kind`` when the chain has exactly one (None when it has none)."""
+        found = [self.members[p] for p in self.netlist.instances if self.kinds[p] == kind]
+        if len(found) > 1:
+            raise ValueError(f"{self.name}: {len(found)} {kind} blocks")
+        return found[0] if found else None
 
     def nominal_stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
-        return self.nominal_analog(rng, n)["codes"]
+        if self.sensor is not None:
+            return self.sensor.nominal_stimulus(rng, n)
+        return self._port_stimulus(rng, n, nominal=True)
 
     def stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
-        nom = self.nominal_stimulus(rng, n)
-        # saturation: full-scale sense input at the coldest and hottest ends of the RTD range
-        m = 1024
-        hot = self.rtd.adc_code(np.full(m, 60.0))
-        full = quantize(self.demod.carrier(self.divide.in_format.max_value * 1.1, 0.0, m), self.divide.in_format,
-                        Rules("half_up", "saturate"))
-        return {"vsa": np.concatenate([nom["vsa"], full]), "rtd_code": np.concatenate([nom["rtd_code"], hot])}
+        if self.sensor is not None:
+            return self.sensor.stimulus(rng, n)
+        return self._port_stimulus(rng, n, nominal=False)
+
+    def _port_stimulus(self, rng: np.random.Generator, n: int, nominal: bool) -> dict[str, np.ndarray]:
+        """Without a sensor: each chain input gets the stimulus of the first block input it drives,
+        all cut to the shortest."""
+        out = {}
+        for name, dsts in self.netlist.inputs.items():
+            block = self.members[dsts[0].instance]
+            stim = block.nominal_stimulus(rng, n) if nominal else block.stimulus(rng, n)
+            out[name] = stim[dsts[0].port]
+        m = min(len(v) for v in out.values())
+        return {k: v[:m] for k, v in out.items()}
 
     def parameters(self) -> dict:
-        out = {"blocks": [b.name for b in (self.rtd, self.sf, self.divide, self.demod, self.bias, self.subtract,
-                                           self.lpf)]}
-        if self.stages:  # only when chosen: a config without them records what it always did
-            out["stages"] = list(self.stages)
-        return out
-
-
-def paper002_stages(cfg: Config) -> tuple[str, ...]:
-    """The optional stages ``[chain_paper002] stages`` chooses, in chain order (absent table or key:
-    none, the paper's chain)."""
-    sec = cfg.optional_section("chain_paper002")
-    if sec is None:
-        return ()
-    chosen = sec.names("stages", Paper002Chain.STAGES, [])
-    return tuple(s for s in Paper002Chain.STAGES if s in chosen)
-
-
-class Paper001Chain(Block):
-    """Paper 001's chain as one block: frequency word ``f`` and ``rate_in`` -> ``temp`` and ``rate``,
-    through freq2temp, the quadratic bias(T) and the subtraction."""
-
-    name = "chain_paper001"
-
-    MEMBERS = ("freq2temp", "piecewise_bias001", "bias_subtract001")
-
-    def __init__(self, f2t: Freq2Temp, bias: Piecewise, subtract: BiasSubtract):
-        self.f2t, self.bias, self.subtract = f2t, bias, subtract
-        self.inputs = {"f": f2t.freq_format, "rate_in": subtract.in_format}
-        self.outputs = {"temp": f2t.temp_format, "rate": subtract.out_format}
-
-    def stream(self, log: OverflowLog, f: np.ndarray, rate_in: np.ndarray) -> dict[str, np.ndarray]:
-        temp = self.f2t.stream(log, f=f)["temp"]
-        b = self.bias.stream(log, temp=temp)["y"]
-        return {"temp": temp, "rate": self.subtract.stream(log, x=rate_in, bias=b)["y"]}
-
-    def reference(self, f: np.ndarray, rate_in: np.ndarray) -> dict[str, np.ndarray]:
-        temp = self.f2t.reference(f=f)["temp"]
-        b = self.bias.reference(temp=temp)["y"]
-        return {"temp": temp, "rate": self.subtract.reference(x=rate_in, bias=b)["y"]}
-
-    def nominal_analog(self, rng: np.random.Generator, n: int) -> dict:
-        """Chamber points -10..50 C; zero-rate output = the quadratic bias of the same config + noise:
-        the analog frequency and rate (``clean`` without the noise) and their words."""
-        t_c = np.repeat(np.arange(-10.0, 51.0, 10.0), -(-n // 7))[:n] + rng.normal(0, 0.05, n)
-        q = self.bias.reference(temp=t_c)["y"]
-        noise = rng.normal(0.0, 1.0, n)
-        f = self.f2t.frequency(t_c)
-        codes = {"f": self.f2t.freq_code(t_c),
-                 "rate_in": quantize(q + noise, self.subtract.in_format, Rules("half_up", "saturate"))}
-        return {"analog": {"f": f, "rate_in": q + noise}, "clean": {"f": f, "rate_in": q}, "codes": codes, "t_c": t_c}
-
-    def nominal_stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
-        return self.nominal_analog(rng, n)["codes"]
-
-    def stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
-        nom = self.nominal_stimulus(rng, n)
-        extra = self.f2t.stimulus(rng, 0)["f"]
-        fi = self.subtract.in_format
-        rate_extra = np.resize(np.array([fi.min_int, fi.max_int, 0, -1, 1], np.int64), extra.size)
-        return {"f": np.concatenate([nom["f"], extra]), "rate_in": np.concatenate([nom["rate_in"], rate_extra])}
-
-    def parameters(self) -> dict:
-        return {"blocks": [b.name for b in (self.f2t, self.bias, self.subtract)]}
+        return {"blocks": [self.members[p].name for p in self.netlist.order]}
 
 
 @dataclass(frozen=True)
@@ -235,11 +166,23 @@ class Instance:
     inputs: tuple[Port, ...]
     outputs: tuple[Port, ...]
     members: tuple[str, ...] = ()     # a chain's member instances, in ovf bit order
-    has_ready: bool = False           # the RTL module has an in_ready output (multi-cycle)
+
+    @property
+    def has_ready(self) -> bool:
+        """The RTL module has an in_ready output whatever its parameters."""
+        return self.rtl.ready
 
     @property
     def ports(self) -> dict[str, Port]:
         return {p.name: p for p in (*self.inputs, *self.outputs)}
+
+    @property
+    def rtl(self) -> RtlPorts:
+        """The RTL interface: a block's is its datapath's; a chain top (hand-written or generated)
+        takes one sample at a time (in_ready) and has a serial variant (ARCH = 1), no bundle."""
+        if self.members:
+            return RtlPorts(ready=True, serial=True)
+        return self.block.datapath.RTL
 
 
 @dataclass
@@ -282,23 +225,22 @@ class Design:
         raise ValueError(f"{name}: no ovf field counts {counter!r}")
 
 
-# RTL modules that take several cycles per sample and so have an in_ready output
-HAS_READY = {"sf_divide", "chain_paper002"}
-
-
 def _units(design: "Design") -> dict[str, dict[str, tuple[str, float]]]:
-    """Physical unit of every instance port: the paper 002 signal path is in fractions of the
-    sense full scale (rate FS = [system].rate_full_scale_dps), paper 001's rate in deg/h."""
+    """Physical unit of every block instance port of the papers' designs: the paper 002 signal path
+    is in fractions of the sense full scale (rate FS = [system].rate_full_scale_dps), paper 001's
+    rate in deg/h, paper 000's Df in Hz and its acceleration in mg. A chain's ports take the units
+    of the instance ports they are wired to (:func:`_instance_table`)."""
     fs = ("deg/h", design.rate_full_scale_dps * 3600.0)
-    temp, degh = ("C", 1.0), ("deg/h", 1.0)
-    return {"rtd": {"temp": temp}, "lag": {"temp": temp, "te": temp}, "freq2temp": {"temp": temp},
+    temp, degh, hz = ("C", 1.0), ("deg/h", 1.0), ("Hz", 1.0)
+    return {"rtd": {"temp": temp}, "lag": {"temp": temp, "te": temp}, "freq2temp": {"f": hz, "temp": temp},
+            "bias_subtract000": {"x": hz, "bias": hz, "y": hz}, "sf_divide000": {"x": hz, "sf": ("Hz/g", 1.0),
+                                                                                "y": ("mg", 1e3)},
             "piecewise_sf": {"temp": temp, "y": ("ppm", 1e6)}, "piecewise_bias": {"temp": temp, "y": fs},
             "piecewise_bias001": {"temp": temp, "y": degh}, "piecewise_k0": {"temp": temp, "y": ("Hz", 1.0)},
             "piecewise_k1": {"temp": temp, "y": ("Hz/g", 1.0)}, "sf_divide": {"x": fs, "y": fs},
             "demod": {"x": fs, "i": fs, "q": fs, "amp": fs, "phase": ("mrad", 1e3)},
             "bias_subtract": {"x": fs, "bias": fs, "y": fs}, "bias_subtract001": {"x": degh, "bias": degh, "y": degh},
-            "iir": {"x": fs, "y": fs}, "chain_paper002": {"vsa": fs, "temp": temp, "rate": fs},
-            "chain_paper001": {"f": ("Hz", 1.0), "rate_in": degh, "temp": temp, "rate": degh}}
+            "iir": {"x": fs, "y": fs}}
 
 
 def _instance_table(design: "Design") -> dict[str, Instance]:
@@ -306,64 +248,145 @@ def _instance_table(design: "Design") -> dict[str, Instance]:
     table = {}
     for name, block in design.all.items():
         u = units.get(name, {})
+        if isinstance(block, Chain):   # a chain port has the unit of the instance port it is wired to
+            net = block.netlist
+            ends = {**{p: dsts[0] for p, dsts in net.inputs.items()}, **net.outputs}
+            u = {p: units.get(e.instance.replace(".", "_"), {}).get(e.port, ("", 1.0)) for p, e in ends.items()}
         ports = [tuple(Port(p, f, *u.get(p, ("", 1.0))) for p, f in ports.items())
                  for ports in (block.inputs, block.outputs)]
         members = getattr(block, "MEMBERS", ())
         module = name if members else block.datapath.MODULE
         if name != block.name.replace(".", "_"):
             raise AssertionError(f"instance {name} is not named after its config table {block.name}")
-        table[name] = Instance(name, block.name, block, module, ports[0], ports[1], members, module in HAS_READY)
+        table[name] = Instance(name, block.name, block, module, ports[0], ports[1], members)
     return table
 
 
+# Every instance's random streams (vectors, budget) are keyed by its name. The instances of the
+# first releases keep the position they were generated at, so their committed vectors stay as they
+# were; any other instance gets a key from its name: adding, removing or reordering tables never
+# changes another instance's streams.
+FIRST_STREAMS = ("rtd", "iir", "demod", "piecewise_sf", "piecewise_bias", "piecewise_bias001", "piecewise_k0",
+                 "piecewise_k1", "sf_divide", "bias_subtract", "bias_subtract001", "freq2temp", "lag",
+                 "chain_paper002", "chain_paper001")
+
+
+def stream_key(name: str) -> int:
+    """The integer that, with the seed, keys instance ``name``'s random streams."""
+    if name in FIRST_STREAMS:
+        return FIRST_STREAMS.index(name)
+    return int.from_bytes(hashlib.sha256(name.encode()).digest()[:4], "little") + len(FIRST_STREAMS)
+
+
+def _check_top_level(cfg: Config, tables: list[str]) -> None:
+    """A top-level table that is no block, chain or system table is a typo: named (with the table it
+    most likely meant) before the chains are read, which would only say that a block is missing."""
+    from .config import default_config_text, nearest
+    import tomllib
+
+    known = {"system", "stimulus", "chain"} | {t.split(".")[0] for t in tables}
+    for key in cfg.data:
+        if key not in known:
+            near = nearest(key, [k for k in tomllib.loads(default_config_text()) if k not in cfg.data])
+            raise InputError(f"{key}: unknown key" + (f" (did you mean {near!r}?)" if near else ""))
+
+
+def _netlists(cfg: Config, tables: list[str]) -> dict[str, Netlist]:
+    sec = cfg.optional_section("chain")
+    if sec is None:
+        return {}
+    def ports(table: str):
+        kind = kind_of(table)
+        return kind.inputs, kind.outputs
+    out = {}
+    for key, value in sec.data.items():
+        if not isinstance(value, dict):
+            raise WiringError(f"{sec.field(key)}: expected a chain table [chain.{key}]")
+        out[f"chain.{key}"] = parse(sec.sub(key), ports, tuple(tables))
+    return out
+
+
+def _build_order(tables: list[str], nets: dict[str, Netlist]) -> list[str]:
+    """The block tables in an order that builds every driver before what it drives (over all chains)."""
+    deps = {t: set() for t in tables}
+    for net in nets.values():
+        for dst, src in net.drivers.items():
+            if isinstance(src, Endpoint):
+                deps[dst.instance].add(src.instance)
+    done: list[str] = []
+    while len(done) < len(tables):
+        ready = [t for t in tables if t not in done and deps[t] <= set(done)]
+        if not ready:
+            stuck = [t for t in tables if t not in done]
+            raise WiringError(f"chain: the chains together wire a loop through {', '.join(stuck)}")
+        done.append(ready[0])
+    return done
+
+
+def _wired(table: str, nets: dict[str, Netlist], built: dict[str, Block]) -> dict[str, Wired]:
+    """The formats of ``table``'s inputs that chains wire from block outputs; two chains that drive
+    one input from outputs of different formats are an error naming both wires."""
+    out: dict[str, Wired] = {}
+    for net in nets.values():
+        for dst, src in net.drivers.items():
+            if dst.instance != table or not isinstance(src, Endpoint):
+                continue
+            key = kind_of(src.instance).output_keys[src.port]
+            w = Wired(built[src.instance].outputs[src.port],
+                      f"{src.instance}.{key} (wired by {net.name}.wires: {net.wire_text(dst)!r})")
+            if dst.port in out and out[dst.port].format != w.format:
+                raise WiringError(f"{w.source} ({w.format}) and {out[dst.port].source} ({out[dst.port].format}) "
+                                  f"drive {dst} with different formats")
+            out.setdefault(dst.port, w)
+    return out
+
+
+def _check_formats(net: Netlist, blocks: dict[str, Block]) -> None:
+    """Every wire joins equal formats, and a chain input drives inputs of one format."""
+    for dst, src in net.drivers.items():
+        want = blocks[dst.instance].inputs[dst.port]
+        if isinstance(src, Endpoint):
+            got = blocks[src.instance].outputs[src.port]
+            if got != want:
+                raise WiringError(f"{net.name}.wires: {net.wire_text(dst)!r}: {src} is {got}, {dst} is {want}")
+        else:
+            first = net.inputs[src][0]
+            have = blocks[first.instance].inputs[first.port]
+            if have != want:
+                raise WiringError(f"{net.name}.inputs: {net.wire_text(dst)!r}: chain input {src!r} drives "
+                                  f"{first} ({have}) and {dst} ({want}): one input, one format")
+
+
 def build(config: Config | str | None = None, chains: bool = True) -> Design:
-    """Build every block and chain from a config (path, Config, or None for the built-in default).
-    Any unknown key or table anywhere in the config is an error naming it. Every format an input
-    is wired to is derived from the output that drives it. ``chains=False`` builds the blocks
-    alone, for block-level work on formats the chains could not connect."""
+    """Build every block table and every chain of a config (path, Config, or None for the built-in
+    default). Any unknown key or table anywhere in the config is an error naming it; a wiring error
+    names the chain, the wire and the fields. Every format an input is wired to is derived from the
+    output that drives it. ``chains=False`` builds the blocks alone (a stated format is taken as
+    given where it disagrees with its wire), for block-level work on formats the chains could not connect."""
     cfg = config if isinstance(config, Config) else load_config(config)
     stim = cfg.section("stimulus")
     system = cfg.section("system")
     fs = system.number("fs_hz", low=0, low_open=True)
     design = Design(cfg, seed=stim.integer("seed", low=0), samples=stim.integer("samples", low=16, high=10**7),
                     fs_hz=fs, rate_full_scale_dps=system.number("rate_full_scale_dps", low=0, low_open=True))
-
-    rtd = Rtd.from_config(cfg.section("rtd"))
-    sf = Piecewise.from_config(cfg.section("piecewise.sf"), rtd.temp_format)
-    div_sec = cfg.section("sf_divide")
-    divide = SfDivide.from_config(div_sec, div_sec.format("in_format"), sf.out_format)
-    demod_sec = cfg.section("demod")
-    demod = Demod.from_config(demod_sec, fs, divide.out_format, chains)
-    bias = Piecewise.from_config(cfg.section("piecewise.bias"), rtd.temp_format)
-    sub_sec = cfg.section("bias_subtract")
-    subtract = BiasSubtract.from_config(sub_sec, demod.data_format, bias.out_format)
-    iir_sec = cfg.section("iir")
-    lpf = Iir.from_config(iir_sec, fs, iir_sec.wired_format("data_format", subtract.out_format,
-                                                             "bias_subtract.out_format", chains), "iir")
-
-    f2t_sec = cfg.section("freq2temp")
-    f2t = Freq2Temp.from_config(f2t_sec, f2t_sec.format("temp_format"))
-    bias001 = Piecewise.from_config(cfg.section("piecewise.bias001"), f2t.temp_format)
-    sub001_sec = cfg.section("bias_subtract001")
-    subtract001 = BiasSubtract.from_config(sub001_sec, sub001_sec.format("in_format"), bias001.out_format)
-
-    stages = paper002_stages(cfg)
-    # the chain's lag stage is the [lag] block, fed once per chain sample and updated at its rate_hz
-    wired = (fs, "system.fs_hz", chains) if "lag" in stages else ()
-    lag = Lag.from_config(cfg.section("lag"), rtd.temp_format, *wired)
-
-    qvba_temp = cfg.section("piecewise").format("qvba_temp_format")
-    k0 = Piecewise.from_config(cfg.section("piecewise.k0"), qvba_temp)
-    k1 = Piecewise.from_config(cfg.section("piecewise.k1"), qvba_temp)
-
-    design.blocks = {"rtd": rtd, "iir": lpf, "demod": demod, "piecewise_sf": sf, "piecewise_bias": bias,
-                     "piecewise_bias001": bias001, "piecewise_k0": k0, "piecewise_k1": k1, "sf_divide": divide,
-                     "bias_subtract": subtract, "bias_subtract001": subtract001, "freq2temp": f2t,
-                     "lag": lag}
+    tables = block_tables(cfg.data)
+    _check_top_level(cfg, tables)
+    nets = _netlists(cfg, tables)
+    in_chain = {i for net in nets.values() for i in net.instances}
+    built: dict[str, Block] = {}
+    for table in _build_order(tables, nets):
+        ctx = Context(fs, enforce=chains, in_chain=table in in_chain)
+        block = kind_of(table).make(cfg.section(table), _wired(table, nets, built), ctx)
+        block.name = table   # its overflow counters and errors are named after its table
+        built[table] = block
+    names = sorted((t.replace(".", "_") for t in tables),   # the first releases' order, then the file's
+                   key=lambda n: FIRST_STREAMS.index(n) if n in FIRST_STREAMS else len(FIRST_STREAMS))
+    design.blocks = {n: built[next(t for t in tables if t.replace(".", "_") == n)] for n in names}
     if chains:
-        design.chains = {"chain_paper002": Paper002Chain(rtd, sf, divide, demod, bias, subtract, lpf,
-                                                         lag if "lag" in stages else None),
-                         "chain_paper001": Paper001Chain(f2t, bias001, subtract001)}
+        kinds = {t: kind_of(t).name for t in tables}
+        for net in nets.values():
+            _check_formats(net, built)
+            design.chains[net.instance_name] = Chain(net, built, kinds)
     design.instances = _instance_table(design)
     cfg.check_all_read()
     return design

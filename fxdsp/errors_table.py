@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .chains import Design
+from .chains import Design, stream_key
 
 ANGLE_PORTS = {("demod", "phase")}
 
@@ -48,7 +48,7 @@ class ErrorStats:
 def block_errors(design: Design, name: str, samples: int | None = None, seed_offset: int = 1000) -> list[ErrorStats]:
     """Run one block's nominal stimulus through the bit-exact model and the float reference."""
     block = design.all[name]
-    rng = np.random.default_rng([design.seed, seed_offset, list(design.all).index(name)])
+    rng = np.random.default_rng([design.seed, seed_offset, stream_key(name)])
     stim = block.nominal_stimulus(rng, samples or design.samples)
     result = block.run(**stim)
     ref = block.run_float(**stim)

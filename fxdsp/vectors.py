@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .chains import Design
+from .chains import Design, stream_key
 from .fixed import Format
 from .fixed.hexfile import hex_words, read_hex_words
 from .outputs import staged
@@ -42,9 +42,9 @@ def generate(design: Design) -> dict[str, str]:
     manifest: dict = {"generator": "fxdsp vectors", "config": design.config.name, "seed": design.seed,
                       "samples": design.samples, "hex": "two's complement, ceil(wl/4) digits per line",
                       "blocks": {}}
-    for index, (name, block) in enumerate(design.all.items()):
-        # each block its own stream, derived from (seed, index): adding a block never changes another's vectors
-        rng = np.random.default_rng([design.seed, index])
+    for name, block in design.all.items():
+        # each block its own stream, keyed by its name: adding a block never changes another's vectors
+        rng = np.random.default_rng([design.seed, stream_key(name)])
         stim = block.stimulus(rng, design.samples)
         result = block.run(**stim)
         n = len(next(iter(stim.values())))

@@ -60,6 +60,20 @@ def edited_data(**edits) -> dict:
     return data
 
 
+def lag_edits() -> dict:
+    """Dotted edits that put the lag into the paper 002 chain (the netlist edit extend makes)."""
+    from fxdsp.netlist import with_stage
+
+    net = with_stage(default_data()["chain"]["paper002"], "lag")
+    return {"chain.paper002.instances": net["instances"], "chain.paper002.wires": net["wires"]}
+
+
+def lag_chain() -> dict:
+    """The same edit as nested tables, for a deep merge: {"chain": {"paper002": {...}}}."""
+    e = lag_edits()
+    return {"chain": {"paper002": {"instances": e["chain.paper002.instances"], "wires": e["chain.paper002.wires"]}}}
+
+
 def coarse_subtract(rounding: str) -> Config:
     """The default config with a bias_subtract that drops 4 fraction bits (by ``rounding``) after the
     subtraction, and the final low-pass on that wire."""

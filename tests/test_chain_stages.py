@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import default_data, design_with
+from conftest import default_data, design_with, lag_edits
 from fxdsp.blocks.lag import Lag
 from fxdsp.budget.attribution import attribute
 from fxdsp.chains import build
@@ -27,15 +27,14 @@ FS = default_data()["system"]["fs_hz"]
 
 def with_lag(**lag):
     lag = {"rate_hz": FS, "tau_s": 0.002, **lag}
-    return design_with(chains=True, **{"chain_paper002.stages": ["lag"]}, **{f"lag.{k}": v for k, v in lag.items()})
+    return design_with(chains=True, **lag_edits(), **{f"lag.{k}": v for k, v in lag.items()})
 
 
 # ---- absent = today ------------------------------------------------------------------------------
 def test_a_config_without_the_stages_reproduces_every_committed_vector():
-    """The acceptance test: the optional keys left out entirely (no [chain_paper002] table, no
-    phase_trim_rad) give the committed vectors byte for byte, as the shipped neutral values do."""
+    """The acceptance test: the optional key left out entirely (no phase_trim_rad) gives the
+    committed vectors byte for byte, as the shipped neutral value does."""
     data = copy.deepcopy(default_data())
-    del data["chain_paper002"]
     del data["demod"]["phase_trim_rad"]
     d = build(Config(data, source="<default>"))
     assert d.chains[CHAIN].stages == () and d.blocks["demod"].nco.trim == 0
@@ -52,10 +51,11 @@ def test_the_check_sees_a_stage():
 
 # ---- config -----------------------------------------------------------------------------------
 def test_the_lag_stage_updates_at_a_divisor_of_the_chain_sample_rate():
-    data = copy.deepcopy(default_data())
-    data["chain_paper002"]["stages"] = ["lag"]
+    from conftest import edited_data
+
+    data = edited_data(**lag_edits())
     d = build(Config(copy.deepcopy(data), source="<test>"))   # the shipped 10 Hz: every 9600th sample
-    assert d.blocks["lag"].decimation == FS / data["lag"]["rate_hz"] and d.chains[CHAIN].lag is d.blocks["lag"]
+    assert d.blocks["lag"].decimation == FS / data["lag"]["rate_hz"] and d.chains[CHAIN].sensor.lag is d.blocks["lag"]
     assert d.chains[CHAIN].MEMBERS[:2] == ("rtd", "lag") and d.ovf_bit(CHAIN, "lag.te") == 1
     for bad in (7.0, 2 * FS):   # not a whole number of samples; faster than the samples arrive
         data["lag"]["rate_hz"] = bad
@@ -93,15 +93,6 @@ def test_a_decimating_lag_matches_its_oracle_and_continues_across_a_cut(decimati
         lag.set_state({**head.state, "phase": decimation})
 
 
-@pytest.mark.parametrize("stages,error", [(["lagg"], "'lagg' is not one of lag"), (["lag", "lag"], "listed twice"),
-                                          ("lag", "expected a list of names"), ([1], "expected a list of names")])
-def test_bad_stages_name_the_field(stages, error):
-    data = copy.deepcopy(default_data())
-    data["chain_paper002"]["stages"] = stages
-    with pytest.raises((ValueError, TypeError), match=rf"^chain_paper002\.stages: .*{error}"):
-        build(Config(data, source="<test>"))
-
-
 def test_trim_word_is_the_nearest_phase_word_modulo_a_turn():
     nco = design_with(chains=True, **{"demod.phase_trim_rad": -0.3}).blocks["demod"].nco
     exact = (-0.3 / (2 * np.pi)) % 1.0 * 2.0**nco.phase_bits
@@ -128,11 +119,11 @@ def test_the_lag_feeds_the_engines_and_nothing_else():
     assert not np.array_equal(te, b.outputs["temp"])
     # the engines at Te, by hand, then the rest of the chain
     c = lagged.chains[CHAIN]
-    sf = c.sf.run(temp=te).outputs["y"]
-    v = c.divide.run(x=ins["vsa"], sf=sf).outputs["y"]
-    i = c.demod.run(x=v).outputs["i"]
-    r = c.subtract.run(x=i, bias=c.bias.run(temp=te).outputs["y"]).outputs["y"]
-    assert np.array_equal(c.lpf.run(x=r).outputs["y"], a.outputs["rate"])
+    sf = c.sensor.sf.run(temp=te).outputs["y"]
+    v = c.sensor.divide.run(x=ins["vsa"], sf=sf).outputs["y"]
+    i = c.sensor.demod.run(x=v).outputs["i"]
+    r = c.sensor.subtract.run(x=i, bias=c.sensor.bias.run(temp=te).outputs["y"]).outputs["y"]
+    assert np.array_equal(c.sensor.lpf.run(x=r).outputs["y"], a.outputs["rate"])
     assert "lag.te" in a.overflows
 
 
@@ -153,10 +144,10 @@ def _held(d, phase_error: float, rate_fs: float, quad_fs: float, n: int = 12000)
     SF (rate + bias) cos(w t + phi) + SF quad cos(w t + phi + pi/2): a pick-off phase error phi."""
     c = d.chains[CHAIN]
     t = np.full(n, 25.0)
-    sf, bias = c.sf.reference(temp=t)["y"], c.bias.reference(temp=t)["y"]
-    vsa = (c.demod.carrier(sf * (rate_fs + bias), phase_error, n)
-           + c.demod.carrier(sf * quad_fs, phase_error + np.pi / 2, n))
-    codes = c.digitise({"vsa": vsa, "rtd_frac": c.rtd.adc_fraction(t)})
+    sf, bias = c.sensor.sf.reference(temp=t)["y"], c.sensor.bias.reference(temp=t)["y"]
+    vsa = (c.sensor.demod.carrier(sf * (rate_fs + bias), phase_error, n)
+           + c.sensor.demod.carrier(sf * quad_fs, phase_error + np.pi / 2, n))
+    codes = c.sensor.digitise({"vsa": vsa, "rtd_frac": c.sensor.rtd.adc_fraction(t)})
     rate = to_float(c.run(**codes).outputs["rate"], c.outputs["rate"])
     return float(rate[n // 2:].mean())
 
@@ -165,7 +156,7 @@ def test_the_trim_rotates_quadrature_into_rate():
     """No phase error, a trim theta: I = R cos theta + Q sin theta (+ the bias's own rotation)."""
     theta, R, Q = 0.2, 0.05, 0.3
     got = _held(design_with(chains=True, **{"demod.phase_trim_rad": theta}), 0.0, R, Q)
-    bias = design_with(chains=True).chains[CHAIN].bias.reference(temp=np.array([25.0]))["y"][0]
+    bias = design_with(chains=True).chains[CHAIN].sensor.bias.reference(temp=np.array([25.0]))["y"][0]
     want = R * np.cos(theta) + Q * np.sin(theta) + bias * (np.cos(theta) - 1)
     assert abs(got - want) < 2e-5, (got, want)
     assert abs(_held(design_with(chains=True), 0.0, R, Q) - R) < 2e-5

@@ -71,11 +71,10 @@ def test_state_of_a_stateful_block_matters():
 
 
 # ---- wired formats ------------------------------------------------------------------------------
-# (input instance.port, driving instance.port), read off the papers' chains (chains.py docstring)
-WIRES = [("piecewise_sf.temp", "rtd.temp"), ("piecewise_bias.temp", "rtd.temp"), ("lag.temp", "rtd.temp"),
-         ("sf_divide.sf", "piecewise_sf.y"), ("demod.x", "sf_divide.y"), ("bias_subtract.x", "demod.i"),
-         ("bias_subtract.bias", "piecewise_bias.y"), ("iir.x", "bias_subtract.y"),
-         ("piecewise_bias001.temp", "freq2temp.temp"), ("bias_subtract001.bias", "piecewise_bias001.y")]
+# (input instance.port, driving instance.port): every wire of the config's chains, from their netlists
+WIRES = sorted({(f"{dst.instance.replace('.', '_')}.{dst.port}", f"{src.instance.replace('.', '_')}.{src.port}")
+                for chain in DESIGN.chains.values() for dst, src in chain.netlist.drivers.items()
+                if not isinstance(src, str)})
 
 
 def _fmt(design, wire):
@@ -83,15 +82,23 @@ def _fmt(design, wire):
     return design.instances[inst].ports[port].format
 
 
+def test_the_wires_include_the_papers_chains():
+    """The list above is the netlists': it holds the papers' wires (a netlist that lost one would shrink it)."""
+    assert {("sf_divide.sf", "piecewise_sf.y"), ("iir.x", "bias_subtract.y"), ("sf_divide000.sf", "piecewise_k1.y"),
+            ("bias_subtract001.bias", "piecewise_bias001.y")} <= set(WIRES) and len(WIRES) == 12
+
+
 @pytest.mark.parametrize("dst,src", WIRES)
 def test_wired_inputs_follow_their_driver(dst, src):
     """Change the driver's format in the config: the input it drives follows, nothing restated."""
+    from fxdsp.blocks.kinds import kind_of
+
     data = copy.deepcopy(default_data())
     inst = DESIGN.instances[src.split(".")[0]]
     sec = data
     for part in inst.config_path.split("."):
         sec = sec[part]
-    key = {"temp": "temp_format", "y": "out_format", "i": "data_format"}[src.split(".")[1]]
+    key = kind_of(inst.config_path).output_keys[src.split(".")[1]]
     old = _fmt(DESIGN, src)
     sec[key] = f"{'s' if old.signed else 'u'}{old.wl - 1}.{old.fl - 1}"  # narrower: every width check still holds
     d = build(Config(data, source="<test>"))

@@ -96,7 +96,7 @@ def test_the_extended_config_is_the_users_but_for_calibration_and_remedies(logs,
     changed, added, removed = diff(user, ext)
     assert changed <= allowed and not removed and added <= set(REMEDY_KEYS["paper002"]["lag"]), (changed, added)
     assert {"piecewise.sf.coefficients", "piecewise.bias.coefficients", "lag.tau_s",
-            "chain_paper002.stages"} <= changed
+            "chain.paper002.instances", "chain.paper002.wires"} <= changed
     # config_base.toml: the calibrated coefficients only
     base = tomllib.loads((out / "config_base.toml").read_text())
     changed, added, removed = diff(user, base)

@@ -79,10 +79,10 @@ def test_committed_report_is_current_for_the_rtl_and_default_config():
     design = build()
     report = load_hw_report()
     assert report.get("source_sha256") == source_hash(design), "hdl/HW_REPORT.* is stale: run make hw-report"
-    from fxdsp.hdl.report_cli import VARIANTS
+    from fxdsp.hdl.report_cli import variants
 
     # a row per instance, and one per resource-shared variant of a block (e.g. the serial iir)
-    assert {r["name"] for r in report["rows"]} == set(design.instances) | set(VARIANTS)
+    assert {r["name"] for r in report["rows"]} == set(design.instances) | set(variants(design))
     # and each row's own hash is that of what it synthesises now (what a regeneration reuses)
     from fxdsp.hdl.report_cli import expected_row_hashes
 
@@ -210,3 +210,27 @@ def test_a_budget_row_is_judged_on_its_slowest_seed():
     assert "Fmax NOT met (-" in markdown([row], 40.0)
     assert report_cli.seeds_of("chain_paper002 (ARCH=1)") == report_cli.SEED_SWEEP
     assert report_cli.seeds_of("demod (ARCH=1)") == (1,)
+
+
+def test_adding_an_instance_reruns_no_other_row():
+    """A new block table and a chain of it (their headers and top are new generated files) leave every
+    other row's hash as it was: a row reads only the generated files of its own instances."""
+    import copy
+
+    from conftest import default_data
+    from fxdsp.chains import build
+    from fxdsp.config import Config
+    from fxdsp.hdl.report_cli import expected_row_hashes
+
+    before = expected_row_hashes(build(), 40.0)
+    data = copy.deepcopy(default_data())
+    data["iir2"] = {**data["iir"], "cutoff_hz": 20.0}
+    data["chain"]["extra"] = {"instances": ["iir2"], "inputs": ["x -> iir2.x"], "wires": [], "outputs": ["iir2.y -> y"]}
+    data["iir2"]["data_format"] = "s24.22"
+    after = expected_row_hashes(build(Config(data, source="<test>")), 40.0)
+    assert {r for r in after if r not in before} == {"iir2", "iir2 (ARCH=1)", "chain_extra", "chain_extra (ARCH=1)"}
+    assert all(after[r] == h for r, h in before.items())
+    data["iir"]["cutoff_hz"] = 40.0    # and a change to one table re-runs the rows that read it
+    changed = {r for r, h in expected_row_hashes(build(Config(data, source="<test>")), 40.0).items()
+               if before.get(r, h) != h}
+    assert changed == {"iir", "iir (ARCH=1)", "chain_paper002", "chain_paper002 (ARCH=1)"}, changed

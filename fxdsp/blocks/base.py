@@ -121,6 +121,11 @@ class Block:
         if state is not None:
             raise ValueError(f"{self.name}: state: this block has no memory, got {type(state).__name__}")
 
+    def stream_outputs(self, log: OverflowLog, wanted: set[str], **inputs) -> dict[str, np.ndarray]:
+        """``stream`` when a chain reads only the outputs ``wanted`` (a block that can skip the work of
+        the others overrides it; the bits of the wanted ones are the same)."""
+        return self.stream(log, **inputs)
+
     # --- to implement ---
     def stream(self, log: OverflowLog, **inputs) -> dict[str, np.ndarray]:  # pragma: no cover
         """Continue from the current internal state, inputs unchecked (``run`` checks them)."""

@@ -16,7 +16,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, sum_format
 from ..fixed.kernels import convert
 from .base import Block, corner_codes, random_codes
-from .datapath import Datapath, OvfField, info
+from .datapath import Datapath, OvfField, RtlPorts, info
 
 
 @njit(cache=True)
@@ -36,6 +36,7 @@ class BiasSubtractDatapath(Datapath):
     """Fields in the order of the ``bias_subtract`` RTL module's parameters."""
 
     MODULE = "bias_subtract"
+    RTL = RtlPorts()
     in_w: int
     bias_w: int
     out_w: int

@@ -84,11 +84,28 @@ class OvfField:
     width: int
 
 
+@dataclass(frozen=True)
+class RtlPorts:
+    """The RTL module's interface beyond clk, rst, in_valid, the data ports, out_valid and ovf: what
+    a harness or a generated top must connect (Verilator warns of a missing pin)."""
+
+    ready: bool = False         # an in_ready output whatever the parameters (tied high when one per clock)
+    serial: bool = False        # a resource-shared variant selected by ARCH = 1
+    mac_bundle: bool = False    # the shared-multiplier bundle (mac_*, fx_mac_port): tied off on its own multiplier
+    aux: bool = False           # the auxiliary low-pass channel (aux_*, read only with AUX_LPF = 1)
+    second_set: bool = False    # a second coefficient set's outputs (out_valid_1, y_1, ovf_1; SETS = 2)
+
+    def variant(self) -> dict | None:
+        """The parameters selecting the serial variant (None: the module has none)."""
+        return {"ARCH": 1} if self.serial else None
+
+
 @dataclass(frozen=True, eq=False)
 class Datapath:
     """Base of every block's datapath description (subclasses add the fields)."""
 
     MODULE = ""   # the RTL module (class attribute of each subclass); every subclass has ``ovf``
+    RTL = RtlPorts()   # its interface (class attribute of each subclass)
 
     def verilog(self, instance: str) -> tuple[dict[str, int | str], dict[str, Rom], set[str]]:
         """The RTL module's parameters in declaration order, the ROMs by file name and the names

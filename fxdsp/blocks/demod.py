@@ -45,7 +45,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, product_format, quantize, resize
 from ..fixed.kernels import convert, shift_right_round
 from .base import Block, corner_codes
-from .datapath import Datapath, OvfField, Rom, const, info, nested
+from .datapath import Datapath, OvfField, Rom, RtlPorts, const, info, nested
 from .iir import Iir, IirDatapath
 
 
@@ -243,6 +243,7 @@ class DemodDatapath(Datapath):
     """Fields in the order of the ``demod`` RTL module's parameters."""
 
     MODULE = "demod"
+    RTL = RtlPorts(ready=True, serial=True, mac_bundle=True, aux=True)
     in_w: int
     data_w: int
     phase_bits: int
@@ -375,6 +376,13 @@ class Demod(Block):
         i, q = self.iq(log, x)
         amp, phase = self.polar(log, i, q)
         return {"i": i, "q": q, "amp": amp, "phase": phase}
+
+    def stream_outputs(self, log: OverflowLog, wanted: set[str], x: np.ndarray) -> dict[str, np.ndarray]:
+        """Without amp or phase wanted, the CORDIC does not run (nor count)."""
+        if wanted <= {"i", "q"}:
+            i, q = self.iq(log, x)
+            return {"i": i, "q": q}
+        return self.stream(log, x=x)
 
     def polar(self, log: OverflowLog, i: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         dp = self.datapath

@@ -24,7 +24,7 @@ import numpy as np
 from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, product_format, quantize, resize, sub
 from .base import Block, corner_codes
-from .datapath import Datapath, OvfField, const, info
+from .datapath import Datapath, OvfField, RtlPorts, const, info
 
 
 @dataclass(frozen=True, eq=False)
@@ -32,6 +32,7 @@ class Freq2TempDatapath(Datapath):
     """Fields in the order of the ``freq2temp`` RTL module's parameters."""
 
     MODULE = "freq2temp"
+    RTL = RtlPorts(ready=True, serial=True)
     freq_w: int
     kinv_w: int
     temp_w: int

@@ -41,7 +41,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, quantize
 from ..fixed.kernels import fit, shift_right_round
 from .base import Block, corner_codes, random_codes
-from .datapath import Datapath, OvfField, Rom, info, signed_width
+from .datapath import Datapath, OvfField, Rom, RtlPorts, info, signed_width
 
 DESIGNS = ("butter", "cheby1", "bessel")
 BTYPES = ("lowpass", "highpass")
@@ -113,6 +113,7 @@ class IirDatapath(Datapath):
     """Fields in the order of the ``iir`` RTL module's parameters."""
 
     MODULE = "iir"
+    RTL = RtlPorts(ready=True, serial=True, mac_bundle=True)
     data_w: int
     sections: int
     coef_w: int          # ROM word: the wider of num_format and den_format (>= 4 for the c weights)

@@ -41,7 +41,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules
 from ..fixed.kernels import convert, shift_right_round
 from .base import Block, corner_codes
-from .datapath import Datapath, OvfField, info
+from .datapath import Datapath, OvfField, RtlPorts, info
 
 
 @njit(cache=True)
@@ -79,6 +79,7 @@ class LagDatapath(Datapath):
     """Fields in the order of the ``lag`` RTL module's parameters."""
 
     MODULE = "lag"
+    RTL = RtlPorts(ready=True, serial=True)
     temp_w: int
     guard: int           # g: state fraction bits beyond the temperature code
     state_w: int

@@ -33,7 +33,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, product_format, quantize, sum_format
 from ..fixed.kernels import convert
 from .base import Block
-from .datapath import Datapath, OvfField, Rom, const, frozen_array, info, packed, signed_width
+from .datapath import Datapath, OvfField, Rom, RtlPorts, const, frozen_array, info, packed, signed_width
 
 
 @njit(cache=True)
@@ -75,6 +75,7 @@ class PiecewiseDatapath(Datapath):
     """Fields in the order of the ``piecewise`` RTL module's parameters."""
 
     MODULE = "piecewise"
+    RTL = RtlPorts(ready=True, serial=True, mac_bundle=True, second_set=True)
     t_w: int
     order: int
     segments: int

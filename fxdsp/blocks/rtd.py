@@ -35,7 +35,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, quantize
 from ..fixed.kernels import convert
 from .base import Block, corner_codes, random_codes
-from .datapath import Datapath, OvfField, Rom, info
+from .datapath import Datapath, OvfField, Rom, RtlPorts, info
 
 
 @njit(cache=True)
@@ -116,6 +116,7 @@ class RtdDatapath(Datapath):
     """Fields in the order of the ``rtd`` RTL module's parameters."""
 
     MODULE = "rtd"
+    RTL = RtlPorts(ready=True, serial=True, mac_bundle=True)
     adc_w: int
     lut_index_bits: int      # k: segment index = top k bits of the offset-binary code
     lut_w: int

@@ -25,7 +25,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, quantize
 from ..fixed.kernels import convert
 from .base import Block, corner_codes, random_codes, tie_codes
-from .datapath import Datapath, OvfField, info
+from .datapath import Datapath, OvfField, RtlPorts, info
 
 
 @njit(cache=True)
@@ -55,6 +55,7 @@ class SfDivideDatapath(Datapath):
     """Fields in the order of the ``sf_divide`` RTL module's parameters."""
 
     MODULE = "sf_divide"
+    RTL = RtlPorts(ready=True, serial=True)
     in_w: int
     sf_w: int
     sf_signed: int
@@ -134,7 +135,10 @@ class SfDivide(Block):
         return {"x": np.concatenate(xs), "sf": np.concatenate(sfs)}
 
     def nominal_stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
-        sf = quantize(rng.uniform(0.9, 1.1, n), self.sf_format, Rules("half_up", "saturate"))
+        """x over half its range, SF within 10 % of the smallest divisor (at least 1) whose quotients
+        of those x fit the output: a scale factor near 1, or a K1 of 52 Hz/g for a Df in Hz."""
+        scale = max(1.0, self.in_format.max_value / 2 / (0.9 * self.out_format.max_value))
+        sf = quantize(rng.uniform(0.9, 1.1, n) * scale, self.sf_format, Rules("half_up", "saturate"))
         x = random_codes(rng, self.in_format, n) // 2
         return {"x": x, "sf": sf}
 

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..chains import Design
+from ..chains import Design, stream_key
 from ..errors_table import port_units
 from .hybrid import CATEGORIES, CHAIN_MODELS, Source, Switch
 
@@ -143,7 +143,7 @@ class Attribution:
 def _stimulus(design: Design, chain_name: str, n: int | None, seed_offset: int):
     chain = design.chains[chain_name]
     analog_fn, sources_fn, run_fn = CHAIN_MODELS[chain_name]
-    rng = np.random.default_rng([design.seed, seed_offset, list(design.all).index(chain_name)])
+    rng = np.random.default_rng([design.seed, seed_offset, stream_key(chain_name)])
     return chain, analog_fn(chain, rng, n or design.samples), sources_fn(chain), run_fn
 
 
@@ -250,7 +250,7 @@ def attribute(design: Design, chain_name: str, port: str = "rate", n: int | None
 def _band(design: Design, chain_name: str) -> tuple[float, float] | None:
     """(output cut-off, sample rate) of a chain that ends in a low-pass; None otherwise."""
     if chain_name == "chain_paper002":
-        lpf = design.chains[chain_name].lpf
+        lpf = design.chains[chain_name].sensor.lpf
         w = np.linspace(0, np.pi, 4097)
         import scipy.signal as sps
         _, h = sps.sosfreqz(lpf.sos, worN=w)

@@ -150,7 +150,7 @@ def settling_samples(chain, tol: float = SETTLE_TOL) -> int:
     stays within ``tol`` of its final value: the start-up transient is not part of the noise."""
     if not 0 < tol < 1:
         raise ValueError(f"tol: must be within (0, 1), got {tol}")
-    sos = np.vstack([chain.demod.lpf_i.sos, chain.lpf.sos])
+    sos = np.vstack([chain.sensor.demod.lpf_i.sos, chain.sensor.lpf.sos])
     n = 4096
     while True:
         step = sps.sosfilt(sos, np.ones(n))
@@ -224,7 +224,7 @@ def allan_error(design: Design, samples: int = ALLAN_SAMPLES, temp_c: float = AL
     settle = settling_samples(chain)
     n = samples + settle
     rng = np.random.default_rng([design.seed, seed_offset])
-    stim = chain.sensor_inputs(np.full(n, float(temp_c)), np.full(n, float(rate_fs)), quad_fs=0.05, rng=rng,
+    stim = chain.sensor.sensor_inputs(np.full(n, float(temp_c)), np.full(n, float(rate_fs)), quad_fs=0.05, rng=rng,
                                noise_fs=1e-3)
     got = chain.real_outputs(chain.run(**stim))["rate"]
     ref = chain.run_float(**stim)["rate"]

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..chains import Paper001Chain, Paper002Chain
+from ..chains import Chain
 from ..fixed import Format, Rules, quantize
 from ..fixed.kernels import FLOOR, TOWARD_ZERO, round_float
 from ..blocks.lag import held
@@ -354,17 +354,17 @@ def subtract_hybrid(block, x, bias, name: str, sw: Switch) -> np.ndarray:
 # --------------------------------------------------------------------------------------------
 # chains: analog stimulus, sources, hybrid run
 # --------------------------------------------------------------------------------------------
-def sources_paper002(chain: Paper002Chain) -> list[Source]:
-    rtd, sf, div, dem, bias, sub, lpf = (chain.rtd, chain.sf, chain.divide, chain.demod, chain.bias,
-                                        chain.subtract, chain.lpf)
+def sources_paper002(chain: Chain) -> list[Source]:
+    rtd, sf, div, dem, bias, sub, lpf = (chain.sensor.rtd, chain.sensor.sf, chain.sensor.divide, chain.sensor.demod, chain.sensor.bias,
+                                        chain.sensor.subtract, chain.sensor.lpf)
     s = [Source("adc.sense", ADC, "sf_divide", "vsa", div.in_format.lsb, "half_up", "sense ADC"),
          Source("adc.rtd", ADC, "rtd", "rtd_frac", rtd.adc_format.lsb, "half_up", "RTD bridge ADC"),
          Source("rtd.lut_resolution", LUTNCO, "rtd", "temp", note=f"{2**rtd.datapath.lut_index_bits} linear segments"),
          Source("rtd.lut_coef", COEF, "rtd", "temp", note=f"LUT entries in {rtd.lut_format}")]
     if rtd.datapath.shift > 0:
         s.append(Source("rtd.round", ROUND, "rtd", "temp", rtd.temp_format.lsb, rtd.rules.rounding))
-    if chain.lag is not None:
-        lag = chain.lag
+    if chain.sensor.lag is not None:
+        lag = chain.sensor.lag
         s += [Source("lag.alpha", COEF, "lag", "te", note=f"alpha = {lag.m} x 2**-{lag.s}"),
               Source("lag.round", ROUND, "lag", "te", lag.temp_format.lsb, lag.rules.rounding,
                      f"state step at {lag.state_format}, output")]
@@ -387,8 +387,8 @@ def sources_paper002(chain: Paper002Chain) -> list[Source]:
     return s
 
 
-def sources_paper001(chain: Paper001Chain) -> list[Source]:
-    f2t, bias, sub = chain.f2t, chain.bias, chain.subtract
+def sources_paper001(chain: Chain) -> list[Source]:
+    f2t, bias, sub = chain.sensor.f2t, chain.sensor.bias, chain.sensor.subtract
     s = [Source("adc.freq", ADC, "freq2temp", "f", f2t.freq_format.lsb, "half_up", "frequency word"),
          Source("adc.rate", ADC, "bias_subtract001", "rate_in", sub.in_format.lsb, "half_up", "rate input word"),
          Source("freq2temp.coef", COEF, "freq2temp", "temp", note="f0 and 1/k"),
@@ -402,46 +402,46 @@ def sources_paper001(chain: Paper001Chain) -> list[Source]:
     return s
 
 
-def run_paper002(chain: Paper002Chain, analog: dict, sw: Switch) -> dict[str, np.ndarray]:
+def run_paper002(chain: Chain, analog: dict, sw: Switch) -> dict[str, np.ndarray]:
     """Every node of the hybrid paper 002 chain."""
-    dem = chain.demod
+    dem = chain.sensor.demod
     x = analog["vsa"]
-    x = sw.round("adc.sense", x, chain.divide.in_format, Rules("half_up", "saturate"))
+    x = sw.round("adc.sense", x, chain.sensor.divide.in_format, Rules("half_up", "saturate"))
     frac = analog["rtd_frac"]
-    af = chain.rtd.adc_format
+    af = chain.sensor.rtd.adc_format
     frac = sw.round("adc.rtd", frac, af, Rules("half_up", "saturate"))
-    temp = rtd_hybrid(chain.rtd, frac, sw)
-    te = lag_hybrid(chain.lag, temp, sw) if chain.lag is not None else temp   # what the engines see
-    sf = piecewise_hybrid(chain.sf, te, "piecewise_sf", sw)
-    v = divide_hybrid(chain.divide, x, sf, sw)
+    temp = rtd_hybrid(chain.sensor.rtd, frac, sw)
+    te = lag_hybrid(chain.sensor.lag, temp, sw) if chain.sensor.lag is not None else temp   # what the engines see
+    sf = piecewise_hybrid(chain.sensor.sf, te, "piecewise_sf", sw)
+    v = divide_hybrid(chain.sensor.divide, x, sf, sw)
     mix, i = demod_hybrid(dem, v, sw)
-    b = piecewise_hybrid(chain.bias, te, "piecewise_bias", sw)
-    r = subtract_hybrid(chain.subtract, i, b, "bias_subtract.round", sw)
-    rate = iir_hybrid(chain.lpf, r, "iir.coef", "iir.round", sw)
+    b = piecewise_hybrid(chain.sensor.bias, te, "piecewise_bias", sw)
+    r = subtract_hybrid(chain.sensor.subtract, i, b, "bias_subtract.round", sw)
+    rate = iir_hybrid(chain.sensor.lpf, r, "iir.coef", "iir.round", sw)
     return {"vsa": x, "rtd_frac": frac, "temp": temp, "te": te, "sf": sf, "v": v, "mix": mix, "i": i, "bias": b,
             "r": r, "rate": rate}
 
 
-def run_paper001(chain: Paper001Chain, analog: dict, sw: Switch) -> dict[str, np.ndarray]:
-    f2t = chain.f2t
+def run_paper001(chain: Chain, analog: dict, sw: Switch) -> dict[str, np.ndarray]:
+    f2t = chain.sensor.f2t
     f = analog["f"]
     f = sw.round("adc.freq", f, f2t.freq_format, Rules("half_up", "saturate"))
     rate_in = analog["rate_in"]
-    fi = chain.subtract.in_format
+    fi = chain.sensor.subtract.in_format
     rate_in = sw.round("adc.rate", rate_in, fi, Rules("half_up", "saturate"))
     if "freq2temp.coef" in sw:
         temp = (f - f2t.datapath.f0 * f2t.freq_format.lsb) * (f2t.datapath.kinv * f2t.kinv_format.lsb)
     else:
         temp = (f - f2t.f0_hz) / f2t.k_hz_per_c
     temp = sw.round("freq2temp.round", temp, f2t.temp_format, f2t.rules)
-    b = piecewise_hybrid(chain.bias, temp, "piecewise_bias001", sw)
-    rate = subtract_hybrid(chain.subtract, rate_in, b, "bias_subtract001.round", sw)
+    b = piecewise_hybrid(chain.sensor.bias, temp, "piecewise_bias001", sw)
+    rate = subtract_hybrid(chain.sensor.subtract, rate_in, b, "bias_subtract001.round", sw)
     return {"f": f, "rate_in": rate_in, "temp": temp, "bias": b, "rate": rate}
 
 
 # per chain: its analog stimulus (the chain's own ``nominal_analog``: the same draws as
 # ``nominal_stimulus``, before the ADCs), its sources and its hybrid run
 CHAIN_MODELS = {
-    "chain_paper002": (Paper002Chain.nominal_analog, sources_paper002, run_paper002),
-    "chain_paper001": (Paper001Chain.nominal_analog, sources_paper001, run_paper001),
+    "chain_paper002": (lambda chain, rng, n: chain.sensor.nominal_analog(rng, n), sources_paper002, run_paper002),
+    "chain_paper001": (lambda chain, rng, n: chain.sensor.nominal_analog(rng, n), sources_paper001, run_paper001),
 }

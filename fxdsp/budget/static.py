@@ -21,7 +21,7 @@ def static_stimulus(chain, seed: int) -> tuple[dict, np.ndarray]:
     temps = rng.uniform(-20.0, 60.0, POINTS)
     t_c = np.repeat(temps, HOLD)
     rate = np.repeat(np.where(np.arange(POINTS) % 2 == 0, 0.0, 0.2), HOLD)
-    stim = chain.sensor_inputs(t_c, rate, quad_fs=0.05, rng=rng, noise_fs=1e-3)
+    stim = chain.sensor.sensor_inputs(t_c, rate, quad_fs=0.05, rng=rng, noise_fs=1e-3)
     keep = (np.arange(t_c.size) % HOLD) >= HOLD - SETTLED
     return stim, keep
 

@@ -12,7 +12,7 @@ base's; a calibrated value or a remedy that does not fit it is an InputError nam
   (:func:`fxdsp.repro.calibrate.calibrate002`, quadratic segments with the ``order`` remedy)
   in the base's ``[piecewise.sf]`` / ``[piecewise.bias]`` formats, t0 and order;
   ``[system] rate_full_scale_dps`` = 4096 mV / SF(25 C) (the quotient's scale); ``lag``:
-  ``[lag] tau_s`` and ``[chain_paper002] stages = ["lag"]`` (the lag then updates at the base's
+  ``[lag] tau_s`` and the lag inserted into ``[chain.paper002]``'s netlist (the lag then updates at the base's
   ``[lag] rate_hz``, a divisor of ``fs_hz``); ``trim``: ``[demod] phase_trim_rad``; ``cvd``: the
   ``[rtd]`` law and its coefficients.
 * paper001: f0/k of the resonator thermometer against the reference and the bias polynomial in the
@@ -35,6 +35,7 @@ from fxdsp.extend.design import Design, Fitting
 from fxdsp.extend.plan import parameter
 from fxdsp.errors import InputError
 from fxdsp.fixed import Format
+from fxdsp.netlist import with_stage
 from fxdsp.repro.calconfig import FS_MV, acc_width, config_from_text, config_text, fit_format, \
     paper001_coefficients, paper002_coefficients, piecewise_table
 from fxdsp.repro.calibrate import calibrate002
@@ -87,8 +88,10 @@ def remedy_tables(remedies, chain: str, design=None, fitting: Fitting | None = N
             tables["lag"]["rate_hz"] = rate
         if fitting is not None:
             tables["lag"].update(fitting.lag(tau, rate))
-        if chain == "paper002":
-            tables["chain_paper002"] = {"stages": ["lag"]}
+        if chain == "paper002":   # the netlist edit: rtd.temp -> lag -> the SF and bias engines
+            net = design.table("chain.paper002")
+            edited = with_stage(net, "lag")
+            tables["chain.paper002"] = {k: v for k, v in edited.items() if v != net.get(k)}
     if "trim" in stages:
         tables["demod"] = {"phase_trim_rad": parameter(remedies, "trim", "phase_trim_rad")}
     return tables

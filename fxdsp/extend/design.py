@@ -57,7 +57,7 @@ CALIBRATED = {
 }
 # chain -> remedy stage -> the dotted keys the remedy writes (rewritten, or added to their table)
 REMEDY_KEYS = {
-    "paper002": {"lag": ("lag.tau_s", "chain_paper002.stages"), "trim": ("demod.phase_trim_rad",),
+    "paper002": {"lag": ("lag.tau_s", "chain.paper002.instances", "chain.paper002.wires"), "trim": ("demod.phase_trim_rad",),
                  "cvd": ("rtd.law", "rtd.cvd_a", "rtd.cvd_b", "rtd.cvd_c")},
     # the cubic bias: one more coefficient per segment, and a format for it
     "paper001": {"order": ("piecewise.bias001.coef_format",)},

@@ -46,9 +46,9 @@ def config_stages(design) -> tuple[set[str], float | None, float]:
     if design.blocks["rtd"].physics.law == "cvd":
         on.add("cvd")
     chain = design.chains.get("chain_paper002") if design.chains else None
-    if chain is not None and chain.lag is not None:
+    if chain is not None and chain.sensor.lag is not None:
         on.add("lag")
-        tau = chain.lag.tau_s
+        tau = chain.sensor.lag.tau_s
     theta = trim_angle(design.blocks["demod"].nco)
     if design.blocks["demod"].nco.trim != 0:
         on.add("trim")

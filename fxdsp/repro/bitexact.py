@@ -17,28 +17,23 @@ Lag-aware variant (``compensate_lagged``): the T code goes through the ``lag`` b
 die-temperature estimate, config table ``[lag]``) before the coefficient engines.
 
 Paper 001: ``freq_hz`` -> ``freq2temp`` -> ``piecewise.bias001`` -> ``bias_subtract001`` (the
-``chain_paper001`` of the design). Paper 000: a = (Df - K0(t)) / K1(t) with ``piecewise.k0``,
-``piecewise.k1``, a ``BiasSubtract`` and an ``SfDivide`` whose formats are the module constants
-below (the default config has no table for them).
+``chain_paper001`` of the design). Paper 000: a = (Df - K0(t)) / K1(t) through the config's
+``chain_paper000`` (its formats are the config's: ``[bias_subtract000]``, ``[sf_divide000]``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from fxdsp.blocks.bias_subtract import BiasSubtract
 from fxdsp.blocks.freq2temp import Freq2Temp
-from fxdsp.blocks.sf_divide import SfDivide
 from fxdsp.chains import build
 from fxdsp.config import Config
+from fxdsp.errors import InputError
 from fxdsp.fixed import Format, OverflowLog, Rules, quantize, to_float
 from fxdsp.repro.calconfig import FS_MV
 
 ROUND = Rules("half_up", "saturate")
 # paper 000: difference frequency Df in Hz (LSB 1.5e-5 Hz = 0.3 ug at 52 Hz/g)
-DF_FORMAT = Format.parse("s32.16")
-ACCEL_FORMAT = Format.parse("s32.24")  # a in g, LSB 6e-8 g
-ACCEL_GUARD_BITS = 10
 # paper 002's frequency thermometer: the 8 kHz drive frequency word
 DRIVE_FREQ_FORMAT = Format.parse("s32.17")
 KINV_FORMAT = Format.parse("s24.18")
@@ -124,32 +119,33 @@ class Compensator001:
 
     def compensate(self, log_data: dict) -> dict[str, np.ndarray]:
         ovf = OverflowLog()
-        f = quantize(_finite("freq_hz", log_data["freq_hz"]), self.chain.f2t.freq_format, ROUND, ovf, "freq")
-        r = quantize(_finite("output", log_data["output"]), self.chain.subtract.in_format, ROUND, ovf, "rate")
+        f = quantize(_finite("freq_hz", log_data["freq_hz"]), self.chain.sensor.f2t.freq_format, ROUND, ovf, "freq")
+        r = quantize(_finite("output", log_data["output"]), self.chain.sensor.subtract.in_format, ROUND, ovf, "rate")
         res = self.chain.run(ovf, f=f, rate_in=r)
         out = self.chain.real_outputs(res)
         return {"rate_deg_h": out["rate"], "temp_c": out["temp"], "overflows": ovf}
 
 
 class Compensator000:
-    """Paper 000: a = (Df - K0(t)) / K1(t), t = T - 25 C, in g."""
+    """Paper 000 through the config's own chain (``[chain.paper000]``, the ``qvba`` sensor's roles):
+    a = (Df - K0(t)) / K1(t), t = T - 25 C, in g, bit-exact, with the chain's formats."""
 
-    def __init__(self, config: Config | str | None):
+    def __init__(self, config: Config | str | None, chain: str = "chain_paper000"):
         d = build(config)
         self.design = d
-        self.k0, self.k1 = d.blocks["piecewise_k0"], d.blocks["piecewise_k1"]
+        if chain not in d.chains:
+            raise InputError(f"config: no {chain} (the paper 000 chain) in {d.config.name}")
+        self.chain = d.chains[chain]
+        if self.chain.sensor is None or self.chain.sensor.name != "qvba":
+            raise InputError(f"chain.{chain.removeprefix('chain_')}.sensor: the paper 000 chain reads a qvba")
+        self.k0, self.k1 = self.chain.sensor.k0, self.chain.sensor.k1
         self.temp_format = self.k0.temp_format
-        self.subtract = BiasSubtract(DF_FORMAT, self.k0.out_format, DF_FORMAT, ROUND, name="qvba_subtract")
-        self.divide = SfDivide(DF_FORMAT, self.k1.out_format, ACCEL_FORMAT, ACCEL_GUARD_BITS,
-                               Rules("floor", "saturate"))
 
     def compensate(self, temp_c, df_hz) -> dict[str, np.ndarray]:
         ovf = OverflowLog()
-        t = quantize(_finite("temp_c", temp_c), self.temp_format, ROUND, ovf, "temp")
-        df = quantize(_finite("output", df_hz), DF_FORMAT, ROUND, ovf, "df")
-        k0 = self.k0.stream(ovf, temp=t)["y"]
-        k1 = self.k1.stream(ovf, temp=t)["y"]
-        diff = self.subtract.stream(ovf, x=df, bias=k0)["y"]
-        a = self.divide.stream(ovf, x=diff, sf=k1)["y"]
-        return {"accel_g": to_float(a, ACCEL_FORMAT), "k0_hz": to_float(k0, self.k0.out_format),
-                "k1_hz_per_g": to_float(k1, self.k1.out_format), "overflows": ovf}
+        s, ins = self.chain.sensor, self.chain.inputs
+        t = quantize(_finite("temp_c", temp_c), ins[s.temp], ROUND, ovf, "temp")
+        df = quantize(_finite("output", df_hz), ins[s.df], ROUND, ovf, "df")
+        res = self.chain.run(log=ovf, **{s.temp: t, s.df: df})
+        (port, accel), = res.outputs.items()
+        return {"accel_g": to_float(accel, self.chain.outputs[port]), "overflows": ovf}

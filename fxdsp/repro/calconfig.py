@@ -61,6 +61,18 @@ def fit_format(values, wl: int = COEF_WL, headroom_bits: int = 1, signed: bool =
     return f"{'s' if signed else 'u'}{wl}.{fl}"
 
 
+def _value_end(lines: list[str], i: int, start: int) -> int:
+    """The index after the last line of the value that starts at ``lines[i][start:]`` (a TOML array
+    may continue over several lines)."""
+    for end in range(i + 1, len(lines) + 1):
+        try:
+            tomllib.loads("v = " + lines[i][start:] + "".join(lines[i + 1:end]))
+            return end
+        except tomllib.TOMLDecodeError:
+            continue
+    return i + 1
+
+
 def set_table_keys(text: str, table: str, updates: dict, add_missing: bool = False) -> str:
     """Rewrite ``key = value`` lines of ``[table]`` in TOML text. Keys must already exist there,
     unless ``add_missing``: those are then written right after the table's header line."""
@@ -76,11 +88,14 @@ def set_table_keys(text: str, table: str, updates: dict, add_missing: bool = Fal
         if current != table:
             continue
         km = re.match(r"^(\s*)([A-Za-z0-9_]+)(\s*=\s*)", line)
-        if km and km.group(2) in updates:
+        if km and km.group(2) in updates and km.group(2) not in done:
             key = km.group(2)
             # the base's trailing comment described the old value (a paper's polynomial, an LSB in
             # its units): a rewritten key drops it rather than keep a statement that is now false
+            end = _value_end(lines, i, len(km.group(0)))
             lines[i] = f"{km.group(1)}{key}{km.group(3)}{dumps_value(updates[key], f'{table}.{key}')}\n"
+            for j in range(i + 1, end):
+                lines[j] = ""   # the old value's continuation lines (a list written over several lines)
             done.add(key)
     missing = [k for k in updates if k not in done]
     if missing and add_missing:
@@ -214,7 +229,7 @@ def paper001_tables(cal: dict) -> dict:
 
 def paper000_tables(cal: dict) -> dict:
     t0 = float(cal.get("t_ref_c", 25.0))
-    acc_wl = acc_width(_default("piecewise", "qvba_temp_format"))
+    acc_wl = acc_width(_default("piecewise.k0", "temp_format"))
     return {"piecewise.k0": piecewise_table([cal["k0_poly"]], [], t0, acc_wl=acc_wl, name="piecewise.k0"),
             "piecewise.k1": piecewise_table([cal["k1_poly"]], [], t0, acc_wl=acc_wl, name="piecewise.k1")}
 

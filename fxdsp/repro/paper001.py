@@ -75,10 +75,10 @@ def check_thermometer(config, ref_temp_c, freq_hz, tol_c: float = THERMO_TOL_C) 
     """Run the config's freq2temp bit-exactly on calibration points (mean frequency, reference
     temperature) and flag a mean offset beyond ``tol_c``: what a rounded f0 is caught by."""
     comp = Compensator001(config)
-    f2t = comp.chain.f2t
+    f2t = comp.chain.sensor.f2t
     f = quantize(np.asarray(freq_hz, float), f2t.freq_format, Rules("half_up", "saturate"))
     t = f2t.run(OverflowLog(), f=f)
-    err = comp.chain.f2t.real_outputs(t)["temp"] - np.asarray(ref_temp_c, float)
+    err = comp.chain.sensor.f2t.real_outputs(t)["temp"] - np.asarray(ref_temp_c, float)
     return {"mean_error_c": float(err.mean()), "max_error_c": float(np.abs(err).max()),
             "ok": bool(abs(err.mean()) <= tol_c)}
 

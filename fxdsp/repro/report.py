@@ -12,6 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from tqdm import tqdm  # noqa: E402
 
+from fxdsp.chains import build  # noqa: E402
 from fxdsp.repro import paper000, paper001, paper002, paper003  # noqa: E402
 
 PAPERS = ("002", "001", "000", "003")
@@ -499,6 +500,18 @@ def _md001(r: dict) -> str:
     return "\n".join(lines)
 
 
+def _chain000_formats(r: dict) -> str:
+    """The bit-exact path of the paper 000 run, read from its calibrated config's chain."""
+    from fxdsp.repro.calconfig import config_from_text
+
+    chain = build(config_from_text(r["config_text"])).chains["chain_paper000"]
+    s = chain.sensor
+    (out, fmt), = chain.outputs.items()
+    return (f"T -> `{chain.inputs[s.temp]}` code, `{s.k0.name}`, `{s.k1.name}` (formats chosen from the "
+            f"coefficients), Df in `{chain.inputs[s.df]}` Hz, `{s.subtract.name}` Df - K0, `{s.divide.name}` by K1 "
+            f"into `{fmt}` g ({s.divide.guard_bits} guard bits, quotient toward zero, then {s.divide.rules.rounding})")
+
+
 def _md000(r: dict) -> str:
     cal = r["cal"]
     rec = r.get("records", {})
@@ -508,10 +521,8 @@ def _md000(r: dict) -> str:
         "**Simulated test.** The `paper000` scenario (-40..60 C in 20 C steps, 1 h dwell, tumble "
         "0/90/180/270 deg for 10 min each, the sequence twice in one log), output noise 2e-5 K1 per 10-s "
         "sample (quartz-pair level, 1 mHz). Run 1 calibrates cubic K0(t), K1(t), t = T - 25 C; run 2 is "
-        "compensated **bit-exactly**: T -> `s18.9` code, `piecewise.k0`, `piecewise.k1` (formats chosen from "
-        "the coefficients), Df in `s32.16` Hz, `BiasSubtract` Df - K0, `SfDivide` by K1 into `s32.24` g "
-        "(10 guard bits, truncation). At each tumble point of run 2: K0' = (a90 + a270)/2, "
-        "K1' = (a0 - a180)/2g.",
+        f"compensated **bit-exactly** through the config's `chain.paper000` ({_chain000_formats(r)}). "
+        "At each tumble point of run 2: K0' = (a90 + a270)/2, K1' = (a0 - a180)/2g.",
         "",
         "| figure | paper | reproduced |",
         "|---|---|---|",

@@ -234,7 +234,7 @@ def _prepare_rtl(args) -> dict:
     cfg = load_config(args.config)
     rtl_dir = Path(args.rtl) if args.rtl else rtl.RTL_DIR
     rtl.check_tools(rtl_dir)
-    blocks = [b for b in args.blocks.split(",") if b] if args.blocks else list(rtl.BLOCKS)
+    blocks = [b for b in args.blocks.split(",") if b] if args.blocks else None   # None: every instance
     settings = rtl.settings(cfg.data, args.shards, blocks, rtl_dir)
     seed = args.seed if args.seed is not None else int(cfg.data["stimulus"]["seed"])
     build_root = Path(args.build_dir).resolve() if args.build_dir else None

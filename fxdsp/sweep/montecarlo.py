@@ -106,7 +106,7 @@ def point_errors(settings: dict, seed: int) -> dict:
             # the operating point of (seed, T), the same at every frequency: rate first, then the noise
             rng = np.random.default_rng([seed, k])
             rate = float(rng.uniform(-settings["rate_fs"], settings["rate_fs"]))
-            stim = chain.sensor_inputs(np.full(n, float(t)), np.full(n, rate), quad_fs=settings["quad_fs"], rng=rng,
+            stim = chain.sensor.sensor_inputs(np.full(n, float(t)), np.full(n, rate), quad_fs=settings["quad_fs"], rng=rng,
                                        noise_fs=settings["noise_fs"])
             res = chain.run(**stim)
             e = (chain.real_outputs(res)["rate"] - chain.run_float(**stim)["rate"])[settle:] * scale

@@ -35,8 +35,6 @@ ORDERS = (2, 4)
 KNOB_PROBABILITY = 0.3
 KNOB_DELTA = (-2, 2)
 MAX_DRAWS = 200
-BLOCKS = ("rtd", "iir", "demod", "piecewise_sf", "piecewise_bias", "piecewise_bias001", "piecewise_k0", "sf_divide",
-          "bias_subtract", "bias_subtract001", "freq2temp", "lag", "chain_paper001", "chain_paper002")
 EXTRA = {"chain_paper002": {"DIV_UNROLL": 14}, "sf_divide": {"UNROLL": 3}}
 GAP = 0.25
 
@@ -51,14 +49,23 @@ def check_tools(rtl_dir: Path, sim: str = "icarus") -> None:
         raise InputError(f"--rtl: no Verilog sources (*.v) in {rtl_dir}")
 
 
+def instance_names(config_data: dict) -> list[str]:
+    """Every block and chain of the config: what a shard runs by default (``--blocks``)."""
+    from ..chains import build
+    from ..config import Config
+
+    return list(build(Config(copy.deepcopy(config_data), source="<sweep rtl>")).instances)
+
+
 def settings(config_data: dict, shards: int, blocks, rtl_dir: Path) -> dict:
     if shards < 1:
         raise ValueError(f"--shards: need at least 1 shard, got {shards}")
-    blocks = list(blocks)
-    unknown = [b for b in blocks if b not in BLOCKS]
+    names = instance_names(config_data)
+    blocks = list(names if blocks is None else blocks)
+    unknown = [b for b in blocks if b not in names]
     if unknown or not blocks:
         raise ValueError(f"--blocks: unknown block {unknown[0] if unknown else ''!r}; expected some of "
-                         f"{', '.join(BLOCKS)}")
+                         f"{', '.join(names)}")
     sources = {p.name: p.read_text(encoding="utf-8") for p in sorted(Path(rtl_dir).glob("*.v"))}
     import hashlib
 

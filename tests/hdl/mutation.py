@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from conftest import lag_chain
 from fxdsp.vectors import load
 from hdl_util import RTL, SERIAL, icarus_window, VECTORS, BuildFailed, HarnessTimeout, UndefinedWord, build_dir, \
     design_of, generate_into, model_run, mutated_rtl, rtl_sources, run_harness
@@ -161,7 +162,7 @@ MUTATIONS = [
              (({}, "lag", False, SERIAL["lag"]),)),
     Mutation("lag_serial_decim_ignored", "lag.v", "ph <= (ph == PH_LAST) ? {PH_W{1'b0}} : ph + 1'b1;",
              "ph <= {PH_W{1'b0}};", "serial: the phase never advances (every sample updates: DECIM ignored)",
-             (({"chain_paper002": {"stages": ["lag"]}, "lag": {"rate_hz": 96000.0 / 5, "tau_s": 0.005}}, "lag", False,
+             (({**lag_chain(), "lag": {"rate_hz": 96000.0 / 5, "tau_s": 0.005}}, "lag", False,
                SERIAL["lag"]),)),
     # ---- serial rtd (ARCH = 1) ----
     Mutation("rtd_serial_wrong_slot", "rtd.v", "a1_q   <= idx1;", "a1_q   <= {1'b0, idx};",

@@ -1,5 +1,5 @@
 """The optional stages of chain_paper002 on the RTL (issue 14, item 2): the lag between the RTD
-readout and the coefficient engines (``[chain_paper002] stages = ["lag"]`` -> LAG_EN = 1) and the
+readout and the coefficient engines (the lag inserted into ``[chain.paper002]`` -> LAG_EN = 1) and the
 phase trim of the NCO reference (``[demod] phase_trim_rad`` -> demod's PHASE_TRIM), each alone and
 together. Golden vectors of each extended config are made here from the model (not committed) and
 streamed through the chain with cocotb on Icarus: every output word and the overflow-flag count
@@ -15,6 +15,7 @@ import json
 import numpy as np
 import pytest
 
+from conftest import lag_chain
 from hdl_util import SIM_BUILD, build_dir, default_data, design_of, generate_into, lint_iverilog, lint_verilator, \
     mutated_rtl, require_iverilog, run_cocotb, segment
 
@@ -22,12 +23,12 @@ CHAIN = "chain_paper002"
 FS = default_data()["system"]["fs_hz"]
 # rate_hz = fs: the lag updates on every chain sample. tau of a few ms makes Te trail the swept
 # temperature by ~1 C within the streamed prefix (a large, visible effect)
-LAG = {"chain_paper002": {"stages": ["lag"]}, "lag": {"rate_hz": FS, "tau_s": 0.002}}
+LAG = {**lag_chain(), "lag": {"rate_hz": FS, "tau_s": 0.002}}
 TRIM = {"demod": {"phase_trim_rad": 0.3}}
 # both, with the lag updated on every 5th sample (DECIM = 5: holds between), another lag rounding
 # and few guard bits (the state rounding shows), a trim across a quadrant boundary (negative: the
 # word wraps modulo 2**phase_bits)
-BOTH = {"chain_paper002": {"stages": ["lag"]}, "demod": {"phase_trim_rad": -2.2},
+BOTH = {**lag_chain(), "demod": {"phase_trim_rad": -2.2},
         "lag": {"rate_hz": FS / 5, "tau_s": 0.005, "state_guard_bits": 6, "rounding": "floor"}}
 CONFIGS = {"lag": LAG, "trim": TRIM, "both": BOTH}
 EXTRA = {"DIV_UNROLL": 7}   # 7 quotient bits per cycle: the Python-driven run stays fast
@@ -60,7 +61,7 @@ def test_configs_have_the_stages_and_change_the_outputs(designs, baseline):
     for key, d in designs.items():
         chain = d.chains[CHAIN]
         assert chain.stages == (() if key == "trim" else ("lag",)), key
-        assert (chain.demod.nco.trim != 0) == (key != "lag"), key
+        assert (chain.sensor.demod.nco.trim != 0) == (key != "lag"), key
         out = chain.run(**ins).outputs
         assert np.array_equal(out["temp"], plain["temp"]), f"{key}: the temp port stays the thermometer's"
         changed = np.count_nonzero(out["rate"] != plain["rate"])

@@ -35,9 +35,7 @@ DESIGNS = {
         "demod": {"rounding": "half_even", "overflow": "wrap", "lpf": {"overflow": "wrap"}},
     },
 }
-BLOCKS = ["rtd", "iir", "demod", "piecewise_sf", "piecewise_bias", "piecewise_bias001", "piecewise_k0",
-          "piecewise_k1", "sf_divide", "bias_subtract", "bias_subtract001", "freq2temp", "lag", "chain_paper001",
-          "chain_paper002"]
+BLOCKS = sorted(design_of().instances)   # every instance of the design: its blocks and chains
 EXTRA = {"chain_paper002": {"DIV_UNROLL": 14}, "sf_divide": {"UNROLL": 2}}
 _designs: dict = {}
 

@@ -105,6 +105,22 @@ def test_lint_variants(top, params):
     assert out == "", out
 
 
+# the chain tops hdl-gen writes (committed in hdl/gen, checked current by test_headers_rom_files_match_config)
+GENERATED_TOPS = sorted(GEN.glob("chain_*.v"))
+
+
+def test_some_chain_top_is_generated():
+    assert GENERATED_TOPS, "no generated chain top in hdl/gen"
+
+
+@pytest.mark.parametrize("arch", [0, 1])
+@pytest.mark.parametrize("top", GENERATED_TOPS, ids=[p.stem for p in GENERATED_TOPS])
+def test_generated_chain_tops_lint_clean(top, arch):
+    for run in (lint_iverilog, lint_verilator):
+        out = run(top.stem, {"ARCH": arch}, extra=(top,))
+        assert out == "", out
+
+
 @pytest.mark.parametrize("rc,output", [(1, ""), (3, "some diagnostic"), (0, "%Warning-WIDTH: something")])
 @pytest.mark.parametrize("tool", ["iverilog", "verilator"])
 def test_lint_runner_fails_on_any_exit_status_or_output(tool, rc, output, tmp_path, monkeypatch):

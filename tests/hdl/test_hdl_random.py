@@ -12,7 +12,9 @@ import pytest
 from hdl_util import SERIAL, design_of, icarus_samples, icarus_window, run_cocotb, segment
 
 from fxdsp.hdl.stimuli import random_stimulus  # fxdsp rtl and the sweep's RTL shards draw the same way
-from fxdsp.sweep.rtl import BLOCKS, EXTRA
+from fxdsp.sweep.rtl import EXTRA
+
+BLOCKS = sorted(design_of().instances)   # every instance of the design: its blocks and chains
 
 PARAM_SETS = {
     # every rounding floor, every overflow wrap, default word lengths
@@ -40,7 +42,7 @@ PARAM_SETS = {
         "freq2temp": {"temp_format": "s16.7", "rounding": "half_even"},
         "bias_subtract001": {"in_format": "s20.4", "out_format": "s20.4", "rounding": "half_even"},
         # lag on the s16.7 code: a short time constant, a 12-bit alpha, 8 guard bits
-        "lag": {"tau_s": 2.0, "alpha_bits": 12, "state_guard_bits": 8, "rounding": "half_even"},
+        "lag": {"temp_format": "s16.7", "tau_s": 2.0, "alpha_bits": 12, "state_guard_bits": 8, "rounding": "half_even"},
     },
     # toward_zero, wider words, output fraction dropped in the subtractions (rounding ties there)
     "toward_zero_wide": {
@@ -58,7 +60,7 @@ PARAM_SETS = {
         "freq2temp": {"temp_format": "s20.11", "rounding": "toward_zero", "overflow": "wrap"},
         "bias_subtract001": {"in_format": "s24.9", "out_format": "s24.6", "rounding": "toward_zero"},
         # lag on the s20.11 code: an hour's time constant (alpha 2.8e-5), 20-bit alpha, 20 guard bits
-        "lag": {"tau_s": 3600.0, "alpha_bits": 20, "state_guard_bits": 20, "rounding": "toward_zero",
+        "lag": {"temp_format": "s20.11", "tau_s": 3600.0, "alpha_bits": 20, "state_guard_bits": 20, "rounding": "toward_zero",
                 "overflow": "wrap"},
     },
 }

@@ -133,3 +133,68 @@ def test_rtl_that_does_not_build_is_a_failure_quoting_the_compiler(tmp_path, cap
     errors = [e for s in row["streams"].values() for e in s["errors"]]
     assert errors and all(e.startswith("build failed: ") and "bias_subtract.v" in e for e in errors)
     assert "MISMATCH bias_subtract: golden stream: build failed:" in printed and "bias_subtract.v" in printed
+
+
+# ---- a chain of the user's own, written from the docs (README, the default config's comments) ------
+USER_CHAIN = default_config_text() + '''
+[piecewise.tc]            # the user's bias polynomial in T - 25 C, deg/h, two segments
+breakpoints_c = [10.0]
+coefficients = [[2.0, 0.1, 0.001], [2.5, 0.12, 0.0]]
+t0_c = 25.0
+coef_format = ["s24.16", "s24.20", "s24.24"]
+acc_format = "s40.24"
+out_format = "s24.12"
+rounding = "half_even"
+overflow = "saturate"
+
+[bias_subtract2]
+in_format = "s24.12"
+out_format = "s24.12"
+rounding = "half_up"
+overflow = "wrap"
+
+[chain.user]              # branching, and listed in another order than the data flows
+instances = ["bias_subtract2", "piecewise.tc", "rtd"]
+inputs = ["rate -> bias_subtract2.x", "code -> rtd.code"]
+wires = ["rtd.temp -> piecewise.tc.temp", "piecewise.tc.y -> bias_subtract2.bias"]
+outputs = ["bias_subtract2.y -> rate_c", "rtd.temp -> temp", "piecewise.tc.y -> bias"]
+'''
+
+
+@pytest.mark.hdl
+def test_rtl_verifies_a_chain_the_project_never_saw(tmp_path):
+    """Its top is generated from its netlist; both variants pass every stream; a fault in the
+    generated top's schedule (a member started before what drives it is ready) is caught."""
+    require_simulator("icarus")
+    cfg = tmp_path / "user.toml"
+    cfg.write_text(USER_CHAIN)
+    out = tmp_path / "rtl"
+    assert main(["rtl", "--config", str(cfg), "--only", "chain_user", "--sim", "icarus", "--long", "300",
+                 "--out", str(out)]) == 0
+    report = json.loads((out / "report.json").read_text())
+    assert [r["dut"] for r in report["duts"]] == ["chain_user", "chain_user (serial)"] and report["passed"]
+    assert (out / "hdl" / "chain_user.v").is_file()
+
+
+@pytest.mark.hdl
+def test_a_fault_in_a_generated_top_is_caught(tmp_path, monkeypatch):
+    from fxdsp.hdl import chain_top
+
+    require_simulator("icarus")
+    real = chain_top.chain_top
+
+    def early(design, name):   # the subtraction no longer waits for the polynomial
+        text = real(design, name)
+        if name != "chain_user":
+            return text
+        assert " & done_piecewise_tc" in text
+        return text.replace(" & done_piecewise_tc", "")
+
+    monkeypatch.setattr(chain_top, "chain_top", early)
+    cfg = tmp_path / "user.toml"
+    cfg.write_text(USER_CHAIN)
+    code = main(["rtl", "--config", str(cfg), "--only", "chain_user", "--sim", "icarus", "--long", "100",
+                 "--out", str(tmp_path / "rtl")])
+    assert code == 1
+    report = json.loads((tmp_path / "rtl" / "report.json").read_text())
+    assert not report["passed"] and report["duts"][0]["dut"] == "chain_user"

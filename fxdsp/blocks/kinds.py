@@ -1,0 +1,154 @@
+"""The kinds of block a config table can be, stated once: each kind's ports and how its table is
+read, given the formats of the inputs the chains wire to it.
+
+A table's kind is its name up to the first dot, without trailing digits (``bias_subtract001`` and
+``bias_subtract`` are both ``bias_subtract``); a *family* kind's instances are its sub-tables
+(``[piecewise.sf]``, ``[piecewise.k0]``). An input that no chain wires takes its format from the
+table key this module names for it (``in_format``, ``temp_format`` ...); a wired one is derived
+from the output driving it, and a table that states it anyway must agree.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Callable
+
+from ..config import Section
+from ..errors import InputError
+from ..fixed import Format
+
+
+@dataclass(frozen=True)
+class Wired:
+    """The format of an input wired by a chain, and the field (``chain.x: 'a.y -> b.x'``) it comes from."""
+
+    format: Format
+    source: str
+
+
+@dataclass(frozen=True)
+class Context:
+    """What a block's table cannot say by itself: the chains' sample rate, whether a wired format
+    must match a stated one (False: block-level work), and whether a chain feeds the block."""
+
+    fs_hz: float
+    enforce: bool = True
+    in_chain: bool = False
+
+
+def port_format(sec: Section, key: str, port: str, wired: dict[str, Wired], ctx: Context) -> Format:
+    """The format of input ``port``: wired (derived; a stated ``key`` must agree) or stated by ``key``."""
+    w = wired.get(port)
+    if w is None:
+        if not sec.has(key):
+            raise sec._missing(key, f"missing (input {port!r} of {sec.path} is wired by no chain, so its "
+                                    f"format must be stated)")
+        return sec.format(key)
+    return sec.wired_format(key, w.format, w.source, ctx.enforce)
+
+
+@dataclass(frozen=True)
+class Kind:
+    """One kind of block: its class's port names and the reader of its table."""
+
+    name: str
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    make: Callable[[Section, dict[str, Wired], Context], object]
+    output_keys: dict[str, str]   # output port -> the table key its format comes from (errors name it)
+    family: bool = False     # the instances are the sub-tables ([piecewise.sf])
+
+
+def _rtd(sec, wired, ctx):
+    from .rtd import Rtd
+
+    block = Rtd.from_config(sec)
+    if "code" in wired and ctx.enforce and wired["code"].format != block.adc_format:
+        raise InputError(f"{sec.field('adc_format')}: {block.adc_format} must equal {wired['code'].source} "
+                         f"({wired['code'].format}) to connect the chain")
+    return block
+
+
+def _piecewise(sec, wired, ctx):
+    from .piecewise import Piecewise
+
+    return Piecewise.from_config(sec, port_format(sec, "temp_format", "temp", wired, ctx))
+
+
+def _sf_divide(sec, wired, ctx):
+    from .sf_divide import SfDivide
+
+    return SfDivide.from_config(sec, port_format(sec, "in_format", "x", wired, ctx),
+                                port_format(sec, "sf_format", "sf", wired, ctx))
+
+
+def _demod(sec, wired, ctx):
+    from .demod import Demod
+
+    return Demod.from_config(sec, ctx.fs_hz, port_format(sec, "in_format", "x", wired, ctx), ctx.enforce)
+
+
+def _bias_subtract(sec, wired, ctx):
+    from .bias_subtract import BiasSubtract
+
+    return BiasSubtract.from_config(sec, port_format(sec, "in_format", "x", wired, ctx),
+                                    port_format(sec, "bias_format", "bias", wired, ctx))
+
+
+def _iir(sec, wired, ctx):
+    from .iir import Iir
+
+    return Iir.from_config(sec, ctx.fs_hz, port_format(sec, "data_format", "x", wired, ctx), sec.path)
+
+
+def _freq2temp(sec, wired, ctx):
+    from .freq2temp import Freq2Temp
+
+    block = Freq2Temp.from_config(sec, sec.format("temp_format"))
+    if "f" in wired and ctx.enforce and wired["f"].format != block.freq_format:
+        raise InputError(f"{sec.field('freq_format')}: {block.freq_format} must equal {wired['f'].source} "
+                         f"({wired['f'].format}) to connect the chain")
+    return block
+
+
+def _lag(sec, wired, ctx):
+    from .lag import Lag
+
+    # in a chain, the lag's input arrives once per chain sample and it updates at its rate_hz
+    rate = (ctx.fs_hz, "system.fs_hz", ctx.enforce) if ctx.in_chain else ()
+    return Lag.from_config(sec, port_format(sec, "temp_format", "temp", wired, ctx), *rate)
+
+
+KINDS: dict[str, Kind] = {k.name: k for k in (
+    Kind("rtd", ("code",), ("temp",), _rtd, {"temp": "temp_format"}),
+    Kind("lag", ("temp",), ("te",), _lag, {"te": "temp_format"}),
+    Kind("piecewise", ("temp",), ("y",), _piecewise, {"y": "out_format"}, family=True),
+    Kind("sf_divide", ("x", "sf"), ("y",), _sf_divide, {"y": "out_format"}),
+    Kind("demod", ("x",), ("i", "q", "amp", "phase"), _demod,
+         {"i": "data_format", "q": "data_format", "amp": "data_format", "phase": "angle_format"}),
+    Kind("bias_subtract", ("x", "bias"), ("y",), _bias_subtract, {"y": "out_format"}),
+    Kind("iir", ("x",), ("y",), _iir, {"y": "data_format"}),
+    Kind("freq2temp", ("f",), ("temp",), _freq2temp, {"temp": "temp_format"}),
+)}
+
+
+def kind_of(table: str) -> Kind | None:
+    """The kind of the block table ``table`` (``piecewise.sf`` -> piecewise), None for a table that
+    is not a block (``system``, ``chain.paper002``)."""
+    head = table.split(".")[0]
+    return KINDS.get(re.sub(r"\d+$", "", head))
+
+
+def block_tables(data: dict) -> list[str]:
+    """Every block table of a config's data, in the file's order."""
+    out = []
+    for key, value in data.items():
+        kind = kind_of(key)
+        if kind is None or not isinstance(value, dict):
+            continue
+        if kind.family:
+            out += [f"{key}.{sub}" for sub, v in value.items() if isinstance(v, dict)]
+        else:
+            out.append(key)
+    return out
