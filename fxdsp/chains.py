@@ -202,6 +202,13 @@ class Design:
     def all(self) -> dict[str, Block]:
         return {**self.blocks, **self.chains}
 
+    def chain(self, name: str, purpose: str) -> Chain:
+        """The chain ``name``; a config that does not declare it is bad input naming what needs it."""
+        if name not in self.chains:
+            raise InputError(f"[chain.{name.removeprefix('chain_')}]: {purpose} needs it, and {self.config.name} "
+                             f"declares no such chain (its chains: {', '.join(self.chains) or 'none'})")
+        return self.chains[name]
+
     def ovf_fields(self, name: str) -> list[tuple[str, str, int]]:
         """The RTL ovf vector of an instance, bit 0 first: (member instance, counter, width) per field.
         A block's counters are its config path + field counter (``demod.lpf_i.section0``)."""

@@ -234,3 +234,18 @@ def test_adding_an_instance_reruns_no_other_row():
     changed = {r for r, h in expected_row_hashes(build(Config(data, source="<test>")), 40.0).items()
                if before.get(r, h) != h}
     assert changed == {"iir", "iir (ARCH=1)", "chain_paper002", "chain_paper002 (ARCH=1)"}, changed
+
+
+def test_a_generated_tops_comments_are_not_its_logic():
+    """The row hash of a generated top ignores its comments (the schedule it states in words) and
+    sees any change of its code."""
+    from fxdsp.chains import build
+    from fxdsp.hdl.chain_top import chain_top
+    from fxdsp.hdl.hwreport import row_hash
+
+    text = chain_top(build(), "chain_paper000")
+    h = row_hash("chain_paper000", None, {"chain_paper000.v": text})
+    reworded = text.replace("// ARCH = 1 schedule", "// ARCH = 1: the schedule")
+    assert reworded != text and row_hash("chain_paper000", None, {"chain_paper000.v": reworded}) == h
+    broken = text.replace(" & done_piecewise_k0", "", 1)
+    assert broken != text and row_hash("chain_paper000", None, {"chain_paper000.v": broken}) != h

@@ -167,3 +167,35 @@ def test_paper000_is_the_papers_acceleration_within_a_microg():
     err = fixed - truth
     assert np.sqrt(np.mean(err ** 2)) < 1e-6 and np.max(np.abs(err)) < 2e-6, (np.sqrt(np.mean(err ** 2)), err.max())
     assert np.max(np.abs(fixed - nom["accel_g"])) < 2e-5   # counter noise 1e-4 Hz = 2 ug rms
+
+
+# ---- which top a chain runs on ---------------------------------------------------------------------
+def test_a_hand_written_top_only_stands_for_its_own_netlist(tmp_path):
+    """The shipped paper 002 / 001 netlists (and paper 002 with the lag) run on their hand-written tops;
+    the same chain rewired, or a config without it, compiles no hand-written top of it and, when the
+    chain is there, gets a generated one of the same name."""
+    from fxdsp.hdl import harness as hh
+    from fxdsp.hdl import params as hp
+    from fxdsp.hdl.chain_top import uses_hand_top
+
+    def tops(design):
+        return {p.name for p in hh.rtl_sources(None, design, tmp_path) if p.name.startswith("chain_")}
+
+    d = build()
+    assert uses_hand_top(d, "chain_paper002") and uses_hand_top(d, "chain_paper001")
+    assert set(hp.generate(d)) >= {"chain_paper000.v", "chain_paper002_params.vh"} and "chain_paper002.v" not in hp.generate(d)
+    lagged = build(_with_chain("paper002", with_stage(DATA["chain"]["paper002"], "lag")))
+    assert uses_hand_top(lagged, "chain_paper002")
+    rewired = copy.deepcopy(DATA["chain"]["paper002"])
+    rewired["outputs"] = rewired["outputs"] + ["piecewise.sf.y -> sf"]
+    r = build(_with_chain("paper002", rewired))
+    assert not uses_hand_top(r, "chain_paper002")
+    files = hp.generate(r)
+    assert "chain_paper002.v" in files and "chain_paper002_params.vh" not in files
+    assert [p for p in hh.rtl_sources(None, r, tmp_path) if p.name == "chain_paper002.v"] == [tmp_path / "chain_paper002.v"]
+    data = copy.deepcopy(DATA)
+    del data["chain"]["paper001"]
+    data["piecewise"]["bias001"]["temp_format"] = str(d.blocks["freq2temp"].temp_format)
+    data["bias_subtract001"]["bias_format"] = str(d.blocks["piecewise_bias001"].out_format)
+    without = build(Config(data, source="<test>"))
+    assert "chain_paper001.v" not in tops(without) and "chain_paper002.v" in tops(without)

@@ -136,7 +136,7 @@ def run(args) -> int:
             raise ValueError(f"{option}: must be within 1..--samples ({args.samples}), got {value}")
     design = build(args.config)
     iir = design.blocks["iir"]
-    chain = design.chains["chain_paper002"]
+    chain = design.chain("chain_paper002", "fxdsp bench (it times the paper 002 chain)")
     rng = np.random.default_rng(design.seed)
     fmt = iir.data_format
     x = (0.25 * fmt.max_int * np.sin(2 * np.pi * np.arange(args.samples) / 997)

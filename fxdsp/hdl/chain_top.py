@@ -30,6 +30,21 @@ def _vec(w: int) -> str:
     return f"[{w - 1}:0] " if w > 1 else ""
 
 
+def _schedule_lines(design: Design, name: str) -> list[str]:
+    """The serial schedule as numbers for this config (:func:`fxdsp.hdl.schedule.chain_schedule`)."""
+    from .schedule import chain_schedule
+
+    try:
+        per, start = chain_schedule(design, name)
+    except ValueError as e:   # a member without a constant schedule (a decimating lag)
+        return [f"// ARCH = 1 schedule: not constant ({e})."]
+    budget = int(40e6 // design.fs_hz)
+    steps = ", ".join(f"{m} at {b} for {c}" for m, (b, c) in start.items())
+    return [f"// ARCH = 1 schedule (each member's accepting edge, counted from the edge after the chain's, and "
+            f"its cycles): {steps};",
+            f"//   {per} cycles per sample at this config, against {budget} at 40 MHz and {design.fs_hz:g} S/s."]
+
+
 def chain_top(design: Design, name: str) -> str:
     """The Verilog-2005 text of chain ``name``'s generated top."""
     from .harness import tie_offs
@@ -50,6 +65,7 @@ def chain_top(design: Design, name: str) -> str:
              "// from its header. ovf = {" + ", ".join(_v(m) for m in reversed(members)) + "} (bit 0 first: "
              + _v(members[0]) + f"), {n_ovf} flags, valid with out_valid.",
              "// ARCH = 0: every member in its one-sample-per-clock variant; 1: its serial variant (own multiplier).",
+             *_schedule_lines(design, name),
              "`default_nettype none", "", f"module {name} #(",
              "    parameter integer ARCH = 0   // 0: one-sample-per-clock members; 1: their serial variants",
              ") (", "    input  wire clk,", "    input  wire rst,", "    input  wire in_valid,",
@@ -125,10 +141,37 @@ def chain_top(design: Design, name: str) -> str:
     return "\n".join(lines + body + ["endmodule", "", "`default_nettype wire", ""])
 
 
-# chains whose top is still written by hand (hdl/rtl/<chain>.v): their netlists are the built-in ones
+# chains whose top is still written by hand (hdl/rtl/<chain>.v), for the built-in netlists only
 HAND_TOPS = ("chain_paper002", "chain_paper001")
 
 
+def _wiring(table: dict) -> tuple:
+    return (tuple(table["instances"]), *(tuple(sorted(table[k])) for k in ("inputs", "wires", "outputs")))
+
+
+def uses_hand_top(design: Design, name: str) -> bool:
+    """Whether chain ``name`` runs on its hand-written top: only a chain of that name whose netlist is
+    the built-in one (paper 002's also with the lag, its LAG_EN); any other netlist, under any name,
+    gets a generated top, so a hand-written top never stands in for a netlist it was not written for."""
+    import tomllib
+
+    from ..config import default_config_text
+    from ..netlist import with_stage
+
+    if name not in HAND_TOPS or name not in design.chains:
+        return False
+    key = name.removeprefix("chain_")
+    builtin = tomllib.loads(default_config_text())["chain"][key]
+    allowed = {_wiring(builtin)} | ({_wiring(with_stage(builtin, "lag"))} if key == "paper002" else set())
+    return _wiring(design.config.data["chain"][key]) in allowed
+
+
+def unused_hand_tops(design: Design) -> set[str]:
+    """The hand-written top files (``<chain>.v``) a design must not compile: their chain is absent, or
+    has another netlist (its generated top then has the same module name)."""
+    return {f"{h}.v" for h in HAND_TOPS if not uses_hand_top(design, h)}
+
+
 def generated_tops(design: Design) -> dict[str, str]:
-    """``<chain>.v`` of every chain of the design that has no hand-written top."""
-    return {f"{name}.v": chain_top(design, name) for name in design.chains if name not in HAND_TOPS}
+    """``<chain>.v`` of every chain of the design that does not run on a hand-written top."""
+    return {f"{name}.v": chain_top(design, name) for name in design.chains if not uses_hand_top(design, name)}

@@ -38,7 +38,7 @@ from ..chains import build
 from ..outputs import IN, OUT_FILE, check_output, staged
 from . import RTL_DIR as RTL
 from .hwreport import load_hw_report, report_json, row_files, row_hash, source_hash
-from .chain_top import generated_tops
+from .chain_top import generated_tops, unused_hand_tops
 from .params import generate, instance, iverilog_params
 
 UP5K = {"LUT": 5280, "MAC16": 8, "FF": 5280, "BRAM": 30}
@@ -151,8 +151,11 @@ def _stat(text: str) -> dict:
 
 def _sources(design=None, work: Path | None = None):
     """The RTL sources, and the design's generated chain tops in ``work``."""
-    tops = [work / f for f in generated_tops(design)] if design is not None and work is not None else []
-    return " ".join(str(p) for p in [*sorted(RTL.glob("*.v")), *tops])
+    if design is None or work is None:
+        return " ".join(str(p) for p in sorted(RTL.glob("*.v")))
+    unused = unused_hand_tops(design)
+    tops = [work / f for f in generated_tops(design)]
+    return " ".join(str(p) for p in [*(p for p in sorted(RTL.glob("*.v")) if p.name not in unused), *tops])
 
 
 def _xc7_stat(text: str) -> dict:

@@ -67,6 +67,11 @@ def settings(config_data: dict, seeds: int, temps: list, freqs: list, samples: i
         raise ValueError(f"--seeds: need at least 1 seed, got {seeds}")
     if samples < 16:
         raise ValueError(f"--samples: need at least 16 measured samples per point, got {samples}")
+    from ..chains import build
+    from ..config import Config
+
+    build(Config(copy.deepcopy(config_data), source="<sweep montecarlo>")).chain(
+        "chain_paper002", "fxdsp sweep montecarlo (the paper 002 rate's error)")
     return {"config": copy.deepcopy(config_data), "seeds": int(seeds), "temps_c": list(temps),
             "freqs_hz": list(freqs), "samples": int(samples), "rate_fs": RATE_FS, "quad_fs": QUAD_FS,
             "noise_fs": NOISE_FS}

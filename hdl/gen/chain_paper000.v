@@ -7,6 +7,8 @@
 // overflows (floor / half_up / half_even / toward_zero; wrap / saturate) are each block's,
 // from its header. ovf = {sf_divide000, bias_subtract000, piecewise_k1, piecewise_k0} (bit 0 first: piecewise_k0), 19 flags, valid with out_valid.
 // ARCH = 0: every member in its one-sample-per-clock variant; 1: its serial variant (own multiplier).
+// ARCH = 1 schedule (each member's accepting edge, counted from the edge after the chain's, and its cycles): piecewise.k0 at 0 for 55, piecewise.k1 at 0 for 55, bias_subtract000 at 56 for 1, sf_divide000 at 58 for 59;
+//   120 cycles per sample at this config, against 416 at 40 MHz and 96000 S/s.
 `default_nettype none
 
 module chain_paper000 #(
