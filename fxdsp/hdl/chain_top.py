@@ -19,6 +19,8 @@ the multiplier / auxiliary / second-set bundles to tie off (:mod:`fxdsp.hdl.harn
 
 from __future__ import annotations
 
+import functools
+
 from ..chains import Chain, Design
 from ..netlist import Endpoint
 
@@ -149,21 +151,27 @@ def _wiring(table: dict) -> tuple:
     return (tuple(table["instances"]), *(tuple(sorted(table[k])) for k in ("inputs", "wires", "outputs")))
 
 
-def uses_hand_top(design: Design, name: str) -> bool:
-    """Whether chain ``name`` runs on its hand-written top: only a chain of that name whose netlist is
-    the built-in one (paper 002's also with the lag, its LAG_EN); any other netlist, under any name,
-    gets a generated top, so a hand-written top never stands in for a netlist it was not written for."""
+@functools.cache
+def _hand_top_wirings(key: str) -> frozenset:
+    """The netlists the hand-written top of ``chain.<key>`` was written for: the built-in one (and
+    paper 002's with the lag, its LAG_EN)."""
     import tomllib
 
     from ..config import default_config_text
     from ..netlist import with_stage
 
+    builtin = tomllib.loads(default_config_text())["chain"][key]
+    return frozenset({_wiring(builtin)} | ({_wiring(with_stage(builtin, "lag"))} if key == "paper002" else set()))
+
+
+def uses_hand_top(design: Design, name: str) -> bool:
+    """Whether chain ``name`` runs on its hand-written top: only a chain of that name whose netlist is
+    one it was written for (:func:`_hand_top_wirings`); any other netlist, under any name, gets a
+    generated top, so a hand-written top never stands in for a netlist it was not written for."""
     if name not in HAND_TOPS or name not in design.chains:
         return False
     key = name.removeprefix("chain_")
-    builtin = tomllib.loads(default_config_text())["chain"][key]
-    allowed = {_wiring(builtin)} | ({_wiring(with_stage(builtin, "lag"))} if key == "paper002" else set())
-    return _wiring(design.config.data["chain"][key]) in allowed
+    return _wiring(design.config.data["chain"][key]) in _hand_top_wirings(key)
 
 
 def unused_hand_tops(design: Design) -> set[str]:
