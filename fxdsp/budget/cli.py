@@ -29,7 +29,7 @@ from .units import parse_target
 tqdm = partial(_tqdm, disable=None)
 
 ATTRIBUTED = (("chain_paper002", "rate"), ("chain_paper002", "temp"), ("chain_paper001", "rate"),
-              ("chain_paper001", "temp"))
+              ("chain_paper001", "temp"), ("chain_paper000", "accel"))
 
 
 PATHS = {"--config": IN, "--json": OUT_FILE, "--report": OUT_DIR, "--config-out": OUT_FILE}

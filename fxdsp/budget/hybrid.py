@@ -302,11 +302,10 @@ def rtd_hybrid(block, frac: np.ndarray, sw: Switch) -> np.ndarray:
     return temp
 
 
-def divide_hybrid(block, x: np.ndarray, sf: np.ndarray, sw: Switch) -> np.ndarray:
-    """x / SF; source sf_divide.trunc = quotient truncated toward zero at in.fl + guard_bits, then
-    the rescale (``rounding``, floor by default) into out_format."""
+def divide_hybrid(block, x: np.ndarray, sf: np.ndarray, sw: Switch, name: str = "sf_divide.trunc") -> np.ndarray:
+    """x / SF; source ``name`` = quotient truncated toward zero at in.fl + guard_bits, then the
+    rescale (``rounding``, floor by default) into out_format."""
     v = np.asarray(x, dtype=float) / np.asarray(sf, dtype=float)
-    name = "sf_divide.trunc"
     if name in sw:
         scale = 2.0 ** block.datapath.q_format.fl
         q = np.trunc(np.asarray(x, dtype=float) * scale / sf) / scale
@@ -439,9 +438,40 @@ def run_paper001(chain: Chain, analog: dict, sw: Switch) -> dict[str, np.ndarray
     return {"f": f, "rate_in": rate_in, "temp": temp, "bias": b, "rate": rate}
 
 
+def sources_paper000(chain: Chain) -> list[Source]:
+    s = chain.sensor
+    k0, k1, sub, div = s.k0, s.k1, s.subtract, s.divide
+    out = [Source("adc.df", ADC, s.subtract.name.replace(".", "_"), "df", sub.in_format.lsb, "half_up",
+                  "difference-frequency word"),
+           Source("adc.temp", ADC, k0.name.replace(".", "_"), "temp", k0.temp_format.lsb, "half_up", "temperature word")]
+    for engine, node in ((k0, "k0"), (k1, "k1")):
+        inst = engine.name.replace(".", "_")
+        out += [Source(f"{inst}.coef", COEF, inst, node),
+                Source(f"{inst}.round", ROUND, inst, node, engine.out_format.lsb, engine.rules.rounding)]
+    if sub.datapath.shift > 0:
+        out.append(Source(f"{sub.name}.round", ROUND, sub.name, "diff", sub.out_format.lsb, sub.rules.rounding))
+    out.append(Source(f"{div.name}.trunc", DIVIDER, div.name, "accel", div.out_format.lsb, div.rules.rounding,
+                      "quotient toward zero, then the rescale"))
+    return out
+
+
+def run_paper000(chain: Chain, analog: dict, sw: Switch) -> dict[str, np.ndarray]:
+    """Every node of the hybrid paper 000 chain: a = (Df - K0(t)) / K1(t)."""
+    s = chain.sensor
+    df = sw.round("adc.df", analog["df"], s.subtract.in_format, Rules("half_up", "saturate"))
+    temp = sw.round("adc.temp", analog["temp"], s.k0.temp_format, Rules("half_up", "saturate"))
+    k0 = piecewise_hybrid(s.k0, temp, s.k0.name.replace(".", "_"), sw)
+    k1 = piecewise_hybrid(s.k1, temp, s.k1.name.replace(".", "_"), sw)
+    diff = subtract_hybrid(s.subtract, df, k0, f"{s.subtract.name}.round", sw)
+    accel = divide_hybrid(s.divide, diff, k1, sw, f"{s.divide.name}.trunc")
+    (port, _), = chain.outputs.items()
+    return {"df": df, "temp": temp, "k0": k0, "k1": k1, "diff": diff, "accel": accel, port: accel}
+
+
 # per chain: its analog stimulus (the chain's own ``nominal_analog``: the same draws as
 # ``nominal_stimulus``, before the ADCs), its sources and its hybrid run
 CHAIN_MODELS = {
     "chain_paper002": (lambda chain, rng, n: chain.sensor.nominal_analog(rng, n), sources_paper002, run_paper002),
     "chain_paper001": (lambda chain, rng, n: chain.sensor.nominal_analog(rng, n), sources_paper001, run_paper001),
+    "chain_paper000": (lambda chain, rng, n: chain.sensor.nominal_analog(rng, n), sources_paper000, run_paper000),
 }

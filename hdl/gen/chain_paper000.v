@@ -21,7 +21,7 @@ module chain_paper000 #(
     input  wire [17:0] temp,
     input  wire [28:0] df,
     output reg  out_valid,
-    output wire [27:0] accel,
+    output wire [31:0] accel,
     output wire [18:0] ovf
 );
     reg busy;
@@ -138,8 +138,8 @@ module chain_paper000 #(
     wire sf_divide000_out_valid;
     wire [1:0] sf_divide000_ovf;
     reg  [1:0] sf_divide000_ovf_q;
-    wire [27:0] sf_divide000_y;
-    reg  [27:0] sf_divide000_y_q;
+    wire [31:0] sf_divide000_y;
+    reg  [31:0] sf_divide000_y_q;
     wire sf_divide000_in_ready;
     wire go_sf_divide000 = busy & ~started_sf_divide000 & done_bias_subtract000 & done_piecewise_k1 & sf_divide000_in_ready;
     always @(posedge clk) if (sf_divide000_out_valid) begin

@@ -2,8 +2,8 @@
     .IN_W(29),
     .SF_W(24),
     .SF_SIGNED(1),
-    .OUT_W(28),
+    .OUT_W(32),
     .NUM_SHIFT(24),
-    .OUT_SHIFT(4),
+    .OUT_SHIFT(0),
     .ROUNDING(0),
     .OVERFLOW(1)
