@@ -222,7 +222,10 @@ def test_budget_json_is_strict_and_byte_identical(tmp_path, capsys):
     assert out["allan"]["curve"] and out["allan"]["arw"]["deg_per_sqrt_h"] == pytest.approx(
         out["allan"]["arw"]["adev_1s"] / 60)
     assert len(out["drive_sweep"]["points"]) >= 21
-    assert text.count("\nfloor: ") == 4 and "bias instability" in text and "deg/sqrt(h)" in text
+    # one floor line per attributed output, the paper 000 acceleration among them
+    assert text.count("\nfloor: ") == len(out["floor"]) and ("chain_paper000", "accel") in {
+        (f["chain"], f["port"]) for f in out["floor"]}
+    assert "bias instability" in text and "deg/sqrt(h)" in text
     assert "0.664" in text and "worst over the band" in text
     md = (rep / "budget.md").read_text()
     assert "allan_chain_paper002.png" in md and (rep / "allan_chain_paper002.png").stat().st_size > 0
