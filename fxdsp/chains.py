@@ -14,6 +14,7 @@ its ``sensor`` (:mod:`fxdsp.sensors`). The papers' chains are configs in the bui
 
 from __future__ import annotations
 
+import functools
 import hashlib
 from dataclasses import dataclass, field
 
@@ -25,7 +26,7 @@ from .blocks.kinds import Context, Wired, block_tables, kind_of
 from .config import Config, load_config
 from .errors import InputError
 from .fixed import Format, OverflowLog
-from .netlist import STAGES, Endpoint, Netlist, WiringError, parse
+from .netlist import STAGES, Endpoint, Netlist, WiringError, parse, topological
 
 
 class Chain(Block):
@@ -90,30 +91,16 @@ class Chain(Block):
         for p, block in self._stateful.items():
             block.set_state(state[p.replace(".", "_")])
 
-    def counts(self, counter: str) -> bool:
-        """Whether a run counts ``counter`` (False for a member output's counter when nothing reads
-        that output, e.g. the demodulator's amp when the chain uses I only)."""
-        from .fixed import OverflowLog
-
-        log = OverflowLog()
-        self.reset()
-        try:
-            self.stream(log, **{k: np.zeros(1, np.int64) for k in self.inputs})
-        finally:
-            self.reset()
-        return counter in dict(log)
+    @functools.cached_property
+    def counters(self) -> frozenset[str]:
+        """The overflow counters a run counts: not those of member outputs nothing reads (e.g. the
+        demodulator's amp when the chain uses I only). One run of a sample, once per chain."""
+        return frozenset(self.run(**{k: np.zeros(1, np.int64) for k in self.inputs}).overflows)
 
     @property
     def stages(self) -> tuple[str, ...]:
         """The insertable stages (:data:`fxdsp.netlist.STAGES`) the netlist has."""
         return tuple(s for s in STAGES if any(self.kinds[p] == s for p in self.members))
-
-    def member(self, kind: str) -> Block | None:
-        """The member of ``kind`` when the chain has exactly one (None when it has none)."""
-        found = [self.members[p] for p in self.netlist.instances if self.kinds[p] == kind]
-        if len(found) > 1:
-            raise ValueError(f"{self.name}: {len(found)} {kind} blocks")
-        return found[0] if found else None
 
     def nominal_stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
         if self.sensor is not None:
@@ -320,14 +307,10 @@ def _build_order(tables: list[str], nets: dict[str, Netlist]) -> list[str]:
         for dst, src in net.drivers.items():
             if isinstance(src, Endpoint):
                 deps[dst.instance].add(src.instance)
-    done: list[str] = []
-    while len(done) < len(tables):
-        ready = [t for t in tables if t not in done and deps[t] <= set(done)]
-        if not ready:
-            stuck = [t for t in tables if t not in done]
-            raise WiringError(f"chain: the chains together wire a loop through {', '.join(stuck)}")
-        done.append(ready[0])
-    return done
+    order, stuck = topological(tables, deps)
+    if stuck:
+        raise WiringError(f"chain: the chains together wire a loop through {', '.join(stuck)}")
+    return order
 
 
 def _wired(table: str, nets: dict[str, Netlist], built: dict[str, Block]) -> dict[str, Wired]:

@@ -202,17 +202,25 @@ def _order(chain: str, inst: list[str], drivers: dict, lines: dict) -> tuple[str
                 first.setdefault(name, len(first))
     deps = {i: {src.instance for dst, src in drivers.items() if dst.instance == i and isinstance(src, Endpoint)}
             for i in inst}
-    done: list[str] = []
-    while len(done) < len(inst):
-        ready = [i for i in inst if i not in done and deps[i] <= set(done)]
+    order, stuck = topological(inst, deps, key=lambda i: first.get(i, len(first)))
+    if stuck:
+        loop = next(dst for dst, src in drivers.items()
+                    if dst.instance in stuck and isinstance(src, Endpoint) and src.instance in stuck)
+        raise WiringError(f"{chain}.wires: {lines[loop]!r}: closes a loop through {', '.join(stuck)} "
+                          f"(a chain is a feed-forward netlist)")
+    return tuple(order)
+
+
+def topological(nodes, deps: dict, key=None) -> tuple[list, list]:
+    """Kahn's algorithm: (nodes in an order with every dependency first, the nodes left on a loop).
+    Among those ready, the smallest by ``key`` (default: the first in ``nodes``)."""
+    done: list = []
+    while len(done) < len(nodes):
+        ready = [n for n in nodes if n not in done and deps[n] <= set(done)]
         if not ready:
-            stuck = [i for i in inst if i not in done]
-            loop = next(dst for dst, src in drivers.items()
-                        if dst.instance in stuck and isinstance(src, Endpoint) and src.instance in stuck)
-            raise WiringError(f"{chain}.wires: {lines[loop]!r}: closes a loop through {', '.join(stuck)} "
-                              f"(a chain is a feed-forward netlist)")
-        done.append(min(ready, key=lambda i: first.get(i, len(first))))
-    return tuple(done)
+            return done, [n for n in nodes if n not in done]
+        done.append(min(ready, key=key) if key is not None else ready[0])
+    return done, []
 
 
 def insert_stage(net: dict, after: str, stage: str, stage_in: str, stage_out: str,

@@ -60,14 +60,19 @@ class Kind:
     family: bool = False     # the instances are the sub-tables ([piecewise.sf])
 
 
+def _own_format(block, sec: Section, key: str, port: str, wired: dict[str, Wired], ctx: Context):
+    """A block whose input format is its table's own (``key``): a wire to it must bring that format."""
+    w = wired.get(port)
+    if w is not None and ctx.enforce and w.format != block.inputs[port]:
+        raise InputError(f"{sec.field(key)}: {block.inputs[port]} must equal {w.source} ({w.format}) to connect "
+                         f"the chain")
+    return block
+
+
 def _rtd(sec, wired, ctx):
     from .rtd import Rtd
 
-    block = Rtd.from_config(sec)
-    if "code" in wired and ctx.enforce and wired["code"].format != block.adc_format:
-        raise InputError(f"{sec.field('adc_format')}: {block.adc_format} must equal {wired['code'].source} "
-                         f"({wired['code'].format}) to connect the chain")
-    return block
+    return _own_format(Rtd.from_config(sec), sec, "adc_format", "code", wired, ctx)
 
 
 def _piecewise(sec, wired, ctx):
@@ -105,11 +110,7 @@ def _iir(sec, wired, ctx):
 def _freq2temp(sec, wired, ctx):
     from .freq2temp import Freq2Temp
 
-    block = Freq2Temp.from_config(sec, sec.format("temp_format"))
-    if "f" in wired and ctx.enforce and wired["f"].format != block.freq_format:
-        raise InputError(f"{sec.field('freq_format')}: {block.freq_format} must equal {wired['f'].source} "
-                         f"({wired['f'].format}) to connect the chain")
-    return block
+    return _own_format(Freq2Temp.from_config(sec, sec.format("temp_format")), sec, "freq_format", "f", wired, ctx)
 
 
 def _lag(sec, wired, ctx):

@@ -104,7 +104,7 @@ def chain_top(design: Design, name: str) -> str:
         body.append(f"    wire go_{v} = {' & '.join(cond)};")
         body.append(f"    always @(posedge clk) if ({v}_out_valid) begin")
         body += [f"        {v}_{p}_q <= {v}_{p};" for p in sorted(wanted[m])] + [f"        {v}_ovf_q <= {v}_ovf;", "    end"]
-        over = [", .ARCH(ARCH)"] if rtl.serial else [""]
+        over = [", .ARCH(ARCH)"] if rtl.serial else []
         if rtl.mac_bundle:
             over.append(", .MAC_A_W(2), .MAC_B_W(2)   // its own multiplier: the shared bundle unused")
         conns = [".clk(clk)", ".rst(rst)", f".in_valid(go_{v})"]
@@ -118,7 +118,7 @@ def chain_top(design: Design, name: str) -> str:
             conns.append(f".{p}({v}_{p})" if p in wanted[m] else f".{p}()")
         conns.append(f".ovf({v}_ovf)")
         conns += tie_offs(inst[v])
-        body += [f"    {module} #(", f'`include "{v}_params.vh"', *(f"        {o}" for o in over if o),
+        body += [f"    {module} #(", f'`include "{v}_params.vh"', *(f"        {o}" for o in over),
                  f"    ) u_{v} (", "        " + ",\n        ".join(conns), "    );"]
 
     all_done = " & ".join(f"done_{_v(m)}" for m in members)

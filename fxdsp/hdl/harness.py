@@ -137,7 +137,7 @@ def ovf_ignore(design, name: str) -> int:
         return 0
     mask, bit = 0, 0
     for member, counter, width in design.ovf_fields(name):
-        if not block.counts(counter):
+        if counter not in block.counters:
             mask |= ((1 << width) - 1) << bit
         bit += width
     return mask

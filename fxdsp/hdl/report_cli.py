@@ -38,7 +38,6 @@ from ..chains import build
 from ..outputs import IN, OUT_FILE, check_output, staged
 from . import RTL_DIR as RTL
 from .hwreport import load_hw_report, report_json, row_files, row_hash, source_hash
-from .chain_top import generated_tops, unused_hand_tops
 from .params import generate, instance, iverilog_params
 
 UP5K = {"LUT": 5280, "MAC16": 8, "FF": 5280, "BRAM": 30}
@@ -149,13 +148,12 @@ def _stat(text: str) -> dict:
             "BRAM": _cells(text, r"SB_RAM40_4K\w*"), "CARRY": _cells(text, "SB_CARRY")}
 
 
-def _sources(design=None, work: Path | None = None):
-    """The RTL sources, and the design's generated chain tops in ``work``."""
-    if design is None or work is None:
-        return " ".join(str(p) for p in sorted(RTL.glob("*.v")))
-    unused = unused_hand_tops(design)
-    tops = [work / f for f in generated_tops(design)]
-    return " ".join(str(p) for p in [*(p for p in sorted(RTL.glob("*.v")) if p.name not in unused), *tops])
+def _sources(design, work: Path):
+    """The RTL sources of ``design`` (:func:`fxdsp.hdl.harness.rtl_sources`: its generated chain tops
+    in ``work``, no hand-written top it does not use), as yosys reads them."""
+    from .harness import rtl_sources
+
+    return " ".join(str(p) for p in rtl_sources(RTL, design, work))
 
 
 def _xc7_stat(text: str) -> dict:
