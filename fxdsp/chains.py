@@ -165,7 +165,7 @@ class Instance:
 
     @property
     def rtl(self) -> RtlPorts:
-        """The RTL interface: a block's is its datapath's; a chain top (hand-written or generated)
+        """The RTL interface: a block's is its datapath's; a chain top (generated)
         takes one sample at a time (in_ready) and has a serial variant (ARCH = 1), no bundle."""
         if self.members:
             return RtlPorts(ready=True, serial=True)

@@ -123,7 +123,7 @@ def test_extend_a_simulated_paper002_log(logs, name, tmp_path, capsys):
     build(Config(cfg, source="ext"))
     hdl = out / "hdl"
     assert ("lag" in cfg["chain"]["paper002"]["instances"]) == ("lag" in stages)
-    assert ("parameter integer LAG_EN = 1" in (hdl / "chain_paper002_params.vh").read_text()) == ("lag" in stages)
+    assert (" u_lag (" in (hdl / "chain_paper002.v").read_text()) == ("lag" in stages)
     if "lag" in stages:
         decim = round(cfg["system"]["fs_hz"] / cfg["lag"]["rate_hz"])
         assert f".DECIM({decim})" in (hdl / "lag_params.vh").read_text() and decim > 1

@@ -169,30 +169,36 @@ def test_paper000_is_the_papers_acceleration_within_a_microg():
     assert np.max(np.abs(fixed - nom["accel_g"])) < 2e-5   # counter noise 1e-4 Hz = 2 ug rms
 
 
-# ---- which top a chain runs on ---------------------------------------------------------------------
-def test_a_hand_written_top_only_stands_for_its_own_netlist(tmp_path):
-    """The shipped paper 002 / 001 netlists (and paper 002 with the lag) run on their hand-written tops;
-    the same chain rewired, or a config without it, compiles no hand-written top of it and, when the
-    chain is there, gets a generated one of the same name."""
+# ---- every chain's top is generated; the engines it shares come from the netlist ------------------
+def test_every_chain_gets_a_generated_top_and_shares_engines_by_wiring_and_format(tmp_path):
+    """Every chain of a config, and only those, has a generated top among the sources; in paper 002's
+    serial top bias(T) is SF(T)'s engine's second coefficient set (same temperature, same breakpoints
+    and formats) and the output low-pass the demodulator's filter engine's third channel. Moving a
+    breakpoint of bias(T), or giving the output low-pass another rounding, splits the engine: a
+    shared engine is decided by wiring and format, not by name. The schedule counts the sharing (the
+    bias pass after SF's, on the one multiplier)."""
     from fxdsp.hdl import harness as hh
-    from fxdsp.hdl import params as hp
-    from fxdsp.hdl.chain_top import uses_hand_top
+    from fxdsp.hdl.schedule import chain_schedule
+    from fxdsp.hdl.sharing import engine_sharing
 
     def tops(design):
         return {p.name for p in hh.rtl_sources(None, design, tmp_path) if p.name.startswith("chain_")}
 
     d = build()
-    assert uses_hand_top(d, "chain_paper002") and uses_hand_top(d, "chain_paper001")
-    assert set(hp.generate(d)) >= {"chain_paper000.v", "chain_paper002_params.vh"} and "chain_paper002.v" not in hp.generate(d)
-    lagged = build(_with_chain("paper002", with_stage(DATA["chain"]["paper002"], "lag")))
-    assert uses_hand_top(lagged, "chain_paper002")
-    rewired = copy.deepcopy(DATA["chain"]["paper002"])
-    rewired["outputs"] = rewired["outputs"] + ["piecewise.sf.y -> sf"]
-    r = build(_with_chain("paper002", rewired))
-    assert not uses_hand_top(r, "chain_paper002")
-    files = hp.generate(r)
-    assert "chain_paper002.v" in files and "chain_paper002_params.vh" not in files
-    assert [p for p in hh.rtl_sources(None, r, tmp_path) if p.name == "chain_paper002.v"] == [tmp_path / "chain_paper002.v"]
+    assert tops(d) == {f"{c}.v" for c in d.chains} == {"chain_paper000.v", "chain_paper001.v", "chain_paper002.v"}
+    shares = engine_sharing(d, "chain_paper002")
+    assert {g: (s.kind, s.host) for g, s in shares.items()} == {"piecewise.bias": ("set", "piecewise.sf"),
+                                                              "iir": ("aux", "demod")}
+    _, start = chain_schedule(d, "chain_paper002")
+    sf_start, sf_cycles = start["piecewise.sf"]
+    assert start["piecewise.bias"][0] == sf_start + sf_cycles          # the second pass as SF's leaves
+    assert start["demod"][0] > sum(start["piecewise.bias"])            # not on the multiplier meanwhile
+    data = copy.deepcopy(DATA)
+    data["piecewise"]["bias"]["breakpoints_c"] = [0.0, 21.0, 40.0]
+    data["iir"]["rounding"] = "half_even"
+    split = build(Config(data, source="<test>"))
+    assert engine_sharing(split, "chain_paper002") == {}
+    assert " u_piecewise_bias (" in hh.hp.generated_tops(split)["chain_paper002.v"]
     data = copy.deepcopy(DATA)
     del data["chain"]["paper001"]
     data["piecewise"]["bias001"]["temp_format"] = str(d.blocks["freq2temp"].temp_format)

@@ -22,12 +22,18 @@ from fxdsp.chains import build
 from fxdsp.config import Config
 from fxdsp.netlist import without_stage
 
-CHAIN_BLOCKS = {
-    "paper002": ("rtd", "piecewise_sf", "piecewise_bias", "sf_divide", "demod", "bias_subtract", "iir",
-                 "chain_paper002"),
-    "paper001": ("freq2temp", "piecewise_bias001", "bias_subtract001", "chain_paper001"),
-    "thermometer": ("piecewise_bias001", "bias_subtract001"),
-}
+# the thermometer chain (paper 001's bias compensation read from the chamber thermometer) is not yet
+# a config chain: its blocks are named here
+THERMOMETER_BLOCKS = ("piecewise_bias001", "bias_subtract001")
+
+
+def chain_blocks(design, chain: str) -> tuple[str, ...]:
+    """The instances ``extend`` checks for ``chain``: a config chain's members (its netlist) and its
+    top; the thermometer chain's blocks."""
+    top = f"chain_{chain}"
+    if top not in design.chains:
+        return THERMOMETER_BLOCKS
+    return (*(m.replace(".", "_") for m in design.chains[top].netlist.instances), top)
 
 
 def _per_update_lag(config: Config):
@@ -47,7 +53,8 @@ def regression(design, chain: str, has_lag: bool, build_root: Path | None = None
 
     rtl_dir = RTL_DIR if rtl_dir is None else Path(rtl_dir)
     check_tools(rtl_dir)
-    runs = [(name, design, name) for name in CHAIN_BLOCKS[chain]]
+    # a lag member is checked per update below (in the chain it updates only every DECIM-th sample)
+    runs = [(name, design, name) for name in chain_blocks(design, chain) if not (has_lag and name == "lag")]
     if has_lag:
         lag_design = _per_update_lag(design.config) if chain == "paper002" else design
         runs.append(("lag (per update)" if chain == "paper002" else "lag", lag_design, "lag"))
@@ -70,8 +77,7 @@ def cost(chain: str, has_lag: bool) -> dict | None:
     if report is None:
         return None
     rows = {r["name"]: r for r in report["rows"]}
-    before_names = {"paper002": ["chain_paper002"], "paper001": ["chain_paper001"],
-                    "thermometer": list(CHAIN_BLOCKS["thermometer"])}[chain]
+    before_names = [f"chain_{chain}"] if f"chain_{chain}" in rows else list(THERMOMETER_BLOCKS)
     after_names = before_names + (["lag"] if has_lag else [])
 
     def total(names):

@@ -4,25 +4,29 @@ The top runs one sample in flight through any feed-forward netlist of blocks:
 
 * a sample is accepted on ``in_valid && in_ready`` (``in_ready`` is high while the chain is idle,
   which includes the cycle of ``out_valid``); the chain inputs are registered then;
-* a member starts (one ``in_valid`` pulse) as soon as everything that drives it is ready: the chain
-  inputs, and the captured outputs of the members wired to it (and its own ``in_ready``);
+* a member starts as soon as everything that drives it is ready: the chain inputs, and the captured
+  outputs of the members wired to it (and its own ``in_ready``); its ``in_valid`` pulse is that
+  decision registered (a cycle later), so the decision logic ends in a register;
 * each member's outputs and overflow flags are captured on its ``out_valid``, so a member's result
   holds for whatever reads it later, whatever the member does with its output registers meanwhile;
 * ``out_valid`` pulses one cycle after the last member's result is captured, with the chain's
   outputs and ``ovf`` = every member's flags, first instance at bit 0 (the model's order).
 
-``ARCH`` selects every member's variant (0: one sample per clock; 1: the serial variant, each on
-a multiplier of its own). Members are independent blocks with fixed per-block behaviour, so the
-generator needs only what the harness needs of each module: its ports, whether it has ``in_ready``,
-the multiplier / auxiliary / second-set bundles to tie off (:mod:`fxdsp.hdl.harness`).
+``ARCH`` selects every member's variant (0: one sample per clock; 1: the serial variant). In the
+serial variant every member with a multiplier bundle (:class:`~fxdsp.blocks.datapath.RtlPorts`) issues
+on ONE shared ``fx_mac_serial``, sized here from the members' operands; a member on it starts only
+when no other works on it (the earlier in the execution order first), so at most one requests at a
+time, and two members that can share an engine do (:mod:`fxdsp.hdl.sharing`). The schedule that
+results is :func:`fxdsp.hdl.schedule.chain_schedule`, stated as numbers in the header. Members are
+independent blocks with fixed per-block behaviour, so the generator needs only each module's ports,
+its RTL interface and its parameters.
 """
 
 from __future__ import annotations
 
-import functools
-
 from ..chains import Chain, Design
 from ..netlist import Endpoint
+
 
 def _v(name: str) -> str:
     return name.replace(".", "_")
@@ -33,93 +37,315 @@ def _vec(w: int) -> str:
 
 
 def _schedule_lines(design: Design, name: str) -> list[str]:
-    """The serial schedule as numbers for this config (:func:`fxdsp.hdl.schedule.chain_schedule`)."""
+    """Both variants' schedules as numbers for this config (:func:`fxdsp.hdl.schedule.chain_schedule`)."""
     from .schedule import chain_schedule
 
-    try:
-        per, start = chain_schedule(design, name)
-    except ValueError as e:   # a member without a constant schedule (a decimating lag)
-        return [f"// ARCH = 1 schedule: not constant ({e})."]
     budget = int(40e6 // design.fs_hz)
-    steps = ", ".join(f"{m} at {b} for {c}" for m, (b, c) in start.items())
-    return [f"// ARCH = 1 schedule (each member's accepting edge, counted from the edge after the chain's, and "
-            f"its cycles): {steps};",
-            f"//   {per} cycles per sample at this config, against {budget} at 40 MHz and {design.fs_hz:g} S/s."]
+    out = []
+    for arch in (1, 0):
+        try:
+            per, start = chain_schedule(design, name, arch)
+        except ValueError as e:   # a member without a constant schedule (a decimating lag)
+            out.append(f"// ARCH = {arch} schedule: not constant ({e}).")
+            continue
+        steps = ", ".join(f"{m} at {b} for {c}" for m, (b, c) in start.items())
+        out += [f"// ARCH = {arch} schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after "
+                f"the chain's accepting edge, and its cycles): {steps};",
+                f"//   {per} cycles per sample at this config, against {budget} at 40 MHz and {design.fs_hz:g} S/s."]
+    return out
+
+
+# the shared multiplier bundle of a block (fx_mac_port): request, operands, limb counts
+MAC_PORTS = (("mac_in_valid", "req", ""), ("mac_a", "a", "[MAC_A_W-1:0] "), ("mac_b", "b", "[MAC_B_W-1:0] "),
+             ("mac_na", "na", "[3:0] "), ("mac_nb", "nb", "[3:0] "))
+
+
+class _Top:
+    """The text of one generated top, built member by member."""
+
+    def __init__(self, design: Design, name: str):
+        from .sharing import engine_sharing
+
+        self.design, self.name = design, name
+        self.chain: Chain = design.chains[name]
+        self.net = self.chain.netlist
+        self.inst = design.instances
+        self.members = list(self.net.instances)
+        self.order = list(self.net.order)       # priority on the shared multiplier: the execution order
+        self.wanted = self.chain.wanted()
+        self.shares = engine_sharing(design, name)
+        self.hosted = {s.host: s for s in self.shares.values()}
+        self.on_mac = [m for m in self.order if self.inst[_v(m)].rtl.mac_bundle]
+        self.bundles = list(self.on_mac)   # every member on the multiplier has a bundle (a guest's tied off when shared)
+
+    # ---- helpers ----
+    def src(self, m: str, port: str) -> str:
+        s = self.net.driver(m, port)
+        return f"in_{s}_q" if isinstance(s, str) else f"{_v(s.instance)}_{s.port}_q"
+
+    def deps(self, m: str) -> list[str]:
+        return sorted({s.instance for d, s in self.net.drivers.items() if d.instance == m and isinstance(s, Endpoint)})
+
+    def ready(self, m: str) -> bool:
+        return self.inst[_v(m)].rtl.ready
+
+    def mac_width(self) -> tuple[int, int]:
+        from .params import instance
+        from .schedule import mac_operands
+
+        ops = [mac_operands(self.inst[_v(m)].module, instance(self.design, _v(m)).params) for m in self.on_mac]
+        up = lambda w: max(16, -(-w // 16) * 16)  # noqa: E731  whole 16-bit limbs
+        return up(max(a for a, _ in ops)), up(max(b for _, b in ops))
+
+    def instance_text(self, m: str, extra: list[str], conns_extra: list[str], outs: dict[str, str],
+                      label: str = "") -> list[str]:
+        """One member's module instance: its header's parameters, ``extra`` overrides, data and bundle
+        connections; ``outs`` names the wire of each of its outputs (port -> wire or '' unconnected)."""
+        v = _v(m)
+        inst = self.inst[v]
+        rtl = inst.rtl
+        block = self.chain.members[m]
+        over = []
+        if rtl.serial:
+            over.append(", .ARCH(ARCH)")
+        if inst.module == "sf_divide":
+            over.append(", .UNROLL(DIV_UNROLL)")
+        over += extra
+        conns = [".clk(clk)", ".rst(rst)", f".in_valid(go_{v}_q)"]
+        if rtl.ready:
+            conns.append(f".in_ready({v}_in_ready)")
+        conns += [f".{p}({self.src(m, p)})" for p in block.inputs]
+        conns.append(f".out_valid({v}_out_valid)")
+        conns += [f".{p}({outs.get(p, '')})" for p in block.outputs]
+        conns.append(f".ovf({v}_ovf)")
+        if rtl.mac_bundle:
+            conns += [f".{port}({v}_mac_{sig})" for port, sig, _ in MAC_PORTS]
+            conns += [".mac_in_ready(sh_ready)", f".mac_out_valid(sh_valid & own[{self.bundles.index(m)}])",
+                      ".mac_p(sh_p)"]
+            over.insert(1 if rtl.serial else 0, ", .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)")
+        conns += [c for c in conns_extra]
+        ind = "    " + label
+        return [f"{ind}{inst.module} #(", f'`include "{v}_params.vh"', *(f"{ind}    {o}" for o in over),
+                f"{ind}) u_{v} (", f"{ind}    " + f",\n{ind}    ".join(conns), f"{ind});"]
+
+    def outs(self, m: str) -> dict[str, str]:
+        v = _v(m)
+        return {p: f"{v}_{p}" for p in self.wanted[m]}
+
+    def aux_ties(self, m: str) -> list[str]:
+        w = self.inst[_v(m)].ports["i"].format.wl
+        return [".aux_in_valid(1'b0)", f".aux_x({w}'d0)", ".aux_out_valid()", ".aux_y()", ".aux_ovf()"]
+
+    def mac_tie(self, m: str, ind: str) -> list[str]:
+        """A guest's bundle when its engine is the host's: no request, zero operands."""
+        zero = {"req": "1'b0", "a": "{MAC_A_W{1'b0}}", "b": "{MAC_B_W{1'b0}}", "na": "4'd0", "nb": "4'd0"}
+        return [f"{ind}assign {_v(m)}_mac_{sig} = {zero[sig]};" for _, sig, _ in MAC_PORTS]
+
+    # ---- the members ----
+    def member_decls(self, m: str) -> list[str]:
+        v = _v(m)
+        block = self.chain.members[m]
+        w_ovf = self.design.ovf_width(v)
+        out = [f"    // ---- {m} ----", f"    reg started_{v}, done_{v};", f"    wire {v}_out_valid;",
+               f"    wire [{w_ovf - 1}:0] {v}_ovf;", f"    reg  [{w_ovf - 1}:0] {v}_ovf_q;"]
+        for p in sorted(self.wanted[m]):
+            w = block.outputs[p].wl
+            out += [f"    wire {_vec(w)}{v}_{p};", f"    reg  {_vec(w)}{v}_{p}_q;"]
+        if self.ready(m):
+            out.append(f"    wire {v}_in_ready;")
+        if m in self.on_mac:
+            out += [f"    wire {w}{v}_mac_{sig};" for _, sig, w in MAC_PORTS]
+        deps = [f"done_{_v(s)}" for s in self.deps(m)] + ([f"{v}_in_ready"] if self.ready(m) else [])
+        out.append(f"    wire want_{v} = " + " & ".join(["busy", f"~started_{v}"] + deps) + ";")
+        out.append(f"    always @(posedge clk) if ({v}_out_valid) begin")
+        out += [f"        {v}_{p}_q <= {v}_{p};" for p in sorted(self.wanted[m])]
+        out += [f"        {v}_ovf_q <= {v}_ovf;", "    end"]
+        return out
+
+    def go_lines(self) -> list[str]:
+        """Each member's start: it wants to (what drives it is ready, and its in_ready), and on the
+        shared multiplier (ARCH = 1) no other member works on it and none earlier in the order wants to;
+        a shared set's guest starts with its host (the engine runs its pass after the host's)."""
+        out = ["    // ---- starts: what drives a member is ready; ARCH = 1: one member at a time on the shared",
+               "    // multiplier (the earlier in the execution order first); a shared set's guest with its host;",
+               "    // the member's in_valid is its start registered (go_*_q) ----"]
+        set_guest = {s.guest: s.host for s in self.shares.values() if s.kind == "set"}
+        if self.on_mac:
+            out.append("    wire mac_busy = " + " | ".join(f"on_mac_{_v(u)}" for u in self.on_mac) + ";")
+        ahead: list[str] = []
+        for m in self.order:
+            v = _v(m)
+            if m in self.on_mac:
+                asks = f"want_{v}" if m not in set_guest else f"(want_{v} & (SHARE == 0))"
+                cond = f"want_{v} & ((ARCH == 0) | (~mac_busy" + "".join(f" & ~{a}" for a in ahead) + "))"
+                if m in set_guest:
+                    cond = f"(SHARE != 0) ? go_{_v(set_guest[m])} : ({cond})"
+                if m != self.on_mac[-1]:   # a later member on the multiplier waits for it
+                    out.append(f"    wire ask_{v} = {asks};")
+                    ahead.append(f"ask_{v}")
+            else:
+                cond = f"want_{v}"
+            out.append(f"    wire go_{v} = {cond};")
+        # the in_valid pulses registered: the arbitration above is one path to a register, not into each
+        # block's first stage (a cycle per member, paid for 40 MHz)
+        out.append("    reg " + ", ".join(f"go_{_v(m)}_q" for m in self.order) + ";")
+        out.append("    always @(posedge clk) begin")
+        out += [f"        go_{_v(m)}_q <= ~rst & go_{_v(m)};" for m in self.order]
+        out.append("    end")
+        return out
+
+    def unused_ties(self, m: str) -> list[str]:
+        """The connections tying off a member's auxiliary channel and second set (not shared here)."""
+        rtl = self.inst[_v(m)].rtl
+        return (self.aux_ties(m) if rtl.aux else []) + ([".out_valid_1()", ".y_1()", ".ovf_1()"] if rtl.second_set else [])
+
+    def member_body(self, m: str) -> list[str]:
+        """The instance of a member that is neither a host nor a guest of a shared engine."""
+        return self.instance_text(m, [], self.unused_ties(m), self.outs(m))
+
+    def shared_body(self, share) -> list[str]:
+        """A host and its guest: in the serial variant (SHARE) one engine, the guest's outputs the
+        host's second set (``set``) or auxiliary channel (``aux``); else two instances."""
+        from .params import instance, literal
+        from .sharing import set_parameters
+
+        h, g = share.host, share.guest
+        hv, gv = _v(h), _v(g)
+        if share.kind == "set":
+            hinst = instance(self.design, hv)
+            extra = [", .SETS(2), .SETS_FILE(\"" + share.file + "\")",
+                     ", " + ", ".join(f".{k}({literal(hinst, k[:-2], val)})"
+                                      for k, val in set_parameters(self.design, share).items())]
+            ties = [f".out_valid_1({gv}_out_valid)", f".y_1({self.outs(g).get('y', '')})", f".ovf_1({gv}_ovf)"]
+            unused = (f"go_{gv}_q ^ own[{self.bundles.index(g)}];   // the guest's pass is the host's (its start, "
+                      "its products on the host's bundle)")
+            what = "its second coefficient set"
+        else:
+            extra = [", .AUX_LPF(SHARE), .AUX_COEF_FILE(\"" + share.file + "\")"]
+            ties = [f".aux_in_valid(go_{gv}_q)", f".aux_x({self.src(g, 'x')})", f".aux_out_valid({gv}_out_valid)",
+                    f".aux_y({self.outs(g).get('y', '')})", f".aux_ovf({gv}_ovf)"]
+            unused = f"own[{self.bundles.index(g)}];   // the channel's products are the host's (its bundle)"
+            what = "the filter engine's third channel"
+        shared = [f"    // ---- {g} on {h}'s engine in the serial variant ({what}, coefficient sets in {share.file}) ----",
+                  "    generate", f"    if (SHARE != 0) begin : g_{hv}_shared"]
+        shared += self.instance_text(h, extra, ties, self.outs(h), "    ")
+        if self.ready(g):
+            shared.append(f"        assign {gv}_in_ready = {hv}_in_ready;")
+        shared += self.mac_tie(g, "        ")
+        shared += ["        /* verilator lint_off UNUSEDSIGNAL */", f"        wire unused_{gv} = {unused}",
+                   "        /* verilator lint_on UNUSEDSIGNAL */"]
+        apart = [f"    end else begin : g_{hv}_apart"]
+        apart += self.instance_text(h, [], self.unused_ties(h), self.outs(h), "    ")
+        apart += self.member_body(g)
+        return shared + apart + ["    end", "    endgenerate"]
+
+    def mac_lines(self) -> list[str]:
+        """The one multiplier of the serial members (ARCH = 1): the request selects the operands (at most
+        one at a time: the starts above), out_valid goes to the member that works on the multiplier
+        (``own``: started and its result not yet captured, or its guest's pass: registers only, so the
+        product's route back does not hang on the request path); each member keeps its own limb
+        counts (VAR_N = 1), so its schedule is that of a multiplier of its own."""
+        if not self.on_mac:
+            return []
+        n = len(self.bundles)
+        vs = [_v(m) for m in self.bundles]
+        a_w, b_w = self.mac_width()
+        guests = {m: [s.guest for s in self.shares.values() if s.host == m] for m in self.bundles}
+
+        def owner(m: str) -> str:
+            return " | ".join([f"on_mac_{_v(m)}"] + [f"((SHARE != 0) & on_mac_{_v(g)})" for g in guests[m]])
+        def sel(sig: str, w: str) -> str:
+            return " | ".join(f"({{{w}{{{v}_mac_req}}}} & {v}_mac_{sig})" for v in vs)
+        out = ["    // ---- the one multiplier of the serial members (ARCH = 1): the request selects the operands,",
+               "    // out_valid goes to the member working on it (own: started, result not yet captured; a host",
+               "    // also for its guest's pass); each keeps its own limb counts (VAR_N = 1). Users, bit i of own: "
+               + ", ".join(f"{i} {m}" for i, m in enumerate(self.bundles)) + " ----",
+               f"    localparam integer MAC_A_W = {a_w};   // the members' widest operands, in whole 16-bit limbs",
+               f"    localparam integer MAC_B_W = {b_w};",
+               "    wire sh_ready, sh_valid;", "    wire [MAC_A_W+MAC_B_W-1:0] sh_p;",
+               *(f"    wire on_mac_{v} = started_{v} & ~done_{v};" for v in vs),
+               f"    wire [{n - 1}:0] own = {{" + ", ".join(owner(m) for m in reversed(self.bundles)) + "};",
+               "    generate", "        if (ARCH != 0) begin : g_mac",
+               f"            wire [{n - 1}:0] req = {{" + ", ".join(f"{v}_mac_req" for v in reversed(vs)) + "};",
+               f"            wire [MAC_A_W-1:0] sh_a = {sel('a', 'MAC_A_W')};",
+               f"            wire [MAC_B_W-1:0] sh_b = {sel('b', 'MAC_B_W')};",
+               f"            wire [3:0] sh_na = {sel('na', '4')};",
+               f"            wire [3:0] sh_nb = {sel('nb', '4')};",
+               "            fx_mac_serial #(.A_W(MAC_A_W), .B_W(MAC_B_W), .VAR_N(1)) u_mac (.clk(clk), .rst(rst),",
+               "                .in_valid(|req), .in_ready(sh_ready), .a(sh_a), .b(sh_b), .na(sh_na), .nb(sh_nb),",
+               "                .out_valid(sh_valid), .p(sh_p));",
+               "`ifndef SYNTHESIS",
+               "            // simulation only: two requests at once would be a scheduling error (one product lost)",
+               "            always @(posedge clk) begin",
+               f"                if (!rst && (req & (req - {n}'d1)) != {n}'d0) begin",
+               f'                    $display("{self.name}: members %b request the shared multiplier at once", req);',
+               "                    $finish;", "                end", "            end",
+               "`endif",
+               "        end else begin : g_no_mac",
+               "            // one-sample-per-clock members: no shared multiplier, the bundles are idle",
+               "            assign sh_ready = 1'b0;", "            assign sh_valid = 1'b0;",
+               "            assign sh_p = {(MAC_A_W+MAC_B_W){1'b0}};",
+               "            /* verilator lint_off UNUSEDSIGNAL */",
+               "            wire unused_mac = " + " ^ ".join(f"(^{{{v}_mac_req, {v}_mac_a, {v}_mac_b, {v}_mac_na, "
+                                                          f"{v}_mac_nb}})" for v in vs) + ";",
+               "            /* verilator lint_on UNUSEDSIGNAL */",
+               "        end", "    endgenerate"]
+        return out
 
 
 def chain_top(design: Design, name: str) -> str:
     """The Verilog-2005 text of chain ``name``'s generated top."""
-    from .harness import tie_offs
-
-    chain: Chain = design.chains[name]
-    net = chain.netlist
-    inst = design.instances
+    t = _Top(design, name)
+    net, chain, members = t.net, t.chain, t.members
     n_ovf = design.ovf_width(name)
-    members = list(net.instances)
+    has_div = any(t.inst[_v(m)].module == "sf_divide" for m in members)
+    share_words = "; ".join(f"{s.guest} on {s.host}'s engine ({'second coefficient set' if s.kind == 'set' else 'third filter channel'})"
+                            for s in t.shares.values()) or "none"
     lines = [f"// {name}: generated by fxdsp hdl-gen from the config's [{net.name}]; do not edit.",
              "//   " + "; ".join(f"{net.drivers[d] if isinstance(net.drivers[d], Endpoint) else 'in ' + net.drivers[d]}"
                                  f" -> {d}" for d in net.drivers),
              "//   outputs: " + ", ".join(f"{e} -> {o}" for o, e in net.outputs.items()),
              "// One sample in flight: accepted on in_valid && in_ready (in_ready high while idle, also in the",
-             "// cycle of out_valid); each member starts when what drives it is ready and its result is",
-             "// captured on its out_valid; out_valid one cycle after the last result. Roundings and",
+             "// cycle of out_valid); each member starts (its in_valid a cycle later, registered) when what drives",
+             "// it is ready and its result is captured on its out_valid; out_valid one cycle after the last result. Roundings and",
              "// overflows (floor / half_up / half_even / toward_zero; wrap / saturate) are each block's,",
              "// from its header. ovf = {" + ", ".join(_v(m) for m in reversed(members)) + "} (bit 0 first: "
              + _v(members[0]) + f"), {n_ovf} flags, valid with out_valid.",
-             "// ARCH = 0: every member in its one-sample-per-clock variant; 1: its serial variant (own multiplier).",
+             "// ARCH = 0: every member in its one-sample-per-clock variant. ARCH = 1: its serial variant, every",
+             "// member with a multiplier bundle on ONE shared fx_mac_serial (one SB_MAC16), one at a time;",
+             f"// shared engines (ARCH = 1): {share_words}.",
              *_schedule_lines(design, name),
              "`default_nettype none", "", f"module {name} #(",
-             "    parameter integer ARCH = 0   // 0: one-sample-per-clock members; 1: their serial variants",
-             ") (", "    input  wire clk,", "    input  wire rst,", "    input  wire in_valid,",
-             "    output wire in_ready,"]
+             "    parameter integer ARCH = 0" + ("," if has_div else "")
+             + "   // 0: one-sample-per-clock members; 1: their serial variants, one multiplier"]
+    if has_div:
+        lines.append("    parameter integer DIV_UNROLL = 1   // quotient bits per cycle of every sf_divide member")
+    lines += [") (", "    input  wire clk,", "    input  wire rst,", "    input  wire in_valid,",
+              "    output wire in_ready,"]
     ports = [f"    input  wire {_vec(f.wl)}{p}," for p, f in chain.inputs.items()]
     ports += ["    output reg  out_valid,"]
     ports += [f"    output wire {_vec(f.wl)}{p}," for p, f in chain.outputs.items()]
     ports += [f"    output wire [{n_ovf - 1}:0] ovf"]
     lines += ports + [");"]
-    body = ["    reg busy;", "    assign in_ready = ~busy;", "    wire accept = in_valid & ~busy;"]
+    body = (["    // the serial variant's shared engines (fxdsp.hdl.sharing)",
+             "    localparam integer SHARE = (ARCH != 0) ? 1 : 0;"] if t.shares else [])
+    body += ["    reg busy;", "    assign in_ready = ~busy;", "    wire accept = in_valid & ~busy;"]
     for p, f in chain.inputs.items():
         body.append(f"    reg {_vec(f.wl)}in_{p}_q;")
     body.append("    always @(posedge clk) if (accept) begin")
     body += [f"        in_{p}_q <= {p};" for p in chain.inputs]
     body.append("    end")
-
-    wanted = chain.wanted()
     for m in members:
-        v = _v(m)
-        block = chain.members[m]
-        w_ovf = design.ovf_width(v)
-        body += [f"    // ---- {m} ----", f"    reg started_{v}, done_{v};", f"    wire {v}_out_valid;",
-                 f"    wire [{w_ovf - 1}:0] {v}_ovf;", f"    reg  [{w_ovf - 1}:0] {v}_ovf_q;"]
-        for p in sorted(wanted[m]):
-            w = block.outputs[p].wl
-            body += [f"    wire {_vec(w)}{v}_{p};", f"    reg  {_vec(w)}{v}_{p}_q;"]
-        module = inst[v].module
-        rtl = inst[v].rtl
-        ready = rtl.ready
-        deps = sorted({s.instance for d, s in net.drivers.items() if d.instance == m and isinstance(s, Endpoint)})
-        cond = ["busy", f"~started_{v}"] + [f"done_{_v(s)}" for s in deps] + ([f"{v}_in_ready"] if ready else [])
-        if ready:
-            body.append(f"    wire {v}_in_ready;")
-        body.append(f"    wire go_{v} = {' & '.join(cond)};")
-        body.append(f"    always @(posedge clk) if ({v}_out_valid) begin")
-        body += [f"        {v}_{p}_q <= {v}_{p};" for p in sorted(wanted[m])] + [f"        {v}_ovf_q <= {v}_ovf;", "    end"]
-        over = [", .ARCH(ARCH)"] if rtl.serial else []
-        if rtl.mac_bundle:
-            over.append(", .MAC_A_W(2), .MAC_B_W(2)   // its own multiplier: the shared bundle unused")
-        conns = [".clk(clk)", ".rst(rst)", f".in_valid(go_{v})"]
-        if ready:
-            conns.append(f".in_ready({v}_in_ready)")
-        for p in block.inputs:
-            src = net.driver(m, p)
-            conns.append(f".{p}({'in_' + src + '_q' if isinstance(src, str) else _v(src.instance) + '_' + src.port + '_q'})")
-        conns.append(f".out_valid({v}_out_valid)")
-        for p in block.outputs:
-            conns.append(f".{p}({v}_{p})" if p in wanted[m] else f".{p}()")
-        conns.append(f".ovf({v}_ovf)")
-        conns += tie_offs(inst[v])
-        body += [f"    {module} #(", f'`include "{v}_params.vh"', *(f"        {o}" for o in over),
-                 f"    ) u_{v} (", "        " + ",\n        ".join(conns), "    );"]
+        body += t.member_decls(m)
+    body += t.mac_lines()
+    body += t.go_lines()
+    for m in members:
+        if m in t.shares:
+            continue
+        if m in t.hosted:
+            body += t.shared_body(t.hosted[m])
+        else:
+            body += t.member_body(m)
 
     all_done = " & ".join(f"done_{_v(m)}" for m in members)
     body += ["    // ---- the sample's progress: started / done per member, cleared as the sample leaves ----",
@@ -143,43 +369,6 @@ def chain_top(design: Design, name: str) -> str:
     return "\n".join(lines + body + ["endmodule", "", "`default_nettype wire", ""])
 
 
-# chains whose top is still written by hand (hdl/rtl/<chain>.v), for the built-in netlists only
-HAND_TOPS = ("chain_paper002", "chain_paper001")
-
-
-def _wiring(table: dict) -> tuple:
-    return (tuple(table["instances"]), *(tuple(sorted(table[k])) for k in ("inputs", "wires", "outputs")))
-
-
-@functools.cache
-def _hand_top_wirings(key: str) -> frozenset:
-    """The netlists the hand-written top of ``chain.<key>`` was written for: the built-in one (and
-    paper 002's with the lag, its LAG_EN)."""
-    import tomllib
-
-    from ..config import default_config_text
-    from ..netlist import with_stage
-
-    builtin = tomllib.loads(default_config_text())["chain"][key]
-    return frozenset({_wiring(builtin)} | ({_wiring(with_stage(builtin, "lag"))} if key == "paper002" else set()))
-
-
-def uses_hand_top(design: Design, name: str) -> bool:
-    """Whether chain ``name`` runs on its hand-written top: only a chain of that name whose netlist is
-    one it was written for (:func:`_hand_top_wirings`); any other netlist, under any name, gets a
-    generated top, so a hand-written top never stands in for a netlist it was not written for."""
-    if name not in HAND_TOPS or name not in design.chains:
-        return False
-    key = name.removeprefix("chain_")
-    return _wiring(design.config.data["chain"][key]) in _hand_top_wirings(key)
-
-
-def unused_hand_tops(design: Design) -> set[str]:
-    """The hand-written top files (``<chain>.v``) a design must not compile: their chain is absent, or
-    has another netlist (its generated top then has the same module name)."""
-    return {f"{h}.v" for h in HAND_TOPS if not uses_hand_top(design, h)}
-
-
 def generated_tops(design: Design) -> dict[str, str]:
-    """``<chain>.v`` of every chain of the design that does not run on a hand-written top."""
-    return {f"{name}.v": chain_top(design, name) for name in design.chains if not uses_hand_top(design, name)}
+    """``<chain>.v`` of every chain of the design."""
+    return {f"{name}.v": chain_top(design, name) for name in design.chains}

@@ -1,6 +1,7 @@
 """`fxdsp hdl-gen [--config F] [--out DIR] [--check]`: write (or verify) the Verilog parameter
-headers and ROM files of every RTL block instance, and the Verilog top of every chain whose top
-is not hand-written (``<chain>.v``, :mod:`fxdsp.hdl.chain_top`), from the same config as the models."""
+headers and ROM files of every RTL block instance, and the Verilog top of every chain
+(``<chain>.v``, :mod:`fxdsp.hdl.chain_top`: no chain top is written by hand), from the same config
+as the models."""
 
 from __future__ import annotations
 

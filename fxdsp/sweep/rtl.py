@@ -35,8 +35,20 @@ ORDERS = (2, 4)
 KNOB_PROBABILITY = 0.3
 KNOB_DELTA = (-2, 2)
 MAX_DRAWS = 200
-EXTRA = {"chain_paper002": {"DIV_UNROLL": 14}, "sf_divide": {"UNROLL": 3}}
+# a divider's quotient bits per cycle in a shard (a few per cycle: the Icarus runs stay short), as a
+# block's UNROLL or as a chain top's DIV_UNROLL (every chain with a divider member)
+DIV_UNROLL = {"sf_divide": ("UNROLL", 3), "chain": ("DIV_UNROLL", 14)}
 GAP = 0.25
+
+
+def unroll_params(design, name: str) -> dict | None:
+    """The divider setting of a shard run of ``name`` (:data:`DIV_UNROLL`): a divider's UNROLL, a
+    chain top's DIV_UNROLL when one of its members is a divider; None for anything else."""
+    from ..hdl.harness import has_divider
+
+    inst = design.instances[name]
+    key = "chain" if inst.members and has_divider(design, name) else inst.module
+    return dict([DIV_UNROLL[key]]) if key in DIV_UNROLL else None
 
 
 def check_tools(rtl_dir: Path, sim: str = "icarus") -> None:
@@ -148,11 +160,9 @@ def run_block(design, name: str, build: Path, rtl_dir: Path, seed: int) -> dict:
     through its RTL on Icarus in ``build`` (the harness writes the design's headers there); pass/fail,
     samples, cycles, first errors (a DUT that does not build is a failure, named)."""
     from ..hdl import harness as hh
-    from ..hdl.chain_top import uses_hand_top
     from ..hdl.stimuli import random_stimulus
 
-    # the divider's unroll is a parameter of the hand-written paper 002 top only
-    extra = EXTRA.get(name) if name != "chain_paper002" or uses_hand_top(design, name) else None
+    extra = unroll_params(design, name)
     stim = random_stimulus(design, name, seed)
     seg = hh.segment(design, name, stim)
     samples = len(next(iter(seg["outputs"].values())))

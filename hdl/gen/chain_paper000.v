@@ -2,17 +2,22 @@
 //   in temp -> piecewise.k0.temp; in temp -> piecewise.k1.temp; in df -> bias_subtract000.x; piecewise.k0.y -> bias_subtract000.bias; bias_subtract000.y -> sf_divide000.x; piecewise.k1.y -> sf_divide000.sf
 //   outputs: sf_divide000.y -> accel
 // One sample in flight: accepted on in_valid && in_ready (in_ready high while idle, also in the
-// cycle of out_valid); each member starts when what drives it is ready and its result is
-// captured on its out_valid; out_valid one cycle after the last result. Roundings and
+// cycle of out_valid); each member starts (its in_valid a cycle later, registered) when what drives
+// it is ready and its result is captured on its out_valid; out_valid one cycle after the last result. Roundings and
 // overflows (floor / half_up / half_even / toward_zero; wrap / saturate) are each block's,
 // from its header. ovf = {sf_divide000, bias_subtract000, piecewise_k1, piecewise_k0} (bit 0 first: piecewise_k0), 19 flags, valid with out_valid.
-// ARCH = 0: every member in its one-sample-per-clock variant; 1: its serial variant (own multiplier).
-// ARCH = 1 schedule (each member's accepting edge, counted from the edge after the chain's, and its cycles): piecewise.k0 at 0 for 55, piecewise.k1 at 0 for 55, bias_subtract000 at 56 for 1, sf_divide000 at 58 for 59;
-//   120 cycles per sample at this config, against 416 at 40 MHz and 96000 S/s.
+// ARCH = 0: every member in its one-sample-per-clock variant. ARCH = 1: its serial variant, every
+// member with a multiplier bundle on ONE shared fx_mac_serial (one SB_MAC16), one at a time;
+// shared engines (ARCH = 1): none.
+// ARCH = 1 schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after the chain's accepting edge, and its cycles): piecewise.k0 at 1 for 55, piecewise.k1 at 58 for 55, bias_subtract000 at 58 for 1, sf_divide000 at 115 for 59;
+//   177 cycles per sample at this config, against 416 at 40 MHz and 96000 S/s.
+// ARCH = 0 schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after the chain's accepting edge, and its cycles): piecewise.k0 at 1 for 1, piecewise.k1 at 1 for 1, bias_subtract000 at 4 for 1, sf_divide000 at 7 for 54;
+//   64 cycles per sample at this config, against 416 at 40 MHz and 96000 S/s.
 `default_nettype none
 
 module chain_paper000 #(
-    parameter integer ARCH = 0   // 0: one-sample-per-clock members; 1: their serial variants
+    parameter integer ARCH = 0,   // 0: one-sample-per-clock members; 1: their serial variants, one multiplier
+    parameter integer DIV_UNROLL = 1   // quotient bits per cycle of every sf_divide member
 ) (
     input  wire clk,
     input  wire rst,
@@ -41,36 +46,16 @@ module chain_paper000 #(
     wire [23:0] piecewise_k0_y;
     reg  [23:0] piecewise_k0_y_q;
     wire piecewise_k0_in_ready;
-    wire go_piecewise_k0 = busy & ~started_piecewise_k0 & piecewise_k0_in_ready;
+    wire piecewise_k0_mac_req;
+    wire [MAC_A_W-1:0] piecewise_k0_mac_a;
+    wire [MAC_B_W-1:0] piecewise_k0_mac_b;
+    wire [3:0] piecewise_k0_mac_na;
+    wire [3:0] piecewise_k0_mac_nb;
+    wire want_piecewise_k0 = busy & ~started_piecewise_k0 & piecewise_k0_in_ready;
     always @(posedge clk) if (piecewise_k0_out_valid) begin
         piecewise_k0_y_q <= piecewise_k0_y;
         piecewise_k0_ovf_q <= piecewise_k0_ovf;
     end
-    piecewise #(
-`include "piecewise_k0_params.vh"
-        , .ARCH(ARCH)
-        , .MAC_A_W(2), .MAC_B_W(2)   // its own multiplier: the shared bundle unused
-    ) u_piecewise_k0 (
-        .clk(clk),
-        .rst(rst),
-        .in_valid(go_piecewise_k0),
-        .in_ready(piecewise_k0_in_ready),
-        .temp(in_temp_q),
-        .out_valid(piecewise_k0_out_valid),
-        .y(piecewise_k0_y),
-        .ovf(piecewise_k0_ovf),
-        .mac_in_valid(),
-        .mac_in_ready(1'b0),
-        .mac_a(),
-        .mac_b(),
-        .mac_na(),
-        .mac_nb(),
-        .mac_out_valid(1'b0),
-        .mac_p(4'd0),
-        .out_valid_1(),
-        .y_1(),
-        .ovf_1()
-    );
     // ---- piecewise.k1 ----
     reg started_piecewise_k1, done_piecewise_k1;
     wire piecewise_k1_out_valid;
@@ -79,36 +64,16 @@ module chain_paper000 #(
     wire [23:0] piecewise_k1_y;
     reg  [23:0] piecewise_k1_y_q;
     wire piecewise_k1_in_ready;
-    wire go_piecewise_k1 = busy & ~started_piecewise_k1 & piecewise_k1_in_ready;
+    wire piecewise_k1_mac_req;
+    wire [MAC_A_W-1:0] piecewise_k1_mac_a;
+    wire [MAC_B_W-1:0] piecewise_k1_mac_b;
+    wire [3:0] piecewise_k1_mac_na;
+    wire [3:0] piecewise_k1_mac_nb;
+    wire want_piecewise_k1 = busy & ~started_piecewise_k1 & piecewise_k1_in_ready;
     always @(posedge clk) if (piecewise_k1_out_valid) begin
         piecewise_k1_y_q <= piecewise_k1_y;
         piecewise_k1_ovf_q <= piecewise_k1_ovf;
     end
-    piecewise #(
-`include "piecewise_k1_params.vh"
-        , .ARCH(ARCH)
-        , .MAC_A_W(2), .MAC_B_W(2)   // its own multiplier: the shared bundle unused
-    ) u_piecewise_k1 (
-        .clk(clk),
-        .rst(rst),
-        .in_valid(go_piecewise_k1),
-        .in_ready(piecewise_k1_in_ready),
-        .temp(in_temp_q),
-        .out_valid(piecewise_k1_out_valid),
-        .y(piecewise_k1_y),
-        .ovf(piecewise_k1_ovf),
-        .mac_in_valid(),
-        .mac_in_ready(1'b0),
-        .mac_a(),
-        .mac_b(),
-        .mac_na(),
-        .mac_nb(),
-        .mac_out_valid(1'b0),
-        .mac_p(4'd0),
-        .out_valid_1(),
-        .y_1(),
-        .ovf_1()
-    );
     // ---- bias_subtract000 ----
     reg started_bias_subtract000, done_bias_subtract000;
     wire bias_subtract000_out_valid;
@@ -116,23 +81,11 @@ module chain_paper000 #(
     reg  [0:0] bias_subtract000_ovf_q;
     wire [28:0] bias_subtract000_y;
     reg  [28:0] bias_subtract000_y_q;
-    wire go_bias_subtract000 = busy & ~started_bias_subtract000 & done_piecewise_k0;
+    wire want_bias_subtract000 = busy & ~started_bias_subtract000 & done_piecewise_k0;
     always @(posedge clk) if (bias_subtract000_out_valid) begin
         bias_subtract000_y_q <= bias_subtract000_y;
         bias_subtract000_ovf_q <= bias_subtract000_ovf;
     end
-    bias_subtract #(
-`include "bias_subtract000_params.vh"
-    ) u_bias_subtract000 (
-        .clk(clk),
-        .rst(rst),
-        .in_valid(go_bias_subtract000),
-        .x(in_df_q),
-        .bias(piecewise_k0_y_q),
-        .out_valid(bias_subtract000_out_valid),
-        .y(bias_subtract000_y),
-        .ovf(bias_subtract000_ovf)
-    );
     // ---- sf_divide000 ----
     reg started_sf_divide000, done_sf_divide000;
     wire sf_divide000_out_valid;
@@ -141,18 +94,136 @@ module chain_paper000 #(
     wire [31:0] sf_divide000_y;
     reg  [31:0] sf_divide000_y_q;
     wire sf_divide000_in_ready;
-    wire go_sf_divide000 = busy & ~started_sf_divide000 & done_bias_subtract000 & done_piecewise_k1 & sf_divide000_in_ready;
+    wire want_sf_divide000 = busy & ~started_sf_divide000 & done_bias_subtract000 & done_piecewise_k1 & sf_divide000_in_ready;
     always @(posedge clk) if (sf_divide000_out_valid) begin
         sf_divide000_y_q <= sf_divide000_y;
         sf_divide000_ovf_q <= sf_divide000_ovf;
     end
+    // ---- the one multiplier of the serial members (ARCH = 1): the request selects the operands,
+    // out_valid goes to the member working on it (own: started, result not yet captured; a host
+    // also for its guest's pass); each keeps its own limb counts (VAR_N = 1). Users, bit i of own: 0 piecewise.k0, 1 piecewise.k1 ----
+    localparam integer MAC_A_W = 48;   // the members' widest operands, in whole 16-bit limbs
+    localparam integer MAC_B_W = 32;
+    wire sh_ready, sh_valid;
+    wire [MAC_A_W+MAC_B_W-1:0] sh_p;
+    wire on_mac_piecewise_k0 = started_piecewise_k0 & ~done_piecewise_k0;
+    wire on_mac_piecewise_k1 = started_piecewise_k1 & ~done_piecewise_k1;
+    wire [1:0] own = {on_mac_piecewise_k1, on_mac_piecewise_k0};
+    generate
+        if (ARCH != 0) begin : g_mac
+            wire [1:0] req = {piecewise_k1_mac_req, piecewise_k0_mac_req};
+            wire [MAC_A_W-1:0] sh_a = ({MAC_A_W{piecewise_k0_mac_req}} & piecewise_k0_mac_a) | ({MAC_A_W{piecewise_k1_mac_req}} & piecewise_k1_mac_a);
+            wire [MAC_B_W-1:0] sh_b = ({MAC_B_W{piecewise_k0_mac_req}} & piecewise_k0_mac_b) | ({MAC_B_W{piecewise_k1_mac_req}} & piecewise_k1_mac_b);
+            wire [3:0] sh_na = ({4{piecewise_k0_mac_req}} & piecewise_k0_mac_na) | ({4{piecewise_k1_mac_req}} & piecewise_k1_mac_na);
+            wire [3:0] sh_nb = ({4{piecewise_k0_mac_req}} & piecewise_k0_mac_nb) | ({4{piecewise_k1_mac_req}} & piecewise_k1_mac_nb);
+            fx_mac_serial #(.A_W(MAC_A_W), .B_W(MAC_B_W), .VAR_N(1)) u_mac (.clk(clk), .rst(rst),
+                .in_valid(|req), .in_ready(sh_ready), .a(sh_a), .b(sh_b), .na(sh_na), .nb(sh_nb),
+                .out_valid(sh_valid), .p(sh_p));
+`ifndef SYNTHESIS
+            // simulation only: two requests at once would be a scheduling error (one product lost)
+            always @(posedge clk) begin
+                if (!rst && (req & (req - 2'd1)) != 2'd0) begin
+                    $display("chain_paper000: members %b request the shared multiplier at once", req);
+                    $finish;
+                end
+            end
+`endif
+        end else begin : g_no_mac
+            // one-sample-per-clock members: no shared multiplier, the bundles are idle
+            assign sh_ready = 1'b0;
+            assign sh_valid = 1'b0;
+            assign sh_p = {(MAC_A_W+MAC_B_W){1'b0}};
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire unused_mac = (^{piecewise_k0_mac_req, piecewise_k0_mac_a, piecewise_k0_mac_b, piecewise_k0_mac_na, piecewise_k0_mac_nb}) ^ (^{piecewise_k1_mac_req, piecewise_k1_mac_a, piecewise_k1_mac_b, piecewise_k1_mac_na, piecewise_k1_mac_nb});
+            /* verilator lint_on UNUSEDSIGNAL */
+        end
+    endgenerate
+    // ---- starts: what drives a member is ready; ARCH = 1: one member at a time on the shared
+    // multiplier (the earlier in the execution order first); a shared set's guest with its host;
+    // the member's in_valid is its start registered (go_*_q) ----
+    wire mac_busy = on_mac_piecewise_k0 | on_mac_piecewise_k1;
+    wire ask_piecewise_k0 = want_piecewise_k0;
+    wire go_piecewise_k0 = want_piecewise_k0 & ((ARCH == 0) | (~mac_busy));
+    wire go_piecewise_k1 = want_piecewise_k1 & ((ARCH == 0) | (~mac_busy & ~ask_piecewise_k0));
+    wire go_bias_subtract000 = want_bias_subtract000;
+    wire go_sf_divide000 = want_sf_divide000;
+    reg go_piecewise_k0_q, go_piecewise_k1_q, go_bias_subtract000_q, go_sf_divide000_q;
+    always @(posedge clk) begin
+        go_piecewise_k0_q <= ~rst & go_piecewise_k0;
+        go_piecewise_k1_q <= ~rst & go_piecewise_k1;
+        go_bias_subtract000_q <= ~rst & go_bias_subtract000;
+        go_sf_divide000_q <= ~rst & go_sf_divide000;
+    end
+    piecewise #(
+`include "piecewise_k0_params.vh"
+        , .ARCH(ARCH)
+        , .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
+    ) u_piecewise_k0 (
+        .clk(clk),
+        .rst(rst),
+        .in_valid(go_piecewise_k0_q),
+        .in_ready(piecewise_k0_in_ready),
+        .temp(in_temp_q),
+        .out_valid(piecewise_k0_out_valid),
+        .y(piecewise_k0_y),
+        .ovf(piecewise_k0_ovf),
+        .mac_in_valid(piecewise_k0_mac_req),
+        .mac_a(piecewise_k0_mac_a),
+        .mac_b(piecewise_k0_mac_b),
+        .mac_na(piecewise_k0_mac_na),
+        .mac_nb(piecewise_k0_mac_nb),
+        .mac_in_ready(sh_ready),
+        .mac_out_valid(sh_valid & own[0]),
+        .mac_p(sh_p),
+        .out_valid_1(),
+        .y_1(),
+        .ovf_1()
+    );
+    piecewise #(
+`include "piecewise_k1_params.vh"
+        , .ARCH(ARCH)
+        , .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)
+    ) u_piecewise_k1 (
+        .clk(clk),
+        .rst(rst),
+        .in_valid(go_piecewise_k1_q),
+        .in_ready(piecewise_k1_in_ready),
+        .temp(in_temp_q),
+        .out_valid(piecewise_k1_out_valid),
+        .y(piecewise_k1_y),
+        .ovf(piecewise_k1_ovf),
+        .mac_in_valid(piecewise_k1_mac_req),
+        .mac_a(piecewise_k1_mac_a),
+        .mac_b(piecewise_k1_mac_b),
+        .mac_na(piecewise_k1_mac_na),
+        .mac_nb(piecewise_k1_mac_nb),
+        .mac_in_ready(sh_ready),
+        .mac_out_valid(sh_valid & own[1]),
+        .mac_p(sh_p),
+        .out_valid_1(),
+        .y_1(),
+        .ovf_1()
+    );
+    bias_subtract #(
+`include "bias_subtract000_params.vh"
+    ) u_bias_subtract000 (
+        .clk(clk),
+        .rst(rst),
+        .in_valid(go_bias_subtract000_q),
+        .x(in_df_q),
+        .bias(piecewise_k0_y_q),
+        .out_valid(bias_subtract000_out_valid),
+        .y(bias_subtract000_y),
+        .ovf(bias_subtract000_ovf)
+    );
     sf_divide #(
 `include "sf_divide000_params.vh"
         , .ARCH(ARCH)
+        , .UNROLL(DIV_UNROLL)
     ) u_sf_divide000 (
         .clk(clk),
         .rst(rst),
-        .in_valid(go_sf_divide000),
+        .in_valid(go_sf_divide000_q),
         .in_ready(sf_divide000_in_ready),
         .x(bias_subtract000_y_q),
         .sf(piecewise_k1_y_q),

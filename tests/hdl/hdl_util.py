@@ -7,6 +7,7 @@ model fails it. Throughput and build times go to ``sim_build/throughput.jsonl`` 
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import json
 import os
@@ -65,6 +66,29 @@ def require_simulator(sim: str) -> None:
     problem = sims.simulator_problem(sim)
     if problem is not None:
         pytest.skip(problem)
+
+
+@contextlib.contextmanager
+def mutated_top(chain: str, edits):
+    """While the context lasts, chain ``chain``'s generated top (:func:`fxdsp.hdl.chain_top.chain_top`,
+    whatever writes it: the harness, ``hdl-gen``) has each ``(old, new)`` of ``edits`` applied, in order;
+    every ``old`` must occur exactly once. The generated tops' counterpart of :func:`mutated_rtl`."""
+    from fxdsp.hdl import chain_top as ct
+
+    real = ct.chain_top
+
+    def edited(design, name):
+        text = real(design, name)
+        if name == chain:
+            for old, new in edits:
+                assert text.count(old) == 1, f"mutation site {old!r} not found exactly once in {chain}.v"
+                text = text.replace(old, new)
+        return text
+    ct.chain_top = edited
+    try:
+        yield
+    finally:
+        ct.chain_top = real
 
 
 def mutated_rtl(dst: Path, file: str, edits) -> Path:

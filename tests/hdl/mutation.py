@@ -13,6 +13,7 @@ own build directory), and a compile failure there or of a check's harness raises
 
 from __future__ import annotations
 
+import contextlib
 import shutil
 import subprocess
 import tempfile
@@ -25,7 +26,7 @@ import numpy as np
 from conftest import lag_chain
 from fxdsp.vectors import load
 from hdl_util import RTL, SERIAL, icarus_window, VECTORS, BuildFailed, HarnessTimeout, UndefinedWord, build_dir, \
-    design_of, generate_into, model_run, mutated_rtl, rtl_sources, run_harness
+    design_of, generate_into, model_run, mutated_rtl, mutated_top, rtl_sources, run_harness
 
 
 class MutantBroken(RuntimeError):
@@ -130,12 +131,16 @@ MUTATIONS = [
              ((None, "demod", False),)),
     Mutation("cordic_logical_shift", "demod.v", "tx = cx - (cy >>> j);", "tx = cx - (cy >> j);",
              "CORDIC arithmetic shift -> logical", ((None, "demod", False),)),
-    Mutation("divider_strict_compare", "sf_divide.v", "if (!t_v[DW+1]) begin", "if (!t_v[DW+1] && t_v[DW:0] != 0) begin",
-             "restoring step takes r >= d as r > d", ((None, "sf_divide", False),)),
+    Mutation("divider_strict_compare", "sf_divide.v", "qb_v = ~t_v[DW+1];", "qb_v = ~t_v[DW+1] & (t_v[DW:0] != 0);",
+             "division step takes r >= d as r > d (an exact step's quotient bit lost)", ((None, "sf_divide", False),)),
+    Mutation("divider_always_subtracts", "sf_divide.v", "({2'b00, dmag} ^ {(DW+2){~r_v[DW]}}) + {{(DW+1){1'b0}}, ~r_v[DW]}",
+             "({2'b00, dmag} ^ {(DW+2){1'b1}}) + {{(DW+1){1'b0}}, 1'b1}",
+             "non-restoring step subtracts |d| after a negative remainder too (no restore at all)",
+             ((None, "sf_divide", False),)),
     Mutation("divide_by_zero_sign", "sf_divide.v", "(xneg ? full_neg : full_pos)", "full_pos",
              "x / 0 saturates positive whatever the sign of x", ((None, "sf_divide", False),)),
-    Mutation("divide_quotient_sign_dropped", "sf_divide.v", "nq_v = {nq_v[NW-2:0], ~neg};",
-             "nq_v = {nq_v[NW-2:0], 1'b1};", "a negative quotient's bits not inverted as they enter (the "
+    Mutation("divide_quotient_sign_dropped", "sf_divide.v", "nq_v = {nq_v[NW-2:0], qb_v ^ neg};",
+             "nq_v = {nq_v[NW-2:0], qb_v};", "a negative quotient's bits not inverted as they enter (the "
              "sign applied to a wrong magnitude)", ((None, "sf_divide", False),)),
     Mutation("lag_no_guard_bits", "lag.v", "st     <= st_next;", "st     <= (st_next >>> GUARD) <<< GUARD;",
              "lag: state guard bits dropped (state kept at the code LSB: dead band)", ((None, "lag", False),)),
@@ -144,8 +149,9 @@ MUTATIONS = [
     Mutation("lag_state_free_running", "lag.v", "end else if (in_valid) begin\n            if (update) begin",
              "end else begin\n            if (phase == {PH_W{1'b0}}) begin", "lag state advances without in_valid",
              ((None, "lag", True),)),
-    Mutation("chain001_misaligned", "chain_paper001.v", "rate_d2 <= rate_d1;", "rate_d2 <= rate_in;",
-             "rate_in not delayed with the temperature", ((None, "chain_paper001", False),)),
+    Mutation("chain001_misaligned", "chain_paper001.v", ".x(in_rate_in_q),", ".x(rate_in),",
+             "generated chain 001: rate_in read live at the subtraction, not the sample's registered value (the "
+             "next sample's rate by then)", ((None, "chain_paper001", False),)),
     # ---- serial lag (ARCH = 1) ----
     Mutation("lag_serial_carry_wrong_slot", "lag.v", "{sv_hi, 1'b1} + {step_hi, sc_q};",
              "{sv_hi, 1'b1} + {step_hi, s_lo_co};",
@@ -195,14 +201,16 @@ MUTATIONS = [
     Mutation("f2t_serial_missed_stall", "freq2temp.v", "assign in_ready = ~busy | out_valid;", "assign in_ready = 1'b1;",
              "serial: in_ready high while the product is computed (d overwritten mid-product)",
              (({}, "freq2temp", False, SERIAL["freq2temp"]),)),
-    Mutation("chain001_serial_stale_rate", "chain_paper001.v", "if (accept) rate_q <= rate_in;", "rate_q <= rate_in;",
-             "serial chain: rate_in sampled at the end, not with f (the next sample's rate)",
+    Mutation("chain001_serial_stale_bias", "chain_paper001.v",
+             "wire want_bias_subtract001 = busy & ~started_bias_subtract001 & done_piecewise_bias001;",
+             "wire want_bias_subtract001 = busy & ~started_bias_subtract001;",
+             "generated chain 001: the subtraction starts without waiting for bias(T) (the previous sample's)",
              ((None, "chain_paper001", False, SERIAL["chain_paper001"]),)),
-    Mutation("chain001_serial_missed_stall", "chain_paper001.v", "assign in_ready = ~busy | out_valid;",
-             "assign in_ready = 1'b1;", "serial chain: in_ready high while a sample is in flight",
+    Mutation("chain001_serial_missed_stall", "chain_paper001.v", "assign in_ready = ~busy;",
+             "assign in_ready = 1'b1;", "generated chain 001: in_ready high while a sample is in flight",
              (({}, "chain_paper001", False, SERIAL["chain_paper001"]),)),
     # ---- sf_divide with its output path pipelined (ARCH = 1) ----
-    Mutation("divide_serial_no_carry_in", "sf_divide.v", ".x(q_x), .cin(neg)", ".x(q_x), .cin(1'b0)",
+    Mutation("divide_serial_no_carry_in", "sf_divide.v", ".x(q_r), .cin(neg_r)", ".x(q_r), .cin(1'b0)",
              "pipelined divider: the rounding adder's carry in dropped (a negative quotient rounded as ~q, "
              "one LSB below -q)",
              ((None, "sf_divide", False, SERIAL["sf_divide"]),)),
@@ -244,52 +252,71 @@ MUTATIONS = [
              "if (st == S_IDLE) {ph_c, ph_lo} <= ph_lo_n;",
              "serial demod: the phase advances on every idle cycle, not once per accepted sample",
              ((None, "demod", True, SERIAL["demod"]),)),
-    # ---- serial chain_paper002 (ARCH = 1): its scheduler (checks at DIV_UNROLL 7, on a prefix) ----
+    # ---- the generated chain_paper002 top (fxdsp.hdl.chain_top; mutated as written, hdl_util.mutated_top):
+    # its scheduler, ARCH = 1 (checks at DIV_UNROLL 7, on a prefix) ----
     Mutation("chain002_serial_missed_stall", "chain_paper002.v", "assign in_ready = ~busy;",
-             "assign in_ready = 1'b1;", "serial chain 002: in_ready high while a sample is in flight",
+             "assign in_ready = 1'b1;", "generated chain 002: in_ready high while a sample is in flight",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
-    Mutation("chain002_serial_stale_vsa", "chain_paper002.v", "if (accept) vsa_r <= vsa;", "if (sf_v) vsa_r <= vsa;",
-             "serial chain 002: vsa registered as the divider starts, which reads the register's previous content",
+    Mutation("chain002_serial_live_vsa", "chain_paper002.v", ".x(in_vsa_q),", ".x(vsa),",
+             "generated chain 002: the divider reads the vsa port live, not the sample's registered vsa (the next "
+             "sample's, by the time the divider starts)",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
-    Mutation("chain002_serial_stale_sf", "chain_paper002.v", ".in_valid(sf_v), .in_ready(div_ready)",
-             ".in_valid(ce_v), .in_ready(div_ready)",
-             "serial chain 002: the divider started on the temperature, with the previous sample's SF",
+    Mutation("chain002_serial_stale_sf", "chain_paper002.v",
+             "wire want_sf_divide = busy & ~started_sf_divide & done_piecewise_sf & ",
+             "wire want_sf_divide = busy & ~started_sf_divide & ",
+             "generated chain 002: the divider starts without waiting for SF(T) (the previous sample's SF)",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
-    Mutation("chain002_serial_demod_ignores_bias_engine", "chain_paper002.v",
-             "assign dm_go = (d_v | dm_pend) & dm_ready & b_ready;", "assign dm_go = (d_v | dm_pend) & dm_ready;",
-             "serial chain 002: the demodulator started on the quotient while the bias engine still multiplies "
-             "(missed stall: at DIV_UNROLL 48 the divider's 7 cycles end before the bias engine's product returns; "
-             "at DIV_UNROLL 7 its 13 cycles outlast it, an equivalent mutant there)",
+    Mutation("chain002_serial_demod_ignores_the_multiplier", "chain_paper002.v",
+             "wire go_demod = want_demod & ((ARCH == 0) | (~mac_busy & ",
+             "wire go_demod = want_demod & ((ARCH == 0) | (1'b1 & ",
+             "generated chain 002: the demodulator starts on the quotient while the bias pass still multiplies "
+             "(missed stall: at DIV_UNROLL 48 the divider's 7 cycles end before the bias pass does; at DIV_UNROLL 7 "
+             "its 13 cycles outlast it, an equivalent mutant there)",
              ((None, "chain_paper002", False, {**SERIAL["chain_paper002"], "DIV_UNROLL": 48}),)),
+    Mutation("chain002_guest_pass_not_on_the_multiplier", "chain_paper002.v",
+             "wire go_piecewise_bias = (SHARE != 0) ? go_piecewise_sf :",
+             "wire go_piecewise_bias = (SHARE != 0) ? 1'b0 :",
+             "generated chain 002: the shared engine's bias pass not counted as the multiplier busy (the "
+             "demodulator may start during it, at DIV_UNROLL 48)",
+             ((None, "chain_paper002", False, {**SERIAL["chain_paper002"], "DIV_UNROLL": 48}),)),
+    Mutation("chain002_capture_on_start", "chain_paper002.v", "always @(posedge clk) if (bias_subtract_out_valid) begin",
+             "always @(posedge clk) if (go_bias_subtract) begin",
+             "generated chain 002: the subtraction's result captured as it starts, not on its out_valid (stale)",
+             ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
     # ---- one multiplier shared by the serial blocks: demod ARCH = 1 with its filters, chain 002 ARCH = 1 ----
-    # (own <= own | req, an owner kept after its products, is an equivalent mutant since the output
-    # low-pass runs in demod's engine: every block is idle while another multiplies and ignores a stray
-    # out_valid; the owner must still be held from the take to the product's return)
-    Mutation("chain002_mac_owner_not_held", "chain_paper002.v", "else if (sh_in & sh_ready) own <= req;",
-             "else own <= req;",
-             "serial chain 002: the shared multiplier's owner follows the live requests instead of being held "
-             "from the take: a product that returns while nobody requests reaches no block",
+    Mutation("chain002_mac_guest_products_lost", "chain_paper002.v",
+             "on_mac_piecewise_sf | ((SHARE != 0) & on_mac_piecewise_bias)", "on_mac_piecewise_sf",
+             "generated chain 002: the shared multiplier's products of the guest's pass (bias(T) on SF's engine) "
+             "not routed to the engine (its owner is the host alone): the pass waits for a product that never comes",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
-    Mutation("chain002_mac_stale_operand", "chain_paper002.v", "({MAC_A_W{dm_req}} & dm_a)",
-             "({MAC_A_W{own[3]}} & dm_a)",
-             "serial chain 002: the demodulator's operand a selected by the previous product's owner, not by its "
-             "request (its first product of a sample takes the bias engine's operand)",
+    Mutation("chain002_mac_hold_not_released", "chain_paper002.v",
+             "wire on_mac_piecewise_sf = started_piecewise_sf & ~done_piecewise_sf;",
+             "wire on_mac_piecewise_sf = started_piecewise_sf;",
+             "generated chain 002: a member's hold on the shared multiplier not released when its result is "
+             "captured (every later member waits for it: the chain stalls)",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
-    # ---- one filter engine: the output low-pass as the demodulator's engine's third channel (LPF_SHARED) ----
+    Mutation("chain002_mac_wrong_operand_select", "chain_paper002.v", "({MAC_A_W{demod_mac_req}} & demod_mac_a)",
+             "({MAC_A_W{rtd_mac_req}} & demod_mac_a)",
+             "generated chain 002: the demodulator's operand a selected by another member's request (rtd's "
+             "products take both operands, the demodulator's none)",
+             ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
+    # ---- one filter engine: the output low-pass as the demodulator's engine's third channel ----
+    Mutation("chain002_lpf_stale_input", "chain_paper002.v",
+             "wire want_iir = busy & ~started_iir & done_bias_subtract & ",
+             "wire want_iir = busy & ~started_iir & ",
+             "generated chain 002: the output low-pass (the demodulator's third filter channel) starts without "
+             "waiting for the subtraction (the previous sample's difference: stale operand)",
+             ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
     Mutation("chain002_lpf_wrong_set", "demod.v", ".COEF_SETS((AUX_LPF != 0) ? LCH : 1)", ".COEF_SETS(1)",
              "serial chain 002: the output low-pass (the filter engine's third channel) filters with the "
              "demodulator's low-pass coefficients, not its own set (wrong slot)",
-             ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
-    Mutation("chain002_lpf_stale_input", "chain_paper002.v", "assign aux_go  = s_v;", "assign aux_go  = sub_go;",
-             "serial chain 002: the output low-pass takes the subtraction's output a cycle before its out_valid "
-             "(the previous sample's difference: stale operand)",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
     Mutation("chain002_lpf_wrong_channel_input", "iir.v",
              "assign x_pass = pb ? x[CH_LAST_I*DATA_W +: DATA_W] : x_first;", "assign x_pass = x_first;",
              "split iir engine: the last channel's pass filters channel 0's input (the demodulator's I mixer) "
              "instead of its own",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
-    # ---- one coefficient engine: SF(T) and bias(T) as two sets of one piecewise (PW_SHARED) ----
+    # ---- one coefficient engine: SF(T) and bias(T) as two sets of one piecewise (fxdsp.hdl.sharing) ----
     # (the bias set's own alignment is in its ROM words now, the generator's: a wrong alignment is
     # the wrong set's words, chain002_pw_wrong_set)
     # (in_ready high between the two passes is an equivalent mutant in the chain: the demodulator, the
@@ -382,6 +409,11 @@ SERIAL_MUTATIONS = [m for m in MUTATIONS if any(len(c) > 3 for c in m.checks)]
 PER_CLOCK_MUTATIONS = [m for m in MUTATIONS if m not in SERIAL_MUTATIONS]
 
 
+def _generated(m: Mutation) -> bool:
+    """A mutation of a generated chain top (no such file among the hand-written RTL)."""
+    return not (RTL / m.file).exists()
+
+
 def run(mutations=MUTATIONS, baseline: bool = True, tag: str = "mut") -> list[dict]:
     """Check the unmutated RTL (if ``baseline``) and every mutant; ``tag`` names the shared headers'
     build directory (distinct per concurrent caller)."""
@@ -390,8 +422,8 @@ def run(mutations=MUTATIONS, baseline: bool = True, tag: str = "mut") -> list[di
         todo = []
         for m in ([None] if baseline else []) + list(mutations):
             rtl = Path(tmp) / (m.key if m else "baseline")
-            if m is None:
-                shutil.copytree(RTL, rtl)
+            if m is None or _generated(m):
+                shutil.copytree(RTL, rtl)   # a generated top's mutant is applied as it is written (below)
             else:
                 mutated_rtl(rtl, m.file, [(m.old, m.new)])
             todo.append((m, rtl))
@@ -410,11 +442,13 @@ def run(mutations=MUTATIONS, baseline: bool = True, tag: str = "mut") -> list[di
             checks = m.checks if m else ((None, "rtd", False), (None, "bias_subtract", False))
             t0 = time.perf_counter()
             caught, why = False, ""
-            for overrides, name, gapped, *extra in checks:
-                caught, why = _check(rtl, overrides, name, gapped, f"mut_{m.key if m else 'baseline'}_{name}",
-                                     *extra)
-                if caught:
-                    break
+            edit = mutated_top(Path(m.file).stem, [(m.old, m.new)]) if m and _generated(m) else contextlib.nullcontext()
+            with edit:
+                for overrides, name, gapped, *extra in checks:
+                    caught, why = _check(rtl, overrides, name, gapped, f"mut_{m.key if m else 'baseline'}_{name}",
+                                         *extra)
+                    if caught:
+                        break
             rows.append({"mutation": m.key if m else "(none: baseline)", "file": m.file if m else "-",
                          "what": m.what if m else "unmutated RTL must pass", "caught": caught, "evidence": why,
                          "seconds": round(time.perf_counter() - t0, 1)})

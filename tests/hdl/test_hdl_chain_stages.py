@@ -1,15 +1,16 @@
 """The optional stages of chain_paper002 on the RTL (issue 14, item 2): the lag between the RTD
-readout and the coefficient engines (the lag inserted into ``[chain.paper002]`` -> LAG_EN = 1) and the
+readout and the coefficient engines (the lag inserted into ``[chain.paper002]``, a member of its generated top) and the
 phase trim of the NCO reference (``[demod] phase_trim_rad`` -> demod's PHASE_TRIM), each alone and
 together. Golden vectors of each extended config are made here from the model (not committed) and
 streamed through the chain with cocotb on Icarus: every output word and the overflow-flag count
 must match the model. The checks must be able to fail: the same run on a mutated RTL copy (the lag
 bypassed, the trim's sign inverted, the trim not passed to the NCO) fails. The chain with the lag is
-also linted (its default-parameter lint, LAG_EN = 0, is test_hdl_lint.py's).
+also linted (the default chain's lint is test_hdl_lint.py's).
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 
 import numpy as np
@@ -17,7 +18,7 @@ import pytest
 
 from conftest import lag_chain
 from hdl_util import SIM_BUILD, build_dir, default_data, design_of, generate_into, lint_iverilog, lint_verilator, \
-    mutated_rtl, require_iverilog, run_cocotb, segment
+    mutated_rtl, mutated_top, require_iverilog, run_cocotb, segment
 
 CHAIN = "chain_paper002"
 FS = default_data()["system"]["fs_hz"]
@@ -88,7 +89,8 @@ def test_serial_chain_with_both_stages_matches_the_model_on_the_rtl(designs):
 
 # single-point RTL mutations of the stages, each with the config whose check must catch it
 MUTATIONS = {
-    "lag_bypassed": ("chain_paper002.v", "assign ce_w  = te_w;", "assign ce_w  = t_w;", "lag"),
+    # (the generated top: the lag's result captured as the thermometer's, so the engines read T, not Te)
+    "lag_bypassed": ("chain_paper002.v", "lag_te_q <= lag_te;", "lag_te_q <= rtd_temp_q;", "lag"),
     "trim_sign_inverted": ("nco.v", "START_C  = PHASE0_C + TRIM_C;", "START_C  = PHASE0_C - TRIM_C;", "trim"),
     "trim_not_passed": ("demod.v", ".PHASE_TRIM(PHASE_TRIM), ", "", "trim"),
     "lag_not_decimated": ("lag.v", "wire                     update = in_valid & (phase == {PH_W{1'b0}});",
@@ -100,12 +102,14 @@ MUTATIONS = {
 @pytest.mark.parametrize("key", sorted(MUTATIONS))
 def test_a_stage_mutation_fails_the_check(designs, key, tmp_path):
     file, old, new, config = MUTATIONS[key]
-    rtl = mutated_rtl(tmp_path / "rtl", file, [(old, new)])
+    generated = file == f"{CHAIN}.v"   # the chain's top is generated: mutate what the generator writes
+    rtl = None if generated else mutated_rtl(tmp_path / "rtl", file, [(old, new)])
     d = designs[config]
     seg = segment(d, CHAIN, stimulus(d))
     tag = f"stages_mut_{key}"
     # a failed cocotb test ends run_cocotb with pytest.fail, or with the runner's SystemExit
-    with pytest.raises((pytest.fail.Exception, SystemExit)):
+    with pytest.raises((pytest.fail.Exception, SystemExit)), \
+            (mutated_top(CHAIN, [(old, new)]) if generated else contextlib.nullcontext()):
         run_cocotb(d, CHAIN, [seg], tag, extra_params=EXTRA, rtl=rtl)
     # ... and it failed on the outputs (the mutant compiled and ran): the driver's own summary
     errors = json.loads((SIM_BUILD / tag / "summary.json").read_text())["errors"]
@@ -114,13 +118,15 @@ def test_a_stage_mutation_fails_the_check(designs, key, tmp_path):
 
 @pytest.mark.hdl
 def test_chain_with_the_lag_lints_clean(designs):
-    """LAG_EN = 1 with the headers generated from a lag config: iverilog -Wall and verilator -Wall."""
+    """The generated top of a lag config (the lag a member of it) with its headers: iverilog -Wall and
+    verilator -Wall."""
     require_iverilog()
     d = build_dir("stages_lint")
     generate_into(designs["both"], d)
-    assert "parameter integer LAG_EN = 1" in (d / "chain_paper002_params.vh").read_text()
+    top = d / f"{CHAIN}.v"
+    assert " u_lag (" in top.read_text()
     assert ".DECIM(5)" in (d / "lag_params.vh").read_text()
-    assert lint_iverilog(CHAIN, include=d) == ""
-    assert lint_verilator(CHAIN, include=d) == ""
-    assert lint_iverilog(CHAIN, {"ARCH": 1}, include=d) == ""   # the serial chain with the serial lag
-    assert lint_verilator(CHAIN, {"ARCH": 1}, include=d) == ""
+    assert lint_iverilog(CHAIN, include=d, extra=(top,)) == ""
+    assert lint_verilator(CHAIN, include=d, extra=(top,)) == ""
+    assert lint_iverilog(CHAIN, {"ARCH": 1}, include=d, extra=(top,)) == ""   # the serial chain, the serial lag
+    assert lint_verilator(CHAIN, {"ARCH": 1}, include=d, extra=(top,)) == ""

@@ -6,12 +6,14 @@ no module but fx_round rounds, checked on the parsed Verilog and proven on injec
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 
 import pytest
 
 import rtl_rules
+from fxdsp.chains import build
 from hdl_util import GEN, ROOT, RTL, lint_iverilog, lint_verilator, mutated_rtl
 
 MODULES = sorted(p.stem for p in RTL.glob("*.v"))
@@ -79,9 +81,6 @@ VARIANTS = [
     ("piecewise", {"ARCH": 1, "T_W": 12, "ACC_W": 16, "COEF_W": 12, "ACOEF_W": 12, "OUT_W": 10}),  # one-limb operands
     ("freq2temp", {"ARCH": 1}),
     ("freq2temp", {"ARCH": 1, "FREQ_W": 15, "KINV_W": 16, "SHIFT": 4, "ROUNDING": 3, "OVERFLOW": 0}),
-    ("chain_paper001", {"ARCH": 1}),
-    ("chain_paper002", {"ARCH": 1}),
-    ("chain_paper002", {"ARCH": 1, "DIV_UNROLL": 48}),   # the divider faster than the bias engine
 ]
 
 
@@ -109,15 +108,22 @@ def test_lint_variants(top, params):
 GENERATED_TOPS = sorted(GEN.glob("chain_*.v"))
 
 
-def test_some_chain_top_is_generated():
-    assert GENERATED_TOPS, "no generated chain top in hdl/gen"
+def test_every_chain_top_is_generated():
+    """Every chain of the config has a generated top and no chain top is written by hand."""
+    assert {p.stem for p in GENERATED_TOPS} == set(build().chains)
+    hand = [p.name for p in RTL.glob("*.v") if re.search(r"^\s*module\s+chain_", p.read_text(), re.M)]
+    assert not hand, f"hand-written chain tops in {RTL}: {hand}"
 
 
-@pytest.mark.parametrize("arch", [0, 1])
-@pytest.mark.parametrize("top", GENERATED_TOPS, ids=[p.stem for p in GENERATED_TOPS])
-def test_generated_chain_tops_lint_clean(top, arch):
+# every generated top in both variants; the paper 002 top also with a divider faster than the bias pass
+TOP_VARIANTS = [(p, {"ARCH": a}) for p in GENERATED_TOPS for a in (0, 1)]
+TOP_VARIANTS += [(p, {"ARCH": 1, "DIV_UNROLL": 48}) for p in GENERATED_TOPS if p.stem == "chain_paper002"]
+
+
+@pytest.mark.parametrize("top,params", TOP_VARIANTS, ids=[f"{p.stem}-{v}" for p, v in TOP_VARIANTS])
+def test_generated_chain_tops_lint_clean(top, params):
     for run in (lint_iverilog, lint_verilator):
-        out = run(top.stem, {"ARCH": arch}, extra=(top,))
+        out = run(top.stem, params, extra=(top,))
         assert out == "", out
 
 
@@ -148,8 +154,8 @@ def test_headers_rom_files_match_config():
 def test_every_block_has_a_module_and_shared_primitives():
     names = {p.stem for p in RTL.glob("*.v")}
     assert {"rtd", "iir", "nco", "demod", "piecewise", "sf_divide", "bias_subtract", "freq2temp", "lag",
-            "chain_paper002", "chain_paper001", "fx_round", "fx_fit"} <= names
-    for p in RTL.glob("*.v"):
+            "fx_round", "fx_fit"} <= names
+    for p in [*RTL.glob("*.v"), *GENERATED_TOPS]:
         text = p.read_text()
         assert "`default_nettype none" in text, p.name
         if p.stem not in ("fx_round", "fx_fit", "fx_convert", "nco"):

@@ -29,25 +29,30 @@ def test_long_stream_sf_divide_one_bit_per_cycle():
 
 
 def _chain_paper001_cycles_per_sample(d) -> int:
-    """hdl/rtl/chain_paper001.v: freq2temp's cycles + piecewise_bias001's + 1 (the subtraction)."""
-    return (freq2temp_cycles_per_sample(hp.instance(d, "freq2temp").params)
-            + piecewise_cycles_per_sample(hp.instance(d, "piecewise_bias001").params) + 1)
+    """The generated chain_paper001 top, ARCH = 1, written out here from the top's rule: a member's start
+    is decided the cycle after its driver's result is captured and registered into its in_valid (+2
+    per member beyond its own cycles); out_valid a cycle after the last capture and the next sample
+    taken as it leaves (+2): freq2temp, then piecewise_bias001, then the subtraction."""
+    return (freq2temp_cycles_per_sample(hp.instance(d, "freq2temp").params) + 2
+            + piecewise_cycles_per_sample(hp.instance(d, "piecewise_bias001").params) + 2 + (1 + 2) + 2)
 
 
 def _chain_paper002_cycles_per_sample(d) -> int:
-    """hdl/rtl/chain_paper002.v, ARCH = 1 (LAG_EN = 0, the default config): rtd's cycles + piecewise_sf's
-    + max(the divider's, piecewise_bias's) (the bias engine runs during the division; demod starts after
-    both: the two share the multiplier) + demod's + 3 (the join into registers, the subtraction, the
-    output register) + the iir's."""
+    """The generated chain_paper002 top, ARCH = 1 (the default config), likewise: rtd, then SF(T); then
+    the divider and (SF's engine's second coefficient set, its pass as SF's result leaves) bias(T); the
+    demodulator after the divider's result and the bias pass (they share the multiplier); then the
+    subtraction and the output low-pass (on the demodulator's filter engine)."""
     par = lambda n: hp.instance(d, n).params  # noqa: E731
-    return (rtd_cycles_per_sample(par("rtd")) + piecewise_cycles_per_sample(par("piecewise_sf"))
-            + max(sf_divide_cycles_per_sample(par("sf_divide")), piecewise_cycles_per_sample(par("piecewise_bias")))
-            + demod_cycles_per_sample(par("demod")) + 3 + iir_cycles_per_sample(par("iir")))
+    divider = sf_divide_cycles_per_sample(par("sf_divide"))
+    bias_pass = piecewise_cycles_per_sample(par("piecewise_bias"))
+    return (rtd_cycles_per_sample(par("rtd")) + 2 + piecewise_cycles_per_sample(par("piecewise_sf"))
+            + max(divider + 2, bias_pass) + 2 + demod_cycles_per_sample(par("demod")) + 2 + (1 + 2)
+            + iir_cycles_per_sample(par("iir")) + 2 + 2)
 
 
-# the hand-written tops' schedules (their headers); a block's is its module's (fxdsp.hdl.schedule), a
-# generated top's its netlist's (fxdsp.hdl.schedule.chain_schedule)
-HAND_TOPS = {"chain_paper001": _chain_paper001_cycles_per_sample, "chain_paper002": _chain_paper002_cycles_per_sample}
+# the paper chains' schedules written out here; a block's is its module's (fxdsp.hdl.schedule), any
+# other chain's its netlist's (fxdsp.hdl.schedule.chain_schedule)
+PAPER_TOPS = {"chain_paper001": _chain_paper001_cycles_per_sample, "chain_paper002": _chain_paper002_cycles_per_sample}
 
 
 @pytest.mark.hdl
@@ -57,8 +62,9 @@ def test_long_stream_serial(name):
     sample is taken one cycle after the reset is released)."""
     cycles, _, n = long_stream(name, sim="verilator", extra=SERIAL[name])
     design = default_design()
-    if name in HAND_TOPS:
-        per = HAND_TOPS[name](design)
+    if name in PAPER_TOPS:
+        per = PAPER_TOPS[name](design)
+        assert per == chain_schedule(design, name)[0], "the schedule stated in the top's header"
     elif design.instances[name].members:
         per = chain_schedule(design, name)[0]
     else:

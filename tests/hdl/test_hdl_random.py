@@ -12,7 +12,7 @@ import pytest
 from hdl_util import SERIAL, design_of, icarus_samples, icarus_window, run_cocotb, segment
 
 from fxdsp.hdl.stimuli import random_stimulus  # fxdsp rtl and the sweep's RTL shards draw the same way
-from fxdsp.sweep.rtl import EXTRA
+from fxdsp.sweep.rtl import unroll_params
 
 BLOCKS = sorted(design_of().instances)   # every instance of the design: its blocks and chains
 
@@ -80,7 +80,7 @@ def test_random_parameter_set(pset, name):
     d = design(pset)
     stim = random_stimulus(d, name, seed=zlib.crc32(f"{pset}:{name}".encode()))
     run_cocotb(d, name, [segment(d, name, stim)], f"random_{pset}_{name}", gap=0.25, seed=7,
-               extra_params=EXTRA.get(name))
+               extra_params=unroll_params(d, name))
 
 
 @pytest.mark.hdl
@@ -92,4 +92,4 @@ def test_random_parameter_set_serial(pset, name):
     stim = random_stimulus(d, name, seed=zlib.crc32(f"{pset}:{name}".encode()))
     stim = icarus_window(stim, icarus_samples(name))  # on Icarus (hdl_util.ICARUS_SERIAL_SAMPLES); the model runs on it
     run_cocotb(d, name, [segment(d, name, stim)], f"random_{pset}_{name}_serial", gap=0.25, seed=7,
-               extra_params={**EXTRA.get(name, {}), **SERIAL[name]})
+               extra_params={**(unroll_params(d, name) or {}), **SERIAL[name]})

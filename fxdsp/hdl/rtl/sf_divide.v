@@ -1,7 +1,10 @@
 // sf_divide: scale-factor compensation y = x / SF (fxdsp.blocks.sf_divide).
 //   N = x << NUM_SHIFT (exact; NUM_SHIFT = sf.fl + guard_bits)
-//   q = sign(N) sign(d) (|N| div |d|)   sequential restoring divider on magnitudes, truncating
-//                                       toward zero, UNROLL quotient bits per cycle
+//   q = sign(N) sign(d) (|N| div |d|)   sequential divider on magnitudes, truncating toward zero,
+//                                       UNROLL quotient bits per cycle; non-restoring steps (the
+//                                       remainder may go negative, the next step adds |d| back
+//                                       instead of a restore: the restoring quotient bits, and the
+//                                       step is one adder into the remainder register, no multiplexer)
 //   y = fit(round(q >> OUT_SHIFT)) into OUT_W bits: rounding by ROUNDING (floor / half_up /
 //       half_even / toward_zero), fit by OVERFLOW (wrap / saturate)
 // Division by zero: full scale with the sign of x (0 for x = 0), flagged in ovf[1] when x != 0;
@@ -15,7 +18,7 @@
 //   result, and q_s = sign * q = {neg, nq} + neg: the + neg is the rounding adder's carry in
 //   (fx_round cin), so no negation adder of its own (it was ~79 LUT4 of the paper 002 chain).
 // ARCH = 1: the same bits, the output path pipelined for 40 MHz on an iCE40UP5K (in ARCH = 0 the
-//   last restoring step, the rounding adder and the fit are one path): after the last step
+//   last division step, the rounding adder and the fit are one path): after the last step
 //   (nq and neg hold), two cycles of delay (the schedule of the earlier two-stage negation), then
 //   fx_convert_pipe rounds {neg, nq} + neg (one cycle) and fits (one cycle), then the output
 //   register. Latency: ceil((IN_W + NUM_SHIFT) / UNROLL) + 6 cycles; in_ready is high again in the
@@ -51,7 +54,7 @@ module sf_divide #(
     reg              busy;
     reg [CW-1:0]     cnt;       // quotient bits still to compute
     reg [NW-1:0]     nq;        // numerator bits shifted out at the top, quotient bits in at the bottom
-    reg [DW-1:0]     rem;
+    reg [DW:0]       rem;       // the partial remainder, signed, in [-|d|, |d|) (non-restoring)
     reg [DW-1:0]     dmag;
     reg              neg, xneg, xzero, dzero;
 
@@ -68,28 +71,25 @@ module sf_divide #(
     wire [DW:0] dabs = d_neg ? -dext : dext;
     /* verilator lint_on UNUSEDSIGNAL */
 
-    // ---- up to UNROLL restoring steps per cycle ----
-    reg [DW-1:0] r_v;
+    // ---- up to UNROLL division steps per cycle: t = 2 r + b - |d| after a non-negative remainder,
+    // 2 r + b + |d| after a negative one (one adder, |d| or its complement with the carry in); the
+    // quotient bit is t >= 0 (the restoring step's bit: its restore is folded into the next step) ----
+    reg [DW:0]   r_v;
     reg [NW-1:0] nq_v;
     reg [CW-1:0] c_v;
-    reg [DW:0]   sh_v;
     reg [DW+1:0] t_v;
+    reg          qb_v;      // the step's quotient bit
     integer u;
     always @* begin
         r_v = rem; nq_v = nq; c_v = cnt;
-        sh_v = {(DW+1){1'b0}}; t_v = {(DW+2){1'b0}};
+        t_v = {(DW+2){1'b0}}; qb_v = 1'b0;
         for (u = 0; u < UNROLL; u = u + 1) begin
             if (c_v != {CW{1'b0}}) begin
-                sh_v = {r_v, nq_v[NW-1]};
-                t_v  = {1'b0, sh_v} - {2'b00, dmag};
+                t_v  = {r_v, nq_v[NW-1]} + ({2'b00, dmag} ^ {(DW+2){~r_v[DW]}}) + {{(DW+1){1'b0}}, ~r_v[DW]};
+                qb_v = ~t_v[DW+1];
+                r_v  = t_v[DW:0];
                 // the quotient bit, inverted for a negative result (nq ends as ~q: see the header)
-                if (!t_v[DW+1]) begin
-                    r_v  = t_v[DW-1:0];
-                    nq_v = {nq_v[NW-2:0], ~neg};
-                end else begin
-                    r_v  = sh_v[DW-1:0];
-                    nq_v = {nq_v[NW-2:0], neg};
-                end
+                nq_v = {nq_v[NW-2:0], qb_v ^ neg};
                 c_v = c_v - {{(CW-1){1'b0}}, 1'b1};
             end
         end
@@ -98,14 +98,14 @@ module sf_divide #(
     // ---- sign, rounding and fit of the finished quotient ----
     wire [OUT_W-1:0] full_pos = {1'b0, {(OUT_W-1){1'b1}}};
     wire [OUT_W-1:0] full_neg = {1'b1, {(OUT_W-1){1'b0}}};
-    wire             last = busy & (c_v == {CW{1'b0}});   // the last restoring step is this cycle
+    wire             last = busy & (c_v == {CW{1'b0}});   // the last division step is this cycle
     // the result of a division by zero (its own value, no rounding): full scale with the sign of x
     wire [OUT_W-1:0] y_zero = xzero ? {OUT_W{1'b0}} : (xneg ? full_neg : full_pos);
 
     always @(posedge clk) begin
         if (rst) begin
             busy <= 1'b0; cnt <= {CW{1'b0}};
-            nq <= {NW{1'b0}}; rem <= {DW{1'b0}}; dmag <= {DW{1'b0}};
+            nq <= {NW{1'b0}}; rem <= {(DW+1){1'b0}}; dmag <= {DW{1'b0}};
             neg <= 1'b0; xneg <= 1'b0; xzero <= 1'b0; dzero <= 1'b0;
         end else begin
             if (!busy) begin
@@ -113,7 +113,7 @@ module sf_divide #(
                     busy  <= 1'b1;
                     cnt   <= NW[CW-1:0];
                     nq    <= nabs[NW-1:0];
-                    rem   <= {DW{1'b0}};
+                    rem   <= {(DW+1){1'b0}};
                     dmag  <= dabs[DW-1:0];
                     neg   <= x[IN_W-1] ^ d_neg;
                     xneg  <= x[IN_W-1];
@@ -159,11 +159,21 @@ module sf_divide #(
             wire               c_v2;
             wire [OUT_W-1:0]   y_c;
             wire               o_c;
-            wire signed [NW:0] q_x = {neg, nq};           // q, or ~q with the sign: q_s - neg
+            // q, or ~q with the sign (q_s - neg), copied in stage 2 into a register that feeds only the
+            // rounding adder: its NW + 1-bit carry chain then starts beside its operand, not across the
+            // die at the divider's shift register (that route alone cost 7 ns at 40 MHz)
+            reg signed [NW:0]  q_r;
+            reg                neg_r;
+            always @(posedge clk) begin
+                if (h_v) begin
+                    q_r   <= {neg, nq};
+                    neg_r <= neg;
+                end
+            end
             assign fin = fin_r;
             fx_convert_pipe #(.IN_W(NW+1), .SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), .OUT_W(OUT_W),
                               .OUT_SIGNED(1), .OVERFLOW(OVERFLOW), .CIN(1)) u_out
-                (.clk(clk), .rst(rst), .in_valid(s_v), .x(q_x), .cin(neg), .out_valid(c_v2), .y(y_c), .ovf(o_c));
+                (.clk(clk), .rst(rst), .in_valid(s_v), .x(q_r), .cin(neg_r), .out_valid(c_v2), .y(y_c), .ovf(o_c));
             always @(posedge clk) begin
                 if (rst) begin
                     q_v <= 1'b0; h_v <= 1'b0; s_v <= 1'b0; fin_r <= 1'b0;
