@@ -4,6 +4,7 @@ through fxdsp.hdl.hwreport.hw_report_path(), and is what the budget reads."""
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 from fxdsp.hdl import hwreport, report_cli
@@ -29,8 +30,9 @@ def test_json_is_written_from_the_rows_hw_report_collects(tmp_path):
     path = tmp_path / "HW_REPORT.json"
     path.write_text(report_json(rows, 40.0, UP5K))
     got = load_hw_report(path)["rows"]
-    assert got[0] == {"name": "rtd", "module": "rtd", "LUT": 301, "MAC16": 2, "FF": 20, "BRAM": 0, "fmax": 21.83,
-                      "fmax_seeds": None, "note": "", "sha256": None, "xc7": {"LUT": None, "DSP48E1": None, "FF": None, "BRAM36": None, "BRAM18": None,
+    assert got[0] == {"name": "rtd", "module": "rtd", "LC": None, "LUT": 301, "FF": 20, "CARRY": 7, "MAC16": 2,
+                      "BRAM": 0, "GB": None, "fmax": 21.83, "fmax_seeds": None, "critical_seed": None,
+                      "critical_path": None, "cycles_per_sample": None, "cycle_budget": None, "note": "", "sha256": None, "xc7": {"LUT": None, "DSP48E1": None, "FF": None, "BRAM36": None, "BRAM18": None,
                                           "LUTRAM": None, "SRL": None, "note": ""}}
     assert got[1]["LUT"] is None and got[1]["fmax"] is None and got[1]["note"].startswith("timed out")
     rows[0]["xc7"] = {"LUT": 150, "DSP48E1": 2, "FF": 20, "BRAM36": 0, "BRAM18": 1, "LUTRAM": 0, "SRL": 0,
@@ -116,7 +118,9 @@ def test_row_hash_changes_for_exactly_the_rows_that_read_a_changed_file(tmp_path
     changed = {row for row in before if before[row] != after[row]}
     assert {"demod", "demod (ARCH=1)", "chain_paper002", "chain_paper002 (ARCH=1)"} <= changed
     assert not changed & {"rtd", "iir", "chain_paper001", "piecewise_sf (ARCH=1)", "sf_divide"}
-    (rtl / "fx_round.v").write_text((rtl / "fx_round.v").read_text() + "\n")
+    text = (rtl / "fx_round.v").read_text()
+    assert text.count("assign c = half;") == 1
+    (rtl / "fx_round.v").write_text(text.replace("assign c = half;", "assign c = half + one;"))
     assert all(before[row] != h for row, h in expected_row_hashes(design, 40.0).items())  # every block rounds
     assert expected_row_hashes(design, 41.0)["rtd"] != before["rtd"]   # another target clock is another run
 
@@ -173,7 +177,7 @@ def test_only_reruns_its_rows_and_keeps_the_reports_other_current_rows(tmp_path,
     monkeypatch.setattr(report_cli, "synth", lambda *a, **k: {"LUT": 1, "MAC16": 0, "FF": 1, "BRAM": 0, "CARRY": 0})
     monkeypatch.setattr(report_cli, "synth_xc7", lambda *a, **k: {"LUT": 1, "DSP48E1": 0, "FF": 1, "BRAM36": 0,
                                                                  "BRAM18": 0, "LUTRAM": 0, "SRL": 0})
-    monkeypatch.setattr(report_cli, "place_route", lambda *a, **k: (99.0, "", {1: 99.0}))
+    monkeypatch.setattr(report_cli, "place_route", lambda *a, **k: (99.0, "", {1: 99.0}, {"fmax": 99.0, "seed": 1}))
     parser = argparse.ArgumentParser()
     report_cli.configure(parser)
 
@@ -198,18 +202,24 @@ def test_only_reruns_its_rows_and_keeps_the_reports_other_current_rows(tmp_path,
 
 def test_a_budget_row_is_judged_on_its_slowest_seed():
     """A chain's budget row is placed with several seeds; its Fmax target holds only when every seed
-    meets it (one seed is one draw of the placer), and a seed that did not place fails it."""
+    meets it (one seed is one draw of the placer), and a seed that did not place fails it. Its block
+    RAM and its cycles per sample (the generated top's schedule, in the row) are judged too."""
     row = {"name": "chain_paper002 (ARCH=1)", "module": "chain_paper002", "LUT": 2500, "MAC16": 1, "FF": 2000,
-           "BRAM": 19, "fmax": 41.2, "fmax_seeds": {"1": 41.2, "2": 39.6, "3": 40.8}, "note": ""}
+           "BRAM": 19, "fmax": 41.2, "fmax_seeds": {"1": 41.2, "2": 39.6, "3": 40.8}, "note": "",
+           "cycles_per_sample": 361, "cycle_budget": 416}
     text = markdown([row], 40.0)
-    assert "| 41.2 (seed 1: 41.2, seed 2: 39.6, seed 3: 40.8) |" in text
+    assert "BRAM met (19)" in text and "cycles per sample met (361" in text
+    assert "BRAM NOT met (21)" in markdown([{**row, "BRAM": 21}], 40.0)
+    assert "cycles per sample NOT met (417" in markdown([{**row, "cycles_per_sample": 417}], 40.0)
+    assert "| min 39.6, median 40.8 (seed 1: 41.2, seed 2: 39.6, seed 3: 40.8) |" in text
     assert "Fmax NOT met (39.6, the lowest over seeds 1, 2, 3)" in text
     row["fmax_seeds"]["2"] = 40.1
     assert "Fmax met (40.1, the lowest over seeds 1, 2, 3)" in markdown([row], 40.0)
     row["fmax_seeds"]["3"] = None
     assert "Fmax NOT met (-" in markdown([row], 40.0)
     assert report_cli.seeds_of("chain_paper002 (ARCH=1)") == report_cli.SEED_SWEEP
-    assert report_cli.seeds_of("demod (ARCH=1)") == (1,)
+    assert report_cli.seeds_of("chain_user (ARCH=1)") == report_cli.SEED_SWEEP and len(report_cli.SEED_SWEEP) >= 10
+    assert report_cli.seeds_of("demod (ARCH=1)") == (1,) and report_cli.seeds_of("chain_paper002") == (1,)
 
 
 def test_adding_an_instance_reruns_no_other_row():
@@ -236,6 +246,29 @@ def test_adding_an_instance_reruns_no_other_row():
     assert changed == {"iir", "iir (ARCH=1)", "chain_paper002", "chain_paper002 (ARCH=1)"}, changed
 
 
+def test_a_comment_or_whitespace_edit_of_the_rtl_needs_no_new_synthesis(tmp_path, monkeypatch):
+    """The staleness key is the logic: rewording every comment of sf_divide.v and re-indenting it leaves
+    every row's hash as it was (no re-synthesis), while a one-character change of its code makes
+    exactly the rows that read it stale."""
+    from fxdsp.chains import build
+    from fxdsp.hdl.report_cli import expected_row_hashes
+
+    design = build()
+    before = expected_row_hashes(design, 40.0)
+    rtl = _copy_rtl(tmp_path, monkeypatch)
+    text = (rtl / "sf_divide.v").read_text()
+    reworded = re.sub(r"//[^\n]*", "// reworded", text).replace("\n    ", "\n        ")
+    assert reworded != text
+    (rtl / "sf_divide.v").write_text(reworded)
+    assert expected_row_hashes(design, 40.0) == before
+    assert reworded.count("assign in_ready = ~busy & ~fin;") == 1
+    (rtl / "sf_divide.v").write_text(reworded.replace("assign in_ready = ~busy & ~fin;", "assign in_ready = ~busy;"))
+    after = expected_row_hashes(design, 40.0)
+    changed = {row for row in before if before[row] != after[row]}
+    assert {"sf_divide", "sf_divide (ARCH=1)", "sf_divide000", "chain_paper002 (ARCH=1)", "chain_paper000"} <= changed
+    assert not changed & {"rtd", "iir", "demod", "chain_paper001", "chain_paper001 (ARCH=1)"}
+
+
 def test_a_generated_tops_comments_are_not_its_logic():
     """The row hash of a generated top ignores its comments (the schedule it states in words) and
     sees any change of its code."""
@@ -249,3 +282,35 @@ def test_a_generated_tops_comments_are_not_its_logic():
     assert reworded != text and row_hash("chain_paper000", None, {"chain_paper000.v": reworded}) == h
     broken = text.replace(" & done_piecewise_k0", "", 1)
     assert broken != text and row_hash("chain_paper000", None, {"chain_paper000.v": broken}) != h
+
+
+# the parts of a nextpnr-ice40 0.4 log that hw-report reads (its own words and layout)
+NEXTPNR_LOG = """Info: Device utilisation:
+Info: 	         ICESTORM_LC:  3850/ 5280    72%
+Info: 	        ICESTORM_RAM:    19/   30    63%
+Info: 	               SB_GB:     8/    8   100%
+Info: Max frequency for clock 'clk$SB_IO_IN_$glb_clk': 43.15 MHz (PASS at 40.00 MHz)
+Info: Critical path report for clock 'clk$SB_IO_IN_$glb_clk' (posedge -> posedge):
+Info: curr total
+Info:  1.4  1.4  Source dut.done_demod_SB_DFFESR_Q_DFFLC.O
+Info:  3.0  4.3    Net dut.done_demod budget 2.965000 ns (9,27) -> (5,25)
+Info:                Sink dut.done_iir_SB_LUT4_I2_LC.I0
+Info:  1.2  5.5  Source dut.done_iir_SB_LUT4_I2_LC.O
+Info:  2.1  7.6    Net dut.x budget 2.9 ns (5,25) -> (6,25)
+Info:                Sink dut.g_mac.u_mac.ia_SB_DFFESR_Q_D_SB_LUT4_O_LC.SR
+Info: 5.8 ns logic, 17.4 ns routing
+
+Info: Critical path report for cross-domain path '<async>' -> 'posedge clk$SB_IO_IN_$glb_clk':
+Info:  0.0  0.0  Source sin$sb_io.D_IN_0
+Info:                Sink dut.other.I0
+Info: 1.2 ns logic, 3.8 ns routing
+"""
+
+
+def test_the_placement_is_read_from_nextpnrs_log():
+    """Logic cells and global buffers of the placed design and the clock's critical path (not a
+    cross-domain one): its first source, its last sink, logic and routing."""
+    got = report_cli._placement(NEXTPNR_LOG)
+    assert got == {"LC": 3850, "GB": 8, "critical_path": "dut.done_demod_SB_DFFESR_Q_DFFLC.O -> "
+                   "dut.g_mac.u_mac.ia_SB_DFFESR_Q_D_SB_LUT4_O_LC.SR: 5.8 ns logic, 17.4 ns routing"}
+    assert report_cli._placement("Info: nothing placed") == {"LC": None, "GB": None, "critical_path": None}

@@ -31,7 +31,8 @@ from pathlib import Path
 from ..outputs import json_text
 from . import HW_REPORT_JSON, RTL_DIR
 
-COLUMNS = ("name", "module", "LUT", "MAC16", "FF", "BRAM", "fmax", "fmax_seeds", "note", "sha256")
+COLUMNS = ("name", "module", "LC", "LUT", "FF", "CARRY", "MAC16", "BRAM", "GB", "fmax", "fmax_seeds", "critical_seed",
+           "critical_path", "cycles_per_sample", "cycle_budget", "note", "sha256")
 XC7_COLUMNS = ("LUT", "DSP48E1", "FF", "BRAM36", "BRAM18", "LUTRAM", "SRL", "note")
 
 
@@ -64,6 +65,13 @@ _WORD = re.compile(r"\b\w+\b")
 def _code(text: str) -> str:
     """Verilog text without its comments (a module named in a comment is not a dependency)."""
     return re.sub(r"/\*.*?\*/", " ", re.sub(r"//[^\n]*", " ", text), flags=re.S)
+
+
+def logic(text: str) -> str:
+    """What synthesis reads of Verilog text: comments removed and every run of whitespace one space, so
+    that a reworded comment or a re-indented line leaves a row's hash (and the committed report) as it
+    is, while any change of code makes it stale."""
+    return " ".join(_code(text).split())
 
 
 def rtl_closure(module: str, generated: str | None = None) -> list[Path]:
@@ -104,10 +112,10 @@ def row_hash(module: str, params: dict[str, str] | None, files: dict[str, str], 
     synthesis (``fxdsp hw-report`` reuses them)."""
     h = hashlib.sha256(recipe.encode() + b"\0")
     for p in rtl_closure(module, files.get(f"{module}.v")):
-        h.update(f"rtl/{p.name}".encode() + b"\0" + p.read_text(encoding="utf-8").encode() + b"\0")
+        h.update(f"rtl/{p.name}".encode() + b"\0" + logic(p.read_text(encoding="utf-8")).encode() + b"\0")
     for name, text in sorted(files.items()):
-        # a generated top's comments (its schedule in words) are not logic: a reworded header re-runs nothing
-        code = _code(text) if name.endswith(".v") else text
+        # Verilog (a generated top, a parameter header) by its logic; ROM words as written
+        code = logic(text) if name.endswith((".v", ".vh")) else text
         h.update(f"gen/{name}".encode() + b"\0" + code.encode() + b"\0")
     h.update(json.dumps(params, sort_keys=True).encode())
     return h.hexdigest()

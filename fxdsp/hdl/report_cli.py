@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import re
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -40,7 +41,7 @@ from . import RTL_DIR as RTL
 from .hwreport import load_hw_report, report_json, row_files, row_hash, source_hash
 from .params import generate, instance, iverilog_params
 
-UP5K = {"LUT": 5280, "MAC16": 8, "FF": 5280, "BRAM": 30}
+UP5K = {"LUT": 5280, "MAC16": 8, "FF": 5280, "BRAM": 30, "LC": 5280, "GB": 8}
 # the Artix-7 the xc7 columns are read against (a common small one); yosys estimates, not Vivado
 XC7A35T = {"name": "XC7A35T", "LUT": 20800, "DSP48E1": 90, "FF": 41600, "BRAM36": 50}
 XC7_SYNTH = "synth_xilinx -family xc7 -flatten -noiopad"
@@ -54,17 +55,17 @@ def variants(design) -> dict[str, tuple[str, dict[str, str]]]:
 
 # the issue's targets per chain (half the device for paper 002, a quarter for paper 001), read
 # against the chain's serial row when it has one, else its default row
-CHAIN_BUDGETS = {"chain_paper002": {"LUT": 2640, "MAC16": 8, "MHz": 40.0},
-                 "chain_paper001": {"LUT": 1320, "MAC16": 4, "MHz": 40.0}}
-# the budget rows are placed with several nextpnr seeds: one seed's Fmax moves by a few MHz with no
+CHAIN_BUDGETS = {"chain_paper002": {"LUT": 2640, "MAC16": 8, "BRAM": 20, "MHz": 40.0},
+                 "chain_paper001": {"LUT": 1320, "MAC16": 4, "BRAM": 8, "MHz": 40.0}}
+# the chains' serial rows are placed with ten nextpnr seeds: one seed's Fmax moves by a few MHz with no
 # change in logic (a placement is one draw), so the target is judged on the lowest of them
-SEED_SWEEP = (1, 2, 3)
-SWEPT_ROWS = {f"{chain} (ARCH=1)" for chain in CHAIN_BUDGETS}
+SEED_SWEEP = tuple(range(1, 11))
 
 
 def seeds_of(row_name: str) -> tuple[int, ...]:
-    """The nextpnr seeds a row is placed with: :data:`SEED_SWEEP` for a budget row, else seed 1."""
-    return SEED_SWEEP if row_name in SWEPT_ROWS else (1,)
+    """The nextpnr seeds a row is placed with: :data:`SEED_SWEEP` for every chain's serial row (the
+    rows an FPGA engineer signs off), else seed 1."""
+    return SEED_SWEEP if row_name.startswith("chain_") and row_name.endswith(" (ARCH=1)") else (1,)
 
 
 def configure(parser) -> None:
@@ -150,7 +151,7 @@ def _stat(text: str) -> dict:
 
 def _sources(design, work: Path):
     """The RTL sources of ``design`` (:func:`fxdsp.hdl.harness.rtl_sources`: its generated chain tops
-    in ``work``, no hand-written top it does not use), as yosys reads them."""
+    in ``work``), as yosys reads them."""
     from .harness import rtl_sources
 
     return " ".join(str(p) for p in rtl_sources(RTL, design, work))
@@ -195,11 +196,26 @@ def _failure(exc: subprocess.CalledProcessError) -> str:
     return "synthesis failed: " + err.splitlines()[-1] if err else "synthesis failed"
 
 
+def _placement(text: str) -> dict:
+    """What one nextpnr run says of the placed design: logic cells and global buffers used, and its
+    critical path (source, sink, ns of logic and of routing)."""
+    lc = re.search(r"ICESTORM_LC:\s*(\d+)/", text)
+    gb = re.search(r"SB_GB:\s*(\d+)/", text)
+    path = text.split("Critical path report for clock", 1)[1] if "Critical path report for clock" in text else ""
+    path = path.split("Critical path report for cross-domain", 1)[0]
+    ends = re.findall(r"(?:Source|Sink)\s+(\S+)", path)
+    split = re.search(r"([\d.]+) ns logic, ([\d.]+) ns routing", path)
+    critical = (f"{ends[0]} -> {ends[-1]}: {split.group(1)} ns logic, {split.group(2)} ns routing"
+                if ends and split else None)
+    return {"LC": int(lc.group(1)) if lc else None, "GB": int(gb.group(1)) if gb else None, "critical_path": critical}
+
+
 def place_route(design, name: str, work: Path, freq: float, timeout: int, params: dict[str, str] | None,
                 ready: bool = False, tag: str | None = None,
-                seeds: tuple[int, ...] = (1,)) -> tuple[float | None, str, dict[int, float | None]]:
-    """Fmax of the first seed (None and the reason when it does not place) and every seed's Fmax, one
-    synthesis of the wrapper placed once per seed."""
+                seeds: tuple[int, ...] = (1,)) -> tuple[float | None, str, dict[int, float | None], dict]:
+    """Fmax of the first seed (None and the reason when it does not place), every seed's Fmax, one
+    synthesis of the wrapper placed once per seed, and the placement of the slowest seed
+    (:func:`_placement`: logic cells, global buffers, its critical path)."""
     tag = tag or name
     (work / f"{tag}_wrap.v").write_text(wrapper(design, name, params, ready))
     js = work / f"{tag}_wrap.json"
@@ -209,6 +225,7 @@ def place_route(design, name: str, work: Path, freq: float, timeout: int, params
                    timeout=timeout)
     sweep: dict[int, float | None] = {}
     reason = ""
+    worst: dict = {}
     for seed in seeds:
         # not --quiet: it hides the "Max frequency" line of a design that meets the target (an info,
         # only a failing one is a warning)
@@ -218,11 +235,13 @@ def place_route(design, name: str, work: Path, freq: float, timeout: int, params
         text = proc.stdout + proc.stderr
         fmax = re.findall(r"Max frequency for clock\s+'[^']*':\s+([\d.]+)\s+MHz", text)
         sweep[seed] = float(fmax[-1]) if proc.returncode == 0 and fmax else None
+        if sweep[seed] is not None and (not worst or sweep[seed] < worst["fmax"]):
+            worst = {"fmax": sweep[seed], "seed": seed, **_placement(text)}
         if sweep[seed] is None and not reason:
             reason = next((l.strip() for l in text.splitlines() if "ERROR" in l), "nextpnr failed")
         if seed == seeds[0] and sweep[seed] is None:   # it does not place: the other seeds would only say so again
             break
-    return sweep[seeds[0]], ("" if sweep[seeds[0]] is not None else reason), sweep
+    return sweep[seeds[0]], ("" if sweep[seeds[0]] is not None else reason), sweep, worst
 
 
 PATHS = {"--config": IN, "--out": OUT_FILE}
@@ -327,27 +346,30 @@ def run(args) -> int:
             t0 = time.perf_counter()
             chparam = _chparam(module, params)
             digest_row = _digest(design, files, plan, args.freq, seeds_of(row_name))
+            sched = _schedule_fields(design, name, extra)
             if row_name not in chosen:  # --only: the report's other rows stay while they are current
                 if digest_row in current:
-                    rows.append({**current[digest_row], "name": row_name, "module": module})
+                    rows.append({**current[digest_row], "name": row_name, "module": module, **sched})
                 else:
                     print(f"{row_name}: not in --only and stale or absent in the previous report: left out",
                           file=sys.stderr)
                 continue
             if digest_row in reuse:
-                rows.append({**reuse[digest_row], "name": row_name, "module": module})
+                rows.append({**reuse[digest_row], "name": row_name, "module": module, **sched})
                 print(f"{row_name}: unchanged, taken from the previous report", file=sys.stderr)
                 continue
-            row = {"name": row_name, "module": module, "sha256": digest_row}
+            row = {"name": row_name, "module": module, "sha256": digest_row, **sched}
             try:
                 row.update(synth(design, name, work, args.timeout, chparam, tag))
                 row["fmax"], row["note"] = None, too_big(row)
                 if not row["note"]:  # placing what cannot fit would only spend minutes to say so
                     seeds = seeds_of(row_name)
-                    row["fmax"], row["note"], sweep = place_route(design, name, work, args.freq, args.timeout,
-                                                                  params, bool(extra), tag, seeds)
+                    row["fmax"], row["note"], sweep, worst = place_route(design, name, work, args.freq, args.timeout,
+                                                                         params, bool(extra), tag, seeds)
+                    row.update({k: worst.get(k) for k in ("LC", "GB", "critical_path")})
                     if len(seeds) > 1:
                         row["fmax_seeds"] = {str(s): f for s, f in sweep.items()}
+                        row["critical_seed"] = worst.get("seed")
                 if row["fmax"] is None and "no BELs remaining" in row["note"] and "DSP" in row["note"]:
                     row["note"] = f"does not place: {row['MAC16']} SB_MAC16 > {UP5K['MAC16']} on the device"
                 elif row["fmax"] is None and "ICESTORM_LC" in row["note"] and (
@@ -395,12 +417,30 @@ def _xc7_cells(r) -> str:
 
 
 def _fmax_cell(r) -> str:
-    """Seed 1's Fmax, and for a swept row every seed's (seed: MHz)."""
-    cell = _fmt(None if r.get("fmax") is None else round(r["fmax"], 1))
+    """Seed 1's Fmax; for a swept row the lowest over its seeds, the median and every seed's."""
     seeds = r.get("fmax_seeds") or {}
-    if seeds:
-        cell += " (" + ", ".join(f"seed {s}: {_fmt(None if f is None else round(f, 1))}" for s, f in seeds.items()) + ")"
-    return cell
+    if not seeds:
+        return _fmt(None if r.get("fmax") is None else round(r["fmax"], 1))
+    low = _slowest(r)
+    placed = sorted(f for f in seeds.values() if f is not None)
+    median = None if len(placed) < len(seeds) else round(float(statistics.median(placed)), 1)
+    return (f"min {_fmt(None if low is None else round(low, 1))}, median {_fmt(median)} ("
+            + ", ".join(f"seed {s}: {_fmt(None if f is None else round(f, 1))}" for s, f in seeds.items()) + ")")
+
+
+def _schedule_fields(design, name: str, extra) -> dict:
+    """A chain row's cycles per sample (its generated top's schedule, :func:`fxdsp.hdl.schedule.chain_schedule`,
+    at the row's ARCH) and the budget at 40 MHz and the config's sample rate; nothing for a block."""
+    from .schedule import chain_schedule
+
+    if not design.instances[name].members:
+        return {}
+    arch = int((extra or {}).get("ARCH", 0))
+    try:
+        per = chain_schedule(design, name, arch)[0]
+    except ValueError:   # a member without a constant schedule
+        per = None
+    return {"cycles_per_sample": per, "cycle_budget": int(40e6 // design.fs_hz)}
 
 
 def _slowest(r) -> float | None:
@@ -419,9 +459,9 @@ def markdown(rows, freq, source_sha256: str = "") -> str:
     lines = ["# Hardware report: iCE40UP5K (and a yosys estimate for an Artix-7)", "",
              "Generated by `fxdsp hw-report` (`make hw-report`): yosys `synth_ice40 -dsp` on each bare module "
              "(parameters from the default config), nextpnr-ice40 `--up5k --package sg48` "
-             f"at a {freq:g} MHz target on the module inside a serial I/O wrapper for Fmax (seed 1; the chains' "
-             f"budget rows also seeds {', '.join(str(s) for s in SEED_SWEEP[1:])}: a placement is one draw, "
-             "their target is judged on the lowest). "
+             f"at a {freq:g} MHz target on the module inside a serial I/O wrapper for Fmax (seed 1; every chain's "
+             f"serial row also seeds {', '.join(str(s) for s in SEED_SWEEP[1:])}: a placement is one draw, "
+             "its Fmax is the lowest, and a target is judged on it). "
              f"Device: {UP5K['LUT']} LUT4, {UP5K['MAC16']} SB_MAC16, {UP5K['BRAM']} SB_RAM40_4K. "
              f"Sources (RTL and generated parameters) sha256 `{source_sha256 or 'unknown'}`.", "",
              f"The xc7 columns are yosys `{XC7_SYNTH}` estimates of the same bare module with the same "
@@ -430,14 +470,24 @@ def markdown(rows, freq, source_sha256: str = "") -> str:
              f"{XC7A35T['FF']:,} FF, {XC7A35T['BRAM36']} RAMB36): synthesis only, not Vivado results, "
              "no place and route and no timing. LUT is LUT1..LUT6 (distributed-RAM and SRL cells are in the "
              "JSON only), FF is FDRE/FDSE/FDCE/FDPE, BRAM is RAMB36E1/RAMB18E1.", "",
-             "| block | module | LUT4 | SB_MAC16 | FF | BRAM | Fmax (MHz) | xc7 LUT | xc7 DSP48E1 | xc7 FF "
-             "| xc7 RAMB36/18 | note |",
-             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
+             f"Logic cells (ICESTORM_LC, of {UP5K['LC']}) and global buffers (SB_GB, of {UP5K['GB']}) are "
+             "nextpnr's count of the placed design (the module in its I/O wrapper); LUT4, FF, carries "
+             "(SB_CARRY), SB_MAC16 and block RAM are yosys's of the bare module. A swept row's Fmax is its "
+             "lowest seed's, then the median and every seed; its slowest seed's critical path is listed "
+             "below the table.", "",
+             "| block | module | logic cells | LUT4 | FF | carry | SB_MAC16 | BRAM | GB | Fmax (MHz) | xc7 LUT "
+             "| xc7 DSP48E1 | xc7 FF | xc7 RAMB36/18 | note |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
     for r in rows:
-        lines.append(f"| {r['name']} | {r['module']} | {_fmt(r.get('LUT'))} | {_fmt(r.get('MAC16'))} | "
-                     f"{_fmt(r.get('FF'))} | {_fmt(r.get('BRAM'))} | "
-                     f"{_fmax_cell(r)} | {_xc7_cells(r)} | "
+        lines.append(f"| {r['name']} | {r['module']} | {_fmt(r.get('LC'))} | {_fmt(r.get('LUT'))} | "
+                     f"{_fmt(r.get('FF'))} | {_fmt(r.get('CARRY'))} | {_fmt(r.get('MAC16'))} | {_fmt(r.get('BRAM'))} | "
+                     f"{_fmt(r.get('GB'))} | {_fmax_cell(r)} | {_xc7_cells(r)} | "
                      f"{_note(r)} |")
+    swept = [r for r in rows if r.get("fmax_seeds") and r.get("critical_path")]
+    if swept:
+        lines += ["", "Critical path of each swept row's slowest seed (nextpnr, posedge to posedge):", ""]
+        lines += [f"* {r['name']}, seed {r.get('critical_seed')} ({_fmt(_slowest(r))} MHz): `{r['critical_path']}`"
+                  for r in swept]
     missed = False
     for chain_name, budget in CHAIN_BUDGETS.items():
         chain = next((r for r in rows if r["name"] == f"{chain_name} (ARCH=1)"), None) or \
@@ -446,13 +496,20 @@ def markdown(rows, freq, source_sha256: str = "") -> str:
             continue
         ok_lut = chain["LUT"] <= budget["LUT"]
         ok_mac = chain["MAC16"] <= budget["MAC16"]
+        ok_bram = chain["BRAM"] <= budget["BRAM"]
         slowest = _slowest(chain)
         ok_f = slowest is not None and slowest >= budget["MHz"]
-        missed |= chain_name == "chain_paper002" and not (ok_lut and ok_mac and ok_f)
-        lines += ["", f"Target for {chain_name} (row {chain['name']}): <= {budget['LUT']} LUT4, <= {budget['MAC16']} "
-                  f"SB_MAC16, >= {budget['MHz']:g} MHz: LUT {'met' if ok_lut else 'NOT met'} ({chain['LUT']}), "
-                  f"MAC16 {'met' if ok_mac else 'NOT met'} ({chain['MAC16']}), Fmax "
-                  f"{'met' if ok_f else 'NOT met'} ({_fmt(None if slowest is None else round(slowest, 1))}"
+        per, cap = chain.get("cycles_per_sample"), chain.get("cycle_budget")
+        ok_c = per is not None and cap is not None and per <= cap
+        missed |= chain_name == "chain_paper002" and not (ok_lut and ok_mac and ok_bram and ok_f and ok_c)
+        met = lambda ok: "met" if ok else "NOT met"  # noqa: E731
+        occupancy = (f"{chain['LC']} of {UP5K['LC']} logic cells ({100 * chain['LC'] / UP5K['LC']:.0f} %), "
+                     f"{_fmt(chain.get('GB'))} of {UP5K['GB']} global buffers; " if chain.get("LC") else "")
+        lines += ["", f"Target for {chain_name} (row {chain['name']}): {occupancy}<= {budget['LUT']} LUT4, <= {budget['MAC16']} "
+                  f"SB_MAC16, <= {budget['BRAM']} BRAM, <= {cap} cycles per sample, >= {budget['MHz']:g} MHz on every "
+                  f"seed: LUT {met(ok_lut)} ({chain['LUT']}), MAC16 {met(ok_mac)} ({chain['MAC16']}), BRAM "
+                  f"{met(ok_bram)} ({chain['BRAM']}), cycles per sample {met(ok_c)} ({per}, the top's schedule), Fmax "
+                  f"{met(ok_f)} ({_fmt(None if slowest is None else round(slowest, 1))}"
                   f"{', the lowest over seeds ' + ', '.join(chain['fmax_seeds']) if chain.get('fmax_seeds') else ''})."]
     if missed:
         lines += ["", ANALYSIS]
@@ -472,8 +529,8 @@ rounding or fit per cycle, tables through a registered read port (block RAM), va
 cycles per sample are in each module's header and in `hdl/README.md`. They give the same bits as
 the default RTL (same golden vectors, random sets, corners, long streams and mutants), and each
 places on the UP5K at >= 40 MHz. The paper 001 chain built from them meets its target (its target
-line above reads that row). The paper 002 chain built from them (`chain_paper002 (ARCH=1)`: 349
-cycles per sample) is bit-exact; one sample in flight means no two of its blocks compute at once,
+line above reads that row). The paper 002 chain built from them (`chain_paper002 (ARCH=1)`, its
+cycles per sample in its generated header) is bit-exact; one sample in flight means no two of its blocks compute at once,
 so its serial blocks share ONE `fx_mac_serial` (one SB_MAC16: rtd, both piecewise engines, the
 demodulator with its two-channel filter, the output iir; each keeps its own schedule), which took
 it from 6 SB_MAC16, 4645 LUT4 and 4447 FF to the row above. What remains over the LUT4 budget is
