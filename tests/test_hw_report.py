@@ -32,8 +32,9 @@ def test_json_is_written_from_the_rows_hw_report_collects(tmp_path):
     got = load_hw_report(path)["rows"]
     assert got[0] == {"name": "rtd", "module": "rtd", "LC": None, "LUT": 301, "FF": 20, "CARRY": 7, "MAC16": 2,
                       "BRAM": 0, "GB": None, "fmax": 21.83, "fmax_seeds": None, "critical_seed": None,
-                      "critical_path": None, "cycles_per_sample": None, "cycle_budget": None, "note": "", "sha256": None, "xc7": {"LUT": None, "DSP48E1": None, "FF": None, "BRAM36": None, "BRAM18": None,
-                                          "LUTRAM": None, "SRL": None, "note": ""}}
+                      "critical_path": None, "cycles_per_sample": None, "cycle_budget": None, "warnings": None,
+                      "note": "", "sha256": None, "xc7": {"LUT": None, "DSP48E1": None, "FF": None, "BRAM36": None, "BRAM18": None,
+                                          "LUTRAM": None, "SRL": None, "warnings": None, "note": ""}}
     assert got[1]["LUT"] is None and got[1]["fmax"] is None and got[1]["note"].startswith("timed out")
     rows[0]["xc7"] = {"LUT": 150, "DSP48E1": 2, "FF": 20, "BRAM36": 0, "BRAM18": 1, "LUTRAM": 0, "SRL": 0,
                       "seconds": 2.5}
@@ -41,7 +42,7 @@ def test_json_is_written_from_the_rows_hw_report_collects(tmp_path):
     data = load_hw_report(path)
     assert data["device_xc7"]["DSP48E1"] == 90
     assert data["rows"][0]["xc7"] == {"LUT": 150, "DSP48E1": 2, "FF": 20, "BRAM36": 0, "BRAM18": 1, "LUTRAM": 0,
-                                      "SRL": 0, "note": ""}
+                                      "SRL": 0, "warnings": None, "note": ""}
     assert "| 150 | 2 | 20 | 0/1 |" in markdown(data["rows"], 40.0)
     assert load_hw_report(tmp_path / "absent.json") is None
 
@@ -314,3 +315,19 @@ def test_the_placement_is_read_from_nextpnrs_log():
     assert got == {"LC": 3850, "GB": 8, "critical_path": "dut.done_demod_SB_DFFESR_Q_DFFLC.O -> "
                    "dut.g_mac.u_mac.ia_SB_DFFESR_Q_D_SB_LUT4_O_LC.SR: 5.8 ns logic, 17.4 ns routing"}
     assert report_cli._placement("Info: nothing placed") == {"LC": None, "GB": None, "critical_path": None}
+
+
+def test_tool_warnings_are_kept_but_the_two_every_placement_gives():
+    """A yosys or nextpnr warning reaches the row (each once) and the report lists it; nextpnr's
+    missing-PCF note and a seed's Fmax below target (the Fmax column) are left out."""
+    text = ("Warning: No PCF file specified; IO pins will be placed automatically\n"
+            "Warning: Literal has a width of 28 bit, but value requires 35 bit. (iir.v:1)\n"
+            "Info: something\nWarning: Literal has a width of 28 bit, but value requires 35 bit. (iir.v:1)\n"
+            "Warning: Max frequency for clock 'clk': 39.1 MHz (FAIL at 40.00 MHz)\n")
+    assert report_cli.tool_warnings(text) == ["Warning: Literal has a width of 28 bit, but value requires 35 bit. "
+                                              "(iir.v:1)"]
+    row = {"name": "iir", "module": "iir", "LUT": 1, "MAC16": 0, "FF": 1, "BRAM": 0, "fmax": 50.0, "note": "",
+           "warnings": report_cli.tool_warnings(text)}
+    text = markdown([row], 40.0)
+    assert "1:" in text and "* iir (iCE40): Warning: Literal has a width" in text
+    assert "none." in markdown([{**row, "warnings": []}], 40.0)

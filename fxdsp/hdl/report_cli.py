@@ -166,7 +166,25 @@ def _xc7_stat(text: str) -> dict:
 def _read_and_chparam(design, work: Path, chparam: str) -> str:
     """The yosys commands that read the RTL and set the bare module's parameters (``chparam``, from
     :func:`_chparam`; '' for a top, which takes its parameters from the generated headers)."""
-    return f"read_verilog -I{work} {_sources(design, work)}; {chparam}"
+    # -defer: a module is elaborated only with the parameters it is used with (a default elaboration
+    # reads the ROM files of this config at the module's default widths: yosys warns of wide words)
+    return f"read_verilog -defer -I{work} {_sources(design, work)}; {chparam}"
+
+
+# nextpnr's warnings that every placement gives and that say nothing about the design: the wrapper's
+# three pins are placed without a PCF (no pin constraint is part of a module's cost), and a seed's
+# Fmax below the target (that is the Fmax column)
+HARMLESS = ("No PCF file specified", "Max frequency for clock")
+
+
+def tool_warnings(text: str) -> list[str]:
+    """The warnings of a yosys or nextpnr run but :data:`HARMLESS`, each once, in order."""
+    out: list[str] = []
+    for line in text.splitlines():
+        w = line.strip()
+        if w.startswith("Warning") and not any(h in w for h in HARMLESS) and w not in out:
+            out.append(w)
+    return out
 
 
 def _yosys_stat(design, name: str, work: Path, timeout: int, synth_cmd: str, suffix: str, parse,
@@ -176,9 +194,9 @@ def _yosys_stat(design, name: str, work: Path, timeout: int, synth_cmd: str, suf
     module = design.instances[name].module
     stat = work / f"{tag or name}{suffix}"
     script = f"{_read_and_chparam(design, work, chparam)} {synth_cmd} -top {module}; tee -o {stat} stat"
-    subprocess.run(["yosys", "-q", "-p", script], cwd=work, check=True, capture_output=True, text=True,
-                   timeout=timeout)
-    return parse(stat.read_text())
+    proc = subprocess.run(["yosys", "-q", "-p", script], cwd=work, check=True, capture_output=True, text=True,
+                          timeout=timeout)
+    return {**parse(stat.read_text()), "warnings": tool_warnings(proc.stdout + proc.stderr)}
 
 
 def synth(design, name: str, work: Path, timeout: int, chparam: str, tag: str | None = None) -> dict:
@@ -219,13 +237,13 @@ def place_route(design, name: str, work: Path, freq: float, timeout: int, params
     tag = tag or name
     (work / f"{tag}_wrap.v").write_text(wrapper(design, name, params, ready))
     js = work / f"{tag}_wrap.json"
-    script = (f"read_verilog -I{work} {_sources(design, work)} {work / (tag + '_wrap.v')}; "
+    script = (f"read_verilog -defer -I{work} {_sources(design, work)} {work / (tag + '_wrap.v')}; "
               f"synth_ice40 -dsp -top hw_wrap -json {js}")
-    subprocess.run(["yosys", "-q", "-p", script], cwd=work, check=True, capture_output=True, text=True,
-                   timeout=timeout)
+    proc = subprocess.run(["yosys", "-q", "-p", script], cwd=work, check=True, capture_output=True, text=True,
+                          timeout=timeout)
     sweep: dict[int, float | None] = {}
     reason = ""
-    worst: dict = {}
+    worst: dict = {"warnings": tool_warnings(proc.stdout + proc.stderr)}
     for seed in seeds:
         # not --quiet: it hides the "Max frequency" line of a design that meets the target (an info,
         # only a failing one is a warning)
@@ -235,8 +253,10 @@ def place_route(design, name: str, work: Path, freq: float, timeout: int, params
         text = proc.stdout + proc.stderr
         fmax = re.findall(r"Max frequency for clock\s+'[^']*':\s+([\d.]+)\s+MHz", text)
         sweep[seed] = float(fmax[-1]) if proc.returncode == 0 and fmax else None
-        if sweep[seed] is not None and (not worst or sweep[seed] < worst["fmax"]):
-            worst = {"fmax": sweep[seed], "seed": seed, **_placement(text)}
+        found = [w for w in tool_warnings(text) if w not in worst["warnings"]]
+        worst["warnings"] = worst["warnings"] + found
+        if sweep[seed] is not None and ("fmax" not in worst or sweep[seed] < worst["fmax"]):
+            worst.update({"fmax": sweep[seed], "seed": seed, **_placement(text)})
         if sweep[seed] is None and not reason:
             reason = next((l.strip() for l in text.splitlines() if "ERROR" in l), "nextpnr failed")
         if seed == seeds[0] and sweep[seed] is None:   # it does not place: the other seeds would only say so again
@@ -261,7 +281,8 @@ def recipe(design, name: str, params: dict[str, str] | None, ready: bool, freq: 
            seeds: tuple[int, ...] = (1,)) -> str:
     """The tool commands and the place-and-route wrapper of a row, as text (part of its row hash)."""
     seed = " ".join(str(s) for s in seeds)
-    return (f"synth_ice40 -dsp | {XC7_SYNTH} | nextpnr-ice40 --up5k --package sg48 --seed {seed} --freq {freq:g}\n"
+    return (f"read_verilog -defer | synth_ice40 -dsp | {XC7_SYNTH} | nextpnr-ice40 --up5k --package sg48 --seed {seed} "
+            f"--freq {freq:g} | warnings\n"
             + wrapper(design, name, params, ready))
 
 
@@ -367,6 +388,8 @@ def run(args) -> int:
                     row["fmax"], row["note"], sweep, worst = place_route(design, name, work, args.freq, args.timeout,
                                                                          params, bool(extra), tag, seeds)
                     row.update({k: worst.get(k) for k in ("LC", "GB", "critical_path")})
+                    row["warnings"] = row.get("warnings", []) + [w for w in worst.get("warnings", [])
+                                                                 if w not in row.get("warnings", [])]
                     if len(seeds) > 1:
                         row["fmax_seeds"] = {str(s): f for s, f in sweep.items()}
                         row["critical_seed"] = worst.get("seed")
@@ -483,6 +506,14 @@ def markdown(rows, freq, source_sha256: str = "") -> str:
                      f"{_fmt(r.get('FF'))} | {_fmt(r.get('CARRY'))} | {_fmt(r.get('MAC16'))} | {_fmt(r.get('BRAM'))} | "
                      f"{_fmt(r.get('GB'))} | {_fmax_cell(r)} | {_xc7_cells(r)} | "
                      f"{_note(r)} |")
+    warned = [(r["name"], tool, w) for r in rows for tool, ws in (("iCE40", r.get("warnings")),
+                                                                  ("xc7", (r.get("xc7") or {}).get("warnings")))
+              for w in ws or ()]
+    lines += ["", "Tool warnings (yosys and nextpnr, every row; nextpnr's "
+              + " / ".join(f"'{h}'" for h in HARMLESS) + " are left out: the wrapper's pins are placed without "
+              "constraints, and a seed below the target is the Fmax column): "
+              + ("none." if not warned else f"{len(warned)}:"), ""]
+    lines += [f"* {name} ({tool}): {w}" for name, tool, w in warned]
     swept = [r for r in rows if r.get("fmax_seeds") and r.get("critical_path")]
     if swept:
         lines += ["", "Critical path of each swept row's slowest seed (nextpnr, posedge to posedge):", ""]

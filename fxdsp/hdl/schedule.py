@@ -35,9 +35,9 @@ def limbs(a_w: int, b_w: int) -> int:
 
 
 def piecewise_cycles_per_sample(p: dict) -> int:
-    """The serial piecewise's documented schedule (hdl/rtl/piecewise.v): ORDER (N + 10) + 7, N the
+    """The serial piecewise's documented schedule (hdl/rtl/piecewise.v): ORDER (N + 11) + 7, N the
     limb products of acc (ACC_W bits) x t (T_W + 1 bits)."""
-    return p["ORDER"] * (limbs(p["ACC_W"], p["T_W"] + 1) + 10) + 7
+    return p["ORDER"] * (limbs(p["ACC_W"], p["T_W"] + 1) + 11) + 7
 
 
 def freq2temp_cycles_per_sample(p: dict) -> int:

@@ -191,7 +191,7 @@ MUTATIONS = [
     Mutation("pw_serial_stale_coefficient", "piecewise.v", "k <= K_TOP; ra <= ra - 1'b1;", "k <= K_TOP; ra <= ra;",
              "serial: the first Horner step adds the top coefficient again (ROM address not advanced)",
              ((None, "piecewise_sf", False, SERIAL["piecewise_sf"]),)),
-    Mutation("pw_serial_stale_product", "piecewise.v", "S_WAIT:  if (mac_valid) st <= S_PFIT;", "S_WAIT:  st <= S_PFIT;",
+    Mutation("pw_serial_stale_product", "piecewise.v", "S_WAIT:  if (mac_valid) st <= S_PREG;", "S_WAIT:  st <= S_PREG;",
              "serial: the product read before the MAC returns it (the previous one)",
              ((None, "piecewise_sf", False, SERIAL["piecewise_sf"]),)),
     Mutation("pw_serial_missed_stall", "piecewise.v", "assign in_ready = (st == S_IDLE) && !pend;",

@@ -25,14 +25,16 @@
 //     3: ROM word registered;  4: acc = fit(round(c >> TOP_SHIFT)), address of c[seg][ORDER-1]
 //     per power k = ORDER-1 .. 0, from edge b (b = 4 for the first):
 //       b + 1:          acc * t issued to the MAC;  b + N + 4: product registered by the MAC
-//       b + N + 5, + 6: round(product >> PROD_SHIFT), then its fit (product flag)
-//       b + N + 7:      p << ACC_ALIGN[k] registered
-//       b + N + 8:      its sum with c[seg][k] << COEF_ALIGN[k] (the ROM word as read: ACOEF_FILE,
+//       b + N + 5:      the product registered here (prod_q: the rounding adder's carry chain starts
+//                       beside its operand, not across the die at a shared multiplier's register)
+//       b + N + 6, + 7: round(product >> PROD_SHIFT), then its fit (product flag)
+//       b + N + 8:      p << ACC_ALIGN[k] registered
+//       b + N + 9:      its sum with c[seg][k] << COEF_ALIGN[k] (the ROM word as read: ACOEF_FILE,
 //                       the generator's aligned copy of the coefficients) registered
-//       b + N + 9, +10: round(sum >> ACC_ALIGN[k]), then acc = its fit (acc flag), next address
+//       b + N + 10, +11: round(sum >> ACC_ALIGN[k]), then acc = its fit (acc flag), next address
 //     then round(acc >> OUT_SHIFT), then y = its fit with out_valid (out flag).
-//   Cycles per sample: ORDER * (N + 10) + 7, e.g. 35 for the paper 001 bias (ORDER 2, 32-bit
-//   acc, 24-bit temperature: N = 4), 55 for k0 (ORDER 3, N = 6). Latency: that minus 1.
+//   Cycles per sample: ORDER * (N + 11) + 7, e.g. 37 for the paper 001 bias (ORDER 2, 32-bit
+//   acc, 24-bit temperature: N = 4), 58 for k0 (ORDER 3, N = 6). Latency: that minus 1.
 //   EXT_MAC = 1: no multiplier here; the products go out on the mac_* bundle (fx_mac_port) to a
 //   multiplier shared with other blocks (chain_paper002's), the schedule unchanged.
 //   SETS = 2 (ARCH = 1 only): two coefficient engines in one. A second set of coefficients (and its
@@ -40,7 +42,7 @@
 //   are shared) is evaluated on every sample right after the first: the first set's y, ovf leave
 //   with out_valid, the engine is idle for that one cycle and starts the second pass at the next
 //   edge on the same temp (registered at the take), whose y_1, ovf_1 leave with out_valid_1:
-//   2 (ORDER (N + 10) + 7) cycles per sample, the same as two engines started one after the other.
+//   2 (ORDER (N + 11) + 7) cycles per sample, the same as two engines started one after the other.
 //   in_ready stays low from the take to out_valid_1. SETS_FILE (read instead of ACOEF_FILE) holds set
 //   0's SEGMENTS (ORDER + 1) words, then set 1's. chain_paper002 ARCH = 1 runs SF(T) and bias(T) so
 //   (PW_SHARED). SETS = 1: out_valid_1 stays low, y_1 and ovf_1 are 0.
@@ -290,6 +292,7 @@ module piecewise #(
         localparam [3:0] S_SRND = 4'd10;
         localparam [3:0] S_SFIT = 4'd11;
         localparam [3:0] S_ORND = 4'd12;
+        localparam [3:0] S_PREG = 4'd14;   // the product registered here (prod_q)
         localparam [3:0] S_OFIT = 4'd13;
 
         reg [3:0]               st;
@@ -349,9 +352,11 @@ module piecewise #(
         /* verilator lint_off UNUSEDSIGNAL */   // the FSM knows when the product is there
         wire             p_v;
         /* verilator lint_on UNUSEDSIGNAL */
+        reg signed [PW-1:0] prod_q;   // the product, registered beside its rounding adder
+        always @(posedge clk) if (mac_valid) prod_q <= prod;
         fx_convert_pipe #(.IN_W(PW), .SHIFT(PROD_SHIFT), .ROUNDING(ROUNDING), .OUT_W(ACC_W), .OUT_SIGNED(1),
-                          .OVERFLOW(OVERFLOW)) u_prod (.clk(clk), .rst(rst), .in_valid(mac_valid), .x(prod), .cin(1'b0),
-                                                       .out_valid(p_v), .y(p_q), .ovf(ovf_p));
+                          .OVERFLOW(OVERFLOW)) u_prod (.clk(clk), .rst(rst), .in_valid(st == S_PREG), .x(prod_q),
+                                                       .cin(1'b0), .out_valid(p_v), .y(p_q), .ovf(ovf_p));
 
         // Horner sum and its rounding, one alignment per power (selected by k): the aligned product is
         // registered first, so the sum is one adder from registers (not one per power behind a
@@ -420,7 +425,8 @@ module piecewise #(
                         k <= K_TOP; ra <= ra - 1'b1; st <= S_ISSUE;
                     end
                     S_ISSUE: if (mac_ready) st <= S_WAIT;
-                    S_WAIT:  if (mac_valid) st <= S_PFIT;   // the product is rounded at this edge ...
+                    S_WAIT:  if (mac_valid) st <= S_PREG;   // the product is registered at this edge ...
+                    S_PREG:  st <= S_PFIT;                  // ... rounded at this one ...
                     S_PFIT:  st <= S_ALGN;                  // ... and fitted at this one (u_prod)
                     S_ALGN:  begin
                         pal_q <= pal_k[k]; ovf_prod_q[j_of_k] <= ovf_p; st <= S_SUM;
