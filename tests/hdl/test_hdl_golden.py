@@ -8,15 +8,23 @@ import json
 
 import pytest
 
+from fxdsp.hdl.harness import has_divider
 from fxdsp.vectors import load
 from hdl_util import SERIAL, SIMULATORS, VECTORS, design_of, icarus_samples, icarus_window, record_throughput, \
     run_cocotb, segment
 
 # every instance of the design has an RTL module; the manifest must list them all
 NAMES = sorted(json.loads((VECTORS / "manifest.json").read_text())["blocks"])
-# the sequential divider one quotient bit per cycle is the hardware setting; the Python-driven run
-# of the chain takes 7 bits per cycle to stay fast (the file-driven long test runs UNROLL = 1)
-EXTRA = {"sf_divide": {"UNROLL": 1}, "chain_paper002": {"DIV_UNROLL": 7}}
+# the sequential divider one quotient bit per cycle is the hardware setting; the Python-driven runs
+# of the chains with a divider take 7 bits per cycle to stay fast (the file-driven long tests run
+# DIV_UNROLL = 1)
+DIV7 = {"DIV_UNROLL": 7}
+
+
+def _extra(design, name: str) -> dict | None:
+    if design.instances[name].members:
+        return DIV7 if has_divider(design, name) else None
+    return {"UNROLL": 1} if name == "sf_divide" else None
 
 
 @pytest.fixture(scope="module")
@@ -32,7 +40,7 @@ def test_golden_vectors(design, name, sim):
     total = sum(entry["overflows"].values())
     # the committed vectors are the model's: the design built here must reproduce them
     seg = segment(design, name, ins, outs, total)
-    summary = run_cocotb(design, name, [seg], f"golden_{name}", extra_params=EXTRA.get(name), sim=sim)
+    summary = run_cocotb(design, name, [seg], f"golden_{name}", extra_params=_extra(design, name), sim=sim)
     record_throughput("cocotb", name, summary["cycles"], summary["seconds"], sim=sim)
 
 
@@ -46,5 +54,6 @@ def test_golden_vectors_serial(design, name, sim):
         seg = segment(design, name, icarus_window(ins, icarus_samples(name)))
     else:
         seg = segment(design, name, ins, outs, sum(entry["overflows"].values()))
-    summary = run_cocotb(design, name, [seg], f"golden_{name}_serial", extra_params=SERIAL[name], sim=sim)
+    summary = run_cocotb(design, name, [seg], f"golden_{name}_serial", extra_params={**(_extra(design, name) or {}),
+                                                                                    **SERIAL[name]}, sim=sim)
     record_throughput("cocotb", f"{name} (serial)", summary["cycles"], summary["seconds"], sim=sim)
