@@ -72,6 +72,10 @@ class Netlist:
     def driver(self, instance: str, port: str) -> Endpoint | str:
         return self.drivers[Endpoint(instance, port)]
 
+    def upstream(self, instance: str) -> set[str]:
+        """The instances wired into ``instance``."""
+        return upstream(self.drivers, instance)
+
     def wire_text(self, dst: Endpoint) -> str:
         return (self.lines or {}).get(dst, f"{self.drivers[dst]} -> {dst}")
 
@@ -192,6 +196,11 @@ def parse(sec: Section, ports: PortNames, known: tuple[str, ...]) -> Netlist:
                    sensor, lines)
 
 
+def upstream(drivers: dict, instance: str) -> set[str]:
+    """The instances whose outputs drive an input of ``instance`` (chain inputs left out)."""
+    return {src.instance for dst, src in drivers.items() if dst.instance == instance and isinstance(src, Endpoint)}
+
+
 def _order(chain: str, inst: list[str], drivers: dict, lines: dict) -> tuple[str, ...]:
     """A topological order of the instances (Kahn's algorithm). Among those ready, the one whose
     first mention in the wiring comes first, so a chain runs in the order its wires are written."""
@@ -200,8 +209,7 @@ def _order(chain: str, inst: list[str], drivers: dict, lines: dict) -> tuple[str
         for name in (getattr(src, "instance", None), dst.instance):
             if name is not None:
                 first.setdefault(name, len(first))
-    deps = {i: {src.instance for dst, src in drivers.items() if dst.instance == i and isinstance(src, Endpoint)}
-            for i in inst}
+    deps = {i: upstream(drivers, i) for i in inst}
     order, stuck = topological(inst, deps, key=lambda i: first.get(i, len(first)))
     if stuck:
         loop = next(dst for dst, src in drivers.items()

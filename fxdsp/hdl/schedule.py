@@ -128,8 +128,7 @@ def chain_schedule(design, name: str, arch: int = 1, unroll: int = 1) -> tuple[i
     shares = engine_sharing(design, name) if arch else {}
     cycles = {m: member_cycles(design, m.replace(".", "_"), arch, unroll) for m in net.order}
     on_mac = {m for m in net.order if arch and design.instances[m.replace(".", "_")].rtl.mac_bundle}
-    deps = {m: {s.instance for d, s in net.drivers.items() if d.instance == m and not isinstance(s, str)}
-            for m in net.order}
+    deps = {m: net.upstream(m) for m in net.order}
     guest_of = {s.host: s.guest for s in shares.values() if s.kind == "set"}
     valid: dict[str, int] = {}   # each member's in_valid cycle
     t = 0

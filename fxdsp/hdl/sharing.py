@@ -20,7 +20,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..fixed.hexfile import hex_words
-from ..netlist import Endpoint
 
 # the piecewise parameters a second coefficient set has of its own (piecewise.v SETS = 2: the "_1"
 # parameters); the files are each set's ROMs
@@ -112,8 +111,3 @@ def rom(design, share: Shared) -> str:
 def roms(design, name: str) -> dict[str, str]:
     """Every coefficient-set file of chain ``name``'s shared engines."""
     return {s.file: rom(design, s) for s in engine_sharing(design, name).values()}
-
-
-def guest_source(net, share: Shared) -> str | Endpoint:
-    """What drives the guest's data input (the aux channel's ``x``)."""
-    return net.driver(share.guest, "x")

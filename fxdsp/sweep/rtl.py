@@ -44,7 +44,7 @@ GAP = 0.25
 def unroll_params(design, name: str) -> dict | None:
     """The divider setting of a shard run of ``name`` (:data:`DIV_UNROLL`): a divider's UNROLL, a
     chain top's DIV_UNROLL when one of its members is a divider; None for anything else."""
-    from ..hdl.harness import has_divider
+    from ..hdl.chain_top import has_divider
 
     inst = design.instances[name]
     key = "chain" if inst.members and has_divider(design, name) else inst.module

@@ -8,7 +8,7 @@ import json
 
 import pytest
 
-from fxdsp.hdl.harness import has_divider
+from fxdsp.hdl.chain_top import has_divider
 from fxdsp.vectors import load
 from hdl_util import SERIAL, SIMULATORS, VECTORS, design_of, icarus_samples, icarus_window, record_throughput, \
     run_cocotb, segment
