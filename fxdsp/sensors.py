@@ -69,11 +69,30 @@ class Sensor:
     def nominal_stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
         return self.nominal_analog(rng, n)["codes"]
 
+    # chamber points: temperatures drawn in CHAMBER_C, the physical input alternating between 0 and
+    # CHAMBER_LEVEL (the sensor's own unit); STEADY_LEVEL: the constant input of a long steady run
+    CHAMBER_C = (-20.0, 60.0)
+    CHAMBER_LEVEL = 0.0
+    STEADY_LEVEL = 0.0
+
+    def held_inputs(self, t_c: np.ndarray, level: np.ndarray, rng: np.random.Generator) -> dict[str, np.ndarray]:
+        """The chain's input words for a device held at temperatures ``t_c`` under the physical input
+        ``level`` (per sample), with the sensor's noise drawn from ``rng``."""
+        raise NotImplementedError
+
+    def analog_inputs(self, analog: dict) -> dict[str, np.ndarray]:
+        """The analog signals of :meth:`nominal_analog` by the chain input each one is the ADC input
+        of, in the real units of that input's format (its ADC = quantise to the format, nearest)."""
+        raise NotImplementedError
+
 
 class GyroRtd(Sensor):
     """Paper 002's gyro: sense carrier scaled by SF(T) and offset by bias(T), RTD bridge ADC."""
 
     name = "gyro_rtd"
+    CHAMBER_C = (-20.0, 60.0)
+    CHAMBER_LEVEL = 0.2    # rate, fraction of full scale
+    STEADY_LEVEL = 0.1
 
     def __init__(self, chain):
         super().__init__(chain)
@@ -105,6 +124,14 @@ class GyroRtd(Sensor):
         return {self.vsa: quantize(analog["vsa"], self.divide.in_format, NEAREST_SAT),
                 self.code: self.rtd.adc_quantize(analog["rtd_frac"])}
 
+    def analog_inputs(self, analog: dict) -> dict[str, np.ndarray]:
+        return {self.vsa: analog["vsa"], self.code: analog["rtd_frac"]}
+
+    def held_inputs(self, t_c: np.ndarray, level: np.ndarray, rng: np.random.Generator) -> dict[str, np.ndarray]:
+        """Rate ``level`` (FS) with the nominal stimulus' quadrature (0.05 FS) and sense noise
+        (1e-3 FS), which dithers the ADCs as in a real sensor."""
+        return self.sensor_inputs(t_c, level, quad_fs=0.05, rng=rng, noise_fs=1e-3)
+
     def sensor_inputs(self, t_c: np.ndarray, rate_fs: np.ndarray, quad_fs: float = 0.0,
                       rng: np.random.Generator | None = None, noise_fs: float = 0.0) -> dict[str, np.ndarray]:
         """The ADC codes of :meth:`sensor_analog`."""
@@ -135,6 +162,10 @@ class GyroFreq(Sensor):
     """Paper 001's gyro: resonant frequency f(T) = f0 + k T and a zero-rate output q(T) + noise."""
 
     name = "gyro_freq"
+    CHAMBER_C = (-10.0, 50.0)
+    CHAMBER_LEVEL = 100.0  # rate, deg/h (the rate input's unit)
+    STEADY_LEVEL = 100.0
+    NOISE = 1.0            # zero-rate output noise, deg/h
 
     def __init__(self, chain):
         super().__init__(chain)
@@ -143,12 +174,20 @@ class GyroFreq(Sensor):
         self.bias = self.driver(self.subtract, "bias")
         self.f, self.rate_in = self.input_of(self.f2t, "f"), self.input_of(self.subtract, "x")
 
+    def analog_inputs(self, analog: dict) -> dict[str, np.ndarray]:
+        return {self.f: analog["f"], self.rate_in: analog["rate_in"]}
+
+    def held_inputs(self, t_c: np.ndarray, level: np.ndarray, rng: np.random.Generator) -> dict[str, np.ndarray]:
+        """Zero-rate output q(T) plus the rate ``level`` (deg/h) and the output noise."""
+        rate = self.bias.reference(temp=t_c)["y"] + level + rng.normal(0.0, self.NOISE, len(t_c))
+        return {self.f: self.f2t.freq_code(t_c), self.rate_in: quantize(rate, self.subtract.in_format, NEAREST_SAT)}
+
     def nominal_analog(self, rng: np.random.Generator, n: int) -> dict:
         """Chamber points -10..50 C; zero-rate output = the quadratic bias of the same config + noise:
         the analog frequency and rate (``clean`` without the noise) and their words."""
         t_c = np.repeat(np.arange(-10.0, 51.0, 10.0), -(-n // 7))[:n] + rng.normal(0, 0.05, n)
         q = self.bias.reference(temp=t_c)["y"]
-        noise = rng.normal(0.0, 1.0, n)
+        noise = rng.normal(0.0, self.NOISE, n)
         f = self.f2t.frequency(t_c)
         codes = {self.f: self.f2t.freq_code(t_c),
                  self.rate_in: quantize(q + noise, self.subtract.in_format, NEAREST_SAT)}
@@ -170,6 +209,10 @@ class Qvba(Sensor):
 
     name = "qvba"
     G_STEPS = (0.0, 1.0, -1.0, 0.5, 0.0, -0.25, 2.0, -2.0)   # the tumble's +-1 g and a few more
+    CHAMBER_C = (-35.0, 75.0)
+    CHAMBER_LEVEL = 1.0    # acceleration, g
+    STEADY_LEVEL = 1.0
+    NOISE_HZ = 1e-4        # frequency-counter noise
 
     def __init__(self, chain):
         super().__init__(chain)
@@ -190,6 +233,13 @@ class Qvba(Sensor):
         df = clean + rng.normal(0.0, noise_hz, len(t_c)) if rng is not None and noise_hz else clean
         return {"analog": {"df": df, "temp": t_c}, "clean": {"df": clean, "temp": t_c}}
 
+    def analog_inputs(self, analog: dict) -> dict[str, np.ndarray]:
+        return {self.df: analog["df"], self.temp: analog["temp"]}
+
+    def held_inputs(self, t_c: np.ndarray, level: np.ndarray, rng: np.random.Generator) -> dict[str, np.ndarray]:
+        """Acceleration ``level`` (g) with the counter's noise."""
+        return self.digitise(self.sensor_analog(t_c, level, rng, self.NOISE_HZ)["analog"])
+
     def digitise(self, analog: dict) -> dict[str, np.ndarray]:
         """The frequency counter's word (nearest, saturating) and the temperature word."""
         return {self.df: quantize(analog["df"], self.subtract.in_format, NEAREST_SAT),
@@ -201,7 +251,7 @@ class Qvba(Sensor):
         n = max(n, 4096)
         t_c = np.linspace(-35.0, 75.0, n)
         a = np.repeat(np.array(self.G_STEPS), -(-n // len(self.G_STEPS)))[:n]
-        out = self.sensor_analog(t_c, a, rng, 1e-4)
+        out = self.sensor_analog(t_c, a, rng, self.NOISE_HZ)
         out.update(t_c=t_c, accel_g=a, codes=self.digitise(out["analog"]))
         return out
 

@@ -17,7 +17,7 @@ import pytest
 from conftest import coarse_subtract, design_with
 from fxdsp.budget.attribution import SourceResult, attribute
 from fxdsp.budget.cli import format_floor
-from fxdsp.budget.floor import allan_chain_paper002, allan_figures, drive_band, drive_sweep, floor_of
+from fxdsp.budget.floor import allan_chain, allan_figures, drive_band, drive_sweep, floor_of
 from fxdsp.budget.hybrid import Source
 from fxdsp.budget.static import static_error
 from fxdsp.chains import build
@@ -109,12 +109,12 @@ def test_an_output_no_adc_reaches_has_no_margin(att001):
 @pytest.fixture(scope="module")
 def allan_default():
     """The Allan figures of the default design (one 2**20-sample run shared by the tests)."""
-    return allan_chain_paper002(build())
+    return allan_chain(build(), "chain_paper002", "rate")
 
 
 def test_allan_figures_come_from_allantools_and_are_deterministic(allan_default):
     a = allan_default
-    b = allan_chain_paper002(build())   # a fresh design, same config and seed
+    b = allan_chain(build(), "chain_paper002", "rate")   # a fresh design, same config and seed
     assert np.array_equal(a.error, b.error) and np.array_equal(a.adev, b.adev)
     assert (a.bi_adev, a.bi_tau, a.adev_1s) == (b.bi_adev, b.bi_tau, b.adev_1s)
     fs = a.fs
@@ -156,7 +156,7 @@ def test_allan_rejects_bad_parameters():
 # ---------------------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def sweep():
-    return drive_sweep(load_config())
+    return drive_sweep(load_config(), "chain_paper002", "rate")
 
 
 def test_sweep_spans_the_band_of_the_temperature_law(sweep):
@@ -176,7 +176,7 @@ def test_sweep_points_are_measured_at_their_own_frequency(sweep):
     p = sweep.points[0]
     d = design_with(chains=True, **{"demod.f_hz": p.f_hz})
     rate = next(s for s in block_errors(d, "chain_paper002") if s.port == "rate")
-    st = static_error(d)
+    st = static_error(d, "chain_paper002", "rate")
     scale = d.rate_full_scale_dps * 3600
     assert (p.rms, p.mean) == pytest.approx((rate.rms * rate.scale, rate.mean * rate.scale), rel=1e-12)
     assert (p.static_rms, p.static_mean) == pytest.approx((st["rms"] * scale, st["mean"] * scale), rel=1e-12)
@@ -195,7 +195,7 @@ def test_sweep_worst_values_and_bad_parameters(sweep):
     assert d["worst_abs"]["rms"]["value"] == max(p.rms for p in sweep.points)
     assert d["worst_abs"]["mean"]["value"] == max(abs(p.mean) for p in sweep.points)
     with pytest.raises(ValueError, match="points"):
-        drive_sweep(load_config(), points=1)
+        drive_sweep(load_config(), "chain_paper002", "rate", points=1)
     with pytest.raises(ValueError, match="temp_range_c"):
         drive_band(8000.0, temp_range_c=(85.0, -40.0))
 
@@ -219,17 +219,25 @@ def test_budget_json_is_strict_and_byte_identical(tmp_path, capsys):
         assert f["total"] == a["total_rms"]
         assert {d["name"] for d in f["dominant"]} == {s["name"] for s in a["sources"] if s["category"] != ADC_CATEGORY
                                                      and 0 < s["rms"] and s["rms"] >= a["total_rms"] / 2}
-    assert out["allan"]["curve"] and out["allan"]["arw"]["deg_per_sqrt_h"] == pytest.approx(
-        out["allan"]["arw"]["adev_1s"] / 60)
-    assert len(out["drive_sweep"]["points"]) >= 21
+    # the Allan deviation and the drive sweep: every output a demodulator reaches (paper 002's rate only)
+    assert [(a["chain"], a["port"]) for a in out["allan"]] == [("chain_paper002", "rate")]
+    assert [(s["chain"], s["port"]) for s in out["drive_sweep"]] == [("chain_paper002", "rate")]
+    allan = out["allan"][0]
+    assert allan["curve"] and allan["arw"]["value"] == pytest.approx(allan["arw"]["adev_1s"] / 60)
+    assert allan["arw"]["unit"] == "deg/sqrt(h)"
+    assert len(out["drive_sweep"][0]["points"]) >= 21
+    # the quasi-static error of every output of a chain with a sensor
+    assert {(s["chain"], s["port"]) for s in out["static"]} == {(a["chain"], a["port"]) for a in out["attribution"]}
     # one floor line per attributed output, the paper 000 acceleration among them
     assert text.count("\nfloor: ") == len(out["floor"]) and ("chain_paper000", "accel") in {
         (f["chain"], f["port"]) for f in out["floor"]}
     assert "bias instability" in text and "deg/sqrt(h)" in text
     assert "0.664" in text and "worst over the band" in text
     md = (rep / "budget.md").read_text()
-    assert "allan_chain_paper002.png" in md and (rep / "allan_chain_paper002.png").stat().st_size > 0
-    assert "### Floor and margin" in md and (rep / "drive_sweep_chain_paper002.png").exists()
+    assert "allan_chain_paper002.rate.png" in md and (rep / "allan_chain_paper002.rate.png").stat().st_size > 0
+    assert "### Floor and margin" in md and (rep / "drive_sweep_chain_paper002.rate.png").exists()
+    for a in out["attribution"]:   # every chain output attributed, and plotted
+        assert f"attribution_{a['chain']}.{a['port']}.png" in md
 
 
 # the floor issue's requirement over the band the drive loop covers (not a reading of the code): within
@@ -258,4 +266,4 @@ def test_fixed_point_error_averages_down_without_drift(allan_default):
 
 def test_tuning_word_drift_shows_in_the_allan_deviation():
     """The same check catches an accumulator too short for its tuning word (40 bits at f/fs = 1/12)."""
-    assert _long_tau_trend(allan_chain_paper002(design_with(chains=True, **{"demod.phase_bits": 40}))) > 1.5
+    assert _long_tau_trend(allan_chain(design_with(chains=True, **{"demod.phase_bits": 40}), "chain_paper002", "rate")) > 1.5

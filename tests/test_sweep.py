@@ -251,7 +251,7 @@ def test_montecarlo_error_agrees_with_the_budget_and_follows_the_config():
 
     cfg = load_config()
     design = build(cfg)
-    static = static_error(design)["rms"] * design.rate_full_scale_dps * 3600.0
+    static = static_error(design, "chain_paper002", "rate")["rms"] * design.rate_full_scale_dps * 3600.0
     s = mc.settings(cfg.data, 4, [-10.0, 10.0, 30.0, 50.0], [8000.0], 1024)
     fine = mc.summarise(s, list(mc_sweep(mc.task_function(s), s, Executor(0)).records.values()))
     assert static / 3 < fine["pooled"]["rms"]["p50"]["value"] < static * 3

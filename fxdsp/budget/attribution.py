@@ -29,7 +29,7 @@ import numpy as np
 
 from ..chains import Design, stream_key
 from ..errors_table import port_units
-from .hybrid import CATEGORIES, CHAIN_MODELS, Source, Switch
+from .hybrid import CATEGORIES, Source, Switch, chain_analog, chain_sources, run_chain
 
 ADDITIVITY_DB = 0.5     # stated tolerance of the power sum against the total
 THEORY_DB = 1.0         # a rounding point worse than theory by more than this is flagged
@@ -141,10 +141,9 @@ class Attribution:
 
 
 def _stimulus(design: Design, chain_name: str, n: int | None, seed_offset: int):
-    chain = design.chains[chain_name]
-    analog_fn, sources_fn, run_fn = CHAIN_MODELS[chain_name]
+    chain = design.chain(chain_name, "the budget's attribution")
     rng = np.random.default_rng([design.seed, seed_offset, stream_key(chain_name)])
-    return chain, analog_fn(chain, rng, n or design.samples), sources_fn(chain), run_fn
+    return chain, chain_analog(chain, rng, n or design.samples), chain_sources(chain), run_chain
 
 
 def expected_mean_q(rounding: str, x: np.ndarray | None = None) -> float:
@@ -178,11 +177,12 @@ def check_rounding(residue: np.ndarray, q: float, rounding: str, x: np.ndarray |
     return out, reasons
 
 
+# why a flagged source of a kind may be expected, by (kind, what)
 _KNOWN = {
-    "sf_divide.trunc": "deliberate: the paper's rescale truncates; its DC error is moved to the drive "
-                       "frequency by the mixer and removed by the low-pass",
-    "iir.round": "in-loop rounding of a 50 Hz low-pass at 96 kHz (gain ~1/(1+a1+a2)); error feedback shapes it",
-    "demod.lpf_round": "in-loop rounding of the demodulator low-pass; error feedback shapes it",
+    ("sf_divide", "trunc"): "deliberate: the paper's rescale truncates toward zero; ahead of a demodulator its DC "
+                            "error is moved to the drive frequency by the mixer and removed by the low-pass",
+    ("iir", "round"): "in-loop rounding of a narrow low-pass (gain ~1/(1+a1+a2)); error feedback shapes it",
+    ("demod", "lpf_round"): "in-loop rounding of the demodulator low-pass; error feedback shapes it",
 }
 
 
@@ -202,7 +202,7 @@ def attribute(design: Design, chain_name: str, port: str = "rate", n: int | None
     p_total = float(np.mean(e_total**2))
 
     results, errors, theory = [], {}, []
-    band = _band(design, chain_name)
+    band = _band(design, chain_name, port)
     rng = np.random.default_rng([design.seed, seed_offset, 7])
     for s in sources:
         sw = Switch(on=[s.name])
@@ -247,16 +247,20 @@ def attribute(design: Design, chain_name: str, port: str = "rate", n: int | None
         total_error=e_total if keep_signals else None)
 
 
-def _band(design: Design, chain_name: str) -> tuple[float, float] | None:
-    """(output cut-off, sample rate) of a chain that ends in a low-pass; None otherwise."""
-    if chain_name == "chain_paper002":
-        lpf = design.chains[chain_name].sensor.lpf
-        w = np.linspace(0, np.pi, 4097)
-        import scipy.signal as sps
-        _, h = sps.sosfreqz(lpf.sos, worN=w)
-        fc = float(w[np.argmax(np.abs(h) < 1 / np.sqrt(2))] / (2 * np.pi) * design.fs_hz)
-        return fc, design.fs_hz
-    return None
+def _band(design: Design, chain_name: str, port: str) -> tuple[float, float] | None:
+    """(cut-off, sample rate) of the low-pass that drives the output ``port`` (an iir member, or a
+    demodulator's channel filter); None when the output is not filtered."""
+    chain = design.chains[chain_name]
+    src = chain.netlist.outputs[port]
+    block = chain.members[src.instance]
+    lpf = {"iir": lambda b: b, "demod": lambda b: b.lpf_i}.get(chain.kinds[src.instance], lambda b: None)(block)
+    if lpf is None:
+        return None
+    import scipy.signal as sps
+    w = np.linspace(0, np.pi, 4097)
+    _, h = sps.sosfreqz(lpf.sos, worN=w)
+    fc = float(w[np.argmax(np.abs(h) < 1 / np.sqrt(2))] / (2 * np.pi) * design.fs_hz)
+    return fc, design.fs_hz
 
 
 def lf_share(e: np.ndarray, fc: float, fs: float) -> float:
@@ -307,8 +311,9 @@ def _theory(s: Source, sw: Switch, nodes, ref_nodes, sr: SourceResult, unit: str
                        + "; ".join(why))
     if internal and flagged:
         reasons.append("the stage's internal accumulator roundings are included in the output figures")
-    if flagged and s.name in _KNOWN:
-        reasons.append(_KNOWN[s.name])
+    known = _KNOWN.get((s.kind, s.name.rsplit(".", 1)[-1]))
+    if flagged and known:
+        reasons.append(known)
     return TheoryResult(s.name, s.stage, s.rounding, s.q, unit, scale, local["mean_q"], local["expected_mean_q"],
                         local["var_db"], local["mse_db"], sr.rms, sr.model_rms or 0.0, float(out_db), spread, lf,
                         lf_white, sign_corr,

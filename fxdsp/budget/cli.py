@@ -1,8 +1,9 @@
 """`fxdsp budget [--config F] [--json F] [--report DIR] [--target T [--optimise --config-out F]]`:
 float vs fixed error budget of every block and chain in LSBs and physical units, attribution of
 each chain's error to its quantisation sources, theory check of every rounding point, and
-word-length exploration; floor and margin of each attributed output against its ADCs, Allan
-deviation of the paper 002 rate error, and a drive-frequency sweep."""
+word-length exploration; floor and margin of each chain output against its ADCs, and for every
+chain with a demodulator the Allan deviation of its error and a drive-frequency sweep. Every chain
+of the config is covered the same way: nothing here names one."""
 
 from __future__ import annotations
 
@@ -14,13 +15,14 @@ from pathlib import Path
 from tqdm import tqdm as _tqdm
 
 from ..chains import build
+from ..errors_table import port_units
 from ..config import dumps, load_config
 from ..hdl.hwreport import hw_report_path, synthesised_cost
 from ..outputs import IN, OUT_DIR, OUT_FILE, json_text, plain, staged
 from . import optimise as opt
 from .attribution import ADDITIVITY_DB, THEORY_DB, Attribution, attribute
-from .floor import (DOMINANT_FACTOR, FLICKER_FACTOR, WITHIN_DB, Allan, DriveSweep, Floor, allan_chain_paper002,
-                    drive_frequencies, drive_sweep, floor_of)
+from .floor import (DOMINANT_FACTOR, FLICKER_FACTOR, WITHIN_DB, Allan, DriveSweep, Floor, allan_chain,
+                    carrier_chains, demod_f_hz, drive_frequencies, drive_sweep, floor_of)
 from .static import static_error
 from .table import budget_rows, format_rows
 from .units import parse_target
@@ -28,8 +30,26 @@ from .units import parse_target
 # progress bars on a terminal only: redirected, stderr keeps to the one line an error needs
 tqdm = partial(_tqdm, disable=None)
 
-ATTRIBUTED = (("chain_paper002", "rate"), ("chain_paper002", "temp"), ("chain_paper001", "rate"),
-              ("chain_paper001", "temp"), ("chain_paper000", "accel"))
+
+
+def attributed(design) -> list[tuple[str, str]]:
+    """Every (chain, output) of the design, in config order."""
+    return [(c, p) for c, chain in design.chains.items() for p in chain.outputs]
+
+
+def downstream_outputs(design, chain_name: str, kind: str) -> list[str]:
+    """The outputs of the chain that a member of ``kind`` reaches (through the netlist)."""
+    chain = design.chains[chain_name]
+    net = chain.netlist
+    reached = {p for p in net.order if chain.kinds[p] == kind}
+    for inst in net.order:
+        if any(u in reached for u in net.upstream(inst)):
+            reached.add(inst)
+    return [p for p, e in net.outputs.items() if e.instance in reached]
+
+
+def _scaled(st: dict, scale: float) -> dict:
+    return {k: (v * scale if k in ("rms", "max_abs", "mean") else v) for k, v in st.items()}
 
 
 PATHS = {"--config": IN, "--json": OUT_FILE, "--report": OUT_DIR, "--config-out": OUT_FILE}
@@ -41,7 +61,7 @@ def configure(parser) -> None:
     parser.add_argument("--report", help="directory for the Markdown report and PNG plots")
     parser.add_argument("--target", help="error target on a chain output, <value><unit>: deg/h, deg/s, FS, C, mC, "
                                          "xnoise or %%noise (a fraction of the sensor noise at the output)")
-    parser.add_argument("--chain", default="chain_paper002", help="chain of --target (default: chain_paper002)")
+    parser.add_argument("--chain", help="chain of --target (default: the config's first chain)")
     parser.add_argument("--metric", default="rms", choices=("rms", "max"), help="error measure of --target")
     parser.add_argument("--optimise", action="store_true", help="search small word lengths meeting --target")
     parser.add_argument("--config-out", help="with --optimise: write the optimised TOML config here")
@@ -52,8 +72,9 @@ def configure(parser) -> None:
     parser.add_argument("--max-mean", help="with --optimise: also keep |mean| (a bias) of the --target output within "
                                            "this, <value><unit> as --target")
     parser.add_argument("--drive-band", action="store_true",
-                        help="with --optimise on chain_paper002: meet the target at every frequency of the drive "
-                             "sweep too (the band a -40..85 C silicon resonator covers), not only at demod.f_hz")
+                        help="with --optimise on a chain with a demodulator: meet the target at every frequency of "
+                             "the drive sweep too (the band a -40..85 C silicon resonator covers), not only at the "
+                             "demodulator's f_hz")
 
 
 def _attr_dict(a: Attribution) -> dict:
@@ -121,19 +142,21 @@ def format_allan(a: Allan) -> str:
     how = ("measured" if a.measured_1s else
            f"extrapolated along tau^-1/2 from tau {a.fit_taus[0]:.3g}..{a.fit_taus[-1]:.3g} s")
     return "\n".join([
-        f"{a.chain}.{a.port} bit-exact minus float at {a.temp_c:g} C and {a.rate_fs:g} FS, {a.samples} samples at "
+        f"{a.chain}.{a.port} bit-exact minus float at {a.temp_c:g} C and a constant input {a.level:g}, {a.samples} "
+        f"samples at "
         f"{a.fs:g} Hz after {a.settle} settling samples (allantools.oadev, octave-spaced taus "
         f"{a.taus[0]:.3g}..{a.taus[-1]:.3g} s):",
         f"  bias instability: min adev {a.bi_adev:.3g} {a.unit} at tau {a.bi_tau:.3g} s{edge}; flicker floor "
         f"B = min / {FLICKER_FACTOR} = {a.flicker_floor:.3g} {a.unit} (IEEE 952: sigma = {FLICKER_FACTOR} B on "
         f"the flat part)",
-        f"  angle random walk of the fixed-point design: adev(1 s) {a.adev_1s:.3g} {a.unit} ({how}) -> "
-        f"ARW = adev(1 s) / 60 = {a.arw:.3g} deg/sqrt(h)"])
+        f"  random walk of the fixed-point design: adev(1 s) {a.adev_1s:.3g} {a.unit} ({how}) -> "
+        f"adev(1 s) / 60 = {a.arw:.3g} {a.unit} sqrt(h)" + (" (the angle random walk, deg/sqrt(h))"
+                                                           if a.unit == "deg/h" else "")])
 
 
 def format_sweep(s: DriveSweep) -> str:
     lo_t, hi_t = s.temp_range_c
-    lines = [f"chain_paper002.rate vs drive frequency: w(T) = w0 [1 - a (T - T0) / 2], a {s.a_ppm_per_c:g} ppm/C, "
+    lines = [f"{s.chain}.{s.port} vs drive frequency ({s.demod}.f_hz): w(T) = w0 [1 - a (T - T0) / 2], a {s.a_ppm_per_c:g} ppm/C, "
              f"T0 {s.t0_c:g} C, {lo_t:g}..{hi_t:g} C -> {s.band[0]:.2f}..{s.band[1]:.2f} Hz around f0 "
              f"{s.f0:g} Hz, {len(s.points)} points ({s.unit}; nominal = section 1's chain row, static = "
              f"quasi-static chamber points)",
@@ -158,6 +181,8 @@ def _run(args, stage) -> int:
     t0 = time.time()
     cfg = load_config(args.config)
     design = build(cfg)
+    if args.chain is None:
+        args.chain = next(iter(design.chains), None)
     if args.config_out and not args.optimise:
         raise ValueError("--config-out: only with --optimise")
     if args.optimise and not args.target:
@@ -167,21 +192,26 @@ def _run(args, stage) -> int:
     for opt_only in ("max_mean", "drive_band"):
         if getattr(args, opt_only) and not args.optimise:
             raise ValueError(f"--{opt_only.replace('_', '-')}: only with --optimise")
-    attrs = {(c, p): attribute(design, c, p) for c, p in ATTRIBUTED}
-    noise = {p: attrs[(args.chain, p)].sensor_noise_rms for c, p in ATTRIBUTED if c == args.chain}
+    attrs = {(c, p): attribute(design, c, p) for c, p in attributed(design)}
+    noise = {p: a.sensor_noise_rms for (c, p), a in attrs.items() if c == args.chain}
     target = parse_target(args.target, design, args.chain, noise) if args.target else None
     max_mean = parse_target(args.max_mean, design, args.chain, noise, "--max-mean") if args.max_mean else None
     if args.optimise:
         opt.check_search(args.chain, target=target, max_mean=max_mean)
+    units = port_units(design)
 
     print(f"fxdsp budget: config {cfg.source}, seed {design.seed}")
     print("\n1. bit-exact vs float reference (float fed with the same stored inputs), nominal stimulus:")
     rows = budget_rows(design)
     print(format_rows(rows))
-    st = static_error(design)
-    scale = design.rate_full_scale_dps * 3600.0
-    print(f"chain_paper002.rate at 16 quasi-static chamber temperatures (settled): rms {st['rms'] * scale:.4g} deg/h, "
-          f"max {st['max_abs'] * scale:.4g}, mean {st['mean'] * scale:+.4g}, overflows {st['overflows']}")
+    statics = {}
+    for c, p in attributed(design):
+        if design.chains[c].sensor is None:
+            continue
+        unit, scale = units.get((c, p), ("", 1.0))
+        statics[(c, p)] = st = _scaled(static_error(design, c, p), scale)
+        print(f"{c}.{p} at {st['samples'] // 1024} quasi-static chamber temperatures (settled): rms "
+              f"{st['rms']:.4g} {unit}, max {st['max_abs']:.4g}, mean {st['mean']:+.4g}, overflows {st['overflows']}")
     print("\n2. attribution (one source quantised at a time, the rest in float; vs float on the analog inputs):")
     for a in attrs.values():
         print(format_attribution(a))
@@ -191,43 +221,50 @@ def _run(args, stage) -> int:
     for f in floors:
         print(format_floor(f))
     print(f"\n3. theory check (flag: more than {THEORY_DB} dB worse than theory):")
-    for key in (("chain_paper002", "rate"), ("chain_paper001", "rate")):
-        print(format_theory(attrs[key]))
-    print("\n4. Allan deviation of the fixed-point error:")
-    allan = allan_chain_paper002(design)
-    print(format_allan(allan))
+    for a in attrs.values():
+        if a.theory:
+            print(format_theory(a))
+    carriers = [(c, p) for c in carrier_chains(design) for p in downstream_outputs(design, c, "demod")]
+    print("\n4. Allan deviation of the fixed-point error (every output of a chain with a demodulator):")
+    allans = [allan_chain(design, c, p) for c, p in carriers]
+    for al in allans:
+        print(format_allan(al))
+    if not allans:
+        print("  none: no chain of this config has a demodulator and a sensor")
     print("\n5. drive-frequency sweep (the demodulator reference tracks the drive loop, which moves with "
           "temperature):")
     t_sweep = time.time()
-    sweep = drive_sweep(cfg, progress=partial(tqdm, delay=2.0))  # a bar only if it ever takes > 2 s
+    sweeps = [drive_sweep(cfg, c, p, progress=partial(tqdm, delay=2.0)) for c, p in carriers]  # a bar only > 2 s
     t_sweep = time.time() - t_sweep
-    print(format_sweep(sweep))
-    print(f"  ({len(sweep.points)} points in {t_sweep:.1f} s)")
+    for sw in sweeps:
+        print(format_sweep(sw))
+    print(f"  ({sum(len(sw.points) for sw in sweeps)} points in {t_sweep:.1f} s)")
 
     out = {"config": cfg.name, "seed": design.seed,
            "table": [r.as_dict() for r in rows],
-           "static_paper002_rate": {k: (v * scale if k in ("rms", "max_abs", "mean") else v) for k, v in st.items()},
+           "static": [{"chain": c, "port": p, "unit": units.get((c, p), ("", 1.0))[0], **st}
+                      for (c, p), st in statics.items()],
            "attribution": [_attr_dict(a) for a in attrs.values()], "additivity_tolerance_db": ADDITIVITY_DB,
-           "theory_limit_db": THEORY_DB, "floor": [f.as_dict() for f in floors], "allan": allan.as_dict(),
-           "drive_sweep": sweep.as_dict(),
+           "theory_limit_db": THEORY_DB, "floor": [f.as_dict() for f in floors],
+           "allan": [al.as_dict() for al in allans], "drive_sweep": [sw.as_dict() for sw in sweeps],
            "null_means": "an infinite or undefined value (an exact port's SNR, a margin without a floor)"}
     status = 0
     result = None
     if target:
         row = next(r for r in rows if r.stats.block == target.chain and r.stats.port == target.port)
         measured = (row.stats.rms if args.metric == "rms" else row.stats.max_abs) * row.stats.scale
-        if target.chain == "chain_paper002":
-            measured = max(measured, (st["rms"] if args.metric == "rms" else st["max_abs"]) *
-                           (scale if target.port == "rate" else 1.0))
+        st = statics.get((target.chain, target.port))
+        if st is not None:
+            measured = max(measured, st["rms"] if args.metric == "rms" else st["max_abs"])
         meets = measured <= target.value
-        kind = "nominal and quasi-static" if target.chain == "chain_paper002" else "nominal"
+        kind = "nominal and quasi-static" if st is not None else "nominal"
         print(f"\ntarget {args.target} on {target.chain}.{target.port} ({args.metric}, {kind}): "
               f"{target.value:.4g} {target.unit}; this config: {measured:.4g} {target.unit} -> "
               f"{'MET' if meets else 'NOT MET'}")
         out["target"] = {"text": args.target, "value": target.value, "unit": target.unit, "chain": target.chain,
                          "port": target.port, "metric": args.metric, "measured": measured, "met": meets}
         if args.optimise:
-            freqs = tuple(drive_frequencies(float(cfg.data["demod"]["f_hz"]))) if args.drive_band else ()
+            freqs = tuple(drive_frequencies(demod_f_hz(cfg, design, target.chain))) if args.drive_band else ()
             result = opt.optimise(cfg, target, args.metric, args.margin, progress=tqdm, cost_model=args.cost,
                                   max_mean=max_mean, frequencies=freqs)
             print(f"\n6. word-length search ({result.evaluations} evaluations, greedy min+b):")
@@ -251,7 +288,8 @@ def _run(args, stage) -> int:
             status = 1
 
     if args.report:
-        _report(stage.dir(args.report), design, cfg, rows, attrs, st, target, result, args, floors, allan, sweep)
+        _report(stage.dir(args.report), design, cfg, rows, attrs, statics, target, result, args, floors, allans,
+                sweeps)
         print(f"\nreport written to {args.report}/budget.md")
     if args.json:  # no wall-clock time in it: the same config and seed give the same bytes
         stage.write_text(args.json, json_text(plain(out), "--json", indent=1))
@@ -259,36 +297,33 @@ def _run(args, stage) -> int:
     return status
 
 
-def _report(out: Path, design, cfg, rows, attrs, st, target, result, args, floors, allan, sweep) -> None:
+def _report(out: Path, design, cfg, rows, attrs, statics, target, result, args, floors, allans, sweeps) -> None:
     from . import report as rp
 
     out.mkdir(parents=True, exist_ok=True)
-    figs = []
+    figs = {}
     for (c, p), a in attrs.items():
-        if p != "rate":
-            continue
-        rp.plot_spectra(a, design.fs_hz if c == "chain_paper002" else 1.0, out / f"spectrum_{c}.png")
-        rp.plot_attribution(a, out / f"attribution_{c}.png")
-        figs += [f"spectrum_{c}.png", f"attribution_{c}.png"]
-    sweeps = opt.sweep(cfg, "chain_paper002", "rate", progress=tqdm)
-    rp.plot_sweeps(sweeps, "deg/h", target.value if target and target.chain == "chain_paper002" else None,
-                   out / "wordlength_chain_paper002.png",
-                   "chain_paper002.rate: error vs word length, one knob at a time (others at default)")
-    figs.append("wordlength_chain_paper002.png")
-    rp.plot_allan(allan, out / "allan_chain_paper002.png")
-    rp.plot_drive_sweep(sweep, out / "drive_sweep_chain_paper002.png")
+        tag = f"{c}.{p}"
+        rp.plot_spectra(a, design.fs_hz if c in carrier_chains(design) else 1.0, out / f"spectrum_{tag}.png")
+        rp.plot_attribution(a, out / f"attribution_{tag}.png")
+        figs[(c, p)] = tag
     md = [f"# fxdsp error budget\n\nConfig `{cfg.source}`, seed {design.seed}.\n",
           "## 1. Bit-exact vs float reference\n\nFloat fed with the same stored inputs (ADC excluded), nominal "
-          "stimulus of each block; physical units per port (rates deg/h, SF ppm, temperatures C, K0 Hz).\n",
-          "```\n" + format_rows(rows) + "\n```\n",
-          f"Quasi-static chamber points (paper 002 rate, settled): rms {st['rms'] * design.rate_full_scale_dps * 3600:.4g} "
-          f"deg/h. The nominal chain stimulus sweeps 80 C in 85 ms, so the temperature word's rounding becomes a "
-          f"~500 Hz sawtooth that the 50 Hz low-pass hides; the quasi-static test does not hide it.\n",
-          "## 2. Attribution\n\nOne source quantised at a time (the rest in float), against the float chain fed "
-          "with the analog (pre-ADC) signals. The all-on hybrid reproduces the bit-exact model (difference shown).\n"]
-    for a in attrs.values():
+          "stimulus of each block; physical units per port.\n",
+          "```\n" + format_rows(rows) + "\n```\n"]
+    if statics:
+        md.append("Quasi-static chamber points (settled), per chain output:\n\n```\n" + "\n".join(
+            f"{c}.{p}: rms {st['rms']:.4g}, max {st['max_abs']:.4g}, mean {st['mean']:+.4g} "
+            f"{port_units(design).get((c, p), ('', 1.0))[0]}, overflows {st['overflows']}"
+            for (c, p), st in statics.items()) + "\n```\n\nA nominal stimulus sweeps its temperature range in a "
+            "few thousand samples, so the temperature word's rounding becomes a fast sawtooth that an output "
+            "low-pass hides; the quasi-static test does not hide it.\n")
+    md.append("## 2. Attribution\n\nOne source quantised at a time (the rest in float), against the float chain fed "
+              "with the analog (pre-ADC) signals. The all-on hybrid reproduces the bit-exact model (difference "
+              "shown).\n")
+    for key, a in attrs.items():
         md.append("```\n" + format_attribution(a) + "\n```\n")
-    md.append("![attribution](attribution_chain_paper002.png)\n\n![attribution](attribution_chain_paper001.png)\n")
+        md.append(f"![attribution](attribution_{figs[key]}.png)\n")
     md.append("### Floor and margin\n\nThe floor of an output is the quantisation of the input ADCs carried to it "
               "(power sum of the ADC sources above); margin = 20 log10(total / floor). A non-ADC source whose rms is "
               "at least half the total (power within 6 dB of it) dominates the design error.\n")
@@ -296,18 +331,36 @@ def _report(out: Path, design, cfg, rows, attrs, st, target, result, args, floor
     md.append("## 3. Theory check\n\nEach rounding point's residue against q^2/12 and zero mean; each source's "
               "output contribution against the white uniform noise model pushed through the same chain (the gain "
               "after the stage).\n")
-    for key in (("chain_paper002", "rate"), ("chain_paper001", "rate")):
-        md.append("```\n" + format_theory(attrs[key]) + "\n```\n")
-    md.append("![spectrum](spectrum_chain_paper002.png)\n")
+    for key, a in attrs.items():
+        if a.theory:
+            md.append("```\n" + format_theory(a) + "\n```\n")
+            md.append(f"![spectrum](spectrum_{figs[key]}.png)\n")
     md.append("## 4. Allan deviation\n\nOverlapping Allan deviation of the bit-exact minus float error (both fed "
-              "the same ADC codes) at constant temperature and rate.\n")
-    md.append("```\n" + format_allan(allan) + "\n```\n")
-    md.append("![allan](allan_chain_paper002.png)\n")
-    md.append("## 5. Drive-frequency sweep\n\nThe design rebuilt with demod.f_hz at each drive frequency the "
-              "temperature range produces; both the carrier and the NCO move.\n")
-    md.append("```\n" + format_sweep(sweep) + "\n```\n")
-    md.append("![drive sweep](drive_sweep_chain_paper002.png)\n")
-    md.append("## 6. Word length\n\n![sweep](wordlength_chain_paper002.png)\n")
+              "the same ADC codes) at constant temperature and input, for every output of a chain with a "
+              "demodulator.\n")
+    for al in allans:
+        name = f"allan_{al.chain}.{al.port}.png"
+        rp.plot_allan(al, out / name)
+        md.append("```\n" + format_allan(al) + "\n```\n")
+        md.append(f"![allan]({name})\n")
+    md.append("## 5. Drive-frequency sweep\n\nThe design rebuilt with the demodulator's f_hz at each drive "
+              "frequency the temperature range produces; both the carrier and the NCO move.\n")
+    for sw in sweeps:
+        name = f"drive_sweep_{sw.chain}.{sw.port}.png"
+        rp.plot_drive_sweep(sw, out / name)
+        md.append("```\n" + format_sweep(sw) + "\n```\n")
+        md.append(f"![drive sweep]({name})\n")
+    chain = target.chain if target else args.chain
+    port = target.port if target else (list(design.chains[chain].outputs)[-1] if chain else None)
+    if chain in opt.KNOBS:
+        sweeps_wl = opt.sweep(cfg, chain, port, progress=tqdm)
+        unit = port_units(design).get((chain, port), ("", 1.0))[0]
+        name = f"wordlength_{chain}.{port}.png"
+        rp.plot_sweeps(sweeps_wl, unit, target.value if target else None, out / name,
+                       f"{chain}.{port}: error vs word length, one knob at a time (others at default)")
+        md.append(f"## 6. Word length\n\n![sweep]({name})\n")
+    else:
+        md.append(f"## 6. Word length\n\n{chain}: no word-length knobs (fxdsp.budget.optimise.KNOBS).\n")
     if result:
         md.append(f"Target {args.target} ({result.target.value:.4g} {result.target.unit}, {result.metric}): error "
                   f"{result.default_error:.4g} -> {result.error:.4g}; total bits {result.default_cost['total_bits']} -> "

@@ -6,12 +6,13 @@ time, and how it moves with the drive frequency.
   The margin is 20 log10(total / floor); a design within ``WITHIN_DB`` of its floor spends its bits
   well. A non-ADC source whose rms is at least half the total (its power within 6 dB of the total
   power) dominates the design error and is named.
-* Allan deviation of the fixed-minus-float error of chain_paper002.rate at constant temperature
-  and rate (``allantools.oadev``, octave-spaced averaging factors): bias instability (minimum of
-  the curve) and the angle random walk the fixed-point design adds (adev at tau = 1 s / 60).
-* Drive-frequency sweep: the demodulator reference tracks the drive loop, whose frequency moves
-  with temperature, w(T) = w0 [1 - a (T - T0) / 2]; the chain error is measured at drive
-  frequencies across the band that the sensor's temperature range produces.
+* Allan deviation of the fixed-minus-float error of every output of a chain with a demodulator
+  (its samples are at the design's rate), at constant temperature and input (``allantools.oadev``,
+  octave-spaced averaging factors): bias instability (minimum of the curve) and the random walk the
+  fixed-point design adds (adev at tau = 1 s / 60; the angle random walk for a rate in deg/h).
+* Drive-frequency sweep of every such chain: the demodulator reference tracks the drive loop, whose
+  frequency moves with temperature, w(T) = w0 [1 - a (T - T0) / 2]; the chain error is measured at
+  drive frequencies across the band that the sensor's temperature range produces.
 
 Everything returns data; ``fxdsp budget`` (cli.py) prints it.
 """
@@ -27,6 +28,7 @@ import numpy as np
 import scipy.signal as sps
 
 from ..chains import Design, build
+from ..errors_table import port_units
 from ..config import Config
 from .attribution import Attribution
 from .hybrid import ADC
@@ -38,8 +40,7 @@ DOMINANT_FACTOR = 0.5    # rms >= total / 2: power within 20 log10(2) = 6.02 dB 
 
 FLICKER_FACTOR = 0.664   # IEEE 952: on the flicker floor sigma(tau) = 0.664 B, so B = min(adev) / 0.664
 ALLAN_SAMPLES = 2**20    # 10.9 s at 96 kHz: tau = 1 s is measured, with 10 intervals, not extrapolated
-ALLAN_TEMP_C = 25.0      # at T0 of the drive-frequency law
-ALLAN_RATE_FS = 0.1      # a constant rate, a tenth of full scale
+ALLAN_TEMP_C = 25.0      # at T0 of the drive-frequency law (the input: the sensor's STEADY_LEVEL)
 MIN_INTERVALS = 4        # a tau needs at least 4 intervals of the record for a usable estimate
 SETTLE_TOL = 1e-6        # the filters have settled when their step response is this close to its end
 WHITE_SLOPE = (-0.75, -0.25)   # local log-log slope accepted as the tau^-1/2 (white noise) part
@@ -105,7 +106,7 @@ class Allan:
     samples: int                 # measured samples (after the settling)
     settle: int                  # samples discarded first
     temp_c: float
-    rate_fs: float
+    level: float                 # the constant physical input (the sensor's unit, e.g. rate in FS)
     taus: np.ndarray             # s
     adev: np.ndarray             # unit
     intervals: np.ndarray        # number of averages allantools used per tau
@@ -130,27 +131,37 @@ class Allan:
 
     @property
     def arw(self) -> float:
-        """deg/sqrt(h): sigma(1 s) in deg/h times sqrt(1 s in h) = sigma / 60."""
+        """unit x sqrt(h) (deg/sqrt(h) for a rate in deg/h): sigma(1 s) times sqrt(1 s in h) = sigma / 60."""
         return self.adev_1s / 60.0
 
     def as_dict(self) -> dict:
         return {"chain": self.chain, "port": self.port, "unit": self.unit, "fs_hz": self.fs, "samples": self.samples,
-                "settle_samples": self.settle, "temp_c": self.temp_c, "rate_fs": self.rate_fs,
+                "settle_samples": self.settle, "temp_c": self.temp_c, "level": self.level,
                 "curve": [{"tau_s": float(t), "adev": float(a), "intervals": float(n)}
                           for t, a, n in zip(self.taus, self.adev, self.intervals)],
                 "bias_instability": {"min_adev": self.bi_adev, "tau_s": self.bi_tau,
                                      "at_longest_tau": self.bi_at_longest_tau,
                                      "flicker_floor": self.flicker_floor, "flicker_factor": FLICKER_FACTOR},
                 "arw": {"adev_1s": self.adev_1s, "measured": self.measured_1s, "fit_taus_s": self.fit_taus,
-                        "deg_per_sqrt_h": self.arw}}
+                        "value": self.arw, "unit": "deg/sqrt(h)" if self.unit == "deg/h" else f"{self.unit} sqrt(h)"}}
+
+
+def chain_filters(chain) -> list[np.ndarray]:
+    """The float low-passes of the chain in execution order (iir members, demodulators' channel filters)."""
+    get = {"iir": lambda b: b.sos, "demod": lambda b: b.lpf_i.sos}
+    return [get[chain.kinds[p]](chain.members[p]) for p in chain.netlist.order if chain.kinds[p] in get]
 
 
 def settling_samples(chain, tol: float = SETTLE_TOL) -> int:
-    """Samples until the step response of the chain's float low-passes (demodulator, then output)
-    stays within ``tol`` of its final value: the start-up transient is not part of the noise."""
+    """Samples until the step response of the chain's float low-passes (all in cascade) stays
+    within ``tol`` of its final value: the start-up transient is not part of the noise. 0 for a
+    chain without a filter."""
     if not 0 < tol < 1:
         raise ValueError(f"tol: must be within (0, 1), got {tol}")
-    sos = np.vstack([chain.sensor.demod.lpf_i.sos, chain.sensor.lpf.sos])
+    filters = chain_filters(chain)
+    if not filters:
+        return 0
+    sos = np.vstack(filters)
     n = 4096
     while True:
         step = sps.sosfilt(sos, np.ones(n))
@@ -213,31 +224,40 @@ def allan_figures(error: np.ndarray, fs: float) -> dict:
             "adev_1s": adev_1s, "fit_taus": fit}
 
 
-def allan_error(design: Design, samples: int = ALLAN_SAMPLES, temp_c: float = ALLAN_TEMP_C,
-                rate_fs: float = ALLAN_RATE_FS, seed_offset: int = 3000) -> tuple[np.ndarray, int]:
-    """chain_paper002.rate bit-exact minus float (both on the same ADC codes), deg/h, at a constant
-    temperature and rate with the nominal stimulus' quadrature and sensor noise (the noise dithers
-    the ADCs as in a real sensor), after the filters' settling. Returns (error, settle)."""
+def carrier_chains(design: Design) -> list[str]:
+    """The chains with a demodulator and a sensor: their samples are at the design's rate and they
+    follow a drive frequency (the Allan deviation and the drive sweep apply)."""
+    return [n for n, c in design.chains.items() if c.sensor is not None and "demod" in c.kinds.values()]
+
+
+def allan_error(design: Design, chain_name: str, port: str, samples: int = ALLAN_SAMPLES,
+                temp_c: float = ALLAN_TEMP_C, seed_offset: int = 3000) -> tuple[np.ndarray, int]:
+    """The chain output's bit-exact minus float (both on the same ADC codes), in the port's unit,
+    at a constant temperature and the sensor's STEADY_LEVEL input with its noise (which dithers the
+    ADCs as in a real sensor), after the filters' settling. Returns (error, settle)."""
     if samples < 2 * MIN_INTERVALS:
         raise ValueError(f"samples: need at least {2 * MIN_INTERVALS}, got {samples}")
-    chain = design.chains["chain_paper002"]
+    chain = design.chain(chain_name, "the Allan deviation")
+    if chain.sensor is None:
+        raise ValueError(f"{chain_name}: the Allan deviation needs the chain's sensor (its table's 'sensor')")
+    _, scale = port_units(design).get((chain_name, port), ("", 1.0))
     settle = settling_samples(chain)
     n = samples + settle
     rng = np.random.default_rng([design.seed, seed_offset])
-    stim = chain.sensor.sensor_inputs(np.full(n, float(temp_c)), np.full(n, float(rate_fs)), quad_fs=0.05, rng=rng,
-                               noise_fs=1e-3)
-    got = chain.real_outputs(chain.run(**stim))["rate"]
-    ref = chain.run_float(**stim)["rate"]
-    return (got - ref)[settle:] * design.rate_full_scale_dps * 3600.0, settle
+    stim = chain.sensor.held_inputs(np.full(n, float(temp_c)), np.full(n, float(chain.sensor.STEADY_LEVEL)), rng)
+    got = chain.real_outputs(chain.run(**stim))[port]
+    ref = chain.run_float(**stim)[port]
+    return (got - ref)[settle:] * scale, settle
 
 
-def allan_chain_paper002(design: Design, samples: int = ALLAN_SAMPLES, temp_c: float = ALLAN_TEMP_C,
-                         rate_fs: float = ALLAN_RATE_FS) -> Allan:
-    err, settle = allan_error(design, samples, temp_c, rate_fs)
+def allan_chain(design: Design, chain_name: str, port: str, samples: int = ALLAN_SAMPLES,
+                temp_c: float = ALLAN_TEMP_C) -> Allan:
+    err, settle = allan_error(design, chain_name, port, samples, temp_c)
     f = allan_figures(err, design.fs_hz)
-    return Allan("chain_paper002", "rate", "deg/h", design.fs_hz, int(err.size), settle, float(temp_c),
-                 float(rate_fs), f["taus"], f["adev"], f["intervals"], f["bi_adev"], f["bi_tau"], f["adev_1s"],
-                 f["fit_taus"], err)
+    unit, _ = port_units(design).get((chain_name, port), ("", 1.0))
+    return Allan(chain_name, port, unit, design.fs_hz, int(err.size), settle, float(temp_c),
+                 float(design.chains[chain_name].sensor.STEADY_LEVEL), f["taus"], f["adev"], f["intervals"],
+                 f["bi_adev"], f["bi_tau"], f["adev_1s"], f["fit_taus"], err)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -258,13 +278,16 @@ class DrivePoint:
 
 @dataclass
 class DriveSweep:
+    chain: str
+    port: str
+    demod: str           # the demodulator table whose f_hz is swept
     f0: float
     a_ppm_per_c: float
     t0_c: float
     temp_range_c: tuple[float, float]
     band: tuple[float, float]
     points: list[DrivePoint]
-    unit: str = "deg/h"
+    unit: str = ""
 
     def worst(self, attr: str) -> DrivePoint:
         """The point of the largest |attr| over the band."""
@@ -273,7 +296,7 @@ class DriveSweep:
     def as_dict(self) -> dict:
         worst = {k: {"f_hz": self.worst(k).f_hz, "value": abs(getattr(self.worst(k), k))}
                  for k in ("rms", "mean", "static_rms", "static_mean")}
-        return {"chain": "chain_paper002", "port": "rate", "unit": self.unit, "f0_hz": self.f0,
+        return {"chain": self.chain, "port": self.port, "demod": self.demod, "unit": self.unit, "f0_hz": self.f0,
                 "a_ppm_per_c": self.a_ppm_per_c, "t0_c": self.t0_c, "temp_range_c": list(self.temp_range_c),
                 "band_hz": list(self.band), "points": [p.as_dict() for p in self.points], "worst_abs": worst}
 
@@ -305,26 +328,53 @@ def drive_frequencies(f0: float, points: int = SWEEP_POINTS, a_ppm_per_c: float 
     return np.unique(np.append(np.linspace(band[0], band[1], points), f0))
 
 
-def drive_point(data: dict, f_hz: float) -> DrivePoint:
-    """Build the design with demod.f_hz = f_hz and measure the chain_paper002.rate error as section 1
-    of the budget does, plus the quasi-static error."""
+def demod_table(design: Design, chain_name: str) -> str:
+    """The table of the chain's demodulator (the one whose drive frequency the sweep moves)."""
+    chain = design.chains[chain_name]
+    found = [p for p in chain.netlist.order if chain.kinds[p] == "demod"]
+    if len(found) != 1:
+        raise ValueError(f"{chain_name}: the drive sweep needs one demodulator, the chain has {len(found)}")
+    return found[0]
+
+
+def demod_f_hz(config: Config, design: Design, chain_name: str) -> float:
+    """The configured drive frequency of the chain's demodulator."""
+    return float(_table(config.data, demod_table(design, chain_name))["f_hz"])
+
+
+def _table(data: dict, table: str) -> dict:
+    for key in table.split("."):
+        data = data[key]
+    return data
+
+
+def _with_f_hz(data: dict, table: str, f_hz: float) -> dict:
     d = copy.deepcopy(data)
-    d["demod"]["f_hz"] = float(f_hz)
-    design = build(Config(d, source=f"<drive sweep {f_hz:.3f} Hz>"))
-    row = next(r for r in budget_rows(design, names=["chain_paper002"]) if r.stats.port == "rate").stats
-    st = static_error(design)
-    scale = design.rate_full_scale_dps * 3600.0
-    return DrivePoint(float(f_hz), row.rms * row.scale, row.mean * row.scale, st["rms"] * scale, st["mean"] * scale,
-                      int(row.overflows + st["overflows"]))
+    _table(d, table)["f_hz"] = float(f_hz)
+    return d
 
 
-def drive_sweep(config: Config, points: int = SWEEP_POINTS, a_ppm_per_c: float = SILICON_PPM_PER_C,
-                t0_c: float = T0_C, temp_range_c: tuple[float, float] = TEMP_RANGE_C, progress=None) -> DriveSweep:
-    """chain_paper002.rate error at ``points`` drive frequencies evenly across the band of
-    :func:`drive_band` around the config's demod.f_hz. ``progress``: a tqdm-like wrapper."""
-    f0 = float(config.data["demod"]["f_hz"])
+def drive_point(data: dict, f_hz: float, chain_name: str, port: str, table: str) -> DrivePoint:
+    """Build the design with <table>.f_hz = f_hz and measure the chain output's error as section 1
+    of the budget does, plus the quasi-static error (port units)."""
+    design = build(Config(_with_f_hz(data, table, f_hz), source=f"<drive sweep {f_hz:.3f} Hz>"))
+    row = next(r for r in budget_rows(design, names=[chain_name]) if r.stats.port == port).stats
+    st = static_error(design, chain_name, port)
+    return DrivePoint(float(f_hz), row.rms * row.scale, row.mean * row.scale, st["rms"] * row.scale,
+                      st["mean"] * row.scale, int(row.overflows + st["overflows"]))
+
+
+def drive_sweep(config: Config, chain_name: str, port: str, points: int = SWEEP_POINTS,
+                a_ppm_per_c: float = SILICON_PPM_PER_C, t0_c: float = T0_C,
+                temp_range_c: tuple[float, float] = TEMP_RANGE_C, progress=None) -> DriveSweep:
+    """The chain output's error at ``points`` drive frequencies evenly across the band of
+    :func:`drive_band` around its demodulator's f_hz. ``progress``: a tqdm-like wrapper."""
+    design = build(config)
+    table = demod_table(design, chain_name)
+    unit, _ = port_units(design).get((chain_name, port), ("", 1.0))
+    f0 = float(_table(config.data, table)["f_hz"])
     band = drive_band(f0, a_ppm_per_c, t0_c, temp_range_c)
     freqs = drive_frequencies(f0, points, band=band)
-    it = progress(freqs, desc="drive-frequency sweep", unit="f") if progress else freqs
-    pts = [drive_point(config.data, f) for f in it]
-    return DriveSweep(f0, a_ppm_per_c, t0_c, tuple(temp_range_c), band, pts)
+    it = progress(freqs, desc=f"drive-frequency sweep of {chain_name}", unit="f") if progress else freqs
+    pts = [drive_point(config.data, f, chain_name, port, table) for f in it]
+    return DriveSweep(chain_name, port, table, f0, a_ppm_per_c, t0_c, tuple(temp_range_c), band, pts, unit)

@@ -20,7 +20,7 @@ import numpy as np
 from numba import njit
 
 from ..chains import Chain
-from ..fixed import Format, Rules, quantize
+from ..fixed import Format, OverflowLog, Rules, quantize
 from ..fixed.kernels import FLOOR, TOWARD_ZERO, round_float
 from ..blocks.lag import held
 
@@ -44,6 +44,7 @@ class Source:
     q: float | None = None           # step of the rounding (None: not a rounding, no q^2/12 theory)
     rounding: str | None = None      # rounding mode of the step
     note: str = ""
+    kind: str = ""       # kind of the block it belongs to ("adc" for a chain input's ADC)
 
     @property
     def is_rounding(self) -> bool:
@@ -217,27 +218,27 @@ def _lag_float(x, alpha, q_state, q_out, mode, rounding, lo, hi, noise, resid):
     return y
 
 
-def lag_hybrid(block, temp: np.ndarray, sw: Switch) -> np.ndarray:
-    """The lag block; sources lag.alpha (alpha as mantissa x 2**-shift) and lag.round (the state
+def lag_hybrid(block, temp: np.ndarray, sw: Switch, prefix: str = "lag") -> np.ndarray:
+    """The lag block; sources <prefix>.alpha (alpha as mantissa x 2**-shift) and lag.round (the state
     step at state_format's LSB and the output at temp_format's; in the loop: the state keeps its
     own rounding errors). A decimating lag updates on every decim-th input and holds between."""
     dp = block.datapath
     tf = dp.temp_format
     full = np.asarray(temp, dtype=float)
-    if "lag.alpha" in sw and "lag.round" in sw and (codes := _grid_codes(full / tf.lsb)) is not None:
+    if f"{prefix}.alpha" in sw and f"{prefix}.round" in sw and (codes := _grid_codes(full / tf.lsb)) is not None:
         # all of this block on and its input on the temperature grid: the block's own kernel
         return block.run(temp=codes).outputs["te"].astype(float) * tf.lsb
     x = full[::dp.decim]
-    alpha = dp.alpha_m * 2.0**-dp.alpha_s if "lag.alpha" in sw else block.alpha
-    mode = 1 if "lag.round" in sw else 2 if "lag.round" in sw.inject else 0
+    alpha = dp.alpha_m * 2.0**-dp.alpha_s if f"{prefix}.alpha" in sw else block.alpha
+    mode = 1 if f"{prefix}.round" in sw else 2 if f"{prefix}.round" in sw.inject else 0
     noise = sw.rng.uniform(0.0, 1.0, (2, x.size)) if mode == 2 else np.zeros((2, x.size))
     resid = np.zeros((2, x.size))
     q_state = tf.lsb * 2.0**-dp.guard   # the state's LSB: guard bits below the temperature code
     y = _lag_float(x, alpha, q_state, tf.lsb, mode, dp.rules.rounding_code, tf.min_value, tf.max_value, noise,
                    resid)
     if mode == 1:
-        sw.record("lag.round", "state", resid[0])
-        sw.record("lag.round", "out", resid[1])
+        sw.record(f"{prefix}.round", "state", resid[0])
+        sw.record(f"{prefix}.round", "out", resid[1])
     return held(y, dp.decim, full.size)
 
 
@@ -276,9 +277,9 @@ def piecewise_hybrid(block, temp: np.ndarray, prefix: str, sw: Switch) -> np.nda
     return acc
 
 
-def rtd_hybrid(block, frac: np.ndarray, sw: Switch) -> np.ndarray:
-    """ADC fraction -> temperature; sources rtd.lut_resolution (linear interpolation over 2**k
-    segments instead of the exact inverse), rtd.lut_coef (LUT entries quantised), rtd.round."""
+def rtd_hybrid(block, frac: np.ndarray, sw: Switch, prefix: str = "rtd") -> np.ndarray:
+    """ADC fraction -> temperature; sources <prefix>.lut_resolution (linear interpolation over 2**k
+    segments instead of the exact inverse), <prefix>.lut_coef (LUT entries quantised), <prefix>.round."""
     frac = np.asarray(frac, dtype=float)
     adc, dp = block.adc_format, block.datapath
     exact = block.physics.temperature_from_fraction(frac)
@@ -291,14 +292,14 @@ def rtd_hybrid(block, frac: np.ndarray, sw: Switch) -> np.ndarray:
         fr = u - idx * seg
         return (table[idx] * seg + (table[idx + 1] - table[idx]) * fr) / seg
 
-    if "rtd.lut_resolution" in sw:
-        temp = interp(lut_q if "rtd.lut_coef" in sw else block.lut_real)
-    elif "rtd.lut_coef" in sw:
+    if f"{prefix}.lut_resolution" in sw:
+        temp = interp(lut_q if f"{prefix}.lut_coef" in sw else block.lut_real)
+    elif f"{prefix}.lut_coef" in sw:
         temp = exact + interp(lut_q - block.lut_real)
     else:
         temp = exact
     if dp.shift > 0:
-        temp = sw.round("rtd.round", temp, block.temp_format, block.rules)
+        temp = sw.round(f"{prefix}.round", temp, block.temp_format, block.rules)
     return temp
 
 
@@ -317,30 +318,52 @@ def divide_hybrid(block, x: np.ndarray, sf: np.ndarray, sw: Switch, name: str = 
     return v
 
 
-def nco_hybrid(block, n: int, sw: Switch) -> np.ndarray:
-    """2 cos of the NCO phase (the I mixer's factor); sources demod.nco_phase (tuning word, bin
-    address and interpolation offset: the phase the NCO evaluates, with an exact table and an exact
-    first-order correction) and demod.nco_amp (table values and correction quantised)."""
+def nco_hybrid(block, n: int, sw: Switch, prefix: str = "demod") -> tuple[np.ndarray, np.ndarray]:
+    """(cos, -sin) of the NCO phase; sources <prefix>.nco_phase (tuning word, bin address and
+    interpolation offset: the phase the NCO evaluates, with an exact table and an exact first-order
+    correction) and <prefix>.nco_amp (table values and correction quantised)."""
     nco = block.nco
     phases = nco.phases(n)
-    if "demod.nco_phase" in sw:
-        if "demod.nco_amp" in sw:
-            return nco.wave(phases)[0].astype(float) * nco.nco_format.lsb
+    if f"{prefix}.nco_phase" in sw:
+        if f"{prefix}.nco_amp" in sw:
+            c, m = nco.wave(phases)
+            return c.astype(float) * nco.nco_format.lsb, m.astype(float) * nco.nco_format.lsb
         centre, delta = nco.bin_phase(phases)
-        return np.cos(centre) - np.sin(centre) * delta
+        return np.cos(centre) - np.sin(centre) * delta, -np.sin(centre) - np.cos(centre) * delta
     angle = nco.reference_phase(n, 0)
-    if "demod.nco_amp" in sw:
-        return nco.lut_quantize(np.cos(angle)).astype(float) * nco.lut_format.lsb
-    return np.cos(angle)
+    if f"{prefix}.nco_amp" in sw:
+        lsb = nco.lut_format.lsb
+        return nco.lut_quantize(np.cos(angle)).astype(float) * lsb, nco.lut_quantize(-np.sin(angle)).astype(float) * lsb
+    return np.cos(angle), -np.sin(angle)
 
 
-def demod_hybrid(block, x: np.ndarray, sw: Switch) -> tuple[np.ndarray, np.ndarray]:
-    """The rate (I) channel: mixer 2 x cos, rounding demod.mix_round, low-pass demod.lpf_*."""
-    mix = 2.0 * np.asarray(x, dtype=float) * nco_hybrid(block, len(x), sw)
-    if block.datapath.mix_shift > 0:
-        mix = sw.round("demod.mix_round", mix, block.data_format, block.rules)
-    i = iir_hybrid(block.lpf_i, mix, "demod.lpf_coef", "demod.lpf_round", sw)
-    return mix, i
+def demod_hybrid(block, x: np.ndarray, sw: Switch, prefix: str = "demod", wanted=("i",)) -> dict[str, np.ndarray]:
+    """Mixers 2 x cos (I) and -2 x sin (Q), rounding <prefix>.mix_round, low-pass <prefix>.lpf_*
+    (both channels share the filter's coefficients and rounding); amp and phase through
+    <prefix>.cordic (the CORDIC on the channels' stored words, or hypot / atan2 when off). Returns
+    ``mix`` (the I mixer) and the wanted outputs."""
+    cos, msin = nco_hybrid(block, len(x), sw, prefix)
+    x = np.asarray(x, dtype=float)
+    out = {}
+    for port, lpf, wave in (("i", block.lpf_i, cos), ("q", block.lpf_q, msin)):
+        if port == "q" and not set(wanted) & {"q", "amp", "phase"}:
+            continue
+        mix = 2.0 * x * wave
+        if block.datapath.mix_shift > 0:
+            mix = sw.round(f"{prefix}.mix_round", mix, block.data_format, block.rules, "out" if port == "i" else "mix_q")
+        if port == "i":
+            out["mix"] = mix
+        out[port] = iir_hybrid(lpf, mix, f"{prefix}.lpf_coef", f"{prefix}.lpf_round", sw)
+    if set(wanted) & {"amp", "phase"}:
+        if f"{prefix}.cordic" in sw:
+            df = block.data_format
+            i, q = (quantize(out[p], df, block.rules) for p in ("i", "q"))
+            amp, phase = block.polar(OverflowLog(), i, q)
+            out["amp"] = amp.astype(float) * block.outputs["amp"].lsb
+            out["phase"] = phase.astype(float) * block.outputs["phase"].lsb
+        else:
+            out["amp"], out["phase"] = np.hypot(out["i"], out["q"]), np.arctan2(out["q"], out["i"])
+    return out
 
 
 def subtract_hybrid(block, x, bias, name: str, sw: Switch) -> np.ndarray:
@@ -350,128 +373,169 @@ def subtract_hybrid(block, x, bias, name: str, sw: Switch) -> np.ndarray:
     return r
 
 
-# --------------------------------------------------------------------------------------------
-# chains: analog stimulus, sources, hybrid run
-# --------------------------------------------------------------------------------------------
-def sources_paper002(chain: Chain) -> list[Source]:
-    rtd, sf, div, dem, bias, sub, lpf = (chain.sensor.rtd, chain.sensor.sf, chain.sensor.divide, chain.sensor.demod, chain.sensor.bias,
-                                        chain.sensor.subtract, chain.sensor.lpf)
-    s = [Source("adc.sense", ADC, "sf_divide", "vsa", div.in_format.lsb, "half_up", "sense ADC"),
-         Source("adc.rtd", ADC, "rtd", "rtd_frac", rtd.adc_format.lsb, "half_up", "RTD bridge ADC"),
-         Source("rtd.lut_resolution", LUTNCO, "rtd", "temp", note=f"{2**rtd.datapath.lut_index_bits} linear segments"),
-         Source("rtd.lut_coef", COEF, "rtd", "temp", note=f"LUT entries in {rtd.lut_format}")]
-    if rtd.datapath.shift > 0:
-        s.append(Source("rtd.round", ROUND, "rtd", "temp", rtd.temp_format.lsb, rtd.rules.rounding))
-    if chain.sensor.lag is not None:
-        lag = chain.sensor.lag
-        s += [Source("lag.alpha", COEF, "lag", "te", note=f"alpha = {lag.m} x 2**-{lag.s}"),
-              Source("lag.round", ROUND, "lag", "te", lag.temp_format.lsb, lag.rules.rounding,
-                     f"state step at {lag.state_format}, output")]
-    s += [Source("piecewise_sf.coef", COEF, "piecewise_sf", "sf"),
-          Source("piecewise_sf.round", ROUND, "piecewise_sf", "sf", sf.out_format.lsb, sf.rules.rounding),
-          Source("sf_divide.trunc", DIVIDER, "sf_divide", "v", div.out_format.lsb, div.rules.rounding,
-                 "quotient toward zero, then the rescale"),
-          Source("demod.nco_phase", LUTNCO, "demod", "mix", note=f"{dem.nco.lut_bits}-bit address, {dem.nco.interp_bits}-bit interpolation"),
-          Source("demod.nco_amp", LUTNCO, "demod", "mix", note=f"LUT values in {dem.nco.lut_format}")]
-    if dem.datapath.mix_shift > 0:
-        s.append(Source("demod.mix_round", ROUND, "demod", "mix", dem.data_format.lsb, dem.rules.rounding))
-    s += [Source("demod.lpf_coef", COEF, "demod", "i"),
-          Source("demod.lpf_round", ROUND, "demod", "i", dem.data_format.lsb, dem.lpf_i.rules.rounding),
-          Source("piecewise_bias.coef", COEF, "piecewise_bias", "bias"),
-          Source("piecewise_bias.round", ROUND, "piecewise_bias", "bias", bias.out_format.lsb, bias.rules.rounding)]
-    if sub.datapath.shift > 0:
-        s.append(Source("bias_subtract.round", ROUND, "bias_subtract", "r", sub.out_format.lsb, sub.rules.rounding))
-    s += [Source("iir.coef", COEF, "iir", "rate"),
-          Source("iir.round", ROUND, "iir", "rate", lpf.data_format.lsb, lpf.rules.rounding)]
-    return s
-
-
-def sources_paper001(chain: Chain) -> list[Source]:
-    f2t, bias, sub = chain.sensor.f2t, chain.sensor.bias, chain.sensor.subtract
-    s = [Source("adc.freq", ADC, "freq2temp", "f", f2t.freq_format.lsb, "half_up", "frequency word"),
-         Source("adc.rate", ADC, "bias_subtract001", "rate_in", sub.in_format.lsb, "half_up", "rate input word"),
-         Source("freq2temp.coef", COEF, "freq2temp", "temp", note="f0 and 1/k"),
-         Source("freq2temp.round", ROUND, "freq2temp", "temp", f2t.temp_format.lsb, f2t.rules.rounding),
-         Source("piecewise_bias001.coef", COEF, "piecewise_bias001", "bias"),
-         Source("piecewise_bias001.round", ROUND, "piecewise_bias001", "bias", bias.out_format.lsb,
-                bias.rules.rounding)]
-    if sub.datapath.shift > 0:
-        s.append(Source("bias_subtract001.round", ROUND, "bias_subtract001", "rate", sub.out_format.lsb,
-                        sub.rules.rounding))
-    return s
-
-
-def run_paper002(chain: Chain, analog: dict, sw: Switch) -> dict[str, np.ndarray]:
-    """Every node of the hybrid paper 002 chain."""
-    dem = chain.sensor.demod
-    x = analog["vsa"]
-    x = sw.round("adc.sense", x, chain.sensor.divide.in_format, Rules("half_up", "saturate"))
-    frac = analog["rtd_frac"]
-    af = chain.sensor.rtd.adc_format
-    frac = sw.round("adc.rtd", frac, af, Rules("half_up", "saturate"))
-    temp = rtd_hybrid(chain.sensor.rtd, frac, sw)
-    te = lag_hybrid(chain.sensor.lag, temp, sw) if chain.sensor.lag is not None else temp   # what the engines see
-    sf = piecewise_hybrid(chain.sensor.sf, te, "piecewise_sf", sw)
-    v = divide_hybrid(chain.sensor.divide, x, sf, sw)
-    mix, i = demod_hybrid(dem, v, sw)
-    b = piecewise_hybrid(chain.sensor.bias, te, "piecewise_bias", sw)
-    r = subtract_hybrid(chain.sensor.subtract, i, b, "bias_subtract.round", sw)
-    rate = iir_hybrid(chain.sensor.lpf, r, "iir.coef", "iir.round", sw)
-    return {"vsa": x, "rtd_frac": frac, "temp": temp, "te": te, "sf": sf, "v": v, "mix": mix, "i": i, "bias": b,
-            "r": r, "rate": rate}
-
-
-def run_paper001(chain: Chain, analog: dict, sw: Switch) -> dict[str, np.ndarray]:
-    f2t = chain.sensor.f2t
-    f = analog["f"]
-    f = sw.round("adc.freq", f, f2t.freq_format, Rules("half_up", "saturate"))
-    rate_in = analog["rate_in"]
-    fi = chain.sensor.subtract.in_format
-    rate_in = sw.round("adc.rate", rate_in, fi, Rules("half_up", "saturate"))
-    if "freq2temp.coef" in sw:
-        temp = (f - f2t.datapath.f0 * f2t.freq_format.lsb) * (f2t.datapath.kinv * f2t.kinv_format.lsb)
+def freq2temp_hybrid(block, f: np.ndarray, sw: Switch, prefix: str = "freq2temp") -> np.ndarray:
+    """T = (f - f0) / k; sources <prefix>.coef (f0 and 1/k quantised) and <prefix>.round."""
+    f = np.asarray(f, dtype=float)
+    dp = block.datapath
+    if f"{prefix}.coef" in sw:
+        temp = (f - dp.f0 * block.freq_format.lsb) * (dp.kinv * block.kinv_format.lsb)
     else:
-        temp = (f - f2t.f0_hz) / f2t.k_hz_per_c
-    temp = sw.round("freq2temp.round", temp, f2t.temp_format, f2t.rules)
-    b = piecewise_hybrid(chain.sensor.bias, temp, "piecewise_bias001", sw)
-    rate = subtract_hybrid(chain.sensor.subtract, rate_in, b, "bias_subtract001.round", sw)
-    return {"f": f, "rate_in": rate_in, "temp": temp, "bias": b, "rate": rate}
+        temp = (f - block.f0_hz) / block.k_hz_per_c
+    return sw.round(f"{prefix}.round", temp, block.temp_format, block.rules)
 
 
-def sources_paper000(chain: Chain) -> list[Source]:
-    s = chain.sensor
-    k0, k1, sub, div = s.k0, s.k1, s.subtract, s.divide
-    out = [Source("adc.df", ADC, s.subtract.name.replace(".", "_"), "df", sub.in_format.lsb, "half_up",
-                  "difference-frequency word"),
-           Source("adc.temp", ADC, k0.name.replace(".", "_"), "temp", k0.temp_format.lsb, "half_up", "temperature word")]
-    for engine, node in ((k0, "k0"), (k1, "k1")):
-        inst = engine.name.replace(".", "_")
-        out += [Source(f"{inst}.coef", COEF, inst, node),
-                Source(f"{inst}.round", ROUND, inst, node, engine.out_format.lsb, engine.rules.rounding)]
-    if sub.datapath.shift > 0:
-        out.append(Source(f"{sub.name}.round", ROUND, sub.name, "diff", sub.out_format.lsb, sub.rules.rounding))
-    out.append(Source(f"{div.name}.trunc", DIVIDER, div.name, "accel", div.out_format.lsb, div.rules.rounding,
-                      "quotient toward zero, then the rescale"))
+# --------------------------------------------------------------------------------------------
+# each kind of block: its quantisation sources and its hybrid run, by instance
+# --------------------------------------------------------------------------------------------
+def _rounding(iid: str, what: str, category: str, kind: str, node: str, fmt: Format, rules: Rules,
+              note: str = "") -> Source:
+    return Source(f"{iid}.{what}", category, iid, node, fmt.lsb, rules.rounding, note, kind)
+
+
+def _sources_rtd(iid, b, wanted):
+    node = f"{iid}.temp"
+    s = [Source(f"{iid}.lut_resolution", LUTNCO, iid, node, note=f"{2**b.datapath.lut_index_bits} linear segments",
+                kind="rtd"),
+         Source(f"{iid}.lut_coef", COEF, iid, node, note=f"LUT entries in {b.lut_format}", kind="rtd")]
+    if b.datapath.shift > 0:
+        s.append(_rounding(iid, "round", ROUND, "rtd", node, b.temp_format, b.rules))
+    return s
+
+
+def _sources_lag(iid, b, wanted):
+    node = f"{iid}.te"
+    return [Source(f"{iid}.alpha", COEF, iid, node, note=f"alpha = {b.m} x 2**-{b.s}", kind="lag"),
+            _rounding(iid, "round", ROUND, "lag", node, b.temp_format, b.rules, f"state step at {b.state_format}, output")]
+
+
+def _sources_piecewise(iid, b, wanted):
+    node = f"{iid}.y"
+    return [Source(f"{iid}.coef", COEF, iid, node, kind="piecewise"),
+            _rounding(iid, "round", ROUND, "piecewise", node, b.out_format, b.rules)]
+
+
+def _sources_divide(iid, b, wanted):
+    return [_rounding(iid, "trunc", DIVIDER, "sf_divide", f"{iid}.y", b.out_format, b.rules,
+                      "quotient toward zero, then the rescale")]
+
+
+def _sources_demod(iid, b, wanted):
+    nco = b.nco
+    s = [Source(f"{iid}.nco_phase", LUTNCO, iid, f"{iid}.mix", note=f"{nco.lut_bits}-bit address, "
+                f"{nco.interp_bits}-bit interpolation", kind="demod"),
+         Source(f"{iid}.nco_amp", LUTNCO, iid, f"{iid}.mix", note=f"LUT values in {nco.lut_format}", kind="demod")]
+    if b.datapath.mix_shift > 0:
+        s.append(_rounding(iid, "mix_round", ROUND, "demod", f"{iid}.mix", b.data_format, b.rules))
+    s += [Source(f"{iid}.lpf_coef", COEF, iid, f"{iid}.i", kind="demod"),
+          _rounding(iid, "lpf_round", ROUND, "demod", f"{iid}.i", b.data_format, b.lpf_i.rules)]
+    if set(wanted) & {"amp", "phase"}:
+        s.append(Source(f"{iid}.cordic", ROUND, iid, f"{iid}.amp", note="CORDIC on the stored I and Q words",
+                        kind="demod"))
+    return s
+
+
+def _sources_subtract(iid, b, wanted):
+    if b.datapath.shift > 0:
+        return [_rounding(iid, "round", ROUND, "bias_subtract", f"{iid}.y", b.out_format, b.rules)]
+    return []
+
+
+def _sources_iir(iid, b, wanted):
+    return [Source(f"{iid}.coef", COEF, iid, f"{iid}.y", kind="iir"),
+            _rounding(iid, "round", ROUND, "iir", f"{iid}.y", b.data_format, b.rules)]
+
+
+def _sources_freq2temp(iid, b, wanted):
+    return [Source(f"{iid}.coef", COEF, iid, f"{iid}.temp", note="f0 and 1/k", kind="freq2temp"),
+            _rounding(iid, "round", ROUND, "freq2temp", f"{iid}.temp", b.temp_format, b.rules)]
+
+
+@dataclass(frozen=True)
+class KindHybrid:
+    """One kind of block in the hybrid: ``sources(iid, block, wanted)`` lists its quantisation
+    sources (named ``<iid>.<what>``, iid = the instance with dots as underscores), ``run(iid, block,
+    inputs, sw, wanted)`` its outputs (real units) from real inputs, plus any internal node a source
+    is measured at (``mix``)."""
+
+    sources: object
+    run: object
+
+
+HYBRIDS: dict[str, KindHybrid] = {
+    "rtd": KindHybrid(_sources_rtd, lambda iid, b, ins, sw, w: {"temp": rtd_hybrid(b, ins["code"], sw, iid)}),
+    "lag": KindHybrid(_sources_lag, lambda iid, b, ins, sw, w: {"te": lag_hybrid(b, ins["temp"], sw, iid)}),
+    "piecewise": KindHybrid(_sources_piecewise,
+                            lambda iid, b, ins, sw, w: {"y": piecewise_hybrid(b, ins["temp"], iid, sw)}),
+    "sf_divide": KindHybrid(_sources_divide,
+                            lambda iid, b, ins, sw, w: {"y": divide_hybrid(b, ins["x"], ins["sf"], sw, f"{iid}.trunc")}),
+    "demod": KindHybrid(_sources_demod, lambda iid, b, ins, sw, w: demod_hybrid(b, ins["x"], sw, iid, w)),
+    "bias_subtract": KindHybrid(_sources_subtract, lambda iid, b, ins, sw, w: {
+        "y": subtract_hybrid(b, ins["x"], ins["bias"], f"{iid}.round", sw)}),
+    "iir": KindHybrid(_sources_iir, lambda iid, b, ins, sw, w: {"y": iir_hybrid(b, ins["x"], f"{iid}.coef",
+                                                                                  f"{iid}.round", sw)}),
+    "freq2temp": KindHybrid(_sources_freq2temp, lambda iid, b, ins, sw, w: {"temp": freq2temp_hybrid(b, ins["f"], sw,
+                                                                                                   iid)}),
+}
+
+
+def _hybrid_of(chain: Chain, inst: str) -> KindHybrid:
+    kind = chain.kinds[inst]
+    if kind not in HYBRIDS:
+        raise ValueError(f"{chain.name}: {inst} ({kind}) has no hybrid model in fxdsp.budget.hybrid.HYBRIDS")
+    return HYBRIDS[kind]
+
+
+# --------------------------------------------------------------------------------------------
+# chains: analog stimulus, sources, hybrid run -- composed from the netlist, any chain
+# --------------------------------------------------------------------------------------------
+def chain_analog(chain: Chain, rng: np.random.Generator, n: int) -> dict:
+    """The chain's stimulus before its ADCs, by chain input: ``analog`` (with the sensor's noise),
+    ``clean`` (without) and ``codes`` (what the bit-exact chain reads). A chain with a sensor: the
+    sensor's own draws (the same as ``nominal_stimulus``); without one, the stored words themselves
+    (there is no ADC to attribute)."""
+    if chain.sensor is not None:
+        out = chain.sensor.nominal_analog(rng, n)
+        return {"analog": chain.sensor.analog_inputs(out["analog"]), "clean": chain.sensor.analog_inputs(out["clean"]),
+                "codes": out["codes"]}
+    codes = chain.nominal_stimulus(rng, n)
+    real = {k: np.asarray(v, dtype=float) * chain.inputs[k].lsb for k, v in codes.items()}
+    return {"analog": real, "clean": real, "codes": codes}
+
+
+def chain_sources(chain: Chain) -> list[Source]:
+    """Every quantisation source of the chain: one ADC per chain input (when the chain has a sensor
+    to read analog values from), then each member's, in execution order."""
+    out = []
+    if chain.sensor is not None:
+        for name, dsts in chain.netlist.inputs.items():
+            fmt = chain.inputs[name]
+            out.append(Source(f"adc.{name}", ADC, dsts[0].instance.replace(".", "_"), name, fmt.lsb, "half_up",
+                              f"{name} ADC ({fmt})", "adc"))
+    wanted = chain.wanted()
+    for inst in chain.netlist.order:
+        out += _hybrid_of(chain, inst).sources(inst.replace(".", "_"), chain.members[inst], wanted[inst])
     return out
 
 
-def run_paper000(chain: Chain, analog: dict, sw: Switch) -> dict[str, np.ndarray]:
-    """Every node of the hybrid paper 000 chain: a = (Df - K0(t)) / K1(t)."""
-    s = chain.sensor
-    df = sw.round("adc.df", analog["df"], s.subtract.in_format, Rules("half_up", "saturate"))
-    temp = sw.round("adc.temp", analog["temp"], s.k0.temp_format, Rules("half_up", "saturate"))
-    k0 = piecewise_hybrid(s.k0, temp, s.k0.name.replace(".", "_"), sw)
-    k1 = piecewise_hybrid(s.k1, temp, s.k1.name.replace(".", "_"), sw)
-    diff = subtract_hybrid(s.subtract, df, k0, f"{s.subtract.name}.round", sw)
-    accel = divide_hybrid(s.divide, diff, k1, sw, f"{s.divide.name}.trunc")
-    (port, _), = chain.outputs.items()
-    return {"df": df, "temp": temp, "k0": k0, "k1": k1, "diff": diff, "accel": accel, port: accel}
+def run_chain(chain: Chain, analog: dict[str, np.ndarray], sw: Switch) -> dict[str, np.ndarray]:
+    """Every node of the hybrid chain: the chain inputs after their ADCs (by input name), each
+    member's outputs and internal nodes (``<iid>.<port>``) and the chain outputs (by name)."""
+    nodes: dict[str, np.ndarray] = {}
+    inputs = {}
+    for name in chain.netlist.inputs:
+        x = analog[name]
+        if chain.sensor is not None:
+            x = sw.round(f"adc.{name}", x, chain.inputs[name], ADC_RULES)
+        nodes[name] = inputs[name] = x
+
+    def step(inst, block, ins, wanted):
+        iid = inst.replace(".", "_")
+        outs = _hybrid_of(chain, inst).run(iid, block, ins, sw, wanted)
+        nodes.update({f"{iid}.{k}": v for k, v in outs.items()})
+        return outs
+
+    nodes.update(chain.evaluate(step, inputs))
+    return nodes
 
 
-# per chain: its analog stimulus (the chain's own ``nominal_analog``: the same draws as
-# ``nominal_stimulus``, before the ADCs), its sources and its hybrid run
-CHAIN_MODELS = {
-    "chain_paper002": (lambda chain, rng, n: chain.sensor.nominal_analog(rng, n), sources_paper002, run_paper002),
-    "chain_paper001": (lambda chain, rng, n: chain.sensor.nominal_analog(rng, n), sources_paper001, run_paper001),
-    "chain_paper000": (lambda chain, rng, n: chain.sensor.nominal_analog(rng, n), sources_paper000, run_paper000),
-}
+ADC_RULES = Rules("half_up", "saturate")   # an ADC: nearest code, clipped at full scale

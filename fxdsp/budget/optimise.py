@@ -214,7 +214,7 @@ class Evaluator:
         if s.overflows:  # saturating on the nominal stimulus: not an acceptable word length
             return math.inf
         err = max((s.rms if self.metric == "rms" else s.max_abs), self.mean_weight * abs(s.mean)) * s.scale
-        if self.chain == "chain_paper002":  # and the quasi-static chamber points (see static.py)
+        if design.chains[self.chain].sensor is not None:  # and the quasi-static chamber points (static.py)
             st = static_error(design, self.chain, self.port)
             if st["overflows"]:
                 return math.inf
@@ -298,8 +298,8 @@ def check_search(chain: str, margin: float | None = None, *, chains=None, search
     if max_mean is not None and target is not None and (max_mean.port != target.port or max_mean.chain != chain):
         raise ValueError(f"--max-mean: must be on {chain}.{target.port}, like --target, got "
                          f"{max_mean.chain}.{max_mean.port}")
-    if drive_band and chain != "chain_paper002":
-        raise ValueError(f"--drive-band: only chain_paper002 has a drive frequency, not {chain}")
+    if drive_band and chains is not None and "demod" not in chains[chain].kinds.values():
+        raise ValueError(f"--drive-band: {chain} has no demodulator, so no drive frequency")
 
 
 def optimise(config: Config, target: Target, metric: str = "rms", margin: float = 0.02, samples: int | None = None,
@@ -307,7 +307,7 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
              frequencies: tuple = (), prefetch=None) -> OptResult:
     """``cost_model``: "total_bits" (registers, coefficients and memory) or "register_bits" (memory free).
     ``max_mean``: a limit on |mean| (a bias) of the same port, met together with the target;
-    ``frequencies``: drive frequencies (chain_paper002) at which both must hold as well.
+    ``frequencies``: drive frequencies (of the chain's demodulator) at which both must hold as well.
     ``prefetch(evaluator, candidates, seed_offset)``: called with every batch of candidates the search
     is about to read (independent of each other) so that they can be evaluated in parallel into
     ``evaluator.cache`` (``fxdsp sweep wordlength``); the search reads the same values either way, so

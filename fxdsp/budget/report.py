@@ -88,7 +88,7 @@ def plot_allan(allan, path: Path) -> None:
         ax.loglog([1.0], [allan.adev_1s], "ks", label=f"tau 1 s ({how}): ARW {allan.arw:.3g} deg/sqrt(h)")
     ax.set_xlabel("tau (s)")
     ax.set_ylabel(f"Allan deviation ({allan.unit})")
-    ax.set_title(f"{allan.chain}.{allan.port}: fixed minus float error, {allan.temp_c:g} C, {allan.rate_fs:g} FS")
+    ax.set_title(f"{allan.chain}.{allan.port}: fixed minus float error, {allan.temp_c:g} C, input {allan.level:g}")
     ax.legend(fontsize=7)
     ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
@@ -109,7 +109,7 @@ def plot_drive_sweep(sweep, path: Path) -> None:
     ax.set_yscale("log", nonpositive="mask")  # an exact zero (no error at all) is left out
     ax.set_xlabel("drive frequency (Hz)")
     ax.set_ylabel(f"error ({sweep.unit})")
-    ax.set_title(f"chain_paper002.rate vs drive frequency ({sweep.temp_range_c[0]:g}..{sweep.temp_range_c[1]:g} C, "
+    ax.set_title(f"{sweep.chain}.{sweep.port} vs drive frequency ({sweep.temp_range_c[0]:g}..{sweep.temp_range_c[1]:g} C, "
                  f"a {sweep.a_ppm_per_c:g} ppm/C)")
     ax.legend(fontsize=7)
     ax.grid(True, which="both", alpha=0.3)

@@ -1,10 +1,11 @@
-"""Quasi-static stimulus of the paper 002 chain: chamber-like constant temperatures.
+"""Quasi-static stimulus of a chain with a sensor: chamber-like constant temperatures.
 
-The chain's nominal stimulus sweeps -20..60 C in 8192 samples (85 ms, ~1000 C/s), so a coarse
-temperature word's rounding error becomes a ~500 Hz sawtooth that the 50 Hz output low-pass averages
-away: a word-length search on that stimulus alone would accept a 2 C temperature LSB. Here the
-temperature is held at random chamber points (as in a real test, where it moves by 1e-7 C per
-sample) and the error is measured after the filters have settled.
+A nominal stimulus sweeps its temperature range in a few thousand samples (paper 002's: -20..60 C
+in 85 ms, ~1000 C/s), so a coarse temperature word's rounding error becomes a fast sawtooth that an
+output low-pass averages away: a word-length search on that stimulus alone would accept a 2 C
+temperature LSB. Here the temperature is held at random chamber points of the sensor's range (as in
+a real test, where it moves by 1e-7 C per sample), the physical input alternating between 0 and the
+sensor's chamber level, and the error is measured after the chain's filters have settled.
 """
 
 from __future__ import annotations
@@ -17,19 +18,22 @@ SETTLED = 1024   # samples at the end of each hold that are measured
 
 
 def static_stimulus(chain, seed: int) -> tuple[dict, np.ndarray]:
+    sensor = chain.sensor
+    if sensor is None:
+        raise ValueError(f"{chain.name}: the quasi-static stimulus needs the chain's sensor (its table's 'sensor')")
     rng = np.random.default_rng([seed, 77])
-    temps = rng.uniform(-20.0, 60.0, POINTS)
+    temps = rng.uniform(*sensor.CHAMBER_C, POINTS)
     t_c = np.repeat(temps, HOLD)
-    rate = np.repeat(np.where(np.arange(POINTS) % 2 == 0, 0.0, 0.2), HOLD)
-    stim = chain.sensor.sensor_inputs(t_c, rate, quad_fs=0.05, rng=rng, noise_fs=1e-3)
+    level = np.repeat(np.where(np.arange(POINTS) % 2 == 0, 0.0, sensor.CHAMBER_LEVEL), HOLD)
+    stim = sensor.held_inputs(t_c, level, rng)
     keep = (np.arange(t_c.size) % HOLD) >= HOLD - SETTLED
     return stim, keep
 
 
-def static_error(design, chain_name: str = "chain_paper002", port: str = "rate") -> dict:
+def static_error(design, chain_name: str, port: str) -> dict:
     """rms / max / mean of bit-exact minus float on the settled parts, in the port's stored units,
     plus the overflow count."""
-    chain = design.chains[chain_name]
+    chain = design.chain(chain_name, "the quasi-static error")
     stim, keep = static_stimulus(chain, design.seed)
     res = chain.run(**stim)
     ref = chain.run_float(**stim)

@@ -173,7 +173,7 @@ def _prepare_montecarlo(args) -> dict:
 
 
 def _prepare_wordlength(args) -> dict:
-    from ..budget.floor import drive_frequencies
+    from ..budget.floor import demod_f_hz, drive_frequencies
     from ..budget.optimise import check_search, config_header
     from ..budget.units import parse_target
     from ..chains import build
@@ -187,11 +187,11 @@ def _prepare_wordlength(args) -> dict:
     if "noise" in args.target or (args.max_mean and "noise" in args.max_mean):
         from ..budget.attribution import attribute
 
-        noise = {"rate": attribute(design, args.chain, "rate").sensor_noise_rms}
+        noise = {p: attribute(design, args.chain, p).sensor_noise_rms for p in design.chains[args.chain].outputs}
     target = parse_target(args.target, design, args.chain, noise)
     max_mean = parse_target(args.max_mean, design, args.chain, noise, "--max-mean") if args.max_mean else None
     check_search(args.chain, target=target, max_mean=max_mean)
-    freqs = tuple(drive_frequencies(float(cfg.data["demod"]["f_hz"]))) if args.drive_band else ()
+    freqs = tuple(drive_frequencies(demod_f_hz(cfg, design, args.chain))) if args.drive_band else ()
     settings = wl.settings(cfg.data, target, args.metric, args.margin, args.cost, max_mean, freqs)
 
     def go(sweep, stage, out):

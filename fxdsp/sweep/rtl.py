@@ -132,7 +132,7 @@ def draw(base: dict, seed: int):
                 table["overflow"] = str(rng.choice(OVERFLOWS))
         for table in (data["iir"], data["demod"]["lpf"]):
             table["order"] = int(rng.choice(ORDERS))
-        for chain in ("chain_paper002", "chain_paper001"):
+        for chain in KNOBS:   # every chain with word-length knobs
             defaults = _field_defaults(base, chain)
             for knob in KNOBS[chain]:
                 if rng.random() < KNOB_PROBABILITY:
