@@ -53,6 +53,7 @@ module sf_divide #(
 
     reg              busy;
     reg [CW-1:0]     cnt;       // quotient bits still to compute
+    reg              near_end;  // cnt <= UNROLL: this cycle's steps are the last (registered decode)
     reg [NW-1:0]     nq;        // numerator bits shifted out at the top, quotient bits in at the bottom
     reg [DW:0]       rem;       // the partial remainder, signed, in [-|d|, |d|) (non-restoring)
     reg [DW-1:0]     dmag;
@@ -98,13 +99,20 @@ module sf_divide #(
     // ---- sign, rounding and fit of the finished quotient ----
     wire [OUT_W-1:0] full_pos = {1'b0, {(OUT_W-1){1'b1}}};
     wire [OUT_W-1:0] full_neg = {1'b1, {(OUT_W-1){1'b0}}};
-    wire             last = busy & (c_v == {CW{1'b0}});   // the last division step is this cycle
+    // the last division step is this cycle: cnt <= UNROLL, decoded a cycle early from the count being
+    // loaded (the count after this cycle's steps is <= UNROLL when cnt <= 2 UNROLL), so the decode
+    // feeds no control path from the count's decrement chain (that path set Fmax at 39.9 MHz)
+    localparam [31:0] NW32 = NW;
+    localparam [31:0] U1   = UNROLL;
+    localparam [31:0] U2   = 2 * UNROLL;
+    wire [31:0]      cnt32 = {{(32-CW){1'b0}}, cnt};
+    wire             last = busy & near_end;
     // the result of a division by zero (its own value, no rounding): full scale with the sign of x
     wire [OUT_W-1:0] y_zero = xzero ? {OUT_W{1'b0}} : (xneg ? full_neg : full_pos);
 
     always @(posedge clk) begin
         if (rst) begin
-            busy <= 1'b0; cnt <= {CW{1'b0}};
+            busy <= 1'b0; cnt <= {CW{1'b0}}; near_end <= 1'b0;
             nq <= {NW{1'b0}}; rem <= {(DW+1){1'b0}}; dmag <= {DW{1'b0}};
             neg <= 1'b0; xneg <= 1'b0; xzero <= 1'b0; dzero <= 1'b0;
         end else begin
@@ -112,6 +120,7 @@ module sf_divide #(
                 if (in_valid && in_ready) begin
                     busy  <= 1'b1;
                     cnt   <= NW[CW-1:0];
+                    near_end <= (NW32 <= U1);
                     nq    <= nabs[NW-1:0];
                     rem   <= {(DW+1){1'b0}};
                     dmag  <= dabs[DW-1:0];
@@ -124,6 +133,7 @@ module sf_divide #(
                 rem <= r_v;
                 nq  <= nq_v;
                 cnt <= c_v;
+                near_end <= ~last & (cnt32 <= U2);
                 if (last) busy <= 1'b0;
             end
         end
