@@ -76,11 +76,11 @@ def sf_divide_cycles_per_sample(p: dict, unroll: int = 1) -> int:
 SERIAL_CYCLES = {"iir": iir_cycles_per_sample, "rtd": rtd_cycles_per_sample, "lag": lag_cycles_per_sample,
                  "piecewise": piecewise_cycles_per_sample, "freq2temp": freq2temp_cycles_per_sample,
                  "demod": demod_cycles_per_sample, "sf_divide": sf_divide_cycles_per_sample,
-                 "bias_subtract": lambda _p: 1}   # one registered stage
+                 "bias_subtract": lambda _p: 2}   # two registered stages (difference, then round and fit)
 
 # per module: the one-sample-per-clock variant's latency (ARCH = 0, each header's "Latency"), edges
 # from the accepting edge to out_valid; the divider's is its steps + 1
-PER_CLOCK_LATENCY = {"iir": 1, "rtd": 1, "lag": 1, "piecewise": 1, "freq2temp": 1, "demod": 2, "bias_subtract": 1}
+PER_CLOCK_LATENCY = {"iir": 1, "rtd": 1, "lag": 1, "piecewise": 1, "freq2temp": 1, "demod": 2, "bias_subtract": 2}
 
 
 def mac_operands(module: str, p: dict) -> tuple[int, int]:

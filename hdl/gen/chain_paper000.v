@@ -9,10 +9,10 @@
 // ARCH = 0: every member in its one-sample-per-clock variant. ARCH = 1: its serial variant, every
 // member with a multiplier bundle on ONE shared fx_mac_serial (one SB_MAC16), one at a time;
 // shared engines (ARCH = 1): none.
-// ARCH = 1 schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after the chain's accepting edge, and its cycles): piecewise.k0 at 1 for 58, piecewise.k1 at 61 for 58, bias_subtract000 at 61 for 1, sf_divide000 at 121 for 59;
+// ARCH = 1 schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after the chain's accepting edge, and its cycles): piecewise.k0 at 1 for 58, piecewise.k1 at 61 for 58, bias_subtract000 at 61 for 2, sf_divide000 at 121 for 59;
 //   183 cycles per sample at this config, against 416 at 40 MHz and 96000 S/s.
-// ARCH = 0 schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after the chain's accepting edge, and its cycles): piecewise.k0 at 1 for 1, piecewise.k1 at 1 for 1, bias_subtract000 at 4 for 1, sf_divide000 at 7 for 54;
-//   64 cycles per sample at this config, against 416 at 40 MHz and 96000 S/s.
+// ARCH = 0 schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after the chain's accepting edge, and its cycles): piecewise.k0 at 1 for 1, piecewise.k1 at 1 for 1, bias_subtract000 at 4 for 2, sf_divide000 at 8 for 54;
+//   65 cycles per sample at this config, against 416 at 40 MHz and 96000 S/s.
 `default_nettype none
 
 module chain_paper000 #(

@@ -9,10 +9,10 @@
 // ARCH = 0: every member in its one-sample-per-clock variant. ARCH = 1: its serial variant, every
 // member with a multiplier bundle on ONE shared fx_mac_serial (one SB_MAC16), one at a time;
 // shared engines (ARCH = 1): none.
-// ARCH = 1 schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after the chain's accepting edge, and its cycles): freq2temp at 1 for 13, piecewise.bias001 at 16 for 37, bias_subtract001 at 55 for 1;
-//   59 cycles per sample at this config, against 416 at 40 MHz and 96000 S/s.
-// ARCH = 0 schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after the chain's accepting edge, and its cycles): freq2temp at 1 for 1, piecewise.bias001 at 4 for 1, bias_subtract001 at 7 for 1;
-//   11 cycles per sample at this config, against 416 at 40 MHz and 96000 S/s.
+// ARCH = 1 schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after the chain's accepting edge, and its cycles): freq2temp at 1 for 13, piecewise.bias001 at 16 for 37, bias_subtract001 at 55 for 2;
+//   60 cycles per sample at this config, against 416 at 40 MHz and 96000 S/s.
+// ARCH = 0 schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after the chain's accepting edge, and its cycles): freq2temp at 1 for 1, piecewise.bias001 at 4 for 1, bias_subtract001 at 7 for 2;
+//   12 cycles per sample at this config, against 416 at 40 MHz and 96000 S/s.
 `default_nettype none
 
 module chain_paper001 #(

@@ -9,10 +9,10 @@
 // ARCH = 0: every member in its one-sample-per-clock variant. ARCH = 1: its serial variant, every
 // member with a multiplier bundle on ONE shared fx_mac_serial (one SB_MAC16), one at a time;
 // shared engines (ARCH = 1): piecewise.bias on piecewise.sf's engine (second coefficient set); iir on demod's engine (third filter channel).
-// ARCH = 1 schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after the chain's accepting edge, and its cycles): rtd at 1 for 12, piecewise.sf at 15 for 22, sf_divide at 39 for 54, demod at 95 for 206, piecewise.bias at 37 for 22, bias_subtract at 303 for 1, iir at 306 for 53;
-//   362 cycles per sample at this config, against 416 at 40 MHz and 96000 S/s.
-// ARCH = 0 schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after the chain's accepting edge, and its cycles): rtd at 1 for 1, piecewise.sf at 4 for 1, sf_divide at 7 for 49, demod at 58 for 2, piecewise.bias at 4 for 1, bias_subtract at 62 for 1, iir at 65 for 1;
-//   69 cycles per sample at this config, against 416 at 40 MHz and 96000 S/s.
+// ARCH = 1 schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after the chain's accepting edge, and its cycles): rtd at 1 for 12, piecewise.sf at 15 for 22, sf_divide at 39 for 54, demod at 95 for 206, piecewise.bias at 37 for 22, bias_subtract at 303 for 2, iir at 307 for 53;
+//   363 cycles per sample at this config, against 416 at 40 MHz and 96000 S/s.
+// ARCH = 0 schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after the chain's accepting edge, and its cycles): rtd at 1 for 1, piecewise.sf at 4 for 1, sf_divide at 7 for 49, demod at 58 for 2, piecewise.bias at 4 for 1, bias_subtract at 62 for 2, iir at 66 for 1;
+//   70 cycles per sample at this config, against 416 at 40 MHz and 96000 S/s.
 `default_nettype none
 
 module chain_paper002 #(

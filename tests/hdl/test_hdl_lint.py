@@ -179,10 +179,10 @@ INJECTIONS = {
          "    fx_convert_reg #(.IN_W(PW - SHIFT + 1), .SHIFT(0),"),
         (".in_valid(in_valid), .x(p),", ".in_valid(in_valid), .x(pr),")], "power-of-two"),
     "half_constant_concat": ("bias_subtract.v", [
-        ("    fx_convert_reg #(", "    wire signed [DW-1:0] dh = d + {{(DW-SHIFT){1'b0}}, 1'b1, {(SHIFT-1){1'b0}}};\n"
+        ("    fx_convert_reg #(", "    wire signed [DW-1:0] dh = d_q + {{(DW-SHIFT){1'b0}}, 1'b1, {(SHIFT-1){1'b0}}};\n"
                                "    fx_convert_reg #("),
-        (".x(d),", ".x(dh),")], "constant"),
-    "half_literal": ("bias_subtract.v", [(".x(d),", ".x(d + 24'h000800),")], "constant"),
+        (".x(d_q),", ".x(dh),")], "constant"),
+    "half_literal": ("bias_subtract.v", [(".x(d_q),", ".x(d_q + 24'h000800),")], "constant"),
     "half_even_odd_bit": ("rtd.v", [("exact = (be <<< S) + prod;",
                                      "exact = (be <<< S) + prod + {{(EW-1){1'b0}}, prod[SHIFT]};")], "data-bit"),
     "toward_zero_mask": ("lag.v", [("p = d * m;", "p = d * m + (d[DW-1] ? {ALPHA_S{1'b1}} : {PW{1'b0}});")],
@@ -193,7 +193,7 @@ INJECTIONS = {
                                          "fx_convert_reg #(.IN_W(PW - SHIFT), .SHIFT(0)"),
                                         (".in_valid(in_valid), .x(p),", ".in_valid(in_valid), .x(p[PW-1:SHIFT]),")],
                         "select"),
-    "floor_by_divide": ("bias_subtract.v", [(".x(d),", ".x(d / 4),")], "divide"),
+    "floor_by_divide": ("bias_subtract.v", [(".x(d_q),", ".x(d_q / 4),")], "divide"),
     "state_truncated": ("lag.v", [("st     <= st_next;", "st     <= (st_next >>> GUARD) <<< GUARD;")], "right-shift"),
     "one_wire_shifted": ("iir.v", [("wire signed [AW-1:0] acc = ",
                                     "wire signed [AW-1:0] one = {{(AW-1){1'b0}}, 1'b1};\n"

@@ -34,7 +34,7 @@ def _chain_paper001_cycles_per_sample(d) -> int:
     per member beyond its own cycles); out_valid a cycle after the last capture and the next sample
     taken as it leaves (+2): freq2temp, then piecewise_bias001, then the subtraction."""
     return (freq2temp_cycles_per_sample(hp.instance(d, "freq2temp").params) + 2
-            + piecewise_cycles_per_sample(hp.instance(d, "piecewise_bias001").params) + 2 + (1 + 2) + 2)
+            + piecewise_cycles_per_sample(hp.instance(d, "piecewise_bias001").params) + 2 + (2 + 2) + 2)
 
 
 def _chain_paper002_cycles_per_sample(d) -> int:
@@ -46,7 +46,7 @@ def _chain_paper002_cycles_per_sample(d) -> int:
     divider = sf_divide_cycles_per_sample(par("sf_divide"))
     bias_pass = piecewise_cycles_per_sample(par("piecewise_bias"))
     return (rtd_cycles_per_sample(par("rtd")) + 2 + piecewise_cycles_per_sample(par("piecewise_sf"))
-            + max(divider + 2, bias_pass) + 2 + demod_cycles_per_sample(par("demod")) + 2 + (1 + 2)
+            + max(divider + 2, bias_pass) + 2 + demod_cycles_per_sample(par("demod")) + 2 + (2 + 2)
             + iir_cycles_per_sample(par("iir")) + 2 + 2)
 
 
