@@ -101,3 +101,23 @@ def test_a_source_switched_on_moves_its_output(design):
              for s in chain_sources(chain)}
     still = [n for n, d in moved.items() if d == 0.0]
     assert not still, f"sources that change nothing at their own node: {still}"
+
+
+def test_every_chain_has_the_word_length_knobs_of_its_members(design):
+    """The search's knobs come from the members' kinds: every chain of the config (the user's too)
+    has them, each names a field its config holds, and a knob moves its field."""
+    from fxdsp.budget.optimise import _field_defaults, _get, knob_value, knobs_of, set_knob
+
+    data = design.config.data
+    for name, chain in design.chains.items():
+        knobs = knobs_of(data, name)
+        assert knobs, f"{name}: no knobs"
+        tables = {f[0] for k in knobs for f in k.fields}
+        members = set(chain.netlist.instances)
+        assert {t.split(".lpf")[0] for t in tables} <= members, f"{name}: a knob outside the chain"
+        defaults = _field_defaults(data, name)
+        for k in knobs:
+            edited = copy.deepcopy(data)
+            set_knob(edited, k, knob_value(data, k) + 1, defaults)
+            assert knob_value(edited, k) == knob_value(data, k) + 1
+            assert all(_get(edited, f) != _get(data, f) for f in k.fields)

@@ -109,3 +109,17 @@ def test_stimuli_cover_the_corners():
     for name in ("iir", "bias_subtract", "sf_divide"):
         _, _, entry = load(VECTORS, name)
         assert sum(entry["overflows"].values()) > 0, f"{name}: the vectors must exercise saturation"
+
+
+def test_a_chains_corner_stream_carries_its_members_corners():
+    """A chain input takes the corner cases of the member input it drives (the rounding ties of the
+    RTD, the divider's full-scale numerators), so a user's chain is tested on its blocks' corners."""
+    from fxdsp.hdl.stimuli import _block_corners, corners
+
+    d = build()
+    for name, chain in d.chains.items():
+        stim = corners(d, name, np.random.default_rng(3))
+        for inp, dsts in chain.netlist.inputs.items():
+            own = _block_corners(d, dsts[0].instance.replace(".", "_")).get(dsts[0].port)
+            if own is not None and len(own):
+                assert set(own.tolist()) <= set(stim[inp].tolist()), f"{name}.{inp}: a member corner missing"

@@ -297,6 +297,15 @@ def _run(args, stage) -> int:
     return status
 
 
+def _figures(md: list, out: Path, items, stem: str, plot, text) -> None:
+    """Per chain output (``items`` with ``chain`` and ``port``): its text block and its plot."""
+    for item in items:
+        name = f"{stem}_{item.chain}.{item.port}.png"
+        plot(item, out / name)
+        md.append("```\n" + text(item) + "\n```\n")
+        md.append(f"![{stem.replace('_', ' ')}]({name})\n")
+
+
 def _report(out: Path, design, cfg, rows, attrs, statics, target, result, args, floors, allans, sweeps) -> None:
     from . import report as rp
 
@@ -338,21 +347,13 @@ def _report(out: Path, design, cfg, rows, attrs, statics, target, result, args, 
     md.append("## 4. Allan deviation\n\nOverlapping Allan deviation of the bit-exact minus float error (both fed "
               "the same ADC codes) at constant temperature and input, for every output of a chain with a "
               "demodulator.\n")
-    for al in allans:
-        name = f"allan_{al.chain}.{al.port}.png"
-        rp.plot_allan(al, out / name)
-        md.append("```\n" + format_allan(al) + "\n```\n")
-        md.append(f"![allan]({name})\n")
+    _figures(md, out, allans, "allan", rp.plot_allan, format_allan)
     md.append("## 5. Drive-frequency sweep\n\nThe design rebuilt with the demodulator's f_hz at each drive "
               "frequency the temperature range produces; both the carrier and the NCO move.\n")
-    for sw in sweeps:
-        name = f"drive_sweep_{sw.chain}.{sw.port}.png"
-        rp.plot_drive_sweep(sw, out / name)
-        md.append("```\n" + format_sweep(sw) + "\n```\n")
-        md.append(f"![drive sweep]({name})\n")
+    _figures(md, out, sweeps, "drive_sweep", rp.plot_drive_sweep, format_sweep)
     chain = target.chain if target else args.chain
     port = target.port if target else (list(design.chains[chain].outputs)[-1] if chain else None)
-    if chain in opt.KNOBS:
+    if chain and opt.knobs_of(cfg.data, chain):
         sweeps_wl = opt.sweep(cfg, chain, port, progress=tqdm)
         unit = port_units(design).get((chain, port), ("", 1.0))[0]
         name = f"wordlength_{chain}.{port}.png"
@@ -360,7 +361,7 @@ def _report(out: Path, design, cfg, rows, attrs, statics, target, result, args, 
                        f"{chain}.{port}: error vs word length, one knob at a time (others at default)")
         md.append(f"## 6. Word length\n\n![sweep]({name})\n")
     else:
-        md.append(f"## 6. Word length\n\n{chain}: no word-length knobs (fxdsp.budget.optimise.KNOBS).\n")
+        md.append(f"## 6. Word length\n\n{chain}: no word-length knobs (fxdsp.budget.optimise.KIND_KNOBS).\n")
     if result:
         md.append(f"Target {args.target} ({result.target.value:.4g} {result.target.unit}, {result.metric}): error "
                   f"{result.default_error:.4g} -> {result.error:.4g}; total bits {result.default_cost['total_bits']} -> "

@@ -15,10 +15,11 @@ Algorithm ("min + b", Cantin/Sung style, no grid):
 4. greedy removal: try one bit less on every knob, most costly first, keep any step that still meets
    the target, until no step is accepted.
 
-The error measured is exactly what ``fxdsp budget`` prints for the chain (errors_table's stimulus and
-seed) and, for paper 002, the larger of that and the quasi-static chamber-point error (see
-:mod:`fxdsp.budget.static`, also printed by ``fxdsp budget``), so the written config meets the
-target when re-run. The cost proxy counts bits: registers
+The knobs come from the chain's members by their kind (:data:`KIND_KNOBS`), so any chain of the
+config can be searched. The error measured is exactly what ``fxdsp budget`` prints for the chain
+(errors_table's stimulus and seed) and, for a chain with a sensor, the larger of that and the
+quasi-static chamber-point error (see :mod:`fxdsp.budget.static`, also printed by ``fxdsp budget``),
+so the written config meets the target when re-run. The cost proxy counts bits: registers
 and coefficients (word length times instances) and memory (LUT words times word length).
 """
 
@@ -46,7 +47,7 @@ class Knob:
     kind: str = "fmt"              # "fmt" (word length) | "int"
     lo: int | None = None
     hi: int | None = None
-    instances: str | int = 1       # multiplicity of the cost: an int or the name of a rule in _instances
+    instances: tuple | int = 1     # multiplicity of the cost: an int or (rule of _instances, table)
 
 
 def _get(data: dict, f: tuple):
@@ -67,44 +68,100 @@ def _set(data: dict, f: tuple, value) -> None:
         node[f[1]] = value
 
 
-KNOBS = {
-    "chain_paper002": [
-        Knob("rtd.temp_format", (("rtd", "temp_format"),)),
-        Knob("rtd.lut_format", (("rtd", "lut_format"),), instances="rtd_lut"),
-        Knob("rtd.lut_index_bits", (("rtd", "lut_index_bits"),), "int", 2, 10, instances="rtd_index"),
-        Knob("piecewise.sf.c0", (("piecewise.sf", "coef_format", 0),), instances="segments_sf"),
-        Knob("piecewise.sf.c1", (("piecewise.sf", "coef_format", 1),), instances="segments_sf"),
-        Knob("piecewise.sf.acc_format", (("piecewise.sf", "acc_format"),)),
-        Knob("piecewise.sf.out_format", (("piecewise.sf", "out_format"),)),
-        Knob("sf_divide.guard_bits", (("sf_divide", "guard_bits"),), "int", 0, 16),
-        Knob("sf_divide.out_format", (("sf_divide", "out_format"),)),
-        Knob("demod.phase_bits", (("demod", "phase_bits"),), "int", 8, 48),
-        Knob("demod.lut_bits", (("demod", "lut_bits"),), "int", 6, 16, instances="nco_index"),
-        Knob("demod.interp_bits", (("demod", "interp_bits"),), "int", 0, 20),
-        Knob("demod.lut_format", (("demod", "lut_format"),), instances="nco_lut"),
-        Knob("demod.data_format", (("demod", "data_format"),), instances=2),  # the low-passes follow (wired)
-        Knob("demod.lpf.num_format", (("demod.lpf", "num_format"),), instances=6),
-        Knob("demod.lpf.den_format", (("demod.lpf", "den_format"),), instances=4),
-        Knob("piecewise.bias.c0", (("piecewise.bias", "coef_format", 0),), instances="segments_bias"),
-        Knob("piecewise.bias.c1", (("piecewise.bias", "coef_format", 1),), instances="segments_bias"),
-        Knob("piecewise.bias.acc_format", (("piecewise.bias", "acc_format"),)),
-        Knob("piecewise.bias.out_format", (("piecewise.bias", "out_format"),)),
-        Knob("iir.data_format", (("bias_subtract", "out_format"),)),  # the filter's wire: it follows
-        Knob("iir.num_format", (("iir", "num_format"),), instances=3),
-        Knob("iir.den_format", (("iir", "den_format"),), instances=2),
-    ],
-    "chain_paper001": [
-        Knob("freq2temp.freq_format", (("freq2temp", "freq_format"),)),
-        Knob("freq2temp.kinv_format", (("freq2temp", "kinv_format"),)),
-        Knob("freq2temp.temp_format", (("freq2temp", "temp_format"),)),
-        Knob("piecewise.bias001.c0", (("piecewise.bias001", "coef_format", 0),)),
-        Knob("piecewise.bias001.c1", (("piecewise.bias001", "coef_format", 1),)),
-        Knob("piecewise.bias001.c2", (("piecewise.bias001", "coef_format", 2),)),
-        Knob("piecewise.bias001.acc_format", (("piecewise.bias001", "acc_format"),)),
-        Knob("piecewise.bias001.out_format", (("piecewise.bias001", "out_format"),)),
-        Knob("bias_subtract001.out_format", (("bias_subtract001", "out_format"),)),
-    ],
-}
+def _sections(order) -> int:
+    return -(-int(order) // 2)
+
+
+def _knobs_rtd(t: str, table: dict) -> list[Knob]:
+    return [Knob(f"{t}.temp_format", ((t, "temp_format"),)),
+            Knob(f"{t}.lut_format", ((t, "lut_format"),), instances=("rtd_lut", t)),
+            Knob(f"{t}.lut_index_bits", ((t, "lut_index_bits"),), "int", 2, 10, instances=("index", t))]
+
+
+def _knobs_piecewise(t: str, table: dict) -> list[Knob]:
+    order = len(table["coef_format"]) if isinstance(table.get("coef_format"), list) else 0
+    return [*(Knob(f"{t}.c{k}", ((t, "coef_format", k),), instances=("segments", t)) for k in range(order)),
+            Knob(f"{t}.acc_format", ((t, "acc_format"),)), Knob(f"{t}.out_format", ((t, "out_format"),))]
+
+
+def _knobs_divide(t: str, table: dict) -> list[Knob]:
+    return [Knob(f"{t}.guard_bits", ((t, "guard_bits"),), "int", 0, 16), Knob(f"{t}.out_format", ((t, "out_format"),))]
+
+
+def _knobs_demod(t: str, table: dict) -> list[Knob]:
+    n = _sections(table.get("lpf", {}).get("order", 2))   # two channels of n biquads: 3 n and 2 n coefficients each
+    return [Knob(f"{t}.phase_bits", ((t, "phase_bits"),), "int", 8, 48),
+            Knob(f"{t}.lut_bits", ((t, "lut_bits"),), "int", 6, 16, instances=("index", t)),
+            Knob(f"{t}.interp_bits", ((t, "interp_bits"),), "int", 0, 20),
+            Knob(f"{t}.lut_format", ((t, "lut_format"),), instances=("nco_lut", t)),
+            Knob(f"{t}.data_format", ((t, "data_format"),), instances=2),   # the low-passes follow (wired)
+            Knob(f"{t}.lpf.num_format", ((f"{t}.lpf", "num_format"),), instances=6 * n),
+            Knob(f"{t}.lpf.den_format", ((f"{t}.lpf", "den_format"),), instances=4 * n)]
+
+
+def _knobs_iir(t: str, table: dict) -> list[Knob]:
+    n = _sections(table.get("order", 2))
+    return [Knob(f"{t}.num_format", ((t, "num_format"),), instances=3 * n),
+            Knob(f"{t}.den_format", ((t, "den_format"),), instances=2 * n)]
+
+
+def _knobs_freq2temp(t: str, table: dict) -> list[Knob]:
+    # the frequency word is the drive loop's counter, a design choice (not a sensor ADC)
+    return [Knob(f"{t}.{k}", ((t, k),)) for k in ("freq_format", "kinv_format", "temp_format")]
+
+
+def _knobs_lag(t: str, table: dict) -> list[Knob]:
+    return [Knob(f"{t}.alpha_bits", ((t, "alpha_bits"),), "int", 4, 32),
+            Knob(f"{t}.state_guard_bits", ((t, "state_guard_bits"),), "int", 0, 32)]
+
+
+def _knobs_subtract(t: str, table: dict) -> list[Knob]:
+    return [Knob(f"{t}.out_format", ((t, "out_format"),))]
+
+
+# every kind's word-length knobs: its own formats and widths; an input format is the wire's (the
+# driver's output knob) or a chain input's (the sensor's ADC), never a knob of its own
+KIND_KNOBS = {"rtd": _knobs_rtd, "piecewise": _knobs_piecewise, "sf_divide": _knobs_divide, "demod": _knobs_demod,
+              "iir": _knobs_iir, "freq2temp": _knobs_freq2temp, "lag": _knobs_lag, "bias_subtract": _knobs_subtract}
+
+
+def _chain_table(data: dict, chain: str) -> dict:
+    name = chain.removeprefix("chain_")
+    table = data.get("chain", {}).get(name)
+    if not isinstance(table, dict):
+        raise ValueError(f"--chain: no [chain.{name}] table in the config")
+    return table
+
+
+def chain_members(data: dict, chain: str) -> list[tuple[str, str]]:
+    """(table, kind) of each instance of the chain's table, in its order."""
+    from ..blocks.kinds import kind_of
+
+    return [(t, kind_of(t).name) for t in _chain_table(data, chain).get("instances", [])]
+
+
+def knobs_of(data: dict, chain: str) -> list[Knob]:
+    """The chain's word-length knobs, from its members' kinds (``KIND_KNOBS``), in the order of its
+    instances."""
+    out = []
+    for table, kind in chain_members(data, chain):
+        out += KIND_KNOBS.get(kind, lambda *_: [])(table, _get_table(data, table))
+    return out
+
+
+def _get_table(data: dict, table: str) -> dict:
+    node = data
+    for part in table.split("."):
+        node = node[part]
+    return node
+
+
+def demod_of(data: dict, chain: str) -> str:
+    """The chain's demodulator table (whose f_hz a drive sweep moves)."""
+    found = [t for t, kind in chain_members(data, chain) if kind == "demod"]
+    if len(found) != 1:
+        raise ValueError(f"--drive-band: {chain} has {len(found)} demodulators, the drive sweep needs one")
+    return found[0]
 
 
 def _instances(knob: Knob, data: dict) -> tuple[int, bool]:
@@ -112,20 +169,20 @@ def _instances(knob: Knob, data: dict) -> tuple[int, bool]:
     rule = knob.instances
     if isinstance(rule, int):
         return rule, False
-    if rule == "rtd_lut":
-        return 2 ** int(_get(data, ("rtd", "lut_index_bits"))) + 1, True
-    if rule == "nco_lut":  # one quarter-wave sine table
-        return 2 ** (int(_get(data, ("demod", "lut_bits"))) - 2), True
-    if rule.startswith("segments_"):
-        sec = "piecewise." + rule.split("_", 1)[1]
-        return len(_get(data, (sec, "coefficients"))), True
+    kind, table = rule
+    if kind == "rtd_lut":
+        return 2 ** int(_get(data, (table, "lut_index_bits"))) + 1, True
+    if kind == "nco_lut":  # one quarter-wave sine table
+        return 2 ** (int(_get(data, (table, "lut_bits"))) - 2), True
+    if kind == "segments":
+        return len(_get(data, (table, "coefficients"))), True
     return 0, False  # index widths: their cost is carried by the table they address
 
 
 def cost(data: dict, chain: str) -> dict[str, int]:
     """Bits of the chain's knobs: registers/coefficients, memory (LUT and coefficient ROM words)."""
     reg = mem = 0
-    for knob in KNOBS[chain]:
+    for knob in knobs_of(data, chain):
         v = _get(data, knob.fields[0])
         wl = Format.parse(v).wl if knob.kind == "fmt" else int(v)
         n, is_mem = _instances(knob, data)
@@ -154,7 +211,7 @@ def set_knob(data: dict, knob: Knob, value: int, defaults: dict) -> None:
 
 
 def _field_defaults(data: dict, chain: str) -> dict:
-    return {f: _get(data, f) for k in KNOBS[chain] for f in k.fields}
+    return {f: _get(data, f) for k in knobs_of(data, chain) for f in k.fields}
 
 
 @dataclass
@@ -165,16 +222,18 @@ class Evaluator:
     metric: str = "rms"
     samples: int | None = None
     mean_weight: float = 0.0        # |mean| x this joins the error: target / the bias limit (0: no limit)
-    frequencies: tuple = ()         # further demod.f_hz at which the same error is measured (the worst counts)
+    frequencies: tuple = ()         # further f_hz of the chain's demodulator at which the same error is measured
     evaluations: int = 0
     cache: dict = field(default_factory=dict)
 
     def __post_init__(self):
+        self.knobs = knobs_of(self.base, self.chain)
         self.defaults = _field_defaults(self.base, self.chain)
+        self.demod = demod_of(self.base, self.chain) if self.frequencies else None
 
     def data(self, values: dict[str, int]) -> dict:
         d = copy.deepcopy(self.base)
-        for knob in KNOBS[self.chain]:
+        for knob in self.knobs:
             if knob.name in values:
                 set_knob(d, knob, values[knob.name], self.defaults)
         return d
@@ -196,7 +255,7 @@ class Evaluator:
         err = 0.0
         for f_hz in (None, *self.frequencies):
             if f_hz is not None:
-                data["demod"]["f_hz"] = float(f_hz)
+                _get_table(data, self.demod)["f_hz"] = float(f_hz)
             try:
                 design = build(Config(data, source="<optimise>"))
             except (ValueError, TypeError, AssertionError):
@@ -293,8 +352,6 @@ def check_search(chain: str, margin: float | None = None, *, chains=None, search
         return
     if cost_model not in ("total_bits", "register_bits"):
         raise ValueError(f"--cost: unknown cost model {cost_model!r}; expected total_bits or register_bits")
-    if chain not in KNOBS:
-        raise ValueError(f"--chain: no word-length knobs for {chain}")
     if max_mean is not None and target is not None and (max_mean.port != target.port or max_mean.chain != chain):
         raise ValueError(f"--max-mean: must be on {chain}.{target.port}, like --target, got "
                          f"{max_mean.chain}.{max_mean.port}")
@@ -316,7 +373,9 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
     check_search(chain, cost_model=cost_model, target=target, max_mean=max_mean, drive_band=bool(frequencies))
     weight = target.value / max_mean.value if max_mean is not None else 0.0
     ev = Evaluator(copy.deepcopy(config.data), chain, target.port, metric, samples, weight, tuple(frequencies))
-    knobs = KNOBS[chain]
+    knobs = ev.knobs
+    if not knobs:
+        raise ValueError(f"--chain: no word-length knobs for {chain}")
     goal = target.value * (1.0 - margin)
     default = {k.name: knob_value(ev.base, k) for k in knobs}
 
@@ -444,8 +503,8 @@ def sweep(config: Config, chain: str, port: str, metric: str = "rms", span: int 
           knobs: list[str] | None = None, progress=None) -> dict[str, list[tuple[int, float]]]:
     """Error vs word length, one knob at a time around the default (others at default)."""
     ev = Evaluator(copy.deepcopy(config.data), chain, port, metric)
-    default = {k.name: knob_value(ev.base, k) for k in KNOBS[chain]}
-    chosen = [k for k in KNOBS[chain] if knobs is None or k.name in knobs]
+    default = {k.name: knob_value(ev.base, k) for k in ev.knobs}
+    chosen = [k for k in ev.knobs if knobs is None or k.name in knobs]
     out = {}
     it = progress(chosen, desc="error vs word length", unit="knob") if progress else chosen
     for k in it:

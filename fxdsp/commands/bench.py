@@ -1,9 +1,9 @@
 """`fxdsp bench [--config F] [--json F]`: throughput of the bit-exact models, measured in one run
 against the same biquad written with fxpmath and with apytypes.
 
-* fxdsp biquad: the ``[iir]`` filter of the config (one biquad by default), int64 in/out, on
+* fxdsp biquad: the config's first iir block (``[iir]``, one biquad, by default), int64 in/out, on
   ``--samples`` samples (>= 200k), best of ``--repeat`` runs after a warm-up (numba compiled).
-* fxdsp chain: the whole paper 002 chain on the same number of samples.
+* fxdsp chains: every chain of the config, whole, on its nominal stimulus of as many samples.
 * fxpmath and apytypes: the *same* DF-I algorithm (exact products and sums, one rounding and one
   fit per section output, error feedback) written with each library's scalar types, one sample
   at a time (a recursive filter cannot be vectorised), timed on a prefix and extrapolated; the
@@ -18,6 +18,7 @@ import time
 import numpy as np
 
 from ..chains import build
+from ..errors import InputError
 from ..fixed import Format
 from ..outputs import IN, OUT_FILE, json_text, staged
 
@@ -135,8 +136,11 @@ def run(args) -> int:
         if not 1 <= value <= args.samples:
             raise ValueError(f"{option}: must be within 1..--samples ({args.samples}), got {value}")
     design = build(args.config)
-    iir = design.blocks["iir"]
-    chain = design.chain("chain_paper002", "fxdsp bench (it times the paper 002 chain)")
+    iirs = [b for n, b in design.blocks.items() if design.instances[n].module == "iir"]
+    if not iirs:
+        raise InputError(f"--config {args.config}: fxdsp bench times an iir block against apytypes and fxpmath; "
+                         f"the config has none")
+    iir = iirs[0]
     rng = np.random.default_rng(design.seed)
     fmt = iir.data_format
     x = (0.25 * fmt.max_int * np.sin(2 * np.pi * np.arange(args.samples) / 997)
@@ -146,17 +150,17 @@ def run(args) -> int:
     t_biquad = _best(lambda: iir.filter(x), args.repeat)
     y_ref = iir.filter(x)
 
-    stim = chain.nominal_stimulus(rng, args.samples)
-    chain.run(**{k: v[:1000] for k, v in stim.items()})
-
-    def run_chain():
-        chain.run(**stim)
-    t_chain = _best(run_chain, max(2, args.repeat // 2))
+    chains = {}
+    for name, chain in design.chains.items():   # every chain of the config, on its nominal stimulus
+        stim = chain.nominal_stimulus(rng, args.samples)
+        chain.run(**{k: v[:1000] for k, v in stim.items()})   # compile
+        n = len(next(iter(stim.values())))
+        chains[name] = {"samples": n, "samples_per_s": n / _best(lambda: chain.run(**stim), max(2, args.repeat // 2))}
 
     results = {"machine": platform.machine(), "python": platform.python_version(), "samples": args.samples,
-               "biquad": {"sections": int(iir.b.shape[0]), "rules": str(iir.rules),
+               "biquad": {"block": iir.name, "sections": int(iir.b.shape[0]), "rules": str(iir.rules),
                           "samples_per_s": args.samples / t_biquad},
-               "chain_paper002": {"samples_per_s": args.samples / t_chain}}
+               "chains": chains}
 
     for name, fn, n in (("apytypes", biquad_apytypes, args.prefix_apytypes),
                         ("fxpmath", biquad_fxpmath, args.prefix_fxpmath)):
@@ -169,10 +173,12 @@ def run(args) -> int:
         results[name] = {"prefix_samples": n, "samples_per_s": rate, "extrapolated_s_for_all": args.samples / rate,
                          "bit_identical_samples": same, "ratio_fxdsp_over_lib": results["biquad"]["samples_per_s"] / rate}
 
-    b, c = results["biquad"]["samples_per_s"], results["chain_paper002"]["samples_per_s"]
+    b = results["biquad"]["samples_per_s"]
     print(f"fxdsp bench  ({args.samples} samples, int64 in/out, best of {args.repeat}; {platform.machine()})")
-    print(f"  biquad [iir] ({results['biquad']['sections']} section, {iir.rules}):  {b / 1e6:8.1f} MS/s   target >= 150")
-    print(f"  paper 002 chain:                                {c / 1e6:8.1f} MS/s   target >= 20")
+    print(f"  biquad [{iir.name}] ({results['biquad']['sections']} section, {iir.rules}):  {b / 1e6:8.1f} MS/s   "
+          f"target >= 150")
+    for name, c in chains.items():
+        print(f"  {name + ':':47s}{c['samples_per_s'] / 1e6:8.1f} MS/s   target >= 20")
     for name in ("apytypes", "fxpmath"):
         r = results[name]
         print(f"  same biquad in {name:8s}: {r['samples_per_s'] / 1e3:8.2f} kS/s on a {r['prefix_samples']}-sample "

@@ -109,11 +109,10 @@ def _stream(design, dut: Dut, stream: str, files: dict, sim: str, seed: int, lon
     from ..vectors import load_generated
 
     name = dut.name
-    module = design.instances[name].module
     window = dut.extra is not None and sim == "icarus"
 
     def cut(stim):
-        return stimuli.icarus_window(stim, stimuli.icarus_samples(module)) if window else stim
+        return stimuli.icarus_window(stim, stimuli.icarus_samples(design, name)) if window else stim
 
     if stream == "golden":
         ins, outs, entry = load_generated(files, name)

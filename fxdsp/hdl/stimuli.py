@@ -11,19 +11,39 @@ import numpy as np
 
 from ..blocks.base import corner_codes, tie_codes
 
-# samples of a random stream per module (its corners first, then a random tail): the slow ones shorter
-MAX_SAMPLES = {"chain_paper002": 1200, "demod": 2500, "iir": 3000, "lag": 4000}
-# A serial variant takes 12-350 cycles per sample and Icarus simulates ~15k of its cycles per second
-# (it, not the Python driver, is the limit), so its Python-driven Icarus streams are cut to a
-# window of this many samples; Verilator runs every stream whole, bit for bit the same RTL.
+# samples of a random stream per block module (its corners first, then a random tail): the slow ones
+# shorter; a chain's from its one-sample-per-clock schedule, CHAIN_CYCLES cycles in all
+MAX_SAMPLES = {"demod": 2500, "iir": 3000, "lag": 4000}
+CHAIN_CYCLES = 80_000
+# A serial variant takes 12-350 cycles per sample and Icarus simulates ~10-15k of its cycles per
+# second (it, not the Python driver, is the limit), so its Python-driven Icarus streams are cut to a
+# window of at most ICARUS_SERIAL_SAMPLES samples and ICARUS_SERIAL_CYCLES cycles (at least
+# ICARUS_MIN_SAMPLES); Verilator runs every stream whole, bit for bit the same RTL.
 ICARUS_SERIAL_SAMPLES = 200
-# ... fewer for the two of ~200-350 cycles per sample, which Icarus runs at ~5-10 k cycles/s
-ICARUS_SERIAL_FEWER = {"demod": 100, "chain_paper002": 60}
+ICARUS_SERIAL_CYCLES = 20_000
+ICARUS_MIN_SAMPLES = 40
 
 
-def icarus_samples(module: str) -> int:
-    """The window of a serial variant's stream on Icarus, by RTL module."""
-    return ICARUS_SERIAL_FEWER.get(module, ICARUS_SERIAL_SAMPLES)
+def _cycles_per_sample(design, name: str, arch: int) -> int:
+    from .schedule import chain_schedule, member_cycles
+
+    if design.instances[name].members:
+        return chain_schedule(design, name, arch)[0]
+    return member_cycles(design, name, arch)
+
+
+def icarus_samples(design, name: str) -> int:
+    """The window of an instance's serial stream on Icarus, from its cycles per sample."""
+    per = _cycles_per_sample(design, name, 1)
+    return int(min(ICARUS_SERIAL_SAMPLES, max(ICARUS_MIN_SAMPLES, ICARUS_SERIAL_CYCLES // per)))
+
+
+def max_samples(design, name: str) -> int | None:
+    """The longest random stream of an instance (None: its whole stimulus)."""
+    inst = design.instances[name]
+    if inst.members:
+        return max(400, CHAIN_CYCLES // _cycles_per_sample(design, name, 0))
+    return MAX_SAMPLES.get(inst.module)
 
 
 def icarus_window(inputs: dict[str, np.ndarray], n: int = ICARUS_SERIAL_SAMPLES) -> dict[str, np.ndarray]:
@@ -45,37 +65,36 @@ def random_stimulus(design, name: str, seed: int) -> dict:
     rng = np.random.default_rng(seed)
     stim = block.stimulus(rng, 400)
     n = len(next(iter(stim.values())))
-    m = MAX_SAMPLES.get(design.instances[name].module, n)
+    m = max_samples(design, name) or n
     if n > m:  # keep the head (corners) and a random tail
         keep = np.r_[np.arange(m // 2), np.sort(rng.choice(np.arange(m // 2, n), m - m // 2, replace=False))]
         stim = {k: v[keep] for k, v in stim.items()}
     return stim
 
 
-def rtd_ties(block) -> np.ndarray:
-    """Every ADC code whose exact interpolated value sits on a rounding tie (searched exhaustively)."""
-    fmt, s, shift = block.adc_format, block.datapath.frac_bits, block.datapath.shift
-    code = np.arange(fmt.min_int, fmt.max_int + 1, dtype=np.int64)
-    u = code - fmt.min_int
-    idx = u >> s
-    base = block.lut[idx]
-    exact = (base << s) + (block.lut[idx + 1] - base) * (u & ((1 << s) - 1))
-    if shift <= 0:
-        return code[:0]
-    tie = (exact & ((1 << shift) - 1)) == (1 << (shift - 1))
-    return code[tie][:200]
+def _chain_corners(d, name: str) -> dict[str, np.ndarray]:
+    """Each chain input: the corners of the first member input it drives (full-scale codes when that
+    member has none for it), all repeated to the longest."""
+    chain = d.chains[name]
+    parts = {}
+    for inp, dsts in chain.netlist.inputs.items():
+        dst = dsts[0]
+        own = _block_corners(d, dst.instance.replace(".", "_")).get(dst.port)
+        parts[inp] = own if own is not None and len(own) else corner_codes(chain.inputs[inp])
+    m = max(len(v) for v in parts.values())
+    return {k: np.resize(v, m).astype(np.int64) for k, v in parts.items()}
 
 
-def corners(d, name, rng) -> dict[str, np.ndarray]:
-    """The instance's corner stream: the cases that tell its arithmetic rules apart (rounding ties,
-    saturation, breakpoints, SF at and near zero, f0, full-scale steps), by its RTL module, then the
-    head of its own stimulus (whose corners open it)."""
+def _block_corners(d, name: str) -> dict[str, np.ndarray]:
+    """A block's corner cases by its RTL module (the inputs it has them for)."""
     block = d.all[name]
     module = d.instances[name].module
-    head = {k: v[:400] for k, v in block.stimulus(rng, 32).items()}
     extra: dict[str, np.ndarray] = {}
     if module == "rtd":
-        extra = {"code": rtd_ties(block)}
+        # rounding ties, then the first LUT segments' boundaries from the lowest code
+        fc, s = block.adc_format, block.datapath.frac_bits
+        ends = (np.arange(min(32, 1 << (fc.wl - s))) << s) + fc.min_int
+        extra = {"code": np.r_[rtd_ties(block), ends].astype(np.int64)}
     elif module == "piecewise":
         bp = block.breakpoints
         t0 = int(block.t0[0])
@@ -94,7 +113,7 @@ def corners(d, name, rng) -> dict[str, np.ndarray]:
         extra = {"x": ties, "bias": np.zeros(ties.size, np.int64)}
     elif module == "freq2temp":
         f0 = block.f0
-        extra = {"f": np.array([f0 - 2, f0 - 1, f0, f0 + 1, f0 + 2], np.int64)}
+        extra = {"f": np.r_[corner_codes(block.freq_format), [f0 - 2, f0 - 1, f0, f0 + 1, f0 + 2]].astype(np.int64)}
     elif module == "lag":
         # starts away from 0 and from where the aborted first stream leaves the state, so the
         # state must be primed again on the first sample after the reset; full-scale alternation
@@ -109,16 +128,31 @@ def corners(d, name, rng) -> dict[str, np.ndarray]:
         alt = np.where(np.arange(600) % 2 == 0, fmt.max_int, fmt.min_int)
         steps = np.r_[np.full(300, fmt.max_int), np.full(300, fmt.min_int), np.full(50, 0)]
         extra = {"x": np.r_[alt, steps].astype(np.int64)}
-    elif module == "chain_paper002":
-        fv, fc = block.inputs["vsa"], block.inputs["rtd_code"]
-        codes = np.r_[corner_codes(fc), (np.arange(32) << block.sensor.rtd.s) + fc.min_int]
-        vs = np.resize(np.r_[corner_codes(fv), fv.max_int, fv.min_int], codes.size)
-        extra = {"vsa": vs.astype(np.int64), "rtd_code": codes.astype(np.int64)}
-    elif module == "chain_paper001":
-        ff, fr = block.inputs["f"], block.inputs["rate_in"]
-        f0 = block.sensor.f2t.f0
-        fs = np.r_[corner_codes(ff), [f0 - 1, f0, f0 + 1]]
-        extra = {"f": fs.astype(np.int64), "rate_in": np.resize(corner_codes(fr), fs.size).astype(np.int64)}
+    return extra
+
+
+def rtd_ties(block) -> np.ndarray:
+    """Every ADC code whose exact interpolated value sits on a rounding tie (searched exhaustively)."""
+    fmt, s, shift = block.adc_format, block.datapath.frac_bits, block.datapath.shift
+    code = np.arange(fmt.min_int, fmt.max_int + 1, dtype=np.int64)
+    u = code - fmt.min_int
+    idx = u >> s
+    base = block.lut[idx]
+    exact = (base << s) + (block.lut[idx + 1] - base) * (u & ((1 << s) - 1))
+    if shift <= 0:
+        return code[:0]
+    tie = (exact & ((1 << shift) - 1)) == (1 << (shift - 1))
+    return code[tie][:200]
+
+
+def corners(d, name, rng) -> dict[str, np.ndarray]:
+    """The instance's corner stream: the cases that tell its arithmetic rules apart (rounding ties,
+    saturation, breakpoints, SF at and near zero, f0, full-scale steps), by its RTL module; a chain's
+    inputs take the corners of the member inputs they drive; then the head of its own stimulus (whose
+    corners open it)."""
+    block = d.all[name]
+    head = {k: v[:400] for k, v in block.stimulus(rng, 32).items()}
+    extra = _chain_corners(d, name) if d.instances[name].members else _block_corners(d, name)
     out = {}
     for k, v in head.items():
         e = extra.get(k)

@@ -117,7 +117,7 @@ def draw(base: dict, seed: int):
     """(config data, design, changes from ``base`` as
     {dotted path: value}, draws needed) of a random parameter set that builds and that the RTL
     generator accepts."""
-    from ..budget.optimise import KNOBS, _field_defaults, knob_value, set_knob
+    from ..budget.optimise import _field_defaults, knob_value, knobs_of, set_knob
     from ..chains import build
     from ..config import Config
     from ..hdl import params as hp
@@ -132,9 +132,9 @@ def draw(base: dict, seed: int):
                 table["overflow"] = str(rng.choice(OVERFLOWS))
         for table in (data["iir"], data["demod"]["lpf"]):
             table["order"] = int(rng.choice(ORDERS))
-        for chain in KNOBS:   # every chain with word-length knobs
+        for chain in (f"chain_{n}" for n in base.get("chain", {})):   # every chain's word-length knobs
             defaults = _field_defaults(base, chain)
-            for knob in KNOBS[chain]:
+            for knob in knobs_of(base, chain):
                 if rng.random() < KNOB_PROBABILITY:
                     delta = int(rng.integers(KNOB_DELTA[0], KNOB_DELTA[1] + 1))
                     value = max(1, knob_value(base, knob) + delta)

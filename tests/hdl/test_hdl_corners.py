@@ -70,7 +70,7 @@ def corner_streams(key, name, sim, extra=None, suffix=""):
     rng = np.random.default_rng(3)
     stim = corners(d, name, rng)
     if extra is not None and sim == "icarus":  # a serial DUT: a window on Icarus, whole on Verilator
-        stim = icarus_window(stim, icarus_samples(name))
+        stim = icarus_window(stim, icarus_samples(d, name))
     n = len(next(iter(stim.values())))
     first = {k: v[: max(8, n // 3)] for k, v in stim.items()}
     segs = [segment(d, name, first, abort_after=max(4, n // 4)),  # reset with samples in flight

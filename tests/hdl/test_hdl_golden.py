@@ -51,7 +51,7 @@ def test_golden_vectors_serial(design, name, sim):
     """The same vectors through the serial variant (valid/ready, many cycles per sample)."""
     ins, outs, entry = load(VECTORS, name)
     if sim == "icarus":  # a window, the model run on it (hdl_util.ICARUS_SERIAL_SAMPLES)
-        seg = segment(design, name, icarus_window(ins, icarus_samples(name)))
+        seg = segment(design, name, icarus_window(ins, icarus_samples(design, name)))
     else:
         seg = segment(design, name, ins, outs, sum(entry["overflows"].values()))
     summary = run_cocotb(design, name, [seg], f"golden_{name}_serial", extra_params={**(_extra(design, name) or {}),

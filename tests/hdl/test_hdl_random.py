@@ -90,6 +90,6 @@ def test_random_parameter_set_serial(pset, name):
     """The serial variants on the same draws (half_even_narrow: two sections in the schedule)."""
     d = design(pset)
     stim = random_stimulus(d, name, seed=zlib.crc32(f"{pset}:{name}".encode()))
-    stim = icarus_window(stim, icarus_samples(name))  # on Icarus (hdl_util.ICARUS_SERIAL_SAMPLES); the model runs on it
+    stim = icarus_window(stim, icarus_samples(d, name))  # on Icarus (hdl_util.ICARUS_SERIAL_SAMPLES); the model runs on it
     run_cocotb(d, name, [segment(d, name, stim)], f"random_{pset}_{name}_serial", gap=0.25, seed=7,
                extra_params={**(unroll_params(d, name) or {}), **SERIAL[name]})
