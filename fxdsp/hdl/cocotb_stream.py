@@ -7,7 +7,9 @@ synchronous reset is applied before every segment, so a segment after another on
 mid-stream. ``abort_after`` cuts a segment after that many accepted samples and resets while
 samples are still in flight: the outputs seen until then must be a prefix of the expected ones.
 ``gap`` is the probability of an idle cycle between samples (gapped valid; a segment may set its
-own ``gap``); 0 is back to back.
+own ``gap``); 0 is back to back. While in_valid is low the data inputs carry random words (a DUT
+must not read them), while a valid sample waits for in_ready they hold. An aborted segment's reset
+lands a random 0..``abort_cycles`` cycles after its last accepted sample: anywhere in a schedule.
 Outputs are sampled on out_valid at each rising edge; for valid/ready DUTs a sample counts as
 accepted only when in_ready was high at the edge.
 A busy valid/ready DUT (a serial one spends hundreds of cycles per sample) is not stepped edge by
@@ -43,15 +45,15 @@ def _popcount(v: int) -> int:
     return bin(v).count("1")
 
 
-def _drive(dut, ins, in_h, seg, idx, drive: bool) -> None:
-    """The next cycle's inputs: the sample at idx with in_valid high, or in_valid low (the data held)."""
-    if drive:
-        for p in ins:
-            in_h[p].value = seg["inputs"][p][idx]
+def _drive(dut, ins, in_h, seg, idx, drive: bool, noise: random.Random, widths: dict) -> None:
+    """The next cycle's inputs: the sample at idx with in_valid high, or in_valid low with random
+    words on the data inputs (what a DUT reads while in_valid is low is garbage)."""
+    for p in ins:
+        in_h[p].value = seg["inputs"][p][idx] if drive else noise.getrandbits(widths[p])
     dut.in_valid.value = int(drive)
 
 
-async def _sleep_while_busy(dut, ins, in_h, seg, idx, drive: bool) -> bool:
+async def _sleep_while_busy(dut, ins, in_h, seg, idx, drive: bool, noise: random.Random, widths: dict) -> bool:
     """Set the next cycle's inputs, then sleep until the edge before which in_ready or out_valid is high.
 
     Called right after an edge (before the DUT's registers update). The next cycle's inputs (the
@@ -61,7 +63,7 @@ async def _sleep_while_busy(dut, ins, in_h, seg, idx, drive: bool) -> bool:
     one to rise (or IDLE_LIMIT cycles: the caller's timeout) and return before the edge that
     samples it, where the caller resumes. Returns whether in_valid is driven.
     """
-    _drive(dut, ins, in_h, seg, idx, drive)
+    _drive(dut, ins, in_h, seg, idx, drive, noise, widths)
     await ReadOnly()
     if int(dut.in_ready.value) == 0 and int(dut.out_valid.value) == 0:
         await First(RisingEdge(dut.in_ready), RisingEdge(dut.out_valid),
@@ -74,6 +76,9 @@ async def stream(dut):
     with open(os.environ["FXDSP_SPEC"]) as f:
         spec = json.load(f)
     rng = random.Random(spec["seed"])
+    noise = random.Random(spec["seed"] + 1)   # its own stream: the gap draws stay as they were
+    widths = spec["widths"]
+    abort_cycles = int(spec.get("abort_cycles", 0))
     ins, outs, ready, gap = spec["inputs"], spec["outputs"], spec["ready"], spec["gap"]
     ignore = int(spec.get("ovf_ignore", 0))
     in_h = {p: getattr(dut, p) for p in ins}
@@ -107,7 +112,7 @@ async def stream(dut):
                 resume = False
             else:
                 driving = idx < n_feed and rng.random() >= seg_gap
-                _drive(dut, ins, in_h, seg, idx, driving)
+                _drive(dut, ins, in_h, seg, idx, driving, noise, widths)
             await RisingEdge(dut.clk)
             # what happened at this edge
             taken = driving and (not ready or int(dut.in_ready.value) == 1)
@@ -122,7 +127,14 @@ async def stream(dut):
                 last_progress = now
             if "abort_after" in seg:
                 if idx >= n_feed:
-                    break  # reset with samples in flight
+                    # reset with samples in flight, a random number of cycles into the schedule
+                    for _ in range(noise.randrange(abort_cycles + 1)):
+                        _drive(dut, ins, in_h, seg, idx, False, noise, widths)
+                        await RisingEdge(dut.clk)
+                        if int(dut.out_valid.value) == 1:
+                            for p in outs:
+                                got[p].append(_u(out_h[p]))
+                    break
             elif len(got[outs[0]]) >= n:
                 break
             if now - last_progress > IDLE_LIMIT * PERIOD_NS:
@@ -131,7 +143,7 @@ async def stream(dut):
             # busy before this edge (in_ready low): most likely busy for many more
             if ready and int(dut.in_ready.value) == 0:
                 drive = idx < n_feed and rng.random() >= seg_gap
-                driving = await _sleep_while_busy(dut, ins, in_h, seg, idx, drive)
+                driving = await _sleep_while_busy(dut, ins, in_h, seg, idx, drive, noise, widths)
                 resume = True
         for p in outs:
             want = exp[p][: len(got[p])] if "abort_after" in seg else exp[p]

@@ -133,6 +133,23 @@ def model_run(design, name: str, inputs: dict[str, np.ndarray]):
     return res.outputs, res.overflows.total
 
 
+def schedule_cycles(design, name: str, extra: dict | None = None) -> int:
+    """The stated cycles per sample of the DUT variant ``extra`` selects (at its divider unroll):
+    how far into a schedule an aborted segment's reset may land. A schedule that varies from sample
+    to sample (a decimating lag) has no one figure: then the design's cycle budget at 40 MHz."""
+    from .schedule import chain_schedule, member_cycles
+
+    extra = extra or {}
+    arch = 1 if is_serial(extra) else 0
+    unroll = int(extra.get("DIV_UNROLL", extra.get("UNROLL", 1)))
+    try:
+        if design.instances[name].members:
+            return chain_schedule(design, name, arch, unroll)[0]
+        return member_cycles(design, name, arch, unroll)
+    except ValueError:
+        return int(40e6 // design.fs_hz)
+
+
 def segment(design, name, inputs, outputs=None, ovf_total=None, abort_after=None, gap=None) -> dict:
     """One stream between resets, as the cocotb driver reads it (the model's outputs unless given)."""
     block = design.all[name]
@@ -174,7 +191,9 @@ def run_cocotb(design, name: str, segments: list[dict], d: Path, models: Path | 
     d = Path(d)
     module, ins, outs, ready = ports_of(design, name, extra_params)
     generate_into(design, d)
+    block = design.all[name]
     spec = {"segments": segments, "inputs": ins, "outputs": outs, "ready": ready, "gap": gap, "seed": int(seed),
+            "widths": {p: block.inputs[p].wl for p in ins}, "abort_cycles": schedule_cycles(design, name, extra_params),
             "ovf_ignore": ovf_ignore(design, name), "summary": str(d / "summary.json")}
     (d / "spec.json").write_text(json.dumps(spec))
     params = dut_parameters(design, name, extra_params)
