@@ -8,7 +8,10 @@ A ``[chain.<name>]`` table lists
   chain input may drive several);
 * ``wires``: ``"<instance>.<output> -> <instance>.<input>"``;
 * ``outputs``: ``"<instance>.<output> -> <chain output>"``;
-* ``sensor`` (optional): the physical stimulus model of its inputs (:mod:`fxdsp.sensors`).
+* ``sensor`` (optional): the physical stimulus model of its inputs (:mod:`fxdsp.sensors`);
+* ``hardware`` (optional): the targets its generated top is judged on by ``fxdsp hw-report``,
+  ``{lut4 = .., mac16 = .., bram = .., mhz = ..}`` (any of them; the cycles per sample are always
+  judged against the sample period at 40 MHz).
 
 An instance's port is written ``<table>.<port>``: the port is what follows the last dot. Every
 instance input must be driven exactly once; nothing may loop. The errors name the chain, the line
@@ -28,7 +31,8 @@ from .config import Section, nearest
 from .errors import InputError
 
 ARROW = "->"
-CHAIN_KEYS = ("sensor", "instances", "inputs", "wires", "outputs")
+CHAIN_KEYS = ("sensor", "instances", "inputs", "wires", "outputs", "hardware")
+HARDWARE_KEYS = ("lut4", "mac16", "bram", "mhz")   # the targets a chain's hardware table may set
 
 
 class WiringError(InputError):
@@ -60,6 +64,7 @@ class Netlist:
     order: tuple[str, ...]
     sensor: str | None = None
     lines: dict[Endpoint, str] | None = None  # driven input -> the config line that wires it (errors)
+    hardware: dict[str, float] | None = None  # the hw-report targets of its generated top (HARDWARE_KEYS)
 
     @property
     def instance_name(self) -> str:
@@ -193,7 +198,25 @@ def parse(sec: Section, ports: PortNames, known: tuple[str, ...]) -> Netlist:
     if sensor is not None and not isinstance(sensor, str):
         raise WiringError(f"{sec.field('sensor')}: expected a name, got {sensor!r}")
     return Netlist(chain, tuple(inst), drivers, {k: tuple(v) for k, v in inputs.items()}, outputs, order,
-                   sensor, lines)
+                   sensor, lines, _hardware(sec))
+
+
+def _hardware(sec: Section) -> dict[str, float] | None:
+    """The chain's ``hardware`` targets: a table of positive numbers with keys from HARDWARE_KEYS."""
+    hw = sec._get("hardware", None)
+    if hw is None:
+        return None
+    if not isinstance(hw, dict) or not hw:
+        raise WiringError(f"{sec.field('hardware')}: expected a table of targets ({', '.join(HARDWARE_KEYS)}), "
+                          f"got {hw!r}")
+    for key, value in hw.items():
+        if key not in HARDWARE_KEYS:
+            near = nearest(key, [k for k in HARDWARE_KEYS if k not in hw])
+            raise WiringError(f"{sec.field('hardware')}.{key}: unknown key" +
+                              (f" (did you mean {near!r}?)" if near else f"; one of {', '.join(HARDWARE_KEYS)}"))
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0 or value == float("inf"):
+            raise WiringError(f"{sec.field('hardware')}.{key}: expected a positive number, got {value!r}")
+    return {k: float(v) for k, v in hw.items()}
 
 
 def upstream(drivers: dict, instance: str) -> set[str]:

@@ -7,6 +7,10 @@ import json
 import re
 from pathlib import Path
 
+import pytest
+
+from fxdsp.chains import build
+
 from fxdsp.hdl import hwreport, report_cli
 from fxdsp.hdl.hwreport import hw_report_path, load_hw_report, report_json, synthesised_cost
 from fxdsp.hdl.report_cli import UP5K, XC7A35T, markdown
@@ -32,7 +36,7 @@ def test_json_is_written_from_the_rows_hw_report_collects(tmp_path):
     got = load_hw_report(path)["rows"]
     assert got[0] == {"name": "rtd", "module": "rtd", "LC": None, "LUT": 301, "FF": 20, "CARRY": 7, "MAC16": 2,
                       "BRAM": 0, "GB": None, "fmax": 21.83, "fmax_seeds": None, "critical_seed": None,
-                      "critical_path": None, "cycles_per_sample": None, "cycle_budget": None, "warnings": None,
+                      "critical_path": None, "cycles_per_sample": None, "cycle_budget": None, "target": None, "warnings": None,
                       "note": "", "sha256": None, "xc7": {"LUT": None, "DSP48E1": None, "FF": None, "BRAM36": None, "BRAM18": None,
                                           "LUTRAM": None, "SRL": None, "warnings": None, "note": ""}}
     assert got[1]["LUT"] is None and got[1]["fmax"] is None and got[1]["note"].startswith("timed out")
@@ -207,7 +211,8 @@ def test_a_budget_row_is_judged_on_its_slowest_seed():
     RAM and its cycles per sample (the generated top's schedule, in the row) are judged too."""
     row = {"name": "chain_paper002 (ARCH=1)", "module": "chain_paper002", "LUT": 2500, "MAC16": 1, "FF": 2000,
            "BRAM": 19, "fmax": 41.2, "fmax_seeds": {"1": 41.2, "2": 39.6, "3": 40.8}, "note": "",
-           "cycles_per_sample": 361, "cycle_budget": 416}
+           "cycles_per_sample": 361, "cycle_budget": 416,
+           "target": {"lut4": 2640.0, "mac16": 8.0, "bram": 20.0, "mhz": 40.0}}
     text = markdown([row], 40.0)
     assert "BRAM met (19)" in text and "cycles per sample met (361" in text
     assert "BRAM NOT met (21)" in markdown([{**row, "BRAM": 21}], 40.0)
@@ -331,3 +336,32 @@ def test_tool_warnings_are_kept_but_the_two_every_placement_gives():
     text = markdown([row], 40.0)
     assert "1:" in text and "* iir (iCE40): Warning: Literal has a width" in text
     assert "none." in markdown([{**row, "warnings": []}], 40.0)
+
+
+def test_a_chains_targets_come_from_its_config_table():
+    """A chain's hardware targets are its table's ``hardware`` (a user's chain declares its own), carried
+    in its report rows; a misspelt or non-positive target is an error naming the field."""
+    import copy
+
+    from conftest import edited_data
+    from fxdsp.config import Config
+    from fxdsp.hdl.report_cli import _schedule_fields
+
+    data = edited_data()
+    data["chain"]["paper001"]["hardware"] = {"lut4": 100, "mhz": 45.0}
+    d = build(Config(copy.deepcopy(data), source="<targets>"))
+    assert d.chains["chain_paper001"].netlist.hardware == {"lut4": 100.0, "mhz": 45.0}
+    fields = _schedule_fields(d, "chain_paper001", {"ARCH": 1})
+    row = {"name": "chain_paper001 (ARCH=1)", "module": "chain_paper001", "LUT": 870, "MAC16": 2, "FF": 1000,
+           "BRAM": 0, "fmax": 46.0, "fmax_seeds": {"1": 46.0, "2": 44.0}, "note": "", **fields}
+    text = markdown([row], 40.0)
+    assert "LUT NOT met (870)" in text and "Fmax NOT met (44" in text and "MAC16" not in text.split("Target for")[1]
+    assert "Targets missed: chain_paper001" in text
+    for bad, words in (({"lut": 1}, "did you mean 'lut4'"), ({"mhz": -1}, "positive number"), ({"bram": "x"}, "positive")):
+        data["chain"]["paper001"]["hardware"] = bad
+        with pytest.raises(ValueError, match=r"chain\.paper001\.hardware"):
+            try:
+                build(Config(copy.deepcopy(data), source="<targets>"))
+            except ValueError as e:
+                assert words in str(e), str(e)
+                raise

@@ -32,7 +32,7 @@ from ..outputs import json_text
 from . import HW_REPORT_JSON, RTL_DIR
 
 COLUMNS = ("name", "module", "LC", "LUT", "FF", "CARRY", "MAC16", "BRAM", "GB", "fmax", "fmax_seeds", "critical_seed",
-           "critical_path", "cycles_per_sample", "cycle_budget", "warnings", "note", "sha256")
+           "critical_path", "cycles_per_sample", "cycle_budget", "target", "warnings", "note", "sha256")
 XC7_COLUMNS = ("LUT", "DSP48E1", "FF", "BRAM36", "BRAM18", "LUTRAM", "SRL", "warnings", "note")
 
 

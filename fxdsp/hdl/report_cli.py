@@ -55,8 +55,9 @@ def variants(design) -> dict[str, tuple[str, dict[str, str]]]:
 
 # the issue's targets per chain (half the device for paper 002, a quarter for paper 001), read
 # against the chain's serial row when it has one, else its default row
-CHAIN_BUDGETS = {"chain_paper002": {"LUT": 2640, "MAC16": 8, "BRAM": 20, "MHz": 40.0},
-                 "chain_paper001": {"LUT": 1320, "MAC16": 4, "BRAM": 8, "MHz": 40.0}}
+# a chain row's target (its table's ``hardware``, fxdsp.netlist.HARDWARE_KEYS) -> the row's column
+TARGET_COLUMNS = {"lut4": "LUT", "mac16": "MAC16", "bram": "BRAM"}
+DEVICE_NAMES = {"LUT": "LUT4", "MAC16": "SB_MAC16"}   # the iCE40 primitives the columns count
 # the chains' serial rows are placed with ten nextpnr seeds: one seed's Fmax moves by a few MHz with no
 # change in logic (a placement is one draw), so the target is judged on the lowest of them
 SEED_SWEEP = tuple(range(1, 11))
@@ -463,7 +464,8 @@ def _schedule_fields(design, name: str, extra) -> dict:
         per = chain_schedule(design, name, arch)[0]
     except ValueError:   # a member without a constant schedule
         per = None
-    return {"cycles_per_sample": per, "cycle_budget": int(40e6 // design.fs_hz)}
+    hw = design.chains[name].netlist.hardware
+    return {"cycles_per_sample": per, "cycle_budget": int(40e6 // design.fs_hz), **({"target": hw} if hw else {})}
 
 
 def _slowest(r) -> float | None:
@@ -519,52 +521,36 @@ def markdown(rows, freq, source_sha256: str = "") -> str:
         lines += ["", "Critical path of each swept row's slowest seed (nextpnr, posedge to posedge):", ""]
         lines += [f"* {r['name']}, seed {r.get('critical_seed')} ({_fmt(_slowest(r))} MHz): `{r['critical_path']}`"
                   for r in swept]
-    missed = False
-    for chain_name, budget in CHAIN_BUDGETS.items():
+    missed = []
+    for chain_name in dict.fromkeys(r["name"].split(" (")[0] for r in rows if r.get("target")):
         chain = next((r for r in rows if r["name"] == f"{chain_name} (ARCH=1)"), None) or \
             next((r for r in rows if r["name"] == chain_name), None)
-        if not chain or chain.get("LUT") is None:
+        if not chain or chain.get("LUT") is None or not chain.get("target"):
             continue
-        ok_lut = chain["LUT"] <= budget["LUT"]
-        ok_mac = chain["MAC16"] <= budget["MAC16"]
-        ok_bram = chain["BRAM"] <= budget["BRAM"]
+        target = chain["target"]
+        judged = [(f"<= {target[k]:g} {DEVICE_NAMES.get(col, col)}", col, chain.get(col) is not None
+                   and chain[col] <= target[k]) for k, col in TARGET_COLUMNS.items() if k in target]
         slowest = _slowest(chain)
-        ok_f = slowest is not None and slowest >= budget["MHz"]
         per, cap = chain.get("cycles_per_sample"), chain.get("cycle_budget")
         ok_c = per is not None and cap is not None and per <= cap
-        missed |= chain_name == "chain_paper002" and not (ok_lut and ok_mac and ok_bram and ok_f and ok_c)
+        judged.append((f"<= {cap} cycles per sample", "cycles per sample", ok_c))
+        if "mhz" in target:
+            judged.append((f">= {target['mhz']:g} MHz on every seed", "Fmax",
+                           slowest is not None and slowest >= target["mhz"]))
         met = lambda ok: "met" if ok else "NOT met"  # noqa: E731
+        value = {"cycles per sample": f"{per}, the top's schedule",
+                 "Fmax": f"{_fmt(None if slowest is None else round(slowest, 1))}"
+                         f"{', the lowest over seeds ' + ', '.join(chain['fmax_seeds']) if chain.get('fmax_seeds') else ''}"}
+        if not all(ok for _, _, ok in judged):
+            missed.append(chain_name)
         occupancy = (f"{chain['LC']} of {UP5K['LC']} logic cells ({100 * chain['LC'] / UP5K['LC']:.0f} %), "
                      f"{_fmt(chain.get('GB'))} of {UP5K['GB']} global buffers; " if chain.get("LC") else "")
-        lines += ["", f"Target for {chain_name} (row {chain['name']}): {occupancy}<= {budget['LUT']} LUT4, <= {budget['MAC16']} "
-                  f"SB_MAC16, <= {budget['BRAM']} BRAM, <= {cap} cycles per sample, >= {budget['MHz']:g} MHz on every "
-                  f"seed: LUT {met(ok_lut)} ({chain['LUT']}), MAC16 {met(ok_mac)} ({chain['MAC16']}), BRAM "
-                  f"{met(ok_bram)} ({chain['BRAM']}), cycles per sample {met(ok_c)} ({per}, the top's schedule), Fmax "
-                  f"{met(ok_f)} ({_fmt(None if slowest is None else round(slowest, 1))}"
-                  f"{', the lowest over seeds ' + ', '.join(chain['fmax_seeds']) if chain.get('fmax_seeds') else ''})."]
+        lines += ["", f"Target for {chain_name} (row {chain['name']}, its config table's `hardware`): {occupancy}"
+                  + ", ".join(t for t, _, _ in judged) + ": "
+                  + ", ".join(f"{col} {met(ok)} ({value.get(col, chain.get(col))})" for _, col, ok in judged) + "."]
     if missed:
-        lines += ["", ANALYSIS]
+        lines += ["", f"Targets missed: {', '.join(missed)} (the lines above say which)."]
     return "\n".join(lines) + "\n"
 
 
-ANALYSIS = """## Why the paper 002 chain misses the half-device target, and the way there
 
-The default RTL is written for bit-exactness and verification first: every block computes one
-sample per clock with a combinational datapath and one hardware multiplier per product. At
-fs = 96 kHz and 40 MHz that is ~400x more throughput than needed, paid in SB_MAC16s (137), in LUTs
-(the NCO's and the RTD's tables read combinationally) and in long paths (10-30 MHz).
-
-The resource-shared variants (the `(ARCH=1)` rows) trade that throughput back: each runs its
-products through one `fx_mac_serial` (one SB_MAC16 iterated over 16 x 16 limb products), one
-rounding or fit per cycle, tables through a registered read port (block RAM), valid/ready; the
-cycles per sample are in each module's header and in `hdl/README.md`. They give the same bits as
-the default RTL (same golden vectors, random sets, corners, long streams and mutants), and each
-places on the UP5K at >= 40 MHz. The paper 001 chain built from them meets its target (its target
-line above reads that row). The paper 002 chain built from them (`chain_paper002 (ARCH=1)`, its
-cycles per sample in its generated header) is bit-exact; one sample in flight means no two of its blocks compute at once,
-so its serial blocks share ONE `fx_mac_serial` (one SB_MAC16: rtd, both piecewise engines, the
-demodulator with its two-channel filter, the output iir; each keeps its own schedule), which took
-it from 6 SB_MAC16, 4645 LUT4 and 4447 FF to the row above. What remains over the LUT4 budget is
-the engines' own logic and their operand, state and pipeline registers: the next steps are one iir
-engine for the demodulator's two channels and the output filter (same formats on the default
-config) and state in block RAM rather than flip-flops."""
