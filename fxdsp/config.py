@@ -57,6 +57,13 @@ def load_config(path: str | Path | None = None) -> "Config":
     return Config(data, source=str(p))
 
 
+def table_at(data: dict, dotted: str) -> dict:
+    """The raw table of parsed config ``data`` at a dotted path (``"demod.lpf"``); KeyError if absent."""
+    for part in dotted.split("."):
+        data = data[part]
+    return data
+
+
 def nearest(name: str, choices) -> str | None:
     """The valid name closest to a misspelt one, or None: a name one edit away (a character
     changed, added, dropped, or two neighbours swapped: ``0r_ohm`` is ``r0_ohm``, not ``r4_ohm``;

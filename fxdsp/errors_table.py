@@ -22,6 +22,11 @@ def port_units(design: Design) -> dict[tuple[str, str], tuple[str, float]]:
             for p in (*inst.inputs, *inst.outputs) if p.unit}
 
 
+def port_unit(design: Design, instance: str, port: str) -> tuple[str, float]:
+    """(unit, value-to-unit factor) of one instance port; ("", 1.0) for a port without a unit."""
+    return port_units(design).get((instance, port), ("", 1.0))
+
+
 @dataclass
 class ErrorStats:
     block: str

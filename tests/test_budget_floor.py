@@ -109,12 +109,12 @@ def test_an_output_no_adc_reaches_has_no_margin(att001):
 @pytest.fixture(scope="module")
 def allan_default():
     """The Allan figures of the default design (one 2**20-sample run shared by the tests)."""
-    return allan_chain(build(), "chain_paper002", "rate")
+    return allan_chain(build(), "chain_paper002", ["rate"])[0]
 
 
 def test_allan_figures_come_from_allantools_and_are_deterministic(allan_default):
     a = allan_default
-    b = allan_chain(build(), "chain_paper002", "rate")   # a fresh design, same config and seed
+    b = allan_chain(build(), "chain_paper002", ["rate"])[0]   # a fresh design, same config and seed
     assert np.array_equal(a.error, b.error) and np.array_equal(a.adev, b.adev)
     assert (a.bi_adev, a.bi_tau, a.adev_1s) == (b.bi_adev, b.bi_tau, b.adev_1s)
     fs = a.fs
@@ -156,7 +156,7 @@ def test_allan_rejects_bad_parameters():
 # ---------------------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def sweep():
-    return drive_sweep(load_config(), "chain_paper002", "rate")
+    return drive_sweep(load_config(), "chain_paper002", ["rate"])[0]
 
 
 def test_sweep_spans_the_band_of_the_temperature_law(sweep):
@@ -195,7 +195,7 @@ def test_sweep_worst_values_and_bad_parameters(sweep):
     assert d["worst_abs"]["rms"]["value"] == max(p.rms for p in sweep.points)
     assert d["worst_abs"]["mean"]["value"] == max(abs(p.mean) for p in sweep.points)
     with pytest.raises(ValueError, match="points"):
-        drive_sweep(load_config(), "chain_paper002", "rate", points=1)
+        drive_sweep(load_config(), "chain_paper002", ["rate"], points=1)
     with pytest.raises(ValueError, match="temp_range_c"):
         drive_band(8000.0, temp_range_c=(85.0, -40.0))
 
@@ -266,4 +266,4 @@ def test_fixed_point_error_averages_down_without_drift(allan_default):
 
 def test_tuning_word_drift_shows_in_the_allan_deviation():
     """The same check catches an accumulator too short for its tuning word (40 bits at f/fs = 1/12)."""
-    assert _long_tau_trend(allan_chain(design_with(chains=True, **{"demod.phase_bits": 40}), "chain_paper002", "rate")) > 1.5
+    assert _long_tau_trend(allan_chain(design_with(chains=True, **{"demod.phase_bits": 40}), "chain_paper002", ["rate"])[0]) > 1.5

@@ -28,8 +28,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..chains import Design, stream_key
-from ..errors_table import port_units
-from .hybrid import CATEGORIES, Source, Switch, chain_analog, chain_sources, run_chain
+from ..errors_table import port_unit
+from .hybrid import CATEGORIES, Source, Switch, chain_analog, chain_sources, lowpass_of, run_chain
 
 ADDITIVITY_DB = 0.5     # stated tolerance of the power sum against the total
 THEORY_DB = 1.0         # a rounding point worse than theory by more than this is flagged
@@ -189,7 +189,7 @@ _KNOWN = {
 def attribute(design: Design, chain_name: str, port: str = "rate", n: int | None = None, seed_offset: int = 2000,
               keep_signals: bool = True) -> Attribution:
     chain, stim, sources, run_fn = _stimulus(design, chain_name, n, seed_offset)
-    unit, scale = port_units(design).get((chain_name, port), ("", 1.0))
+    unit, scale = port_unit(design, chain_name, port)
     result = chain.run(**stim["codes"])
     bit = chain.real_outputs(result)[port]
     ref_nodes = run_fn(chain, stim["analog"], Switch())
@@ -251,9 +251,7 @@ def _band(design: Design, chain_name: str, port: str) -> tuple[float, float] | N
     """(cut-off, sample rate) of the low-pass that drives the output ``port`` (an iir member, or a
     demodulator's channel filter); None when the output is not filtered."""
     chain = design.chains[chain_name]
-    src = chain.netlist.outputs[port]
-    block = chain.members[src.instance]
-    lpf = {"iir": lambda b: b, "demod": lambda b: b.lpf_i}.get(chain.kinds[src.instance], lambda b: None)(block)
+    lpf = lowpass_of(chain, chain.netlist.outputs[port].instance)
     if lpf is None:
         return None
     import scipy.signal as sps

@@ -15,7 +15,7 @@ from pathlib import Path
 from tqdm import tqdm as _tqdm
 
 from ..chains import build
-from ..errors_table import port_units
+from ..errors_table import port_unit
 from ..config import dumps, load_config
 from ..hdl.hwreport import hw_report_path, synthesised_cost
 from ..outputs import IN, OUT_DIR, OUT_FILE, json_text, plain, staged
@@ -23,7 +23,7 @@ from . import optimise as opt
 from .attribution import ADDITIVITY_DB, THEORY_DB, Attribution, attribute
 from .floor import (DOMINANT_FACTOR, FLICKER_FACTOR, WITHIN_DB, Allan, DriveSweep, Floor, allan_chain,
                     carrier_chains, demod_f_hz, drive_frequencies, drive_sweep, floor_of)
-from .static import static_error
+from .static import static_errors
 from .table import budget_rows, format_rows
 from .units import parse_target
 
@@ -192,26 +192,29 @@ def _run(args, stage) -> int:
     for opt_only in ("max_mean", "drive_band"):
         if getattr(args, opt_only) and not args.optimise:
             raise ValueError(f"--{opt_only.replace('_', '-')}: only with --optimise")
-    attrs = {(c, p): attribute(design, c, p) for c, p in attributed(design)}
-    noise = {p: a.sensor_noise_rms for (c, p), a in attrs.items() if c == args.chain}
+    # the target's chain first: a target that names no output of it is refused before the rest is run
+    own = {(c, p): attribute(design, c, p) for c, p in attributed(design) if c == args.chain}
+    noise = {p: a.sensor_noise_rms for (c, p), a in own.items()}
     target = parse_target(args.target, design, args.chain, noise) if args.target else None
     max_mean = parse_target(args.max_mean, design, args.chain, noise, "--max-mean") if args.max_mean else None
     if args.optimise:
         opt.check_search(args.chain, target=target, max_mean=max_mean)
-    units = port_units(design)
+    attrs = {key: own[key] if key in own else attribute(design, *key) for key in attributed(design)}
 
     print(f"fxdsp budget: config {cfg.source}, seed {design.seed}")
     print("\n1. bit-exact vs float reference (float fed with the same stored inputs), nominal stimulus:")
     rows = budget_rows(design)
     print(format_rows(rows))
     statics = {}
-    for c, p in attributed(design):
-        if design.chains[c].sensor is None:
+    for c, chain in design.chains.items():
+        if chain.sensor is None:
             continue
-        unit, scale = units.get((c, p), ("", 1.0))
-        statics[(c, p)] = st = _scaled(static_error(design, c, p), scale)
-        print(f"{c}.{p} at {st['samples'] // 1024} quasi-static chamber temperatures (settled): rms "
-              f"{st['rms']:.4g} {unit}, max {st['max_abs']:.4g}, mean {st['mean']:+.4g}, overflows {st['overflows']}")
+        for p, st in static_errors(design, c).items():
+            unit, scale = port_unit(design, c, p)
+            statics[(c, p)] = st = _scaled(st, scale)
+            print(f"{c}.{p} at {st['samples'] // 1024} quasi-static chamber temperatures (settled): rms "
+                  f"{st['rms']:.4g} {unit}, max {st['max_abs']:.4g}, mean {st['mean']:+.4g}, overflows "
+                  f"{st['overflows']}")
     print("\n2. attribution (one source quantised at a time, the rest in float; vs float on the analog inputs):")
     for a in attrs.values():
         print(format_attribution(a))
@@ -224,9 +227,9 @@ def _run(args, stage) -> int:
     for a in attrs.values():
         if a.theory:
             print(format_theory(a))
-    carriers = [(c, p) for c in carrier_chains(design) for p in downstream_outputs(design, c, "demod")]
+    carriers = {c: downstream_outputs(design, c, "demod") for c in carrier_chains(design)}
     print("\n4. Allan deviation of the fixed-point error (every output of a chain with a demodulator):")
-    allans = [allan_chain(design, c, p) for c, p in carriers]
+    allans = [a for c, ports in carriers.items() for a in allan_chain(design, c, ports)]
     for al in allans:
         print(format_allan(al))
     if not allans:
@@ -234,7 +237,8 @@ def _run(args, stage) -> int:
     print("\n5. drive-frequency sweep (the demodulator reference tracks the drive loop, which moves with "
           "temperature):")
     t_sweep = time.time()
-    sweeps = [drive_sweep(cfg, c, p, progress=partial(tqdm, delay=2.0)) for c, p in carriers]  # a bar only > 2 s
+    sweeps = [s for c, ports in carriers.items()   # a bar only if it ever takes > 2 s
+              for s in drive_sweep(cfg, c, ports, progress=partial(tqdm, delay=2.0))]
     t_sweep = time.time() - t_sweep
     for sw in sweeps:
         print(format_sweep(sw))
@@ -242,7 +246,7 @@ def _run(args, stage) -> int:
 
     out = {"config": cfg.name, "seed": design.seed,
            "table": [r.as_dict() for r in rows],
-           "static": [{"chain": c, "port": p, "unit": units.get((c, p), ("", 1.0))[0], **st}
+           "static": [{"chain": c, "port": p, "unit": port_unit(design, c, p)[0], **st}
                       for (c, p), st in statics.items()],
            "attribution": [_attr_dict(a) for a in attrs.values()], "additivity_tolerance_db": ADDITIVITY_DB,
            "theory_limit_db": THEORY_DB, "floor": [f.as_dict() for f in floors],
@@ -323,7 +327,7 @@ def _report(out: Path, design, cfg, rows, attrs, statics, target, result, args, 
     if statics:
         md.append("Quasi-static chamber points (settled), per chain output:\n\n```\n" + "\n".join(
             f"{c}.{p}: rms {st['rms']:.4g}, max {st['max_abs']:.4g}, mean {st['mean']:+.4g} "
-            f"{port_units(design).get((c, p), ('', 1.0))[0]}, overflows {st['overflows']}"
+            f"{port_unit(design, c, p)[0]}, overflows {st['overflows']}"
             for (c, p), st in statics.items()) + "\n```\n\nA nominal stimulus sweeps its temperature range in a "
             "few thousand samples, so the temperature word's rounding becomes a fast sawtooth that an output "
             "low-pass hides; the quasi-static test does not hide it.\n")
@@ -355,7 +359,7 @@ def _report(out: Path, design, cfg, rows, attrs, statics, target, result, args, 
     port = target.port if target else (list(design.chains[chain].outputs)[-1] if chain else None)
     if chain and opt.knobs_of(cfg.data, chain):
         sweeps_wl = opt.sweep(cfg, chain, port, progress=tqdm)
-        unit = port_units(design).get((chain, port), ("", 1.0))[0]
+        unit = port_unit(design, chain, port)[0]
         name = f"wordlength_{chain}.{port}.png"
         rp.plot_sweeps(sweeps_wl, unit, target.value if target else None, out / name,
                        f"{chain}.{port}: error vs word length, one knob at a time (others at default)")

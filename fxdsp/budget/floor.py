@@ -28,11 +28,12 @@ import numpy as np
 import scipy.signal as sps
 
 from ..chains import Design, build
-from ..errors_table import port_units
-from ..config import Config
+from ..config import Config, table_at
+from ..errors_table import port_unit
 from .attribution import Attribution
-from .hybrid import ADC
-from .static import static_error
+from .hybrid import ADC, lowpass_of
+from .optimise import demod_of
+from .static import static_errors
 from .table import budget_rows
 
 WITHIN_DB = 3.0          # "within 3 dB of its floor"
@@ -148,8 +149,7 @@ class Allan:
 
 def chain_filters(chain) -> list[np.ndarray]:
     """The float low-passes of the chain in execution order (iir members, demodulators' channel filters)."""
-    get = {"iir": lambda b: b.sos, "demod": lambda b: b.lpf_i.sos}
-    return [get[chain.kinds[p]](chain.members[p]) for p in chain.netlist.order if chain.kinds[p] in get]
+    return [f.sos for f in (lowpass_of(chain, p) for p in chain.netlist.order) if f is not None]
 
 
 def settling_samples(chain, tol: float = SETTLE_TOL) -> int:
@@ -230,34 +230,36 @@ def carrier_chains(design: Design) -> list[str]:
     return [n for n, c in design.chains.items() if c.sensor is not None and "demod" in c.kinds.values()]
 
 
-def allan_error(design: Design, chain_name: str, port: str, samples: int = ALLAN_SAMPLES,
-                temp_c: float = ALLAN_TEMP_C, seed_offset: int = 3000) -> tuple[np.ndarray, int]:
-    """The chain output's bit-exact minus float (both on the same ADC codes), in the port's unit,
-    at a constant temperature and the sensor's STEADY_LEVEL input with its noise (which dithers the
-    ADCs as in a real sensor), after the filters' settling. Returns (error, settle)."""
+def allan_errors(design: Design, chain_name: str, ports, samples: int = ALLAN_SAMPLES,
+                 temp_c: float = ALLAN_TEMP_C, seed_offset: int = 3000) -> tuple[dict[str, np.ndarray], int]:
+    """Each output's bit-exact minus float (both on the same ADC codes), in its unit, at a constant
+    temperature and the sensor's STEADY_LEVEL input with its noise (which dithers the ADCs as in a
+    real sensor), after the filters' settling; one run of each model. Returns ({port: error}, settle)."""
     if samples < 2 * MIN_INTERVALS:
         raise ValueError(f"samples: need at least {2 * MIN_INTERVALS}, got {samples}")
     chain = design.chain(chain_name, "the Allan deviation")
     if chain.sensor is None:
         raise ValueError(f"{chain_name}: the Allan deviation needs the chain's sensor (its table's 'sensor')")
-    _, scale = port_units(design).get((chain_name, port), ("", 1.0))
     settle = settling_samples(chain)
     n = samples + settle
     rng = np.random.default_rng([design.seed, seed_offset])
     stim = chain.sensor.held_inputs(np.full(n, float(temp_c)), np.full(n, float(chain.sensor.STEADY_LEVEL)), rng)
-    got = chain.real_outputs(chain.run(**stim))[port]
-    ref = chain.run_float(**stim)[port]
-    return (got - ref)[settle:] * scale, settle
+    got = chain.real_outputs(chain.run(**stim))
+    ref = chain.run_float(**stim)
+    return {p: (got[p] - ref[p])[settle:] * port_unit(design, chain_name, p)[1] for p in ports}, settle
 
 
-def allan_chain(design: Design, chain_name: str, port: str, samples: int = ALLAN_SAMPLES,
-                temp_c: float = ALLAN_TEMP_C) -> Allan:
-    err, settle = allan_error(design, chain_name, port, samples, temp_c)
-    f = allan_figures(err, design.fs_hz)
-    unit, _ = port_units(design).get((chain_name, port), ("", 1.0))
-    return Allan(chain_name, port, unit, design.fs_hz, int(err.size), settle, float(temp_c),
-                 float(design.chains[chain_name].sensor.STEADY_LEVEL), f["taus"], f["adev"], f["intervals"],
-                 f["bi_adev"], f["bi_tau"], f["adev_1s"], f["fit_taus"], err)
+def allan_chain(design: Design, chain_name: str, ports: list[str], samples: int = ALLAN_SAMPLES,
+                temp_c: float = ALLAN_TEMP_C) -> list[Allan]:
+    """The Allan figures of the chain's outputs ``ports``, from one run."""
+    errs, settle = allan_errors(design, chain_name, ports, samples, temp_c)
+    out = []
+    for port, err in errs.items():
+        f = allan_figures(err, design.fs_hz)
+        out.append(Allan(chain_name, port, port_unit(design, chain_name, port)[0], design.fs_hz, int(err.size),
+                         settle, float(temp_c), float(design.chains[chain_name].sensor.STEADY_LEVEL), f["taus"],
+                         f["adev"], f["intervals"], f["bi_adev"], f["bi_tau"], f["adev_1s"], f["fit_taus"], err))
+    return out
 
 
 # ----------------------------------------------------------------------------------------------
@@ -328,53 +330,44 @@ def drive_frequencies(f0: float, points: int = SWEEP_POINTS, a_ppm_per_c: float 
     return np.unique(np.append(np.linspace(band[0], band[1], points), f0))
 
 
-def demod_table(design: Design, chain_name: str) -> str:
-    """The table of the chain's demodulator (the one whose drive frequency the sweep moves)."""
-    chain = design.chains[chain_name]
-    found = [p for p in chain.netlist.order if chain.kinds[p] == "demod"]
-    if len(found) != 1:
-        raise ValueError(f"{chain_name}: the drive sweep needs one demodulator, the chain has {len(found)}")
-    return found[0]
-
-
 def demod_f_hz(config: Config, design: Design, chain_name: str) -> float:
     """The configured drive frequency of the chain's demodulator."""
-    return float(_table(config.data, demod_table(design, chain_name))["f_hz"])
-
-
-def _table(data: dict, table: str) -> dict:
-    for key in table.split("."):
-        data = data[key]
-    return data
+    return float(table_at(config.data, demod_of(config.data, chain_name))["f_hz"])
 
 
 def _with_f_hz(data: dict, table: str, f_hz: float) -> dict:
     d = copy.deepcopy(data)
-    _table(d, table)["f_hz"] = float(f_hz)
+    table_at(d, table)["f_hz"] = float(f_hz)
     return d
 
 
-def drive_point(data: dict, f_hz: float, chain_name: str, port: str, table: str) -> DrivePoint:
-    """Build the design with <table>.f_hz = f_hz and measure the chain output's error as section 1
-    of the budget does, plus the quasi-static error (port units)."""
+def drive_points(data: dict, f_hz: float, chain_name: str, ports, table: str) -> dict[str, DrivePoint]:
+    """Build the design with <table>.f_hz = f_hz and measure each chain output's error as section 1
+    of the budget does, plus the quasi-static error (port units); one build for every output."""
     design = build(Config(_with_f_hz(data, table, f_hz), source=f"<drive sweep {f_hz:.3f} Hz>"))
-    row = next(r for r in budget_rows(design, names=[chain_name]) if r.stats.port == port).stats
-    st = static_error(design, chain_name, port)
-    return DrivePoint(float(f_hz), row.rms * row.scale, row.mean * row.scale, st["rms"] * row.scale,
-                      st["mean"] * row.scale, int(row.overflows + st["overflows"]))
+    rows = {r.stats.port: r.stats for r in budget_rows(design, names=[chain_name])}
+    static = static_errors(design, chain_name)
+    out = {}
+    for port in ports:
+        row, st = rows[port], static[port]
+        out[port] = DrivePoint(float(f_hz), row.rms * row.scale, row.mean * row.scale, st["rms"] * row.scale,
+                               st["mean"] * row.scale, int(row.overflows + st["overflows"]))
+    return out
 
 
-def drive_sweep(config: Config, chain_name: str, port: str, points: int = SWEEP_POINTS,
+def drive_sweep(config: Config, chain_name: str, ports: list[str], points: int = SWEEP_POINTS,
                 a_ppm_per_c: float = SILICON_PPM_PER_C, t0_c: float = T0_C,
-                temp_range_c: tuple[float, float] = TEMP_RANGE_C, progress=None) -> DriveSweep:
-    """The chain output's error at ``points`` drive frequencies evenly across the band of
-    :func:`drive_band` around its demodulator's f_hz. ``progress``: a tqdm-like wrapper."""
+                temp_range_c: tuple[float, float] = TEMP_RANGE_C, progress=None) -> list[DriveSweep]:
+    """The outputs' error at ``points`` drive frequencies evenly across the band of :func:`drive_band`
+    around the chain demodulator's f_hz, one design per frequency for every output.
+    ``progress``: a tqdm-like wrapper."""
     design = build(config)
-    table = demod_table(design, chain_name)
-    unit, _ = port_units(design).get((chain_name, port), ("", 1.0))
-    f0 = float(_table(config.data, table)["f_hz"])
+    table = demod_of(config.data, chain_name)
+    f0 = demod_f_hz(config, design, chain_name)
     band = drive_band(f0, a_ppm_per_c, t0_c, temp_range_c)
     freqs = drive_frequencies(f0, points, band=band)
     it = progress(freqs, desc=f"drive-frequency sweep of {chain_name}", unit="f") if progress else freqs
-    pts = [drive_point(config.data, f, chain_name, port, table) for f in it]
-    return DriveSweep(chain_name, port, table, f0, a_ppm_per_c, t0_c, tuple(temp_range_c), band, pts, unit)
+    at = [drive_points(config.data, f, chain_name, ports, table) for f in it]
+    out = [DriveSweep(chain_name, p, table, f0, a_ppm_per_c, t0_c, tuple(temp_range_c), band, [a[p] for a in at],
+                      port_unit(design, chain_name, p)[0]) for p in ports]
+    return out

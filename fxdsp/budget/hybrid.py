@@ -478,6 +478,12 @@ HYBRIDS: dict[str, KindHybrid] = {
 }
 
 
+def lowpass_of(chain: Chain, inst: str):
+    """The member's low-pass (an iir member itself, a demodulator's channel filter), or None."""
+    block = chain.members[inst]
+    return {"iir": block, "demod": getattr(block, "lpf_i", None)}.get(chain.kinds[inst])
+
+
 def _hybrid_of(chain: Chain, inst: str) -> KindHybrid:
     kind = chain.kinds[inst]
     if kind not in HYBRIDS:

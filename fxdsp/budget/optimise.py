@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 
 from ..chains import build
-from ..config import Config
+from ..config import Config, table_at
 from ..errors_table import block_errors
 from ..fixed import Format
 from .static import static_error
@@ -51,17 +51,12 @@ class Knob:
 
 
 def _get(data: dict, f: tuple):
-    node = data
-    for part in f[0].split("."):
-        node = node[part]
-    v = node[f[1]]
+    v = table_at(data, f[0])[f[1]]
     return v[f[2]] if len(f) == 3 else v
 
 
 def _set(data: dict, f: tuple, value) -> None:
-    node = data
-    for part in f[0].split("."):
-        node = node[part]
+    node = table_at(data, f[0])
     if len(f) == 3:
         node[f[1]][f[2]] = value
     else:
@@ -145,19 +140,13 @@ def knobs_of(data: dict, chain: str) -> list[Knob]:
     instances."""
     out = []
     for table, kind in chain_members(data, chain):
-        out += KIND_KNOBS.get(kind, lambda *_: [])(table, _get_table(data, table))
+        out += KIND_KNOBS.get(kind, lambda *_: [])(table, table_at(data, table))
     return out
 
 
-def _get_table(data: dict, table: str) -> dict:
-    node = data
-    for part in table.split("."):
-        node = node[part]
-    return node
-
-
 def demod_of(data: dict, chain: str) -> str:
-    """The chain's demodulator table (whose f_hz a drive sweep moves)."""
+    """The chain's demodulator table (whose f_hz a drive sweep moves): the one lookup of the budget,
+    its optimiser and the sweeps."""
     found = [t for t, kind in chain_members(data, chain) if kind == "demod"]
     if len(found) != 1:
         raise ValueError(f"--drive-band: {chain} has {len(found)} demodulators, the drive sweep needs one")
@@ -255,7 +244,7 @@ class Evaluator:
         err = 0.0
         for f_hz in (None, *self.frequencies):
             if f_hz is not None:
-                _get_table(data, self.demod)["f_hz"] = float(f_hz)
+                table_at(data, self.demod)["f_hz"] = float(f_hz)
             try:
                 design = build(Config(data, source="<optimise>"))
             except (ValueError, TypeError, AssertionError):

@@ -135,19 +135,12 @@ def model_run(design, name: str, inputs: dict[str, np.ndarray]):
 
 def schedule_cycles(design, name: str, extra: dict | None = None) -> int:
     """The stated cycles per sample of the DUT variant ``extra`` selects (at its divider unroll):
-    how far into a schedule an aborted segment's reset may land. A schedule that varies from sample
-    to sample (a decimating lag) has no one figure: then the design's cycle budget at 40 MHz."""
-    from .schedule import chain_schedule, member_cycles
+    how far into a schedule an aborted segment's reset may land."""
+    from .schedule import cycles_per_sample
 
     extra = extra or {}
-    arch = 1 if is_serial(extra) else 0
     unroll = int(extra.get("DIV_UNROLL", extra.get("UNROLL", 1)))
-    try:
-        if design.instances[name].members:
-            return chain_schedule(design, name, arch, unroll)[0]
-        return member_cycles(design, name, arch, unroll)
-    except ValueError:
-        return int(40e6 // design.fs_hz)
+    return cycles_per_sample(design, name, 1 if is_serial(extra) else 0, unroll)
 
 
 def segment(design, name, inputs, outputs=None, ovf_total=None, abort_after=None, gap=None) -> dict:

@@ -112,6 +112,18 @@ def member_cycles(design, name: str, arch: int = 1, unroll: int = 1) -> int:
     return SERIAL_CYCLES[module](p) if arch else PER_CLOCK_LATENCY[module]
 
 
+def cycles_per_sample(design, name: str, arch: int = 1, unroll: int = 1) -> int:
+    """An instance's cycles per sample (a chain's from its top's schedule, a block's from its module's);
+    for a schedule that varies from sample to sample (a decimating lag) the bound every schedule
+    must meet: the sample period at 40 MHz."""
+    try:
+        if design.instances[name].members:
+            return chain_schedule(design, name, arch, unroll)[0]
+        return member_cycles(design, name, arch, unroll)
+    except ValueError:
+        return int(40e6 // design.fs_hz)
+
+
 def chain_schedule(design, name: str, arch: int = 1, unroll: int = 1) -> tuple[int, dict[str, tuple[int, int]]]:
     """A generated top's schedule, one sample in flight, as the top runs it (:mod:`fxdsp.hdl.chain_top`):
     (cycles per sample, {member: (in_valid cycle, cycles)}), counted from the cycle after the chain's

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..blocks.base import corner_codes, tie_codes
+from .schedule import cycles_per_sample
 
 # samples of a random stream per block module (its corners first, then a random tail): the slow ones
 # shorter; a chain's from its one-sample-per-clock schedule, CHAIN_CYCLES cycles in all
@@ -24,17 +25,9 @@ ICARUS_SERIAL_CYCLES = 20_000
 ICARUS_MIN_SAMPLES = 40
 
 
-def _cycles_per_sample(design, name: str, arch: int) -> int:
-    from .schedule import chain_schedule, member_cycles
-
-    if design.instances[name].members:
-        return chain_schedule(design, name, arch)[0]
-    return member_cycles(design, name, arch)
-
-
 def icarus_samples(design, name: str) -> int:
     """The window of an instance's serial stream on Icarus, from its cycles per sample."""
-    per = _cycles_per_sample(design, name, 1)
+    per = cycles_per_sample(design, name, 1)
     return int(min(ICARUS_SERIAL_SAMPLES, max(ICARUS_MIN_SAMPLES, ICARUS_SERIAL_CYCLES // per)))
 
 
@@ -42,7 +35,7 @@ def max_samples(design, name: str) -> int | None:
     """The longest random stream of an instance (None: its whole stimulus)."""
     inst = design.instances[name]
     if inst.members:
-        return max(400, CHAIN_CYCLES // _cycles_per_sample(design, name, 0))
+        return max(400, CHAIN_CYCLES // cycles_per_sample(design, name, 0))
     return MAX_SAMPLES.get(inst.module)
 
 

@@ -35,7 +35,7 @@ import tomllib
 import numpy as np
 
 from fxdsp.chains import build
-from fxdsp.config import Config, default_config_text, dumps_value
+from fxdsp.config import Config, default_config_text, dumps_value, table_at
 from fxdsp.fixed import Format
 
 FS_MV = 4096.0
@@ -125,10 +125,7 @@ def _default_data() -> dict:
 
 def _default(table: str, key: str):
     """A value of the default config (parsed once: calibrations ask for it hundreds of times)."""
-    node = _default_data()
-    for part in table.split("."):
-        node = node[part]
-    return node[key]
+    return table_at(_default_data(), table)[key]
 
 
 def acc_width(temp_format: str) -> int:
