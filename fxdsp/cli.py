@@ -34,6 +34,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "budget": ("fxdsp.budget.cli", "float vs fixed error budget in physical units; word-length exploration"),
     "rtl": ("fxdsp.hdl.rtl_cli", "RTL regression of a config: vectors, headers, every block and chain simulated "
                                  "against the model, report"),
+    "formal": ("fxdsp.hdl.formal_cli", "formal proofs of every serial block's and chain top's handshake, latency "
+                                       "and shared-multiplier rules (yosys-smtbmc)"),
     "hdl-gen": ("fxdsp.hdl.gen_cli", "write the Verilog parameter headers and ROM files from the config"),
     "hw-report": ("fxdsp.hdl.report_cli", "synthesise every block for the iCE40UP5K and tabulate the cost"),
     "diagnose-bench": ("fxdsp.commands.diagnose_bench", "seconds to diagnose simulated logs of given sizes"),

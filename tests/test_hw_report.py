@@ -262,15 +262,19 @@ def test_a_comment_or_whitespace_edit_of_the_rtl_needs_no_new_synthesis(tmp_path
     design = build()
     before = expected_row_hashes(design, 40.0)
     rtl = _copy_rtl(tmp_path, monkeypatch)
+    source_before = hwreport.source_hash(design)
     text = (rtl / "sf_divide.v").read_text()
     reworded = re.sub(r"//[^\n]*", "// reworded", text).replace("\n    ", "\n        ")
     assert reworded != text
     (rtl / "sf_divide.v").write_text(reworded)
     assert expected_row_hashes(design, 40.0) == before
+    assert hwreport.source_hash(design) == source_before   # the report's own key likewise
     assert reworded.count("assign in_ready = ~busy & ~fin;") == 1
     (rtl / "sf_divide.v").write_text(reworded.replace("assign in_ready = ~busy & ~fin;", "assign in_ready = ~busy;"))
     after = expected_row_hashes(design, 40.0)
     changed = {row for row in before if before[row] != after[row]}
+    assert hwreport.source_hash(design) != source_before
+    assert hwreport.source_hash(design) != source_before
     assert {"sf_divide", "sf_divide (ARCH=1)", "sf_divide000", "chain_paper002 (ARCH=1)", "chain_paper000"} <= changed
     assert not changed & {"rtd", "iir", "demod", "chain_paper001", "chain_paper001 (ARCH=1)"}
 
@@ -288,6 +292,28 @@ def test_a_generated_tops_comments_are_not_its_logic():
     assert reworded != text and row_hash("chain_paper000", None, {"chain_paper000.v": reworded}) == h
     broken = text.replace(" & done_piecewise_k0", "", 1)
     assert broken != text and row_hash("chain_paper000", None, {"chain_paper000.v": broken}) != h
+
+
+def test_checks_synthesis_never_reads_are_not_logic():
+    """A formal property (`ifdef FORMAL) or a simulation-only check (`ifndef SYNTHESIS) of a generated
+    top is not what synthesis reads: editing it leaves the row current; the synthesised code beside
+    it still counts, and a branch synthesis does take (`else of `ifdef FORMAL) counts too."""
+    from fxdsp.chains import build
+    from fxdsp.hdl.chain_top import chain_top
+    from fxdsp.hdl.hwreport import row_hash, synthesised
+
+    text = chain_top(build(), "chain_paper000")
+    h = row_hash("chain_paper000", None, {"chain_paper000.v": text})
+    assert text.count("one_request: assert(") == 1 and text.count("$finish;") == 1
+    for edited in (text.replace("one_request: assert(", "one_request: assume("),
+                   text.replace("$finish;", "$stop;")):
+        assert edited != text and row_hash("chain_paper000", None, {"chain_paper000.v": edited}) == h
+    # the directives as synthesis (SYNTHESIS defined, FORMAL not) resolves them, nested, with `else
+    src = "a\n`ifdef FORMAL\nf\n`else\nx\n`ifndef SYNTHESIS\ns\n`else\ny\n`endif\n`endif\nb\n`ifdef SYNTHESIS\nz\n`endif"
+    assert synthesised(src).split() == ["a", "x", "y", "b", "z"]
+    assert synthesised(src, {"FORMAL"}).split() == ["a", "f", "b"]
+    with pytest.raises(ValueError):
+        synthesised("`ifdef FORMAL\nf\n")
 
 
 # the parts of a nextpnr-ice40 0.4 log that hw-report reads (its own words and layout)

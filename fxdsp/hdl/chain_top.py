@@ -269,12 +269,17 @@ class _Top:
                "            fx_mac_serial #(.A_W(MAC_A_W), .B_W(MAC_B_W), .VAR_N(1)) u_mac (.clk(clk), .rst(rst),",
                "                .in_valid(|req), .in_ready(sh_ready), .a(sh_a), .b(sh_b), .na(sh_na), .nb(sh_nb),",
                "                .out_valid(sh_valid), .p(sh_p));",
+               "            // two requests at once would be a scheduling error (one product lost): proven never to",
+               "            // happen (fxdsp.hdl.formal, make formal); a simulation stops on it",
+               "`ifdef FORMAL",
+               f"            always @* if (!rst) one_request: assert((req & (req - {n}'d1)) == {n}'d0);",
+               "`else",
                "`ifndef SYNTHESIS",
-               "            // simulation only: two requests at once would be a scheduling error (one product lost)",
                "            always @(posedge clk) begin",
                f"                if (!rst && (req & (req - {n}'d1)) != {n}'d0) begin",
                f'                    $display("{self.name}: members %b request the shared multiplier at once", req);',
                "                    $finish;", "                end", "            end",
+               "`endif",
                "`endif",
                "        end else begin : g_no_mac",
                "            // one-sample-per-clock members: no shared multiplier, the bundles are idle",
@@ -286,6 +291,79 @@ class _Top:
                "            /* verilator lint_on UNUSEDSIGNAL */",
                "        end", "    endgenerate"]
         return out
+
+
+    def formal_lines(self) -> list[str]:
+        """The members' contracts for the formal proofs (:mod:`fxdsp.hdl.formal`), read only under
+        FORMAL: each member answers only a sample it took (out_valid only while one is in flight)
+        and requests the multiplier only while it, or the guest on its engine, has one in flight.
+        Each is proven of the block on its own; the top's proof with its members cut
+        (FXDSP_CUT_MEMBERS) assumes them, a proof with the members in place asserts them."""
+        vs = [_v(m) for m in self.members]
+        guest_of = {s.host: s.guest for s in self.shares.values()}
+
+        def take(m: str) -> str:
+            return f"go_{_v(m)}_q" + (f" & {_v(m)}_in_ready" if self.ready(m) else "")
+
+        rules = []
+        for m in self.members:
+            v = _v(m)
+            rules.append(f"{{kind}}(!{v}_out_valid || fv_pend_{v});")
+            if m in self.on_mac and m not in self.shares:   # a guest's bundle is tied off when shared
+                also = f" || ((SHARE != 0) & fv_pend_{_v(guest_of[m])})" if m in guest_of else ""
+                rules.append(f"{{kind}}(!{v}_mac_req || fv_pend_{v}{also});")
+        out = ["`ifdef FORMAL",
+               "    // ---- the members' contracts (fxdsp.hdl.formal): out_valid only for a sample the member took, a",
+               "    // multiplier request only while it (or the guest on its engine) has one in flight; proven of each",
+               "    // block on its own, assumed of cut members (FXDSP_CUT_MEMBERS), asserted of members in place ----",
+               "    reg " + ", ".join(f"fv_pend_{v}" for v in vs) + ";",
+               "    always @(posedge clk) begin",
+               "        if (rst) begin",
+               *(f"            fv_pend_{v} <= 1'b0;" for v in vs),
+               "        end else begin",
+               *(f"            if ({take(m)}) fv_pend_{_v(m)} <= 1'b1; else if ({_v(m)}_out_valid) fv_pend_{_v(m)} <= 1'b0;"
+                 for m in self.members),
+               "        end",
+               "    end",
+               *self._formal_invariants(),
+               "`ifdef FXDSP_CUT_MEMBERS",
+               "    always @* if (!rst) begin",
+               *(f"        {r.format(kind='assume')}" for r in rules),
+               "    end",
+               "`else",
+               "    always @* if (!rst) begin",
+               *(f"        {r.format(kind='assert')}" for r in rules),
+               "    end",
+               "`endif",
+               "`endif"]
+        return out
+
+
+    def _formal_invariants(self) -> list[str]:
+        """The top's own bookkeeping, asserted in every proof (an induction proof needs them: they rule
+        out states no reset reaches): idle, nothing is started or done; a member's registered start
+        goes to a member started, not done, not yet in flight; a member in flight was started and is
+        not done; at most one engine works on the multiplier (a guest's pass is its host's)."""
+        vs = [_v(m) for m in self.members]
+        # an engine's use: its member's, and in the serial variant its guest's pass (the ``own`` of mac_lines)
+        guests = {m: [s.guest for s in self.shares.values() if s.host == m] for m in self.on_mac}
+        users = [f"on_mac_{_v(m)}" + "".join(f" | ((SHARE != 0) & on_mac_{_v(g)})" for g in guests[m])
+                 + (" & (SHARE == 0)" if m in self.shares else "") for m in self.on_mac]
+        n = len(users)
+        out = [f"    wire [{n - 1}:0] fv_users = {{" + ", ".join(f"({u})" for u in users) + "};"] if n > 1 else []
+        out += ["    always @* if (!rst) begin",
+               "        idle_means_nothing_started: assert(busy || !(" + " | ".join(f"started_{v} | done_{v}" for v in vs) + "));"]
+        for v in vs:
+            out.append(f"        {v}_in_flight_was_started: assert(!fv_pend_{v} || (started_{v} & ~done_{v}));")
+            out.append(f"        {v}_done_was_started: assert(!done_{v} || started_{v});")
+            out.append(f"        {v}_start_on_its_way: assert(!go_{v}_q || (started_{v} & ~done_{v} & ~fv_pend_{v}));")
+        for sh in self.shares.values():   # a second coefficient set starts with its host
+            if sh.kind == "set":
+                g, h = _v(sh.guest), _v(sh.host)
+                out.append(f"        {g}_starts_with_{h}: assert((SHARE == 0) || (started_{g} == started_{h}));")
+        if n > 1:
+            out.append(f"        one_member_on_the_multiplier: assert((fv_users & (fv_users - {n}'d1)) == {n}'d0);")
+        return out + ["    end"]
 
 
 def chain_top(design: Design, name: str) -> str:
@@ -361,6 +439,7 @@ def chain_top(design: Design, name: str) -> str:
     for p, e in net.outputs.items():
         body.append(f"    assign {p} = {_v(e.instance)}_{e.port}_q;")
     body.append("    assign ovf = {" + ", ".join(f"{_v(m)}_ovf_q" for m in reversed(members)) + "};")
+    body += t.formal_lines()
     return "\n".join(lines + body + ["endmodule", "", "`default_nettype wire", ""])
 
 

@@ -119,14 +119,19 @@ module chain_paper000 #(
             fx_mac_serial #(.A_W(MAC_A_W), .B_W(MAC_B_W), .VAR_N(1)) u_mac (.clk(clk), .rst(rst),
                 .in_valid(|req), .in_ready(sh_ready), .a(sh_a), .b(sh_b), .na(sh_na), .nb(sh_nb),
                 .out_valid(sh_valid), .p(sh_p));
+            // two requests at once would be a scheduling error (one product lost): proven never to
+            // happen (fxdsp.hdl.formal, make formal); a simulation stops on it
+`ifdef FORMAL
+            always @* if (!rst) one_request: assert((req & (req - 2'd1)) == 2'd0);
+`else
 `ifndef SYNTHESIS
-            // simulation only: two requests at once would be a scheduling error (one product lost)
             always @(posedge clk) begin
                 if (!rst && (req & (req - 2'd1)) != 2'd0) begin
                     $display("chain_paper000: members %b request the shared multiplier at once", req);
                     $finish;
                 end
             end
+`endif
 `endif
         end else begin : g_no_mac
             // one-sample-per-clock members: no shared multiplier, the bundles are idle
@@ -265,6 +270,61 @@ module chain_paper000 #(
     end
     assign accel = sf_divide000_y_q;
     assign ovf = {sf_divide000_ovf_q, bias_subtract000_ovf_q, piecewise_k1_ovf_q, piecewise_k0_ovf_q};
+`ifdef FORMAL
+    // ---- the members' contracts (fxdsp.hdl.formal): out_valid only for a sample the member took, a
+    // multiplier request only while it (or the guest on its engine) has one in flight; proven of each
+    // block on its own, assumed of cut members (FXDSP_CUT_MEMBERS), asserted of members in place ----
+    reg fv_pend_piecewise_k0, fv_pend_piecewise_k1, fv_pend_bias_subtract000, fv_pend_sf_divide000;
+    always @(posedge clk) begin
+        if (rst) begin
+            fv_pend_piecewise_k0 <= 1'b0;
+            fv_pend_piecewise_k1 <= 1'b0;
+            fv_pend_bias_subtract000 <= 1'b0;
+            fv_pend_sf_divide000 <= 1'b0;
+        end else begin
+            if (go_piecewise_k0_q & piecewise_k0_in_ready) fv_pend_piecewise_k0 <= 1'b1; else if (piecewise_k0_out_valid) fv_pend_piecewise_k0 <= 1'b0;
+            if (go_piecewise_k1_q & piecewise_k1_in_ready) fv_pend_piecewise_k1 <= 1'b1; else if (piecewise_k1_out_valid) fv_pend_piecewise_k1 <= 1'b0;
+            if (go_bias_subtract000_q) fv_pend_bias_subtract000 <= 1'b1; else if (bias_subtract000_out_valid) fv_pend_bias_subtract000 <= 1'b0;
+            if (go_sf_divide000_q & sf_divide000_in_ready) fv_pend_sf_divide000 <= 1'b1; else if (sf_divide000_out_valid) fv_pend_sf_divide000 <= 1'b0;
+        end
+    end
+    wire [1:0] fv_users = {(on_mac_piecewise_k0), (on_mac_piecewise_k1)};
+    always @* if (!rst) begin
+        idle_means_nothing_started: assert(busy || !(started_piecewise_k0 | done_piecewise_k0 | started_piecewise_k1 | done_piecewise_k1 | started_bias_subtract000 | done_bias_subtract000 | started_sf_divide000 | done_sf_divide000));
+        piecewise_k0_in_flight_was_started: assert(!fv_pend_piecewise_k0 || (started_piecewise_k0 & ~done_piecewise_k0));
+        piecewise_k0_done_was_started: assert(!done_piecewise_k0 || started_piecewise_k0);
+        piecewise_k0_start_on_its_way: assert(!go_piecewise_k0_q || (started_piecewise_k0 & ~done_piecewise_k0 & ~fv_pend_piecewise_k0));
+        piecewise_k1_in_flight_was_started: assert(!fv_pend_piecewise_k1 || (started_piecewise_k1 & ~done_piecewise_k1));
+        piecewise_k1_done_was_started: assert(!done_piecewise_k1 || started_piecewise_k1);
+        piecewise_k1_start_on_its_way: assert(!go_piecewise_k1_q || (started_piecewise_k1 & ~done_piecewise_k1 & ~fv_pend_piecewise_k1));
+        bias_subtract000_in_flight_was_started: assert(!fv_pend_bias_subtract000 || (started_bias_subtract000 & ~done_bias_subtract000));
+        bias_subtract000_done_was_started: assert(!done_bias_subtract000 || started_bias_subtract000);
+        bias_subtract000_start_on_its_way: assert(!go_bias_subtract000_q || (started_bias_subtract000 & ~done_bias_subtract000 & ~fv_pend_bias_subtract000));
+        sf_divide000_in_flight_was_started: assert(!fv_pend_sf_divide000 || (started_sf_divide000 & ~done_sf_divide000));
+        sf_divide000_done_was_started: assert(!done_sf_divide000 || started_sf_divide000);
+        sf_divide000_start_on_its_way: assert(!go_sf_divide000_q || (started_sf_divide000 & ~done_sf_divide000 & ~fv_pend_sf_divide000));
+        one_member_on_the_multiplier: assert((fv_users & (fv_users - 2'd1)) == 2'd0);
+    end
+`ifdef FXDSP_CUT_MEMBERS
+    always @* if (!rst) begin
+        assume(!piecewise_k0_out_valid || fv_pend_piecewise_k0);
+        assume(!piecewise_k0_mac_req || fv_pend_piecewise_k0);
+        assume(!piecewise_k1_out_valid || fv_pend_piecewise_k1);
+        assume(!piecewise_k1_mac_req || fv_pend_piecewise_k1);
+        assume(!bias_subtract000_out_valid || fv_pend_bias_subtract000);
+        assume(!sf_divide000_out_valid || fv_pend_sf_divide000);
+    end
+`else
+    always @* if (!rst) begin
+        assert(!piecewise_k0_out_valid || fv_pend_piecewise_k0);
+        assert(!piecewise_k0_mac_req || fv_pend_piecewise_k0);
+        assert(!piecewise_k1_out_valid || fv_pend_piecewise_k1);
+        assert(!piecewise_k1_mac_req || fv_pend_piecewise_k1);
+        assert(!bias_subtract000_out_valid || fv_pend_bias_subtract000);
+        assert(!sf_divide000_out_valid || fv_pend_sf_divide000);
+    end
+`endif
+`endif
 endmodule
 
 `default_nettype wire

@@ -100,14 +100,19 @@ module chain_paper001 #(
             fx_mac_serial #(.A_W(MAC_A_W), .B_W(MAC_B_W), .VAR_N(1)) u_mac (.clk(clk), .rst(rst),
                 .in_valid(|req), .in_ready(sh_ready), .a(sh_a), .b(sh_b), .na(sh_na), .nb(sh_nb),
                 .out_valid(sh_valid), .p(sh_p));
+            // two requests at once would be a scheduling error (one product lost): proven never to
+            // happen (fxdsp.hdl.formal, make formal); a simulation stops on it
+`ifdef FORMAL
+            always @* if (!rst) one_request: assert((req & (req - 1'd1)) == 1'd0);
+`else
 `ifndef SYNTHESIS
-            // simulation only: two requests at once would be a scheduling error (one product lost)
             always @(posedge clk) begin
                 if (!rst && (req & (req - 1'd1)) != 1'd0) begin
                     $display("chain_paper001: members %b request the shared multiplier at once", req);
                     $finish;
                 end
             end
+`endif
 `endif
         end else begin : g_no_mac
             // one-sample-per-clock members: no shared multiplier, the bundles are idle
@@ -213,6 +218,50 @@ module chain_paper001 #(
     assign temp = freq2temp_temp_q;
     assign rate = bias_subtract001_y_q;
     assign ovf = {bias_subtract001_ovf_q, piecewise_bias001_ovf_q, freq2temp_ovf_q};
+`ifdef FORMAL
+    // ---- the members' contracts (fxdsp.hdl.formal): out_valid only for a sample the member took, a
+    // multiplier request only while it (or the guest on its engine) has one in flight; proven of each
+    // block on its own, assumed of cut members (FXDSP_CUT_MEMBERS), asserted of members in place ----
+    reg fv_pend_freq2temp, fv_pend_piecewise_bias001, fv_pend_bias_subtract001;
+    always @(posedge clk) begin
+        if (rst) begin
+            fv_pend_freq2temp <= 1'b0;
+            fv_pend_piecewise_bias001 <= 1'b0;
+            fv_pend_bias_subtract001 <= 1'b0;
+        end else begin
+            if (go_freq2temp_q & freq2temp_in_ready) fv_pend_freq2temp <= 1'b1; else if (freq2temp_out_valid) fv_pend_freq2temp <= 1'b0;
+            if (go_piecewise_bias001_q & piecewise_bias001_in_ready) fv_pend_piecewise_bias001 <= 1'b1; else if (piecewise_bias001_out_valid) fv_pend_piecewise_bias001 <= 1'b0;
+            if (go_bias_subtract001_q) fv_pend_bias_subtract001 <= 1'b1; else if (bias_subtract001_out_valid) fv_pend_bias_subtract001 <= 1'b0;
+        end
+    end
+    always @* if (!rst) begin
+        idle_means_nothing_started: assert(busy || !(started_freq2temp | done_freq2temp | started_piecewise_bias001 | done_piecewise_bias001 | started_bias_subtract001 | done_bias_subtract001));
+        freq2temp_in_flight_was_started: assert(!fv_pend_freq2temp || (started_freq2temp & ~done_freq2temp));
+        freq2temp_done_was_started: assert(!done_freq2temp || started_freq2temp);
+        freq2temp_start_on_its_way: assert(!go_freq2temp_q || (started_freq2temp & ~done_freq2temp & ~fv_pend_freq2temp));
+        piecewise_bias001_in_flight_was_started: assert(!fv_pend_piecewise_bias001 || (started_piecewise_bias001 & ~done_piecewise_bias001));
+        piecewise_bias001_done_was_started: assert(!done_piecewise_bias001 || started_piecewise_bias001);
+        piecewise_bias001_start_on_its_way: assert(!go_piecewise_bias001_q || (started_piecewise_bias001 & ~done_piecewise_bias001 & ~fv_pend_piecewise_bias001));
+        bias_subtract001_in_flight_was_started: assert(!fv_pend_bias_subtract001 || (started_bias_subtract001 & ~done_bias_subtract001));
+        bias_subtract001_done_was_started: assert(!done_bias_subtract001 || started_bias_subtract001);
+        bias_subtract001_start_on_its_way: assert(!go_bias_subtract001_q || (started_bias_subtract001 & ~done_bias_subtract001 & ~fv_pend_bias_subtract001));
+    end
+`ifdef FXDSP_CUT_MEMBERS
+    always @* if (!rst) begin
+        assume(!freq2temp_out_valid || fv_pend_freq2temp);
+        assume(!piecewise_bias001_out_valid || fv_pend_piecewise_bias001);
+        assume(!piecewise_bias001_mac_req || fv_pend_piecewise_bias001);
+        assume(!bias_subtract001_out_valid || fv_pend_bias_subtract001);
+    end
+`else
+    always @* if (!rst) begin
+        assert(!freq2temp_out_valid || fv_pend_freq2temp);
+        assert(!piecewise_bias001_out_valid || fv_pend_piecewise_bias001);
+        assert(!piecewise_bias001_mac_req || fv_pend_piecewise_bias001);
+        assert(!bias_subtract001_out_valid || fv_pend_bias_subtract001);
+    end
+`endif
+`endif
 endmodule
 
 `default_nettype wire

@@ -179,14 +179,19 @@ module chain_paper002 #(
             fx_mac_serial #(.A_W(MAC_A_W), .B_W(MAC_B_W), .VAR_N(1)) u_mac (.clk(clk), .rst(rst),
                 .in_valid(|req), .in_ready(sh_ready), .a(sh_a), .b(sh_b), .na(sh_na), .nb(sh_nb),
                 .out_valid(sh_valid), .p(sh_p));
+            // two requests at once would be a scheduling error (one product lost): proven never to
+            // happen (fxdsp.hdl.formal, make formal); a simulation stops on it
+`ifdef FORMAL
+            always @* if (!rst) one_request: assert((req & (req - 5'd1)) == 5'd0);
+`else
 `ifndef SYNTHESIS
-            // simulation only: two requests at once would be a scheduling error (one product lost)
             always @(posedge clk) begin
                 if (!rst && (req & (req - 5'd1)) != 5'd0) begin
                     $display("chain_paper002: members %b request the shared multiplier at once", req);
                     $finish;
                 end
             end
+`endif
 `endif
         end else begin : g_no_mac
             // one-sample-per-clock members: no shared multiplier, the bundles are idle
@@ -509,6 +514,85 @@ module chain_paper002 #(
     assign temp = rtd_temp_q;
     assign rate = iir_y_q;
     assign ovf = {iir_ovf_q, bias_subtract_ovf_q, demod_ovf_q, sf_divide_ovf_q, piecewise_bias_ovf_q, piecewise_sf_ovf_q, rtd_ovf_q};
+`ifdef FORMAL
+    // ---- the members' contracts (fxdsp.hdl.formal): out_valid only for a sample the member took, a
+    // multiplier request only while it (or the guest on its engine) has one in flight; proven of each
+    // block on its own, assumed of cut members (FXDSP_CUT_MEMBERS), asserted of members in place ----
+    reg fv_pend_rtd, fv_pend_piecewise_sf, fv_pend_piecewise_bias, fv_pend_sf_divide, fv_pend_demod, fv_pend_bias_subtract, fv_pend_iir;
+    always @(posedge clk) begin
+        if (rst) begin
+            fv_pend_rtd <= 1'b0;
+            fv_pend_piecewise_sf <= 1'b0;
+            fv_pend_piecewise_bias <= 1'b0;
+            fv_pend_sf_divide <= 1'b0;
+            fv_pend_demod <= 1'b0;
+            fv_pend_bias_subtract <= 1'b0;
+            fv_pend_iir <= 1'b0;
+        end else begin
+            if (go_rtd_q & rtd_in_ready) fv_pend_rtd <= 1'b1; else if (rtd_out_valid) fv_pend_rtd <= 1'b0;
+            if (go_piecewise_sf_q & piecewise_sf_in_ready) fv_pend_piecewise_sf <= 1'b1; else if (piecewise_sf_out_valid) fv_pend_piecewise_sf <= 1'b0;
+            if (go_piecewise_bias_q & piecewise_bias_in_ready) fv_pend_piecewise_bias <= 1'b1; else if (piecewise_bias_out_valid) fv_pend_piecewise_bias <= 1'b0;
+            if (go_sf_divide_q & sf_divide_in_ready) fv_pend_sf_divide <= 1'b1; else if (sf_divide_out_valid) fv_pend_sf_divide <= 1'b0;
+            if (go_demod_q & demod_in_ready) fv_pend_demod <= 1'b1; else if (demod_out_valid) fv_pend_demod <= 1'b0;
+            if (go_bias_subtract_q) fv_pend_bias_subtract <= 1'b1; else if (bias_subtract_out_valid) fv_pend_bias_subtract <= 1'b0;
+            if (go_iir_q & iir_in_ready) fv_pend_iir <= 1'b1; else if (iir_out_valid) fv_pend_iir <= 1'b0;
+        end
+    end
+    wire [4:0] fv_users = {(on_mac_rtd), (on_mac_piecewise_sf | ((SHARE != 0) & on_mac_piecewise_bias)), (on_mac_demod | ((SHARE != 0) & on_mac_iir)), (on_mac_piecewise_bias & (SHARE == 0)), (on_mac_iir & (SHARE == 0))};
+    always @* if (!rst) begin
+        idle_means_nothing_started: assert(busy || !(started_rtd | done_rtd | started_piecewise_sf | done_piecewise_sf | started_piecewise_bias | done_piecewise_bias | started_sf_divide | done_sf_divide | started_demod | done_demod | started_bias_subtract | done_bias_subtract | started_iir | done_iir));
+        rtd_in_flight_was_started: assert(!fv_pend_rtd || (started_rtd & ~done_rtd));
+        rtd_done_was_started: assert(!done_rtd || started_rtd);
+        rtd_start_on_its_way: assert(!go_rtd_q || (started_rtd & ~done_rtd & ~fv_pend_rtd));
+        piecewise_sf_in_flight_was_started: assert(!fv_pend_piecewise_sf || (started_piecewise_sf & ~done_piecewise_sf));
+        piecewise_sf_done_was_started: assert(!done_piecewise_sf || started_piecewise_sf);
+        piecewise_sf_start_on_its_way: assert(!go_piecewise_sf_q || (started_piecewise_sf & ~done_piecewise_sf & ~fv_pend_piecewise_sf));
+        piecewise_bias_in_flight_was_started: assert(!fv_pend_piecewise_bias || (started_piecewise_bias & ~done_piecewise_bias));
+        piecewise_bias_done_was_started: assert(!done_piecewise_bias || started_piecewise_bias);
+        piecewise_bias_start_on_its_way: assert(!go_piecewise_bias_q || (started_piecewise_bias & ~done_piecewise_bias & ~fv_pend_piecewise_bias));
+        sf_divide_in_flight_was_started: assert(!fv_pend_sf_divide || (started_sf_divide & ~done_sf_divide));
+        sf_divide_done_was_started: assert(!done_sf_divide || started_sf_divide);
+        sf_divide_start_on_its_way: assert(!go_sf_divide_q || (started_sf_divide & ~done_sf_divide & ~fv_pend_sf_divide));
+        demod_in_flight_was_started: assert(!fv_pend_demod || (started_demod & ~done_demod));
+        demod_done_was_started: assert(!done_demod || started_demod);
+        demod_start_on_its_way: assert(!go_demod_q || (started_demod & ~done_demod & ~fv_pend_demod));
+        bias_subtract_in_flight_was_started: assert(!fv_pend_bias_subtract || (started_bias_subtract & ~done_bias_subtract));
+        bias_subtract_done_was_started: assert(!done_bias_subtract || started_bias_subtract);
+        bias_subtract_start_on_its_way: assert(!go_bias_subtract_q || (started_bias_subtract & ~done_bias_subtract & ~fv_pend_bias_subtract));
+        iir_in_flight_was_started: assert(!fv_pend_iir || (started_iir & ~done_iir));
+        iir_done_was_started: assert(!done_iir || started_iir);
+        iir_start_on_its_way: assert(!go_iir_q || (started_iir & ~done_iir & ~fv_pend_iir));
+        piecewise_bias_starts_with_piecewise_sf: assert((SHARE == 0) || (started_piecewise_bias == started_piecewise_sf));
+        one_member_on_the_multiplier: assert((fv_users & (fv_users - 5'd1)) == 5'd0);
+    end
+`ifdef FXDSP_CUT_MEMBERS
+    always @* if (!rst) begin
+        assume(!rtd_out_valid || fv_pend_rtd);
+        assume(!rtd_mac_req || fv_pend_rtd);
+        assume(!piecewise_sf_out_valid || fv_pend_piecewise_sf);
+        assume(!piecewise_sf_mac_req || fv_pend_piecewise_sf || ((SHARE != 0) & fv_pend_piecewise_bias));
+        assume(!piecewise_bias_out_valid || fv_pend_piecewise_bias);
+        assume(!sf_divide_out_valid || fv_pend_sf_divide);
+        assume(!demod_out_valid || fv_pend_demod);
+        assume(!demod_mac_req || fv_pend_demod || ((SHARE != 0) & fv_pend_iir));
+        assume(!bias_subtract_out_valid || fv_pend_bias_subtract);
+        assume(!iir_out_valid || fv_pend_iir);
+    end
+`else
+    always @* if (!rst) begin
+        assert(!rtd_out_valid || fv_pend_rtd);
+        assert(!rtd_mac_req || fv_pend_rtd);
+        assert(!piecewise_sf_out_valid || fv_pend_piecewise_sf);
+        assert(!piecewise_sf_mac_req || fv_pend_piecewise_sf || ((SHARE != 0) & fv_pend_piecewise_bias));
+        assert(!piecewise_bias_out_valid || fv_pend_piecewise_bias);
+        assert(!sf_divide_out_valid || fv_pend_sf_divide);
+        assert(!demod_out_valid || fv_pend_demod);
+        assert(!demod_mac_req || fv_pend_demod || ((SHARE != 0) & fv_pend_iir));
+        assert(!bias_subtract_out_valid || fv_pend_bias_subtract);
+        assert(!iir_out_valid || fv_pend_iir);
+    end
+`endif
+`endif
 endmodule
 
 `default_nettype wire

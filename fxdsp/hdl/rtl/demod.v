@@ -552,14 +552,19 @@ module demod #(
                 assign aux_out_valid = lpf_done && aux_q;
                 assign {aux_y, lpf_y} = lpf_yall;
                 assign {aux_ovf, lpf_o} = lpf_oall;
+                // an aux sample while the demodulator works would share its multiplier: the caller's
+                // rule, proven of a generated top (fxdsp.hdl.formal); a simulation stops on it
+`ifdef FORMAL
+                always @* if (!rst && aux_in_valid) aux_only_when_idle: assert(idle);
+`else
 `ifndef SYNTHESIS
-                // simulation only: an aux sample while the demodulator works would share its multiplier
                 always @(posedge clk) begin
                     if (!rst && aux_in_valid && !idle) begin
                         $display("demod: aux_in_valid while busy (state %0d, aux %b)", st, aux_q);
                         $finish;
                     end
                 end
+`endif
 `endif
             end else begin : g_no_aux
                 assign aux_go = 1'b0;

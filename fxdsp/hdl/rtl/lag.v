@@ -92,7 +92,9 @@ module lag #(
     reg signed [STATE_W-1:0] st;                       // te with GUARD extra fraction bits
     reg                      primed;
     reg [PH_W-1:0]           phase;                    // 0: this sample updates the state
-    wire                     update = in_valid & (phase == {PH_W{1'b0}});
+    // DECIM = 1: every sample updates whatever the (then unread) count holds, so no state of the
+    // register breaks the stated schedule (proven from any state by induction, fxdsp.hdl.formal)
+    wire                     update = in_valid & ((DECIM == 1) | (phase == {PH_W{1'b0}}));
 
     wire signed [STATE_W-1:0] xe = {{(STATE_W-TEMP_W){temp[TEMP_W-1]}}, temp};
     wire signed [STATE_W-1:0] xg = xe <<< GUARD;       // exact: fits STATE_W - 1 bits
@@ -258,7 +260,7 @@ module lag #(
                                 {sv_hi, sv_lo} <= {{(STATE_W-TEMP_W){temp[TEMP_W-1]}}, temp} <<< GUARD;
                                 sv_primed <= 1'b1;
                             end
-                            if (ph == {PH_W{1'b0}}) begin
+                            if ((DECIM == 1) | (ph == {PH_W{1'b0}})) begin   // DECIM = 1: as for phase above
                                 fsm <= S_DLO;               // an update: through the MAC
                             end else begin
                                 out_valid <= 1'b1;          // held: te unchanged, no overflow
