@@ -345,12 +345,11 @@ class _Top:
         goes to a member started, not done, not yet in flight; a member in flight was started and is
         not done; at most one engine works on the multiplier (a guest's pass is its host's)."""
         vs = [_v(m) for m in self.members]
-        # an engine's use: its member's, and in the serial variant its guest's pass (the ``own`` of mac_lines)
-        guests = {m: [s.guest for s in self.shares.values() if s.host == m] for m in self.on_mac}
-        users = [f"on_mac_{_v(m)}" + "".join(f" | ((SHARE != 0) & on_mac_{_v(g)})" for g in guests[m])
-                 + (" & (SHARE == 0)" if m in self.shares else "") for m in self.on_mac]
+        # an engine's use: ``own`` of mac_lines (a member's, and in the serial variant its guest's pass),
+        # but a guest's own bit not when its pass is its host's
+        users = [f"own[{i}]" + (" & (SHARE == 0)" if m in self.shares else "") for i, m in enumerate(self.bundles)]
         n = len(users)
-        out = [f"    wire [{n - 1}:0] fv_users = {{" + ", ".join(f"({u})" for u in users) + "};"] if n > 1 else []
+        out = [f"    wire [{n - 1}:0] fv_users = {{" + ", ".join(f"({u})" for u in reversed(users)) + "};"] if n > 1 else []
         out += ["    always @* if (!rst) begin",
                "        idle_means_nothing_started: assert(busy || !(" + " | ".join(f"started_{v} | done_{v}" for v in vs) + "));"]
         for v in vs:

@@ -30,7 +30,6 @@ Nothing here prints: the verdict is a :class:`Proof`.
 from __future__ import annotations
 
 import os
-import re
 import shutil
 import subprocess
 import sys
@@ -126,7 +125,7 @@ def wrapper(design, name: str, cut: bool = False) -> str:
         conns += tie_offs(inst, mac=False)
     header = [] if inst.members else [f'`include "{name}_params.vh"', "        , "]
     lines += [f"    {inst.module} #(", *header[:1], "        " + ("," if header else "") + ", ".join(over),
-              f"    ) dut (", "        " + ",\n        ".join(conns), "    );"]
+              "    ) dut (", "        " + ",\n        ".join(conns), "    );"]
     lines += [f"    // the monitor: the sample in flight and the edges since its accepting edge (C = {c})",
               f"    localparam integer C = {c};",
               "    reg pend;",
@@ -232,7 +231,8 @@ def prove(design, name: str, d: Path, depth: int | None = None, induction: bool 
     detail = "" if passed else failed_assertions(out)
     if passed and cut:
         # not vacuous: under the assumptions a sample goes through within its stated schedule (members
-        # answering at their stated cycles are one behaviour the contracts admit; the search stops there)
+        # answering at their stated cycles are one behaviour the contracts admit; the search stops
+        # there)
         reach = c + 4
         r = subprocess.run([smtbmc, "-s", SOLVER, "--presat", "-c", "-t", str(reach), "fx_formal.smt2"], cwd=d,
                            capture_output=True, text=True, env=env, timeout=timeout)

@@ -288,7 +288,7 @@ module chain_paper000 #(
             if (go_sf_divide000_q & sf_divide000_in_ready) fv_pend_sf_divide000 <= 1'b1; else if (sf_divide000_out_valid) fv_pend_sf_divide000 <= 1'b0;
         end
     end
-    wire [1:0] fv_users = {(on_mac_piecewise_k0), (on_mac_piecewise_k1)};
+    wire [1:0] fv_users = {(own[1]), (own[0])};
     always @* if (!rst) begin
         idle_means_nothing_started: assert(busy || !(started_piecewise_k0 | done_piecewise_k0 | started_piecewise_k1 | done_piecewise_k1 | started_bias_subtract000 | done_bias_subtract000 | started_sf_divide000 | done_sf_divide000));
         piecewise_k0_in_flight_was_started: assert(!fv_pend_piecewise_k0 || (started_piecewise_k0 & ~done_piecewise_k0));

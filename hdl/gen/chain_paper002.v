@@ -538,7 +538,7 @@ module chain_paper002 #(
             if (go_iir_q & iir_in_ready) fv_pend_iir <= 1'b1; else if (iir_out_valid) fv_pend_iir <= 1'b0;
         end
     end
-    wire [4:0] fv_users = {(on_mac_rtd), (on_mac_piecewise_sf | ((SHARE != 0) & on_mac_piecewise_bias)), (on_mac_demod | ((SHARE != 0) & on_mac_iir)), (on_mac_piecewise_bias & (SHARE == 0)), (on_mac_iir & (SHARE == 0))};
+    wire [4:0] fv_users = {(own[4] & (SHARE == 0)), (own[3] & (SHARE == 0)), (own[2]), (own[1]), (own[0])};
     always @* if (!rst) begin
         idle_means_nothing_started: assert(busy || !(started_rtd | done_rtd | started_piecewise_sf | done_piecewise_sf | started_piecewise_bias | done_piecewise_bias | started_sf_divide | done_sf_divide | started_demod | done_demod | started_bias_subtract | done_bias_subtract | started_iir | done_iir));
         rtd_in_flight_was_started: assert(!fv_pend_rtd || (started_rtd & ~done_rtd));

@@ -112,3 +112,4 @@ def test_formal_command(tmp_path, capsys):
         assert main(["formal", *args, "--out", str(bad)]) == 2
         err = capsys.readouterr().err
         assert len(err.strip().splitlines()) == 1 and not bad.exists(), err
+

@@ -93,7 +93,7 @@ MUTATIONS = {
     "lag_bypassed": ("chain_paper002.v", "lag_te_q <= lag_te;", "lag_te_q <= rtd_temp_q;", "lag"),
     "trim_sign_inverted": ("nco.v", "START_C  = PHASE0_C + TRIM_C;", "START_C  = PHASE0_C - TRIM_C;", "trim"),
     "trim_not_passed": ("demod.v", ".PHASE_TRIM(PHASE_TRIM), ", "", "trim"),
-    "lag_not_decimated": ("lag.v", "wire                     update = in_valid & (phase == {PH_W{1'b0}});",
+    "lag_not_decimated": ("lag.v", "wire                     update = in_valid & ((DECIM == 1) | (phase == {PH_W{1'b0}}));",
                           "wire                     update = in_valid;", "both"),
 }
 
