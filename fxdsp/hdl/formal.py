@@ -214,17 +214,25 @@ def prove(design, name: str, d: Path, depth: int | None = None, induction: bool 
     (d / "fx_formal.ys").write_text(script, encoding="ascii")
     env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}"}
     t0 = time.perf_counter()
-    r = subprocess.run([yosys, "-q", "-l", "yosys.log", "fx_formal.ys"], cwd=d, capture_output=True, text=True,
-                       env=env, timeout=timeout)
+    mode = "induction" if induction else "bmc"
+    undecided = Proof(name, mode + (" (members cut)" if cut else ""), depth, False, 0.0,
+                      f"undecided: the tools gave no answer within {timeout:g} s", None)
+    try:
+        r = subprocess.run([yosys, "-q", "-l", "yosys.log", "fx_formal.ys"], cwd=d, capture_output=True, text=True,
+                           env=env, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return undecided
     if r.returncode != 0:
         raise RuntimeError(f"formal: yosys failed on {name}: {(r.stderr or r.stdout).strip()[-2000:]}")
-    mode = "induction" if induction else "bmc"
     trace = d / "trace.vcd"
     cmd = [smtbmc, "-s", SOLVER, "--presat", "-t", str(depth), "--dump-vcd", str(trace)]
     if induction:
         cmd.insert(1, "-i")
     cmd.append("fx_formal.smt2")
-    r = subprocess.run(cmd, cwd=d, capture_output=True, text=True, env=env, timeout=timeout)
+    try:
+        r = subprocess.run(cmd, cwd=d, capture_output=True, text=True, env=env, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return undecided
     out = r.stdout + r.stderr
     (d / f"smtbmc_{mode}.log").write_text(out, encoding="utf-8")
     passed = r.returncode == 0 and "PASSED" in out

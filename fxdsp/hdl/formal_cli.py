@@ -11,7 +11,8 @@ pass of both holds for every cycle).
 
 ``DIR/report.json`` and ``DIR/report.md``: per DUT and mode the verdict, the depth, the seconds and,
 for a failure, the failing assertions and the counterexample's waveform (``DIR/traces/*.vcd``).
-Exit status: 0 when every proof passes, 1 when any fails, 2 on bad input or a missing tool.
+Exit status: 0 when every proof passes, 1 when any fails or is undecided (no answer within
+``--timeout`` seconds), 2 on bad input or a missing tool.
 """
 
 from __future__ import annotations
@@ -32,8 +33,14 @@ def configure(parser) -> None:
     parser.add_argument("--depth", type=int, default=None, metavar="N",
                         help="cycles of the bounded proof (default: two samples back to back after a reset)")
     parser.add_argument("--induction", action="store_true", help="also prove by k-induction (every cycle)")
+    parser.add_argument("--timeout", type=float, default=3600, metavar="S",
+                        help="seconds per solver run; a proof without an answer by then is undecided (default 3600)")
     parser.add_argument("--rtl", default=None, metavar="DIR", help="Verilog sources (default: the RTL in the package)")
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder: report and traces")
+
+
+def _verdict(r: dict) -> str:
+    return "proven" if r["passed"] else "undecided" if r["failing"].startswith("undecided") else "FAILS"
 
 
 def markdown(report: dict) -> str:
@@ -43,7 +50,7 @@ def markdown(report: dict) -> str:
              "|---|---|---:|---:|---|---:|---|"]
     for r in report["proofs"]:
         lines.append(f"| {r['dut']} | {r['mode']} | {r['depth']} | {r['cycles_per_sample']} | "
-                     f"{'proven' if r['passed'] else 'FAILS'} | {r['seconds']} | {r['failing'] or ''} |")
+                     f"{_verdict(r)} | {r['seconds']} | {r['failing'] or ''} |")
     return "\n".join(lines) + "\n"
 
 
@@ -56,6 +63,8 @@ def run(args) -> int:
     from . import formal
     from .schedule import cycles_per_sample
 
+    if not args.timeout > 0:
+        raise InputError(f"--timeout: need a positive number of seconds, got {args.timeout}")
     if args.depth is not None and args.depth < 2:
         raise InputError(f"--depth: need at least 2 cycles, got {args.depth}")
     if args.rtl is not None and not sorted(Path(args.rtl).glob("*.v")):
@@ -80,7 +89,8 @@ def run(args) -> int:
         for name in tqdm(duts, desc="formal", unit="DUT", disable=None):
             for ind in modes:
                 p = formal.prove(design, name, Path(tmp) / name, depth=args.depth, induction=ind,
-                                 rtl=Path(args.rtl) if args.rtl else None, cut=bool(design.instances[name].members))
+                                 rtl=Path(args.rtl) if args.rtl else None, cut=bool(design.instances[name].members),
+                                 timeout=args.timeout)
                 trace = None
                 if p.trace is not None:
                     trace = f"traces/{name}_{p.mode}.vcd"
@@ -95,7 +105,7 @@ def run(args) -> int:
         (out / "report.md").write_text(markdown(report), encoding="utf-8")
     bad = [p for p in proofs if not p["passed"]]
     for p in bad:
-        sys.stdout.write(f"formal: FAILS {p['dut']} ({p['mode']}, {p['depth']} cycles): {p['failing']}"
+        sys.stdout.write(f"formal: {_verdict(p).upper()} {p['dut']} ({p['mode']}, {p['depth']} cycles): {p['failing']}"
                          + (f"; trace {Path(args.out) / p['trace']}" if p["trace"] else "") + "\n")
     sys.stdout.write(f"formal: {len(proofs) - len(bad)} of {len(proofs)} proofs pass; report "
                      f"{Path(args.out) / 'report.md'}\n")

@@ -106,8 +106,11 @@ def test_formal_command(tmp_path, capsys):
     text = (out / "report.md").read_text()
     assert "| rtd | bmc |" in text and "proven" in text
     capsys.readouterr()
+    # a proof the solver does not finish in time is undecided, not proven: exit 1, said so
+    assert main(["formal", "--only", "iir", "--timeout", "1", "--out", str(tmp_path / "t")]) == 1
+    assert "UNDECIDED iir" in capsys.readouterr().out
     # bad input: one line, exit 2, nothing written
-    for args in (["--only", "nope"], ["--only", "bias_subtract"], ["--depth", "1"]):
+    for args in (["--only", "nope"], ["--only", "bias_subtract"], ["--depth", "1"], ["--timeout", "0"]):
         bad = tmp_path / "bad"
         assert main(["formal", *args, "--out", str(bad)]) == 2
         err = capsys.readouterr().err
