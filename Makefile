@@ -44,11 +44,11 @@ clean:
 # ---- HDL (issue 3); not part of `make test` -----------------------------------------------------
 .PHONY: hdl-gen hdl-lint hdl-mutation hw-report formal
 
-# every formal proof of the default config (fxdsp formal --induction): the serial blocks and the chain
+# every formal proof of the default config (fxdsp formal): the serial blocks and the chain
 # tops, bounded from reset and by induction; report and counterexample traces in build/formal/. The
 # proofs that take seconds also run in `make test` (tests/hdl/test_formal.py)
 formal: $(STAMP) hdl-tools
-	$(VENV)/bin/fxdsp formal --induction --out build/formal
+	$(VENV)/bin/fxdsp formal --out build/formal
 
 # regenerate the Verilog parameter headers and ROM files from the config
 hdl-gen: $(STAMP)

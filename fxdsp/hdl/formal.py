@@ -23,7 +23,11 @@ assumptions are not vacuous). The members' exact latencies are not assumed, so a
 checked in simulation (tests/hdl, the long streams), not here.
 
 A bounded proof (BMC) to ``depth`` cycles covers every input sequence from reset; an induction proof
-(``induction=True``) covers every reachable cycle. A failure leaves a VCD trace of the counterexample.
+(``induction=True``) of the same length then covers every reachable cycle (k-induction: the bounded
+run is its base case). A block's default length is two samples back to back after a reset (2 C + 4):
+freq2temp's induction does not close at C + 2, piecewise_k0's does (and its bounded run takes 22 s
+there, no answer in 300 s at 2 C + 4): ``depth`` chooses. A failure leaves a VCD trace of the
+counterexample.
 Nothing here prints: the verdict is a :class:`Proof`.
 """
 

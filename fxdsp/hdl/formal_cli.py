@@ -1,4 +1,4 @@
-"""``fxdsp formal [--config F] [--only NAMES] [--depth N] [--induction] [--rtl DIR] --out DIR``
+"""``fxdsp formal [--config F] [--only NAMES] [--depth N] [--bounded-only] [--rtl DIR] --out DIR``
 
 Formal proofs (yosys-smtbmc, the yices solver) of the serial variant of every block and chain top of
 F (or those named), :mod:`fxdsp.hdl.formal`: a block's one sample in flight, out_valid exactly the
@@ -6,8 +6,8 @@ stated cycles per sample after the accepting edge, in_ready back when the sample
 while one is in flight, multiplier requests only inside a sample; a chain top with its members cut
 to their contracts: at most one multiplier request per cycle, its handshake, its bookkeeping, and a
 sample able to go through. A bounded proof to N cycles from reset (default: a block's two samples
-back to back, a top's 24 cycles), and with ``--induction`` a k-induction of that length as well (a
-pass of both holds for every cycle).
+back to back, 2 C + 4; a top's 24 cycles) and a k-induction of that length: a pass of both holds for
+every cycle (``--bounded-only``: the bounded proof alone).
 
 ``DIR/report.json`` and ``DIR/report.md``: per DUT and mode the verdict, the depth, the seconds and,
 for a failure, the failing assertions and the counterexample's waveform (``DIR/traces/*.vcd``).
@@ -31,8 +31,9 @@ def configure(parser) -> None:
     parser.add_argument("--only", default=None, metavar="NAMES",
                         help="comma-separated blocks or chains (default: every one with a serial variant)")
     parser.add_argument("--depth", type=int, default=None, metavar="N",
-                        help="cycles of the bounded proof (default: two samples back to back after a reset)")
-    parser.add_argument("--induction", action="store_true", help="also prove by k-induction (every cycle)")
+                        help="length of the proofs (default: a block's two samples, 2 x its cycles per sample + 4; a top's 24)")
+    parser.add_argument("--bounded-only", action="store_true",
+                        help="the bounded proof from reset only (no induction: not every cycle)")
     parser.add_argument("--timeout", type=float, default=3600, metavar="S",
                         help="seconds per solver run; a proof without an answer by then is undecided (default 3600)")
     parser.add_argument("--rtl", default=None, metavar="DIR", help="Verilog sources (default: the RTL in the package)")
@@ -83,7 +84,7 @@ def run(args) -> int:
         duts = [n for n in duts if n in only]
     formal.require_tools()
     proofs = []
-    modes = (False, True) if args.induction else (False,)
+    modes = (False,) if args.bounded_only else (False, True)
     with staged() as stage, tempfile.TemporaryDirectory(prefix="fxdsp_formal_") as tmp:
         out = stage.dir(args.out)
         for name in tqdm(duts, desc="formal", unit="DUT", disable=None):

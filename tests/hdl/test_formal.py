@@ -1,6 +1,6 @@
 """Formal proofs of the serial interface (fxdsp.hdl.formal, yosys-smtbmc + yices): the proofs that
 take seconds pass here, bounded (two samples from a reset, reset and gaps free at every cycle) and by
-induction (every cycle); each property fails on an RTL bug injected into a copy of the sources, named
+induction of that length (together: every cycle); each property fails on an RTL bug injected into a copy of the sources, named
 by its label, with a counterexample trace. The long proofs (the iir, the demodulator, the divider,
 the tops) run in `make formal`."""
 
