@@ -391,3 +391,14 @@ def test_a_chains_targets_come_from_its_config_table():
             except ValueError as e:
                 assert words in str(e), str(e)
                 raise
+
+
+@pytest.mark.parametrize("args", [["--freq", "-1"], ["--freq", "nan"], ["--freq", "inf"], ["--timeout", "0"],
+                                  ["--xc7-timeout", "-5"]])
+def test_a_bad_number_is_refused_before_any_synthesis(tmp_path, capsys, args):
+    from fxdsp.cli import main
+
+    out = tmp_path / "R.md"
+    assert main(["hw-report", "--only", "lag", *args, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and args[0] in err and not out.exists(), err

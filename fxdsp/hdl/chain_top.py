@@ -91,11 +91,10 @@ class _Top:
 
     def mac_width(self) -> tuple[int, int]:
         from .params import instance
-        from .schedule import mac_operands
+        from .schedule import mac_operands, whole_limbs
 
         ops = [mac_operands(self.inst[_v(m)].module, instance(self.design, _v(m)).params) for m in self.on_mac]
-        up = lambda w: max(16, -(-w // 16) * 16)  # noqa: E731  whole 16-bit limbs
-        return up(max(a for a, _ in ops)), up(max(b for _, b in ops))
+        return whole_limbs(max(a for a, _ in ops)), whole_limbs(max(b for _, b in ops))
 
     def instance_text(self, m: str, extra: list[str], conns_extra: list[str], outs: dict[str, str],
                       label: str = "") -> list[str]:

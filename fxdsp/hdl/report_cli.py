@@ -26,6 +26,7 @@ change to one block only the rows that read it are re-run.
 
 from __future__ import annotations
 
+import math
 import re
 import shutil
 import statistics
@@ -36,6 +37,7 @@ import time
 from pathlib import Path
 
 from ..chains import build
+from ..errors import InputError
 from ..outputs import IN, OUT_FILE, check_output, staged
 from . import RTL_DIR as RTL
 from .hwreport import load_hw_report, report_json, row_files, row_hash, source_hash
@@ -340,6 +342,9 @@ def expected_row_hashes(design, freq: float) -> dict[str, str]:
 
 
 def run(args) -> int:
+    for option, value in (("--freq", args.freq), ("--timeout", args.timeout), ("--xc7-timeout", args.xc7_timeout)):
+        if not (math.isfinite(value) and value > 0):   # before any synthesis: nan, inf and <= 0 alike
+            raise InputError(f"{option}: need a positive, finite number, got {value}")
     check_output(Path(args.out).with_suffix(".json"), OUT_FILE, "--out (its .json twin)")
     for tool in ("yosys", "nextpnr-ice40"):
         if shutil.which(tool) is None:

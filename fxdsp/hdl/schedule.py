@@ -83,6 +83,11 @@ SERIAL_CYCLES = {"iir": iir_cycles_per_sample, "rtd": rtd_cycles_per_sample, "la
 PER_CLOCK_LATENCY = {"iir": 1, "rtd": 1, "lag": 1, "piecewise": 1, "freq2temp": 1, "demod": 2, "bias_subtract": 2}
 
 
+def whole_limbs(w: int) -> int:
+    """A multiplier bundle's operand width for ``w`` bits: whole 16-bit limbs, at least one."""
+    return max(16, -(-w // 16) * 16)
+
+
 def mac_operands(module: str, p: dict) -> tuple[int, int]:
     """The widest (a, b) operands a serial block issues on its multiplier bundle (each header's
     fx_mac_port A_W / B_W): what a multiplier shared by several blocks must take."""

@@ -6,18 +6,13 @@ the tops) run in `make formal`."""
 
 from __future__ import annotations
 
-import shutil
-from pathlib import Path
-
 import pytest
 
 from fxdsp.cli import main
 from fxdsp.hdl import formal
 from hdl_util import design_of, mutated_rtl, mutated_top
 
-pytestmark = pytest.mark.skipif(any(shutil.which(t) is None and not (Path(formal.sys.executable).parent / t).exists()
-                                    for t in ("yosys", "yosys-smtbmc", "yices-smt2")),
-                                reason="yosys, yosys-smtbmc or yices-smt2 is not installed (make formal installs them)")
+pytestmark = pytest.mark.skipif(formal.tools_missing() is not None, reason=str(formal.tools_missing()))
 
 
 @pytest.fixture(scope="module")
@@ -110,7 +105,8 @@ def test_formal_command(tmp_path, capsys):
     assert main(["formal", "--only", "iir", "--timeout", "1", "--out", str(tmp_path / "t")]) == 1
     assert "UNDECIDED iir" in capsys.readouterr().out
     # bad input: one line, exit 2, nothing written
-    for args in (["--only", "nope"], ["--only", "bias_subtract"], ["--depth", "1"], ["--timeout", "0"]):
+    for args in (["--only", "nope"], ["--only", "bias_subtract"], ["--depth", "1"], ["--timeout", "0"],
+                 ["--timeout", "inf"]):
         bad = tmp_path / "bad"
         assert main(["formal", *args, "--out", str(bad)]) == 2
         err = capsys.readouterr().err
