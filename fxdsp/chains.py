@@ -27,6 +27,7 @@ from .config import Config, load_config
 from .errors import InputError
 from .fixed import Format, OverflowLog
 from .netlist import STAGES, Endpoint, Netlist, WiringError, parse, topological
+from .units import display, instance_units, quantity
 
 
 class Chain(Block):
@@ -135,6 +136,7 @@ class Port:
     format: Format
     unit: str = ""        # physical unit of the table rows ("C", "deg/h", "ppm", ...)
     scale: float = 1.0    # real value x scale = value in ``unit``
+    quantity: str | None = None   # what the real value measures (fxdsp.units: "C", "FS", "rad", ...)
 
 
 @dataclass(frozen=True)
@@ -219,34 +221,54 @@ class Design:
         raise ValueError(f"{name}: no ovf field counts {counter!r}")
 
 
-def _units(design: "Design") -> dict[str, dict[str, tuple[str, float]]]:
-    """Physical unit of every block instance port of the papers' designs: the paper 002 signal path
-    is in fractions of the sense full scale (rate FS = [system].rate_full_scale_dps), paper 001's
-    rate in deg/h, paper 000's Df in Hz and its acceleration in mg. A chain's ports take the units
-    of the instance ports they are wired to (:func:`_instance_table`)."""
-    fs = ("deg/h", design.rate_full_scale_dps * 3600.0)
-    temp, degh, hz = ("C", 1.0), ("deg/h", 1.0), ("Hz", 1.0)
-    return {"rtd": {"temp": temp}, "lag": {"temp": temp, "te": temp}, "freq2temp": {"f": hz, "temp": temp},
-            "bias_subtract000": {"x": hz, "bias": hz, "y": hz}, "sf_divide000": {"x": hz, "sf": ("Hz/g", 1.0),
-                                                                                "y": ("mg", 1e3)},
-            "piecewise_sf": {"temp": temp, "y": ("ppm", 1e6)}, "piecewise_bias": {"temp": temp, "y": fs},
-            "piecewise_bias001": {"temp": temp, "y": degh}, "piecewise_k0": {"temp": temp, "y": ("Hz", 1.0)},
-            "piecewise_k1": {"temp": temp, "y": ("Hz/g", 1.0)}, "sf_divide": {"x": fs, "y": fs},
-            "demod": {"x": fs, "i": fs, "q": fs, "amp": fs, "phase": ("mrad", 1e3)},
-            "bias_subtract": {"x": fs, "bias": fs, "y": fs}, "bias_subtract001": {"x": degh, "bias": degh, "y": degh},
-            "iir": {"x": fs, "y": fs}}
+Quantities = dict[str, dict[str, "str | None"]]   # instance or chain -> port -> quantity (fxdsp.units)
 
 
-def _instance_table(design: "Design") -> dict[str, Instance]:
-    units = _units(design)
+def _quantities(design: "Design", tables: list[str], nets: dict[str, Netlist]) -> Quantities:
+    """The quantity of every port of every block table (:mod:`fxdsp.units`), propagated through each
+    chain in its order; a table's ports take the quantities of the first chain it is a member of, a
+    table in no chain its own. A chain that joins ports of different quantities is an error naming
+    the chain and the wires. Keyed by instance name; a chain's own ports under its instance name."""
+    cfg = design.config
+    declared = {}
+    for t in tables:   # a piecewise table states its coefficients' unit (read whether present or not:
+        sec = cfg.section(t)   # a misspelt "unit" is then named as such)
+        unit = sec._get("unit", None) if kind_of(t).name == "piecewise" else None
+        declared[t] = {"y": quantity(unit, sec.field("unit"))} if unit is not None else {}
+    out: Quantities = {}
+    chains: Quantities = {}
+    for net in nets.values():
+        at: dict[Endpoint, str | None] = {}
+        for inst in net.order:
+            fed = {dst.port: src for dst, src in net.drivers.items() if dst.instance == inst}
+            known = {p: (at.get(src) if isinstance(src, Endpoint) else net.input_units.get(src))
+                     for p, src in fed.items()}
+            def where(port, inst=inst, fed=fed):
+                if port in fed:
+                    field_ = "wires" if isinstance(fed[port], Endpoint) else "inputs"
+                    return f"{net.name}.{field_}: {net.wire_text(Endpoint(inst, port))!r}"
+                return f"{net.name}: {inst}.{port}"
+            u = instance_units(kind_of(inst).name, known, declared[inst], where)
+            for p, q in u.items():
+                at[Endpoint(inst, p)] = q
+            out.setdefault(inst.replace(".", "_"), u)
+        ports = {}
+        for name, dsts in net.inputs.items():   # a chain input nothing declares takes its ports' unit
+            qs = {at.get(d) for d in dsts} - {None}
+            if len(qs) > 1:
+                raise WiringError(f"{net.name}.inputs: chain input {name!r} drives ports in {', '.join(sorted(qs))}")
+            ports[name] = net.input_units.get(name) or next(iter(qs), None)
+        chains[net.instance_name] = {**ports, **{name: at.get(src) for name, src in net.outputs.items()}}
+    for t in tables:
+        out.setdefault(t.replace(".", "_"), instance_units(kind_of(t).name, {}, declared[t]))
+    return {**out, **chains}
+
+
+def _instance_table(design: "Design", quantities: Quantities) -> dict[str, Instance]:
     table = {}
     for name, block in design.all.items():
-        u = units.get(name, {})
-        if isinstance(block, Chain):   # a chain port has the unit of the instance port it is wired to
-            net = block.netlist
-            ends = {**{p: dsts[0] for p, dsts in net.inputs.items()}, **net.outputs}
-            u = {p: units.get(e.instance.replace(".", "_"), {}).get(e.port, ("", 1.0)) for p, e in ends.items()}
-        ports = [tuple(Port(p, f, *u.get(p, ("", 1.0))) for p, f in ports.items())
+        q = quantities.get(name, {})
+        ports = [tuple(Port(p, f, *display(q.get(p), design.rate_full_scale_dps), q.get(p)) for p, f in ports.items())
                  for ports in (block.inputs, block.outputs)]
         members = getattr(block, "MEMBERS", ())
         module = name if members else block.datapath.MODULE
@@ -377,6 +399,6 @@ def build(config: Config | str | None = None, chains: bool = True) -> Design:
         for net in nets.values():
             _check_formats(net, built)
             design.chains[net.instance_name] = Chain(net, built, kinds)
-    design.instances = _instance_table(design)
+    design.instances = _instance_table(design, _quantities(design, tables, nets))
     cfg.check_all_read()
     return design

@@ -1,8 +1,9 @@
 """Float vs fixed differences of every block and chain, in LSBs and in physical units.
 
-The physical unit of each port comes from the design: temperatures in C, rates in deg/h (a signal
-of the paper 002 chain is a fraction of full scale; full scale is ``[system].rate_full_scale_dps``),
-scale factors in ppm, phases in rad, QVBA K0 in Hz and K1 in Hz/g.
+The physical unit of each port comes from the design (:mod:`fxdsp.units`, propagated through the
+chains): temperatures in C, rates in deg/h (a signal of the paper 002 chain is a fraction of full
+scale; full scale is ``[system].rate_full_scale_dps``), scale factors in ppm, phases in mrad, QVBA K0
+in Hz and K1 in Hz/g.
 """
 
 from __future__ import annotations
@@ -13,7 +14,12 @@ import numpy as np
 
 from .chains import Design, stream_key
 
-ANGLE_PORTS = {("demod", "phase")}
+
+
+def angle_ports(design: Design) -> set[tuple[str, str]]:
+    """(instance, port) of every port whose value is an angle (fxdsp.units quantity ``rad``): its
+    error is taken modulo a turn."""
+    return {(name, p.name) for name, inst in design.instances.items() for p in inst.outputs if p.quantity == "rad"}
 
 
 def port_units(design: Design) -> dict[tuple[str, str], tuple[str, float]]:
@@ -66,7 +72,7 @@ def block_errors(design: Design, name: str, samples: int | None = None, seed_off
         signal_rms = float(np.sqrt(np.mean(r**2))) if r.size else 0.0
         e = got[port] - ref[port]
         keep = np.isfinite(e)
-        if (name, port) in ANGLE_PORTS:
+        if (name, port) in angle_ports(design):
             e = (e + np.pi) % (2 * np.pi) - np.pi
             # a phase is only defined where there is an amplitude to measure it on
             keep &= ref["amp"] > 0.05 * np.nanmax(ref["amp"])

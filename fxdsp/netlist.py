@@ -24,14 +24,15 @@ output port names, which :mod:`fxdsp.blocks.kinds` states once per kind of block
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 from .config import Section, nearest
 from .errors import InputError
+from .units import quantity
 
 ARROW = "->"
-CHAIN_KEYS = ("sensor", "instances", "inputs", "wires", "outputs", "hardware")
+CHAIN_KEYS = ("sensor", "instances", "inputs", "input_units", "wires", "outputs", "hardware")
 HARDWARE_KEYS = ("lut4", "mac16", "bram", "mhz")   # the targets a chain's hardware table may set
 
 
@@ -65,6 +66,7 @@ class Netlist:
     sensor: str | None = None
     lines: dict[Endpoint, str] | None = None  # driven input -> the config line that wires it (errors)
     hardware: dict[str, float] | None = None  # the hw-report targets of its generated top (HARDWARE_KEYS)
+    input_units: dict[str, str] = field(default_factory=dict)  # chain input -> quantity (fxdsp.units)
 
     @property
     def instance_name(self) -> str:
@@ -198,7 +200,23 @@ def parse(sec: Section, ports: PortNames, known: tuple[str, ...]) -> Netlist:
     if sensor is not None and not isinstance(sensor, str):
         raise WiringError(f"{sec.field('sensor')}: expected a name, got {sensor!r}")
     return Netlist(chain, tuple(inst), drivers, {k: tuple(v) for k, v in inputs.items()}, outputs, order,
-                   sensor, lines, _hardware(sec))
+                   sensor, lines, _hardware(sec), _input_units(sec, inputs))
+
+
+def _input_units(sec: Section, inputs: dict) -> dict[str, str]:
+    """The chain's ``input_units``: chain input -> the quantity its real value is in (fxdsp.units),
+    for inputs whose unit no port they drive fixes."""
+    table = sec._get("input_units", None)
+    if table is None:
+        return {}
+    if not isinstance(table, dict):
+        raise WiringError(f"{sec.field('input_units')}: expected a table {{<chain input> = \"<unit>\"}}, got {table!r}")
+    for name in table:
+        if name not in inputs:
+            near = nearest(name, [i for i in inputs if i not in table])
+            raise WiringError(f"{sec.field('input_units')}.{name}: unknown key" +
+                              (f" (did you mean {near!r}?)" if near else f"; the chain's inputs: {', '.join(inputs)}"))
+    return {name: quantity(q, f"{sec.field('input_units')}.{name}") for name, q in table.items()}
 
 
 def _hardware(sec: Section) -> dict[str, float] | None:

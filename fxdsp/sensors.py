@@ -74,6 +74,10 @@ class Sensor:
     CHAMBER_C = (-20.0, 60.0)
     CHAMBER_LEVEL = 0.0
     STEADY_LEVEL = 0.0
+    # the physical input of a Monte-Carlo operating point is drawn uniformly in +-LEVEL_SPAN, in
+    # LEVEL_UNIT (fxdsp sweep montecarlo)
+    LEVEL_SPAN = 0.0
+    LEVEL_UNIT = ""
 
     def held_inputs(self, t_c: np.ndarray, level: np.ndarray, rng: np.random.Generator) -> dict[str, np.ndarray]:
         """The chain's input words for a device held at temperatures ``t_c`` under the physical input
@@ -93,6 +97,7 @@ class GyroRtd(Sensor):
     CHAMBER_C = (-20.0, 60.0)
     CHAMBER_LEVEL = 0.2    # rate, fraction of full scale
     STEADY_LEVEL = 0.1
+    LEVEL_SPAN, LEVEL_UNIT = 0.3, "FS"   # the nominal stimulus' rate steps span +-0.3 FS
 
     def __init__(self, chain):
         super().__init__(chain)
@@ -165,6 +170,7 @@ class GyroFreq(Sensor):
     CHAMBER_C = (-10.0, 50.0)
     CHAMBER_LEVEL = 100.0  # rate, deg/h (the rate input's unit)
     STEADY_LEVEL = 100.0
+    LEVEL_SPAN, LEVEL_UNIT = 100.0, "deg/h"
     NOISE = 1.0            # zero-rate output noise, deg/h
 
     def __init__(self, chain):
@@ -212,6 +218,7 @@ class Qvba(Sensor):
     CHAMBER_C = (-35.0, 75.0)
     CHAMBER_LEVEL = 1.0    # acceleration, g
     STEADY_LEVEL = 1.0
+    LEVEL_SPAN, LEVEL_UNIT = 1.0, "g"   # the tumble's +-1 g
     NOISE_HZ = 1e-4        # frequency-counter noise
 
     def __init__(self, chain):

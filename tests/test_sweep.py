@@ -261,6 +261,34 @@ def test_montecarlo_error_agrees_with_the_budget_and_follows_the_config():
     assert coarse["pooled"]["rms"]["p50"]["value"] > 3 * fine["pooled"]["rms"]["p50"]["value"]
 
 
+# the papers' other chains, in the units the papers state their errors in
+OTHER_CHAINS = {"chain_paper001": ("rate", "deg/h"), "chain_paper000": ("accel", "mg")}
+
+
+@pytest.mark.parametrize("chain", sorted(OTHER_CHAINS))
+def test_montecarlo_runs_any_chain_with_a_sensor_in_its_outputs_unit(chain, tmp_path, capsys):
+    """A chain without a demodulator has no drive frequency; its output and unit are found from the
+    chain, and its median error is of the size the budget's chamber test measures on that chain."""
+    from fxdsp.budget.static import static_error
+    from fxdsp.chains import build
+
+    port, unit = OTHER_CHAINS[chain]
+    out = tmp_path / "o"
+    assert main(["sweep", "montecarlo", "--chain", chain, "--seeds", "4", "--temps", "3", "--samples", "256",
+                 "--workers", "0", "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert (s["chain"], s["port"], s["unit"], s["freqs_hz"]) == (chain, port, unit, [None])
+    design = build()
+    static = static_error(design, chain, port)["rms"] * design.instances[chain].ports[port].scale
+    assert static / 3 < s["pooled"]["rms"]["p50"]["value"] < static * 3
+    assert f"{chain}.{port} error ({unit}" in (out / "report.md").read_text()
+    capsys.readouterr()
+    assert main(["sweep", "montecarlo", "--chain", chain, "--freqs", "2", "--out", str(tmp_path / "f")]) == 2
+    assert "no demodulator" in capsys.readouterr().err and not (tmp_path / "f").exists()
+    assert main(["sweep", "montecarlo", "--chain", chain, "--port", "nosuch", "--out", str(tmp_path / "p")]) == 2
+    assert "--port" in capsys.readouterr().err and not (tmp_path / "p").exists()
+
+
 # ---- the other sweep kinds --------------------------------------------------------------------------
 def test_hidden_confusion_on_the_cluster_is_diagnose_hiddens_matrix(tmp_path, cluster, capsys):
     from fxdsp.diagnose.hidden import confusion

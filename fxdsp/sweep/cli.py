@@ -1,8 +1,8 @@
 """`fxdsp sweep KIND --out DIR [--workers N | --scheduler ADDR] [--retries R] [--fresh] ...`: the
 sweeps that outgrow one machine, on Dask (see :mod:`fxdsp.sweep.engine`).
 
-* ``montecarlo``: error budget of chain_paper002.rate over seeds x chamber temperatures x drive
-  frequencies, percentiles with confidence intervals, and a plot;
+* ``montecarlo``: error budget of any chain's output (chain_paper002.rate by default) over seeds x
+  chamber temperatures x drive frequencies, percentiles with confidence intervals, and a plot;
 * ``wordlength``: ``budget --optimise``'s word-length search with its candidates evaluated in parallel;
 * ``hidden``: ``diagnose-hidden``'s confusion matrix, one case per task;
 * ``rtl``: random-parameter RTL regressions, one parameter set per shard, each in its own build folder.
@@ -50,20 +50,24 @@ def _common(p, config: bool = True, seed: bool = True) -> None:
 
 def configure(parser) -> None:
     from ..diagnose.hidden import ALL_CAUSES, SNR_RANGE
-    from .montecarlo import TEMP_RANGE_C
+    from .montecarlo import CHAIN
 
     sub = parser.add_subparsers(dest="kind", metavar="KIND", required=True)
     mc = sub.add_parser("montecarlo", help="error budget over seeds x temperatures x drive frequencies",
-                        description="chain_paper002.rate error over seeds x chamber temperatures x drive "
-                                    "frequencies: percentiles with 95 %% confidence intervals, and a plot")
+                        description="a chain output's error over seeds x chamber temperatures (x drive "
+                                    "frequencies, for a chain with a demodulator): percentiles with 95 %% "
+                                    "confidence intervals, and a plot")
     _common(mc)
     mc.add_argument("--seeds", type=int, default=1000, metavar="N", help="Monte-Carlo samples (default 1000)")
     mc.add_argument("--temps", type=int, default=16, metavar="N", help="chamber temperatures (default 16)")
-    mc.add_argument("--temp-range", type=float, nargs=2, default=list(TEMP_RANGE_C), metavar=("LO", "HI"),
-                    help="range of the temperatures, C (default -20 60)")
-    mc.add_argument("--freqs", type=int, default=2, metavar="N",
-                    help="drive frequencies evenly across the drive band, plus demod.f_hz (default 2; 1: "
-                         "demod.f_hz only)")
+    mc.add_argument("--chain", default=CHAIN, help=f"a chain with a sensor (default: {CHAIN})")
+    mc.add_argument("--port", help="the chain output to budget (default: its one output that is not a temperature)")
+    mc.add_argument("--temp-range", type=float, nargs=2, metavar=("LO", "HI"),
+                    help="range of the temperatures, C (default: the chain's sensor's chamber range, -20 60 "
+                         "for paper 002)")
+    mc.add_argument("--freqs", type=int, metavar="N",
+                    help="drive frequencies evenly across the drive band, plus the demodulator's f_hz (default 2; "
+                         "1: f_hz only; a chain without a demodulator has none)")
     mc.add_argument("--samples", type=int, default=2048, metavar="M",
                     help="measured samples per point after the filters' settling (default 2048)")
 
@@ -153,8 +157,8 @@ def _prepare_montecarlo(args) -> dict:
     from . import montecarlo as mc
 
     cfg = load_config(args.config)
-    temps, freqs = mc.grid(cfg.data, args.temps, args.freqs, args.temp_range)
-    settings = mc.settings(cfg.data, args.seeds, temps, freqs, args.samples)
+    temps, freqs = mc.grid(cfg.data, args.temps, args.freqs, args.temp_range, args.chain)
+    settings = mc.settings(cfg.data, args.seeds, temps, freqs, args.samples, args.chain, args.port)
     seed = args.seed if args.seed is not None else int(cfg.data["stimulus"]["seed"])
 
     def go(sweep, stage, out):

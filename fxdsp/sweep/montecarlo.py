@@ -1,19 +1,21 @@
-"""Monte-Carlo error budget of the paper 002 rate output over seeds x chamber temperatures x drive
+"""Monte-Carlo error budget of a chain's output over seeds x chamber temperatures x drive
 frequencies, with percentiles and their confidence intervals.
 
 Why: ``fxdsp budget`` measures one stimulus per question; a user's question is "what error will 99 %
 of my parts see?", which needs the distribution over many noise realisations and operating points.
 
-One task is one seed (a Monte-Carlo sample): for every drive frequency f (the design rebuilt with
-demod.f_hz = f, as the budget's drive-frequency sweep does: the band the -40..85 C silicon resonator
-covers, and f0) and every held chamber temperature T, a record of ``settle + samples`` samples at T
-with a rate drawn uniformly in +-RATE_FS, the nominal quadrature and white sensor noise goes through
-the ADCs; the error is bit-exact minus float on the same ADC codes (the design's own error, as in
-``fxdsp budget``), in deg/h, measured after the filters have settled (floor.settling_samples). The
-rate and noise of (seed, T) are drawn from the task's seed and T's index only, so every drive
-frequency sees the same realisation (the frequencies differ by the design alone). The grid of
-frequencies is crossed with the temperatures: a superset of the physical pairing f(T), so the figures
-bound it.
+Any chain with a ``sensor`` (default ``chain_paper002``; ``--chain``), any of its outputs (default:
+its one output that is not a temperature; ``--port``). One task is one seed (a Monte-Carlo sample):
+for every drive frequency f (only for a chain with a demodulator: the design rebuilt with its f_hz =
+f, as the budget's drive-frequency sweep does: the band the -40..85 C silicon resonator covers, and
+f0) and every held chamber temperature T, a record of ``settle + samples`` samples at T under the
+sensor's physical input drawn uniformly in +-``Sensor.LEVEL_SPAN`` (a rate, an acceleration) with the
+sensor's own noise (:meth:`fxdsp.sensors.Sensor.held_inputs`); the error is bit-exact minus float on
+the same input words (the design's own error, as in ``fxdsp budget``), in the port's physical unit
+(:mod:`fxdsp.units`), measured after the filters have settled (floor.settling_samples). The level
+and noise of (seed, T) are drawn from the task's seed and T's index only, so every drive frequency
+sees the same realisation (the frequencies differ by the design alone). The grid of frequencies is
+crossed with the temperatures: a superset of the physical pairing f(T), so the figures bound it.
 
 Percentiles are order statistics (the ceil(p n)-th smallest value) with a distribution-free
 confidence interval from the binomial law of the count below the true quantile (Conover); an upper
@@ -31,12 +33,10 @@ from functools import lru_cache, partial
 import numpy as np
 from scipy.stats import binom
 
+from ..errors import InputError
 from .engine import failed_records
 
-RATE_FS = 0.3          # rates drawn uniformly in +-0.3 FS: the nominal stimulus' steps span this
-QUAD_FS = 0.05         # nominal stimulus quadrature
-NOISE_FS = 1e-3        # nominal white sensor noise (dithers the ADCs)
-TEMP_RANGE_C = (-20.0, 60.0)   # the paper 002 calibration range
+CHAIN = "chain_paper002"
 PERCENTILES = (0.5, 0.9, 0.99)
 LEVEL = 0.95
 
@@ -44,81 +44,121 @@ LEVEL = 0.95
 # ----------------------------------------------------------------------------------------------
 # Settings and the grid
 # ----------------------------------------------------------------------------------------------
-def grid(config_data: dict, temps: int = 16, freqs: int = 2, temp_range=TEMP_RANGE_C) -> tuple[list, list]:
-    """(temperatures C, drive frequencies Hz): ``temps`` evenly over ``temp_range`` (ends included);
-    ``freqs`` = 1: the config's demod.f_hz alone, else ``freqs`` evenly across the drive band and f0."""
+def _chain(config_data: dict, chain: str):
+    from ..chains import build
+    from ..config import Config
+
+    design = build(Config(copy.deepcopy(config_data), source="<sweep montecarlo>"))
+    c = design.chain(chain, "fxdsp sweep montecarlo")
+    if c.sensor is None:
+        raise InputError(f"--chain: {chain} has no sensor to stimulate it ([{c.netlist.name}].sensor)")
+    return design, c
+
+
+def _demod(chain) -> str | None:
+    """The config table of the chain's demodulator (whose f_hz a drive frequency sets), None without."""
+    found = [m for m, k in chain.kinds.items() if k == "demod"]
+    if len(found) > 1:
+        raise InputError(f"--freqs: {chain.name} has {len(found)} demodulators ({', '.join(found)}); "
+                         f"a drive frequency would be ambiguous: use --freqs 1")
+    return found[0] if found else None
+
+
+def grid(config_data: dict, temps: int = 16, freqs: int | None = None, temp_range=None,
+         chain: str = CHAIN) -> tuple[list, list]:
+    """(temperatures C, drive frequencies Hz): ``temps`` evenly over ``temp_range`` (ends included;
+    default the chain's sensor's chamber range); ``freqs`` = 1: the demodulator's f_hz alone (None
+    for a chain without one), else ``freqs`` evenly across the drive band and f0 (default 2 with a
+    demodulator, 1 without)."""
     from ..budget.floor import drive_frequencies
 
     if temps < 1:
         raise ValueError(f"--temps: need at least 1 temperature, got {temps}")
-    if freqs < 1:
+    if freqs is not None and freqs < 1:
         raise ValueError(f"--freqs: need at least 1 drive frequency, got {freqs}")
-    lo, hi = (float(x) for x in temp_range)
+    design, c = _chain(config_data, chain)
+    lo, hi = (float(x) for x in (temp_range if temp_range is not None else c.sensor.CHAMBER_C))
     if not lo <= hi:
         raise ValueError(f"--temp-range: LO must not exceed HI, got {lo} {hi}")
     t = [lo] if temps == 1 else [float(x) for x in np.linspace(lo, hi, temps)]
-    f0 = float(config_data["demod"]["f_hz"])
+    demod = _demod(c)
+    if demod is None:
+        if freqs not in (None, 1):
+            raise InputError(f"--freqs: {chain} has no demodulator, so no drive frequency to sweep; use 1")
+        return t, [None]
+    f0 = float(c.members[demod].nco.f_hz)
+    freqs = 2 if freqs is None else freqs
     f = [f0] if freqs == 1 else [float(x) for x in drive_frequencies(f0, freqs)]
     return t, f
 
 
-def settings(config_data: dict, seeds: int, temps: list, freqs: list, samples: int) -> dict:
+def settings(config_data: dict, seeds: int, temps: list, freqs: list, samples: int, chain: str = CHAIN,
+             port: str | None = None) -> dict:
     if seeds < 1:
         raise ValueError(f"--seeds: need at least 1 seed, got {seeds}")
     if samples < 16:
         raise ValueError(f"--samples: need at least 16 measured samples per point, got {samples}")
-    from ..chains import build
-    from ..config import Config
-
-    build(Config(copy.deepcopy(config_data), source="<sweep montecarlo>")).chain(
-        "chain_paper002", "fxdsp sweep montecarlo (the paper 002 rate's error)")
-    return {"config": copy.deepcopy(config_data), "seeds": int(seeds), "temps_c": list(temps),
-            "freqs_hz": list(freqs), "samples": int(samples), "rate_fs": RATE_FS, "quad_fs": QUAD_FS,
-            "noise_fs": NOISE_FS}
+    design, c = _chain(config_data, chain)
+    quantities = {p.name: p for p in design.instances[chain].outputs}
+    if port is None:
+        rest = [p for p, q in quantities.items() if q.quantity != "C"]
+        if len(rest) != 1:
+            raise InputError(f"--port: {chain} has outputs {', '.join(quantities)}: name the one to budget")
+        port = rest[0]
+    elif port not in quantities:
+        raise InputError(f"--port: {chain} has no output {port!r} (outputs: {', '.join(quantities)})")
+    unit, scale = quantities[port].unit, quantities[port].scale
+    demod = _demod(c)
+    if demod is None and list(freqs) != [None]:
+        raise InputError(f"--freqs: {chain} has no demodulator, so no drive frequency to sweep")
+    return {"config": copy.deepcopy(config_data), "chain": chain, "port": port, "unit": unit, "scale": scale,
+            "demod": demod, "seeds": int(seeds), "temps_c": list(temps), "freqs_hz": list(freqs),
+            "samples": int(samples), "level_span": float(c.sensor.LEVEL_SPAN), "level_unit": c.sensor.LEVEL_UNIT}
 
 
 # ----------------------------------------------------------------------------------------------
 # One task (runs on a worker)
 # ----------------------------------------------------------------------------------------------
 @lru_cache(maxsize=32)
-def _design(config_json: str, f_hz: float):
-    """The design at one drive frequency and its settling length, kept per worker process."""
+def _design(config_json: str, chain: str, demod: str | None, f_hz: float | None):
+    """The chain at one drive frequency and its settling length, kept per worker process."""
     from ..budget.floor import settling_samples
     from ..chains import build
     from ..config import Config
 
     data = json.loads(config_json)
-    data["demod"]["f_hz"] = float(f_hz)
-    design = build(Config(data, source="<sweep montecarlo>"))
-    return design, settling_samples(design.chains["chain_paper002"])
+    if demod is not None:
+        node = data
+        for key in demod.split("."):
+            node = node[key]
+        node["f_hz"] = float(f_hz)
+    c = build(Config(data, source="<sweep montecarlo>")).chains[chain]
+    return c, settling_samples(c)
 
 
 def point_errors(settings: dict, seed: int) -> dict:
-    """One seed: rms and mean error (deg/h) at every (frequency, temperature), and the overflows."""
+    """One seed: rms and mean error (the port's unit) at every (frequency, temperature), and the overflows."""
     config_json = json.dumps(settings["config"], sort_keys=True)
     temps, freqs, m = settings["temps_c"], settings["freqs_hz"], settings["samples"]
-    rates = [float(np.random.default_rng([seed, k]).uniform(-settings["rate_fs"], settings["rate_fs"]))
-             for k in range(len(temps))]
+    span, port, scale = settings["level_span"], settings["port"], settings["scale"]
+    levels = [float(np.random.default_rng([seed, k]).uniform(-span, span)) for k in range(len(temps))]
     rms = [[0.0] * len(temps) for _ in freqs]
     mean = [[0.0] * len(temps) for _ in freqs]
     overflows = 0
     for j, f in enumerate(freqs):
-        design, settle = _design(config_json, float(f))
-        chain = design.chains["chain_paper002"]
-        scale = design.rate_full_scale_dps * 3600.0
+        chain, settle = _design(config_json, settings["chain"], settings["demod"], f)
         n = settle + m
         for k, t in enumerate(temps):
-            # the operating point of (seed, T), the same at every frequency: rate first, then the noise
+            # the operating point of (seed, T), the same at every frequency: level first, then the noise
             rng = np.random.default_rng([seed, k])
-            rate = float(rng.uniform(-settings["rate_fs"], settings["rate_fs"]))
-            stim = chain.sensor.sensor_inputs(np.full(n, float(t)), np.full(n, rate), quad_fs=settings["quad_fs"], rng=rng,
-                                       noise_fs=settings["noise_fs"])
+            level = float(rng.uniform(-span, span))
+            stim = chain.sensor.held_inputs(np.full(n, float(t)), np.full(n, level), rng)
             res = chain.run(**stim)
-            e = (chain.real_outputs(res)["rate"] - chain.run_float(**stim)["rate"])[settle:] * scale
+            e = (chain.real_outputs(res)[port] - chain.run_float(**stim)[port])[settle:] * scale
             rms[j][k] = float(np.sqrt(np.mean(e ** 2)))
             mean[j][k] = float(e.mean())
             overflows += int(res.overflows.total)
-    return {"rate": rates, "rms": rms, "mean": mean, "overflows": overflows}
+    return {"level": levels, "rms": rms, "mean": mean, "overflows": overflows}
 
 
 def task_function(settings: dict):
@@ -177,10 +217,11 @@ def summarise(settings: dict, records: list[dict]) -> dict:
     good = [r for r in records if "result" in r]
     failed = failed_records(records)
     temps, freqs = settings["temps_c"], settings["freqs_hz"]
-    out = {"chain": "chain_paper002", "port": "rate", "unit": "deg/h", "measure": "bit-exact minus float on the "
-           "same ADC codes, after settling", "seeds": settings["seeds"], "seeds_ok": len(good),
+    out = {"chain": settings["chain"], "port": settings["port"], "unit": settings["unit"],
+           "measure": "bit-exact minus float on the same input words, after settling", "seeds": settings["seeds"], "seeds_ok": len(good),
            "temps_c": temps, "freqs_hz": freqs, "samples_per_point": settings["samples"],
-           "rate_fs_range": [-settings["rate_fs"], settings["rate_fs"]], "failed": failed}
+           "level_range": [-settings["level_span"], settings["level_span"]], "level_unit": settings["level_unit"],
+           "failed": failed}
     if not good:
         return out
     rms = np.array([r["result"]["rms"] for r in good], dtype=float)      # seeds x freqs x temps
@@ -204,8 +245,9 @@ def _q(q: dict) -> str:
 
 def format_summary(s: dict) -> str:
     """The budget table: per temperature (pooled over the drive frequencies), per frequency, pooled."""
-    head = (f"chain_paper002.rate error ({s['unit']} rms per point; {s['measure']}), {s['seeds_ok']} of "
-            f"{s['seeds']} seeds x {len(s['temps_c'])} temperatures x {len(s['freqs_hz'])} drive frequencies, "
+    head = (f"{s['chain']}.{s['port']} error ({s['unit']} rms per point; {s['measure']}), {s['seeds_ok']} of "
+            f"{s['seeds']} seeds x {len(s['temps_c'])} temperatures"
+            + (f" x {len(s['freqs_hz'])} drive frequencies" if s["freqs_hz"] != [None] else "") + ", "
             f"{s['samples_per_point']} samples per point; percentile [95 % CI]")
     lines = [head]
     if "pooled" not in s:
@@ -219,11 +261,13 @@ def format_summary(s: dict) -> str:
 
     lines.append(f"  {'T C':>14s} " + cols)
     lines += [row(f"{b['temp_c']:.1f}", b) for b in s["by_temp"]]
-    lines.append(f"  {'f Hz':>14s} " + cols)
-    lines += [row(f"{b['f_hz']:.2f}", b) for b in s["by_freq"]]
+    if s["freqs_hz"] != [None]:   # a chain with a demodulator: the drive frequencies
+        lines.append(f"  {'f Hz':>14s} " + cols)
+        lines += [row(f"{b['f_hz']:.2f}", b) for b in s["by_freq"]]
     lines.append(row("all", s["pooled"]))
     w = s["worst_cell_p99"]
-    lines.append(f"  worst cell: p99 {_q(w)} at {w['temp_c']:.1f} C, {w['f_hz']:.2f} Hz; overflows "
+    at_f = f", {w['f_hz']:.2f} Hz" if w["f_hz"] is not None else ""
+    lines.append(f"  worst cell: p99 {_q(w)} at {w['temp_c']:.1f} C{at_f}; overflows "
                  f"{s['overflows']}")
     if s["failed"]:
         lines.append(f"  {len(s['failed'])} failed seeds left out (see results.jsonl)")
@@ -243,15 +287,16 @@ def plot(s: dict, path) -> None:
             cells = [c for c in s["cells"] if c["f_hz"] == f]
             t = [c["temp_c"] for c in cells]
             p99 = [c["rms"]["p99"] for c in cells]
-            line, = ax.plot(t, [q["value"] for q in p99], marker="o", ms=3, label=f"p99, {f:.2f} Hz")
+            at = f", {f:.2f} Hz" if f is not None else ""
+            line, = ax.plot(t, [q["value"] for q in p99], marker="o", ms=3, label=f"p99{at}")
             lo = [q["ci"][0] if q["ci"][0] is not None else q["value"] for q in p99]
             hi = [q["ci"][1] if q["ci"][1] is not None else q["value"] for q in p99]
             ax.fill_between(t, lo, hi, color=line.get_color(), alpha=0.15, lw=0)
             ax.plot(t, [c["rms"]["p50"]["value"] for c in cells], ls="--", color=line.get_color(), lw=1,
-                    label=f"p50, {f:.2f} Hz")
+                    label=f"p50{at}")
     ax.set_xlabel("chamber temperature (C)")
-    ax.set_ylabel("rate error rms (deg/h)")
-    ax.set_title(f"chain_paper002.rate: {s['seeds_ok']} seeds per point (band: 95 % CI of p99)", fontsize=9)
+    ax.set_ylabel(f"{s['port']} error rms ({s['unit']})")
+    ax.set_title(f"{s['chain']}.{s['port']}: {s['seeds_ok']} seeds per point (band: 95 % CI of p99)", fontsize=9)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()

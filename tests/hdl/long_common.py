@@ -37,11 +37,19 @@ def long_stream(name: str, n: int = N_LONG, unroll: int | None = None, seed: int
     assert len(next(iter(stim.values()))) >= n
     expected, ovf_model = model_run(d, name, stim)
     tag = f"long_{name}" + ("_serial" if extra else "")
+    cycles, seconds = file_stream(d, name, stim, expected, ovf_model, tag, sim, unroll, extra)
+    record_throughput("file", name + (" (serial)" if extra else ""), cycles, seconds, sim=sim)
+    return cycles, seconds, len(next(iter(stim.values())))
+
+
+def file_stream(d, name: str, stim: dict, expected: dict, ovf_model: int, tag: str, sim: str,
+                unroll: int | None = None, extra: dict | None = None) -> tuple[int, float]:
+    """``stim`` through the file-driven harness of instance ``name``: every output word equal to
+    ``expected`` and the overflow flags to ``ovf_model``; (cycles, seconds of simulation)."""
     got, ovf_rtl, cycles, seconds = run_harness(d, name, stim, tag, unroll, sim=sim, extra=extra)
     for port, want in expected.items():
         bad = np.flatnonzero(got[port] != want)
         assert bad.size == 0, (f"{name}.{port}: {bad.size} mismatches of {want.size}, first at {bad[0]}: "
                                f"got {got[port][bad[0]]}, expected {want[bad[0]]}")
     assert ovf_rtl == ovf_model, f"{name}: RTL flagged {ovf_rtl} overflows, model counted {ovf_model}"
-    record_throughput("file", name + (" (serial)" if extra else ""), cycles, seconds, sim=sim)
-    return cycles, seconds, len(next(iter(stim.values())))
+    return cycles, seconds

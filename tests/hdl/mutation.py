@@ -25,7 +25,7 @@ import numpy as np
 
 from conftest import lag_chain
 from fxdsp.vectors import load
-from hdl_util import RTL, SERIAL, icarus_window, VECTORS, BuildFailed, HarnessTimeout, UndefinedWord, build_dir, \
+from hdl_util import RTL, SERIAL, icarus_samples, icarus_window, VECTORS, BuildFailed, HarnessTimeout, UndefinedWord, build_dir, \
     design_of, generate_into, model_run, mutated_rtl, mutated_top, rtl_sources, run_harness
 
 
@@ -352,15 +352,13 @@ MUTATIONS = [
 ]
 
 
-# serial variants are checked on a window of their stream (hdl_util.icarus_window: from the first
-# change of input, then the stream's end): 12-350 cycles per sample on the Icarus harness, the whole
-# golden streams would take ~0.6-2.7 M cycles per mutant
-SERIAL_WINDOW = 600
-# ... shorter for the two of ~190-330 cycles per sample (~2 and ~4.7 s of Icarus per mutant at 600);
-# their mutants corrupt nearly every word of the window (all caught at 600 with >= 447 of 600 wrong)
-SERIAL_WINDOW_FEWER = {"demod": 300, "chain_paper002": 200}
-
-
+# the one-sample-per-clock demodulator simulates ~1.7k cycles/s on Icarus (its CORDIC and two wide
+# low-passes): its mutants (NCO, CORDIC: thousands of wrong words in its 5.3k golden samples) run on
+# a window of 1200, the other per-clock modules on their whole golden sets
+PER_CLOCK_WINDOW = {"demod": 1200}
+# serial variants are checked on the window of their stream that Icarus runs everywhere in the suite
+# (fxdsp.hdl.stimuli.icarus_samples: at most 200 samples and 20k cycles, from the first change of
+# input, then the stream's end); the whole golden streams would take ~0.6-2.7 M cycles per mutant
 def _check(rtl: Path, overrides, name: str, gapped: bool, tag: str, extra: dict | None = None) -> tuple[bool, str]:
     d = design_of(overrides)
     golden = overrides is None and (VECTORS / name).is_dir()
@@ -369,9 +367,10 @@ def _check(rtl: Path, overrides, name: str, gapped: bool, tag: str, extra: dict 
         total = sum(entry["overflows"].values())
     else:
         ins = d.all[name].stimulus(np.random.default_rng(9), 3000)
-    if extra:  # a serial variant: a window of the stream
-        ins = icarus_window(ins, SERIAL_WINDOW_FEWER.get(name, SERIAL_WINDOW))
-    if extra or not golden:  # the expected outputs: the model on what is streamed
+    window = icarus_samples(d, name) if extra else PER_CLOCK_WINDOW.get(d.instances[name].module)
+    if window:  # a serial variant, or a slow one-sample-per-clock module: a window of the stream
+        ins = icarus_window(ins, window)
+    if window or not golden:  # the expected outputs: the model on what is streamed
         outs, total = model_run(d, name, ins)
     unroll = 7 if name in ("sf_divide", "chain_paper002") else None
     try:

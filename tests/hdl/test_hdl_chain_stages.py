@@ -34,14 +34,17 @@ BOTH = {**lag_chain(), "demod": {"phase_trim_rad": -2.2},
 CONFIGS = {"lag": LAG, "trim": TRIM, "both": BOTH}
 EXTRA = {"DIV_UNROLL": 7}   # 7 quotient bits per cycle: the Python-driven run stays fast
 HEAD, TAIL = 2000, 300      # samples of the nominal sweep and of the saturating hot tail
+# a mutant's run: a fifth of it (each mutant changes most rate words from the first samples on; the
+# lag of tau = 2-5 ms, 190-480 samples, trails the sweep within the first 400)
+MUTANT_HEAD, MUTANT_TAIL = 400, 60
 
 
-def stimulus(design) -> dict[str, np.ndarray]:
+def stimulus(design, head: int = HEAD, tail: int = TAIL) -> dict[str, np.ndarray]:
     """The chain's own vector stimulus, shortened: the start of the temperature sweep with rate steps
     and quadrature, and the end of the full-scale (saturating) segment at 60 C, which the lag reaches
     by slewing from -18 C."""
     full = design.chains[CHAIN].stimulus(np.random.default_rng([design.seed, 14]), design.samples)
-    return {k: np.concatenate([v[:HEAD], v[-TAIL:]]) for k, v in full.items()}
+    return {k: np.concatenate([v[:head], v[-tail:]]) for k, v in full.items()}
 
 
 @pytest.fixture(scope="module")
@@ -105,7 +108,7 @@ def test_a_stage_mutation_fails_the_check(designs, key, tmp_path):
     generated = file == f"{CHAIN}.v"   # the chain's top is generated: mutate what the generator writes
     rtl = None if generated else mutated_rtl(tmp_path / "rtl", file, [(old, new)])
     d = designs[config]
-    seg = segment(d, CHAIN, stimulus(d))
+    seg = segment(d, CHAIN, stimulus(d, MUTANT_HEAD, MUTANT_TAIL))
     tag = f"stages_mut_{key}"
     # a failed cocotb test ends run_cocotb with pytest.fail, or with the runner's SystemExit
     with pytest.raises((pytest.fail.Exception, SystemExit)), \
