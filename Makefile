@@ -6,12 +6,10 @@ STAMP  := $(VENV)/.installed
 
 .PHONY: demo test install hdl-tools bench clean
 
-# --no-compile: Python compiles each module when it is first imported; byte-compiling every file of
-# scipy, matplotlib, numba ... at install took half of the install (53 s -> 28 s on this 2-core box)
 $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install -q --no-compile --upgrade pip
-	$(PY) -m pip install -q --no-compile -e '.[test]'
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -e '.[test]'
 	@touch $(STAMP)
 
 install: $(STAMP)
@@ -34,8 +32,11 @@ hdl-tools:
 demo: $(STAMP)
 	$(VENV)/bin/fxdsp demo
 
+# PYTHONDONTWRITEBYTECODE emptied: with it set (as in some CI images) no .pyc is ever written, so every
+# process of the run (two workers, each simulator's cocotb, each CLI and Dask subprocess) compiled
+# fxdsp and the tests from source again, and pytest rewrote every test module on each collection
 test: $(STAMP) hdl-tools
-	$(VENV)/bin/python -m pytest -q -n 2 --dist loadfile
+	PYTHONDONTWRITEBYTECODE= $(VENV)/bin/python -m pytest -q -n 2 --dist loadfile
 
 bench: $(STAMP)
 	$(VENV)/bin/fxdsp bench

@@ -34,10 +34,11 @@ class Chain(Block):
     """A netlist of blocks as one block: its inputs and outputs are the netlist's, its overflow
     counters its members' (members in the order of ``instances``, which is the RTL ovf order)."""
 
-    def __init__(self, netlist: Netlist, blocks: dict[str, Block], kinds: dict[str, str]):
+    def __init__(self, netlist: Netlist, blocks: dict[str, Block], kinds: dict[str, str], fs_hz: float):
         from .sensors import sensor_for
 
         self.netlist = netlist
+        self.fs_hz = fs_hz   # its sample rate: its own fs_hz, else [system].fs_hz
         self.name = netlist.instance_name
         self.members = {p: blocks[p] for p in netlist.instances}
         self.kinds = {p: kinds[p] for p in netlist.instances}
@@ -322,6 +323,21 @@ def _netlists(cfg: Config, tables: list[str]) -> dict[str, Netlist]:
     return out
 
 
+def _sample_rates(nets: dict[str, Netlist], fs: float) -> dict[str, tuple[float, str]]:
+    """table -> (the sample rate of the chains it is a member of, the field that states it): a chain's
+    own ``fs_hz`` or [system].fs_hz. A table whose reading depends on the rate (a filter, an NCO, a
+    lag) in two chains of different rates is an error naming both."""
+    out: dict[str, tuple[float, str]] = {}
+    for net in nets.values():
+        rate = (net.fs_hz, f"{net.name}.fs_hz") if net.fs_hz is not None else (fs, "system.fs_hz")
+        for table in net.instances:
+            have = out.setdefault(table, rate)
+            if have[0] != rate[0] and kind_of(table).timed:
+                raise WiringError(f"{table}: a member of chains at {have[1]} = {have[0]:g} and {rate[1]} = "
+                                  f"{rate[0]:g}; its {kind_of(table).name} reads one sample rate")
+    return out
+
+
 def _build_order(tables: list[str], nets: dict[str, Netlist]) -> list[str]:
     """The block tables in an order that builds every driver before what it drives (over all chains)."""
     deps = {t: set() for t in tables}
@@ -385,9 +401,11 @@ def build(config: Config | str | None = None, chains: bool = True) -> Design:
     _check_top_level(cfg, tables)
     nets = _netlists(cfg, tables)
     in_chain = {i for net in nets.values() for i in net.instances}
+    rates = _sample_rates(nets, fs)
     built: dict[str, Block] = {}
     for table in _build_order(tables, nets):
-        ctx = Context(fs, enforce=chains, in_chain=table in in_chain)
+        rate, rate_field = rates.get(table, (fs, "system.fs_hz"))
+        ctx = Context(rate, enforce=chains, in_chain=table in in_chain, fs_field=rate_field)
         block = kind_of(table).make(cfg.section(table), _wired(table, nets, built), ctx)
         block.name = table   # its overflow counters and errors are named after its table
         built[table] = block
@@ -398,7 +416,7 @@ def build(config: Config | str | None = None, chains: bool = True) -> Design:
         kinds = {t: kind_of(t).name for t in tables}
         for net in nets.values():
             _check_formats(net, built)
-            design.chains[net.instance_name] = Chain(net, built, kinds)
+            design.chains[net.instance_name] = Chain(net, built, kinds, net.fs_hz or fs)
     design.instances = _instance_table(design, _quantities(design, tables, nets))
     cfg.check_all_read()
     return design

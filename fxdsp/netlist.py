@@ -32,7 +32,7 @@ from .errors import InputError
 from .units import quantity
 
 ARROW = "->"
-CHAIN_KEYS = ("sensor", "instances", "inputs", "input_units", "wires", "outputs", "hardware")
+CHAIN_KEYS = ("sensor", "instances", "inputs", "input_units", "wires", "outputs", "fs_hz", "hardware")
 HARDWARE_KEYS = ("lut4", "mac16", "bram", "mhz")   # the targets a chain's hardware table may set
 
 
@@ -67,6 +67,7 @@ class Netlist:
     lines: dict[Endpoint, str] | None = None  # driven input -> the config line that wires it (errors)
     hardware: dict[str, float] | None = None  # the hw-report targets of its generated top (HARDWARE_KEYS)
     input_units: dict[str, str] = field(default_factory=dict)  # chain input -> quantity (fxdsp.units)
+    fs_hz: float | None = None                # the chain's own sample rate (None: [system].fs_hz)
 
     @property
     def instance_name(self) -> str:
@@ -200,7 +201,15 @@ def parse(sec: Section, ports: PortNames, known: tuple[str, ...]) -> Netlist:
     if sensor is not None and not isinstance(sensor, str):
         raise WiringError(f"{sec.field('sensor')}: expected a name, got {sensor!r}")
     return Netlist(chain, tuple(inst), drivers, {k: tuple(v) for k, v in inputs.items()}, outputs, order,
-                   sensor, lines, _hardware(sec), _input_units(sec, inputs))
+                   sensor, lines, _hardware(sec), _input_units(sec, inputs), _fs_hz(sec))
+
+
+def _fs_hz(sec: Section) -> float | None:
+    """The chain's own ``fs_hz`` (a chain fed at another rate than [system].fs_hz, such as a chamber
+    log's rows): a positive finite number, or None."""
+    if sec._get("fs_hz", None) is None:
+        return None
+    return sec.number("fs_hz", low=0, low_open=True)
 
 
 def _input_units(sec: Section, inputs: dict) -> dict[str, str]:

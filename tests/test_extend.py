@@ -8,6 +8,7 @@ and each stage is shown to be what produced the gain: with it turned off the gai
 from __future__ import annotations
 
 import contextlib
+import copy
 import io
 import json
 import shutil
@@ -228,19 +229,26 @@ def test_extend_the_tckit_log(tmp_path, capsys):
     assert code == 0, err
     rep = json.loads((out / "report.json").read_text())
     assert rep["chain"] == "thermometer" and [r["stage"] for r in rep["remedies"]] == ["lag"]
-    assert rep["regression"]["passed"] and set(rep["regression"]["blocks"]) == {"piecewise_bias001",
-                                                                               "bias_subtract001", "lag"}
+    # the thermometer chain is a config chain: its members and its generated top, the lag per update
+    assert rep["regression"]["passed"] and set(rep["regression"]["blocks"]) == {
+        "piecewise_bias001", "bias_subtract001", "chain_thermometer", "lag"}
+    ext = tomllib.loads((out / "config.toml").read_text())
+    assert ext["chain"]["thermometer"]["instances"] == ["lag", "piecewise.bias001", "bias_subtract001"]
     s = rep["summary"]
     assert s["gain"] > 2.0, s
     # the lag carries the gain: the final config's bit-exact chain with its lag bypassed (the cubic
     # fitted on Te, fed the thermometer's T) leaves much more of the output's temperature dependence
     from fxdsp.diagnose.logio import parse_mapping
+    from fxdsp.extend.configure import thermometer_chain
     from fxdsp.extend.evaluate import thermometer_bitexact, thermometer_codes
 
     columns = read_log(SHARED / TCKIT_REL, parse_mapping(TCKIT_ARGS[1:6:2]), ";", TCKIT_ARGS[-1]).columns
-    design = build(Config(tomllib.loads((out / "config.toml").read_text()), source="ext"))
+    design = build(Config(copy.deepcopy(ext), source="ext"))
     codes = thermometer_codes(design.blocks["lag"], columns, rep["remedies"][0]["parameters"]["tau_s"])
-    on, off = (thermometer_bitexact(design, codes[k], columns["output"], None)["rms_compensated"] for k in ("Te", "T"))
+    on = thermometer_bitexact(design, codes, columns["output"], None)["rms_compensated"]
+    ext["chain"]["thermometer"] = thermometer_chain(False, ext["chain"]["thermometer"]["fs_hz"])   # the lag bypassed
+    off = thermometer_bitexact(build(Config(ext, source="ext, no lag")), {"T": codes["T"]}, columns["output"],
+                               None)["rms_compensated"]
     assert off > 2 * on, (on, off)
     # the hardware arithmetic adds nothing the compensation would notice: a few output LSBs
     b = rep["bitexact_chain"]

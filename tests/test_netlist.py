@@ -205,3 +205,79 @@ def test_every_chain_gets_a_generated_top_and_shares_engines_by_wiring_and_forma
     data["bias_subtract001"]["bias_format"] = str(d.blocks["piecewise_bias001"].out_format)
     without = build(Config(data, source="<test>"))
     assert "chain_paper001.v" not in tops(without) and "chain_paper002.v" in tops(without)
+
+
+# ---- a chain at its own sample rate ---------------------------------------------------------------
+def _slow_chain(data: dict, fs_hz, table: str = "iir2") -> Config:
+    """``data`` with a chain of one low-pass (``table``) fed at ``fs_hz``."""
+    data = copy.deepcopy(data)
+    if table == "iir2":
+        data["iir2"] = copy.deepcopy(DATA["iir"])
+        data["iir2"]["data_format"] = "s24.22"
+    data["chain"]["slow"] = {"instances": [table], "inputs": [f"x -> {table}.x"], "wires": [],
+                             "outputs": [f"{table}.y -> y"],
+                             "fs_hz": fs_hz}
+    return Config(data, source="<test>")
+
+
+def test_a_chain_at_its_own_rate_designs_its_filters_at_that_rate():
+    """The low-pass of a chain fed at 20 kS/s is the scipy design of its cut-off at 20 kS/s (what the
+    config states); the same table at [system].fs_hz elsewhere is not."""
+    import scipy.signal as sps
+
+    d = build(_slow_chain(DATA, 20000.0))
+    cfg = DATA["iir"]
+    want = sps.butter(cfg["order"], cfg["cutoff_hz"], fs=20000.0, output="sos")
+    assert np.allclose(d.blocks["iir2"].sos, want, rtol=0, atol=1e-12)
+    assert not np.allclose(d.blocks["iir"].sos, want, atol=1e-6)
+    assert d.chains["chain_slow"].fs_hz == 20000.0 and d.chains["chain_paper002"].fs_hz == DATA["system"]["fs_hz"]
+
+
+def test_a_timed_block_in_chains_of_two_rates_is_an_error_naming_both():
+    with pytest.raises(WiringError) as info:
+        build(_slow_chain(DATA, 20000.0, table="iir"))
+    msg = str(info.value)
+    assert "chain.slow.fs_hz" in msg and "system.fs_hz" in msg and msg.startswith("iir:"), msg
+
+
+@pytest.mark.parametrize("value", [0, -1.0, "fast", float("nan"), True])
+def test_a_chain_rate_must_be_a_positive_number(value):
+    with pytest.raises((ValueError, TypeError)) as info:
+        build(_slow_chain(DATA, value))
+    assert "chain.slow.fs_hz" in str(info.value)
+
+
+# ---- chain port names the generated top cannot carry ------------------------------------------------
+def _port_renames():
+    """(chain, edited table, the new name): each shipped chain's first input and first output renamed
+    to reserved words of both languages and to names its own generated top declares."""
+    from fxdsp.hdl.chain_top import _DECLARATION, chain_top
+
+    d = build()
+    for name, net in sorted(DATA["chain"].items()):
+        top = chain_top(d, f"chain_{name}")
+        own = sorted({r.split("=")[0].split("]")[-1].strip() for r in _DECLARATION.findall(top)} - {""})
+        own = [n for n in own if n.isidentifier()]
+        for field in ("inputs", "outputs"):
+            line = net[field][0]
+            a, b = (s.strip() for s in line.split("->"))
+            old = a if field == "inputs" else b
+            for new in ("output", "logic", "clk", "busy", own[len(own) // 2]):
+                edited = [(f"{new} -> {y.strip()}" if field == "inputs" else f"{x.strip()} -> {new}")
+                          if (x.strip() if field == "inputs" else y.strip()) == old else ln
+                          for ln in net[field] for x, y in [ln.split("->")]]
+                other = {"outputs": net["outputs"]} if field == "inputs" else {}
+                extra = {k: {new if kk == old else kk: vv for kk, vv in v.items()}
+                         for k, v in net.items() if k == "input_units"} if field == "inputs" else {}
+                yield name, {**net, field: edited, **other, **extra}, new
+
+
+@pytest.mark.parametrize("name,table,new", list(_port_renames()))
+def test_a_chain_port_the_generated_top_cannot_carry_is_refused_naming_the_line(name, table, new):
+    from fxdsp.errors import InputError
+    from fxdsp.hdl.chain_top import chain_top
+
+    d = build(_with_chain(name, table))          # the model runs any name ...
+    with pytest.raises(InputError) as info:       # ... the RTL generator refuses it, naming the chain
+        chain_top(d, f"chain_{name}")
+    assert f"chain.{name}." in str(info.value) and repr(new) in str(info.value), str(info.value)

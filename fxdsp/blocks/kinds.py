@@ -35,6 +35,7 @@ class Context:
     fs_hz: float
     enforce: bool = True
     in_chain: bool = False
+    fs_field: str = "system.fs_hz"   # the field fs_hz comes from (a chain's own fs_hz, errors name it)
 
 
 def port_format(sec: Section, key: str, port: str, wired: dict[str, Wired], ctx: Context) -> Format:
@@ -58,6 +59,7 @@ class Kind:
     make: Callable[[Section, dict[str, Wired], Context], object]
     output_keys: dict[str, str]   # output port -> the table key its format comes from (errors name it)
     family: bool = False     # the instances are the sub-tables ([piecewise.sf])
+    timed: bool = False      # its table is read at the sample rate (a filter design, an NCO, a lag's update rate)
 
 
 def _own_format(block, sec: Section, key: str, port: str, wired: dict[str, Wired], ctx: Context):
@@ -117,19 +119,19 @@ def _lag(sec, wired, ctx):
     from .lag import Lag
 
     # in a chain, the lag's input arrives once per chain sample and it updates at its rate_hz
-    rate = (ctx.fs_hz, "system.fs_hz", ctx.enforce) if ctx.in_chain else ()
+    rate = (ctx.fs_hz, ctx.fs_field, ctx.enforce) if ctx.in_chain else ()
     return Lag.from_config(sec, port_format(sec, "temp_format", "temp", wired, ctx), *rate)
 
 
 KINDS: dict[str, Kind] = {k.name: k for k in (
     Kind("rtd", ("code",), ("temp",), _rtd, {"temp": "temp_format"}),
-    Kind("lag", ("temp",), ("te",), _lag, {"te": "temp_format"}),
+    Kind("lag", ("temp",), ("te",), _lag, {"te": "temp_format"}, timed=True),
     Kind("piecewise", ("temp",), ("y",), _piecewise, {"y": "out_format"}, family=True),
     Kind("sf_divide", ("x", "sf"), ("y",), _sf_divide, {"y": "out_format"}),
     Kind("demod", ("x",), ("i", "q", "amp", "phase"), _demod,
-         {"i": "data_format", "q": "data_format", "amp": "data_format", "phase": "angle_format"}),
+         {"i": "data_format", "q": "data_format", "amp": "data_format", "phase": "angle_format"}, timed=True),
     Kind("bias_subtract", ("x", "bias"), ("y",), _bias_subtract, {"y": "out_format"}),
-    Kind("iir", ("x",), ("y",), _iir, {"y": "data_format"}),
+    Kind("iir", ("x",), ("y",), _iir, {"y": "data_format"}, timed=True),
     Kind("freq2temp", ("f",), ("temp",), _freq2temp, {"temp": "temp_format"}),
 )}
 

@@ -257,8 +257,9 @@ def _band(design: Design, chain_name: str, port: str) -> tuple[float, float] | N
     import scipy.signal as sps
     w = np.linspace(0, np.pi, 4097)
     _, h = sps.sosfreqz(lpf.sos, worN=w)
-    fc = float(w[np.argmax(np.abs(h) < 1 / np.sqrt(2))] / (2 * np.pi) * design.fs_hz)
-    return fc, design.fs_hz
+    fs = chain.fs_hz
+    fc = float(w[np.argmax(np.abs(h) < 1 / np.sqrt(2))] / (2 * np.pi) * fs)
+    return fc, fs
 
 
 def lf_share(e: np.ndarray, fc: float, fs: float) -> float:

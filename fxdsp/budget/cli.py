@@ -317,7 +317,7 @@ def _report(out: Path, design, cfg, rows, attrs, statics, target, result, args, 
     figs = {}
     for (c, p), a in attrs.items():
         tag = f"{c}.{p}"
-        rp.plot_spectra(a, design.fs_hz if c in carrier_chains(design) else 1.0, out / f"spectrum_{tag}.png")
+        rp.plot_spectra(a, design.chains[c].fs_hz if c in carrier_chains(design) else 1.0, out / f"spectrum_{tag}.png")
         rp.plot_attribution(a, out / f"attribution_{tag}.png")
         figs[(c, p)] = tag
     md = [f"# fxdsp error budget\n\nConfig `{cfg.source}`, seed {design.seed}.\n",

@@ -255,8 +255,9 @@ def allan_chain(design: Design, chain_name: str, ports: list[str], samples: int 
     errs, settle = allan_errors(design, chain_name, ports, samples, temp_c)
     out = []
     for port, err in errs.items():
-        f = allan_figures(err, design.fs_hz)
-        out.append(Allan(chain_name, port, port_unit(design, chain_name, port)[0], design.fs_hz, int(err.size),
+        fs = design.chains[chain_name].fs_hz
+        f = allan_figures(err, fs)
+        out.append(Allan(chain_name, port, port_unit(design, chain_name, port)[0], fs, int(err.size),
                          settle, float(temp_c), float(design.chains[chain_name].sensor.STEADY_LEVEL), f["taus"],
                          f["adev"], f["intervals"], f["bi_adev"], f["bi_tau"], f["adev_1s"], f["fit_taus"], err))
     return out

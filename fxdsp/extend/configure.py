@@ -18,9 +18,10 @@ base's; a calibrated value or a remedy that does not fit it is an InputError nam
 * paper001: f0/k of the resonator thermometer against the reference and the bias polynomial in the
   frequency's temperature (a cubic instead of the paper's quadratic with the ``order`` remedy, for
   a resonator whose frequency turns over: one format added for the new power).
-* thermometer (an instrument read against a thermometer, such as the tckit voltmeter): the log's
-  temperature code -> ``lag`` (at the log's own rate) -> a bias polynomial in T
-  (``[piecewise.bias001]``) -> ``bias_subtract001``. The blocks are paper 001's bias engine and
+* thermometer (an instrument read against a thermometer, such as the tckit voltmeter): the chain
+  ``[chain.thermometer]`` the extension writes (:func:`thermometer_chain`, at the log's own rate,
+  its ``fs_hz``): the log's temperature code -> ``lag`` (with the lag remedy) -> a bias polynomial
+  in T (``[piecewise.bias001]``) -> ``bias_subtract001``. The blocks are paper 001's bias engine and
   subtractor; the temperature enters in the RTD's temperature format, which ``[freq2temp]
   temp_format`` must equal (the bias engine reads that code). With ``--config`` the polynomial
   has the config's order, t0 and formats; without it (the built-in config has no thermometer design)
@@ -37,7 +38,7 @@ from fxdsp.errors import InputError
 from fxdsp.fixed import Format
 from fxdsp.netlist import with_stage
 from fxdsp.repro.calconfig import FS_MV, acc_width, config_from_text, config_text, fit_format, \
-    paper001_coefficients, paper002_coefficients, piecewise_table
+    paper001_coefficients, paper002_coefficients, piecewise_table, set_table_keys
 from fxdsp.repro.calibrate import calibrate002
 
 THERMO_ORDER = 3          # the thermometer chain's bias polynomial without --config: a cubic in T - t0
@@ -183,7 +184,9 @@ def thermometer_tables(temp_c, te_c, output, rate_hz: float, temp_format: str) -
     bias["coef_format"] = [str(Format(True, f.wl, min(f.fl, acc_fl))) for f in map(Format.parse, bias["coef_format"])]
     word = fit_format([np.abs(y).max()], THERMO_OUT_WL, 1, True, "bias_subtract001.in")
     bias["out_format"] = word    # subtracted word for word from the output: the same format
-    return {"freq2temp": {"temp_format": temp_format},
+    bias["unit"] = "sensor"      # the log's output unit, not paper 001's deg/h (fxdsp.units)
+    # paper 001's chain reads the same engines: its rate input is now in the log's unit too
+    return {"freq2temp": {"temp_format": temp_format}, "chain.paper001": {"input_units": {"rate_in": "sensor"}},
             "piecewise.bias001": bias, "bias_subtract001": {"in_format": word, "out_format": word},
             "_fit": {"t0_c": t0, "coefficients": [float(c) for c in coef], "coef_wl": THERMO_COEF_WL}}
 
@@ -236,4 +239,22 @@ def thermometer_config(te_c, output, remedies, design=None, log_rate_hz: float |
     tables.update(remedy_tables(remedies, "thermometer", design, fit, log_rate_hz))
     what = "; ".join(r.what for r in remedies) or "no remedy"
     text = config_text(tables, design.text, provenance=f"thermometer chain by fxdsp extend: {what}")
+    chain = thermometer_chain("lag" in _stages(remedies), lag_rate_hz(design, "thermometer", log_rate_hz))
+    text = set_table_keys(text, THERMOMETER_CHAIN, chain, add_missing=True)
+    config_from_text(text)   # must build
     return text, fitted, fit.changes
+
+
+THERMOMETER_CHAIN = "chain.thermometer"
+
+
+def thermometer_chain(lag: bool, rate_hz: float) -> dict:
+    """The thermometer chain's netlist (a ``[chain.thermometer]`` table): the log's temperature code,
+    through the lag with the lag remedy, into the bias engine; the log's output minus its bias. Its
+    samples are the log's rows (``fs_hz`` = the log's rate: a lag updating at that rate updates on
+    every row)."""
+    engine = "piecewise.bias001.temp"
+    return {"instances": ["lag"] * lag + ["piecewise.bias001", "bias_subtract001"],
+            "inputs": [f"temp -> {'lag.temp' if lag else engine}", "reading -> bias_subtract001.x"],
+            "wires": [f"lag.te -> {engine}"] * lag + ["piecewise.bias001.y -> bias_subtract001.bias"],
+            "outputs": ["bias_subtract001.y -> compensated"], "fs_hz": float(rate_hz)}

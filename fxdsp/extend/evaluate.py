@@ -257,18 +257,24 @@ def thermometer_errors(columns: dict, codes: dict, fmt, remedies, folds: np.ndar
             "_held": np.ones(y.size, dtype=bool)}
 
 
-def thermometer_bitexact(design, te_code: np.ndarray, output, fit: dict) -> dict:
-    """The final config's bias engine and subtractor on the log (bit-exact) against the float cubic
-    they quantise: the arithmetic's own error, in the output unit."""
-    bias, sub = design.blocks["piecewise_bias001"], design.blocks["bias_subtract001"]
+def thermometer_bitexact(design, codes: dict, output, fit: dict) -> dict:
+    """The config's thermometer chain (``[chain.thermometer]``: the lag if it has one, the bias
+    engine, the subtractor) on the log, bit-exact, against the float polynomial it quantises: the
+    arithmetic's own error, in the output unit. ``codes``: :func:`thermometer_codes`."""
+    from fxdsp.errors import InputError
+
+    chain = design.chain("chain_thermometer", "the thermometer chain of fxdsp extend")
+    if chain.inputs["temp"] != design.blocks["lag"].temp_format:
+        raise InputError(f"chain.thermometer: its temperature word {chain.inputs['temp']} is not the lag's "
+                         f"{design.blocks['lag'].temp_format} (lag.temp_format)")
     ovf = OverflowLog()
-    y = quantize(np.asarray(output, float), sub.in_format, ROUND, ovf, "output")
-    b = bias.stream(ovf, temp=te_code)["y"]
-    r = to_float(sub.stream(ovf, x=y, bias=b)["y"], sub.out_format)
-    out = {"rms_compensated": float(np.sqrt(np.mean(r**2))), "overflows": int(ovf.total), "lsb": sub.out_format.lsb,
+    y = quantize(np.asarray(output, float), chain.inputs["reading"], ROUND, ovf, "output")
+    fmt = chain.outputs["compensated"]
+    r = to_float(chain.stream(ovf, temp=codes["T"], reading=y)["compensated"], fmt)
+    out = {"rms_compensated": float(np.sqrt(np.mean(r**2))), "overflows": int(ovf.total), "lsb": fmt.lsb,
            "_series": r}
     if fit is not None:
-        te = to_float(te_code, bias.temp_format)
+        te = to_float(codes.get("Te", codes["T"]), design.blocks["lag"].temp_format)
         want = np.asarray(output, float) - np.polynomial.polynomial.polyval(te - fit["t0_c"], fit["coefficients"])
         out["max_abs_vs_float"] = float(np.abs(r - want).max())
     return out
@@ -284,7 +290,7 @@ def thermometer_applied(columns: dict, configs: dict, remedies) -> dict:
     for name, stages in (("before", set()), ("after", {r.stage for r in remedies})):
         design = build(config_from_text(configs[name]))
         codes = thermometer_codes(design.blocks["lag"], columns, tau_of(remedies) if "lag" in stages else None)
-        got = thermometer_bitexact(design, codes.get("Te", codes["T"]), columns["output"], None)
+        got = thermometer_bitexact(design, codes, columns["output"], None)
         errors[name] = (got["_series"] - got["_series"].mean(), got["overflows"])
     return applied_result(errors, len(columns["time_s"]))
 

@@ -22,18 +22,11 @@ from fxdsp.chains import build
 from fxdsp.config import Config
 from fxdsp.netlist import without_stage
 
-# the thermometer chain (paper 001's bias compensation read from the chamber thermometer) is not yet
-# a config chain: its blocks are named here
-THERMOMETER_BLOCKS = ("piecewise_bias001", "bias_subtract001")
-
-
 def chain_blocks(design, chain: str) -> tuple[str, ...]:
-    """The instances ``extend`` checks for ``chain``: a config chain's members (its netlist) and its
-    top; the thermometer chain's blocks."""
-    top = f"chain_{chain}"
-    if top not in design.chains:
-        return THERMOMETER_BLOCKS
-    return (*(m.replace(".", "_") for m in design.chains[top].netlist.instances), top)
+    """The instances ``extend`` checks for ``chain``: the config chain's members (its netlist) and
+    its generated top (the thermometer chain is the ``[chain.thermometer]`` extend writes)."""
+    top = design.chain(f"chain_{chain}", "fxdsp extend's regression")
+    return (*(m.replace(".", "_") for m in top.netlist.instances), top.name)
 
 
 def _per_update_lag(config: Config):
@@ -68,16 +61,19 @@ def regression(design, chain: str, has_lag: bool, build_root: Path | None = None
     return {"simulator": "icarus", "blocks": results, "passed": all(r["ok"] for r in results.values())}
 
 
-def cost(chain: str, has_lag: bool) -> dict | None:
+def cost(design, chain: str, has_lag: bool) -> dict | None:
     """LUT4 / SB_MAC16 / FF of the chain before and after, from the committed report's rows (the
-    default config's word lengths: an estimate for this config). None without a report."""
+    default config's word lengths: an estimate for this config): the chain's top, or (a chain the
+    default config does not have, such as the thermometer chain) its members but the lag. None
+    without a report."""
     from fxdsp.hdl.hwreport import load_hw_report
 
     report = load_hw_report()
     if report is None:
         return None
     rows = {r["name"]: r for r in report["rows"]}
-    before_names = [f"chain_{chain}"] if f"chain_{chain}" in rows else list(THERMOMETER_BLOCKS)
+    members = [m for m in chain_blocks(design, chain)[:-1] if m != "lag"]
+    before_names = [f"chain_{chain}"] if f"chain_{chain}" in rows else members
     after_names = before_names + (["lag"] if has_lag else [])
 
     def total(names):

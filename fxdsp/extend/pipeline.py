@@ -128,7 +128,7 @@ def extend_diagnosis(diag, log_name: str, chain="auto", base_text=None, rtl: boo
         errors = evaluate.thermometer_errors(columns, codes, fmt, remedies, diag.context.blocks.row_fold(),
                                              order=len(fit["coefficients"]) - 1)
         errors["_changes"] = {"before": ch_base, "after": ch_ext}
-        bx = evaluate.thermometer_bitexact(build(configure.config_from_text(ext)), te_code, columns["output"], fit)
+        bx = evaluate.thermometer_bitexact(build(configure.config_from_text(ext)), codes, columns["output"], fit)
         extra["bitexact_chain"] = rp.public(bx)
         extra["fit"] = fit
     ext_cfg = configure.config_from_text(ext)
@@ -148,7 +148,7 @@ def extend_diagnosis(diag, log_name: str, chain="auto", base_text=None, rtl: boo
                          "widen": bool(widen), "changes": changes},
               "heldout": rp.public(errors), "summary": rp.summary(errors), **extra,
               "regression": hardware.regression(design_built, chain, "lag" in stages, build_root) if rtl else None,
-              "cost": hardware.cost(chain, "lag" in stages)}
+              "cost": hardware.cost(design_built, chain, "lag" in stages)}
     from fxdsp.diagnose.report import replay_model
 
     return Extension(report, ext, base, files, errors, columns["time_s"], replay_model(diag), remedies)

@@ -24,8 +24,36 @@ its RTL interface and its parameters.
 
 from __future__ import annotations
 
+import re
+
 from ..chains import Chain, Design
+from ..errors import InputError
 from ..netlist import Endpoint
+
+# The reserved words of Verilog-2005 (IEEE 1364-2005 annex B) and SystemVerilog-2012 (the simulators
+# compile the tops with -g2012): a chain port of that name cannot be a port of its generated top.
+RESERVED_WORDS = frozenset("""
+always and assign automatic begin buf bufif0 bufif1 case casex casez cell cmos config deassign default defparam
+design disable edge else end endcase endconfig endfunction endgenerate endmodule endprimitive endspecify endtable
+endtask event for force forever fork function generate genvar highz0 highz1 if ifnone incdir include initial inout
+input instance integer join large liblist library localparam macromodule medium module nand negedge nmos nor
+noshowcancelled not notif0 notif1 or output parameter pmos posedge primitive pull0 pull1 pulldown pullup
+pulsestyle_ondetect pulsestyle_onevent rcmos real realtime reg release repeat rnmos rpmos rtran rtranif0 rtranif1
+scalared showcancelled signed small specify specparam strong0 strong1 supply0 supply1 table task time tran tranif0
+tranif1 tri tri0 tri1 triand trior trireg unsigned use uwire vectored wait wand weak0 weak1 while wire wor xnor xor
+accept_on alias always_comb always_ff always_latch assert assume before bind bins binsof bit break byte chandle
+checker class clocking const constraint context continue cover covergroup coverpoint cross dist do endchecker
+endclass endclocking endgroup endinterface endpackage endprogram endproperty endsequence enum eventually expect
+export extends extern final first_match foreach forkjoin global iff ignore_bins illegal_bins implements implies
+import inside int interconnect interface intersect join_any join_none let local logic longint matches modport
+nettype new nexttime null package packed priority program property protected pure rand randc randcase randsequence
+ref reject_on restrict return s_always s_eventually s_nexttime s_until s_until_with sequence shortint shortreal
+soft solve static string strong struct super sync_accept_on sync_reject_on tagged this throughout timeprecision
+timeunit type typedef union unique unique0 until until_with untyped var virtual void wait_order weak wildcard with
+within""".split())
+_DECLARATION = re.compile(r"^\s*(?:wire|reg|integer|genvar|localparam|parameter)\b([^;]*)", re.M)
+_INSTANCE = re.compile(r"\b(u_\w+)\s*\(")
+_FIXED_PORTS = ("clk", "rst", "in_valid", "in_ready", "out_valid", "ovf")
 
 
 def _v(name: str) -> str:
@@ -40,7 +68,8 @@ def _schedule_lines(design: Design, name: str) -> list[str]:
     """Both variants' schedules as numbers for this config (:func:`fxdsp.hdl.schedule.chain_schedule`)."""
     from .schedule import chain_schedule
 
-    budget = int(40e6 // design.fs_hz)
+    fs = design.chains[name].fs_hz
+    budget = int(40e6 // fs)
     out = []
     for arch in (1, 0):
         try:
@@ -51,7 +80,7 @@ def _schedule_lines(design: Design, name: str) -> list[str]:
         steps = ", ".join(f"{m} at {b} for {c}" for m, (b, c) in start.items())
         out += [f"// ARCH = {arch} schedule at DIV_UNROLL = 1 (each member's in_valid cycle, counted from the cycle after "
                 f"the chain's accepting edge, and its cycles): {steps};",
-                f"//   {per} cycles per sample at this config, against {budget} at 40 MHz and {design.fs_hz:g} S/s."]
+                f"//   {per} cycles per sample at this config, against {budget} at 40 MHz and {fs:g} S/s."]
     return out
 
 
@@ -438,7 +467,26 @@ def chain_top(design: Design, name: str) -> str:
         body.append(f"    assign {p} = {_v(e.instance)}_{e.port}_q;")
     body.append("    assign ovf = {" + ", ".join(f"{_v(m)}_ovf_q" for m in reversed(members)) + "};")
     body += t.formal_lines()
-    return "\n".join(lines + body + ["endmodule", "", "`default_nettype wire", ""])
+    text = "\n".join(lines + body + ["endmodule", "", "`default_nettype wire", ""])
+    _check_port_names(net, text)
+    return text
+
+
+def _check_port_names(net, text: str) -> None:
+    """Every chain port must be free to be a port of the top: not a reserved word, not one of the
+    top's own ports or of the names it declares (``busy``, ``go_<member>``, ``u_<member>`` ...);
+    otherwise an InputError naming the chain's line (the model runs any name, the RTL cannot)."""
+    declared = set(_FIXED_PORTS) | set(_INSTANCE.findall(text))
+    for rest in _DECLARATION.findall(text):   # "reg [3:0] a, b" / "wire x = ..." / "parameter integer N = 1"
+        head = re.sub(r"\[[^\]]*\]|\b(?:signed|integer)\b", " ", rest.split("=")[0])
+        declared |= {n.strip() for n in head.split(",") if n.strip().isidentifier()}
+    for field, names in (("inputs", net.inputs), ("outputs", net.outputs)):
+        for p in names:
+            why = ("a Verilog / SystemVerilog reserved word" if p in RESERVED_WORDS else
+                   "a name the generated top uses itself" if p in declared else None)
+            if why:
+                raise InputError(f"{net.name}.{field}: chain {field[:-1]} {p!r} is {why}: its generated top "
+                                 f"cannot have a port of that name; rename it")
 
 
 def tie_offs(inst, mac: bool = True) -> list[str]:

@@ -470,7 +470,7 @@ def _schedule_fields(design, name: str, extra) -> dict:
     except ValueError:   # a member without a constant schedule
         per = None
     hw = design.chains[name].netlist.hardware
-    return {"cycles_per_sample": per, "cycle_budget": int(40e6 // design.fs_hz), **({"target": hw} if hw else {})}
+    return {"cycles_per_sample": per, "cycle_budget": int(40e6 // design.chains[name].fs_hz), **({"target": hw} if hw else {})}
 
 
 def _slowest(r) -> float | None:

@@ -125,8 +125,8 @@ def cycles_per_sample(design, name: str, arch: int = 1, unroll: int = 1) -> int:
         if design.instances[name].members:
             return chain_schedule(design, name, arch, unroll)[0]
         return member_cycles(design, name, arch, unroll)
-    except ValueError:
-        return int(40e6 // design.fs_hz)
+    except ValueError:   # the period of the chain's own rate (a block: the system's)
+        return int(40e6 // getattr(design.chains.get(name), "fs_hz", design.fs_hz))
 
 
 def chain_schedule(design, name: str, arch: int = 1, unroll: int = 1) -> tuple[int, dict[str, tuple[int, int]]]:

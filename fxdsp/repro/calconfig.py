@@ -75,7 +75,8 @@ def _value_end(lines: list[str], i: int, start: int) -> int:
 
 def set_table_keys(text: str, table: str, updates: dict, add_missing: bool = False) -> str:
     """Rewrite ``key = value`` lines of ``[table]`` in TOML text. Keys must already exist there,
-    unless ``add_missing``: those are then written right after the table's header line."""
+    unless ``add_missing``: those are then written right after the table's header line (and a table
+    the text lacks is appended, with every key)."""
     lines = text.splitlines(keepends=True)
     current = None
     done = set()
@@ -101,9 +102,12 @@ def set_table_keys(text: str, table: str, updates: dict, add_missing: bool = Fal
     if missing and add_missing:
         at = next((i for i, line in enumerate(lines) if (m := header.match(line)) and m.group(1).strip() == table),
                   None)
+        new = [f"{k} = {dumps_value(updates[k], f'{table}.{k}')}\n" for k in missing]
         if at is not None:
-            new = [f"{k} = {dumps_value(updates[k], f'{table}.{k}')}\n" for k in missing]
             return "".join(lines[:at + 1] + new + lines[at + 1:])
+        if not done:
+            tail = "" if not lines or lines[-1].endswith("\n") else "\n"
+            return "".join(lines) + tail + f"\n[{table}]\n" + "".join(new)
     if missing:
         raise ValueError(f"[{table}].{missing[0]}: not in the base config, cannot rewrite it")
     return "".join(lines)
