@@ -98,7 +98,7 @@ def test_rtl_of_a_users_config_and_of_a_faulty_rtl_from_the_installed_package(in
     bin_dir, env, work, _ = installed
     (work / "adc18.toml").write_text(adc18_text())
     proc = fxdsp(installed, "rtl", "--config", "adc18.toml", "--only", "sf_divide", "--sim", "icarus", "--long",
-                 "300", "--out", "rtl18")
+                 "150", "--out", "rtl18")
     report = json.loads((work / "rtl18" / "report.json").read_text())
     assert report["passed"] and [r["dut"] for r in report["duts"]] == ["sf_divide", "sf_divide (serial)"], proc.stdout
     # the RTL the installed package carries, with the subtraction's sign flipped
@@ -110,7 +110,7 @@ def test_rtl_of_a_users_config_and_of_a_faulty_rtl_from_the_installed_package(in
     src = rtl / "bias_subtract.v"
     assert src.read_text().count("- (be <<< B_ALIGN)") == 1
     src.write_text(src.read_text().replace("- (be <<< B_ALIGN)", "+ (be <<< B_ALIGN)"))
-    proc = subprocess.run([str(bin_dir / "fxdsp"), "rtl", "--only", "bias_subtract", "--rtl", str(rtl), "--long", "300",
+    proc = subprocess.run([str(bin_dir / "fxdsp"), "rtl", "--only", "bias_subtract", "--rtl", str(rtl), "--long", "150",
                            "--out", "faulty"], cwd=work, env=env, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     row = json.loads((work / "faulty" / "report.json").read_text())["duts"][0]

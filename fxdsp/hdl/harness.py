@@ -9,8 +9,9 @@ own HDL tests all run through here. Nothing here prints, skips or exits: a tool 
 :class:`~fxdsp.hdl.simulators.SimulatorMissing`, a build that fails :class:`BuildFailed`, and a
 stream's verdict is data (the driver's summary: errors and the first mismatch per port).
 
-What the harness must know of a module's ports beyond the design's instance table is listed once
-below (``READY_PORT``, ``MAC_PORT``, ``AUX_PORT``, ``SET1_PORT``, ``SERIAL_MODULES``), by module.
+What the harness must know of a module's ports beyond the design's instance table is its RTL
+interface, stated once beside its datapath (:class:`fxdsp.blocks.datapath.RtlPorts`: in_ready, the
+serial variant, the multiplier bundle, the auxiliary channel, a second coefficient set).
 """
 
 from __future__ import annotations

@@ -14,8 +14,10 @@ from .schedule import cycles_per_sample
 
 # samples of a random stream per block module (its corners first, then a random tail): the slow ones
 # shorter; a chain's from its one-sample-per-clock schedule, CHAIN_CYCLES cycles in all
-MAX_SAMPLES = {"demod": 2500, "iir": 3000, "lag": 4000}
-CHAIN_CYCLES = 80_000
+# (demod 1200: its low-passes settle in ~80 samples; Icarus runs its one-sample-per-clock RTL at ~1.7 k
+# samples/s)
+MAX_SAMPLES = {"demod": 1200, "iir": 1500, "lag": 2000}
+CHAIN_CYCLES = 40_000
 # A serial variant takes 12-350 cycles per sample and Icarus simulates ~10-15k of its cycles per
 # second (it, not the Python driver, is the limit), so its Python-driven Icarus streams are cut to a
 # window of at most ICARUS_SERIAL_SAMPLES samples and ICARUS_SERIAL_CYCLES cycles (at least

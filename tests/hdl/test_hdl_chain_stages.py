@@ -33,7 +33,7 @@ BOTH = {**lag_chain(), "demod": {"phase_trim_rad": -2.2},
         "lag": {"rate_hz": FS / 5, "tau_s": 0.005, "state_guard_bits": 6, "rounding": "floor"}}
 CONFIGS = {"lag": LAG, "trim": TRIM, "both": BOTH}
 EXTRA = {"DIV_UNROLL": 7}   # 7 quotient bits per cycle: the Python-driven run stays fast
-HEAD, TAIL = 2000, 300      # samples of the nominal sweep and of the saturating hot tail
+HEAD, TAIL = 1000, 300      # samples of the nominal sweep and of the saturating hot tail
 # a mutant's run: a fifth of it (each mutant changes most rate words from the first samples on; the
 # lag of tau = 2-5 ms, 190-480 samples, trails the sweep within the first 400)
 MUTANT_HEAD, MUTANT_TAIL = 400, 60

@@ -1,6 +1,6 @@
-"""(c) Corner cases through every block and both tops, each as three streams on the same DUT:
-reset in mid-stream with samples in flight, then the corner list back to back, then again with
-gapped valid. Two designs with narrowed formats force saturation / wrap and rounding ties:
+"""(c) Corner cases through every block and both tops, as streams on the same DUT: reset in
+mid-stream with samples in flight, then the corner list with gapped valid (on Verilator also back to
+back before it; on Icarus back-to-back valid is the golden vectors' stream). Two designs with narrowed formats force saturation / wrap and rounding ties:
 full scale, minimum negative, rounding ties, saturation, SF at and near zero, temperatures
 exactly on (and next to) breakpoints, frequencies at f0. The one-sample-per-clock RTL on Icarus; the
 serial variants on Icarus (a window of the streams, the half_up / saturate design) and on Verilator
@@ -91,8 +91,9 @@ def corner_streams(key, name, sim, extra=None, suffix=""):
         stim = icarus_window(stim, icarus_samples(d, name))
     n = len(next(iter(stim.values())))
     first = {k: v[: max(8, n // 3)] for k, v in stim.items()}
-    segs = [segment(d, name, first, abort_after=max(4, n // 4)),  # reset with samples in flight
-            segment(d, name, stim, gap=0.0),                      # back to back from reset
-            segment(d, name, stim, gap=0.5)]                      # gapped valid from reset
+    segs = [segment(d, name, first, abort_after=max(4, n // 4))]  # reset with samples in flight
+    if sim != "icarus":   # on Icarus the golden vectors stream back to back (~1.7 k samples/s for demod)
+        segs.append(segment(d, name, stim, gap=0.0))               # back to back from reset
+    segs.append(segment(d, name, stim, gap=0.5))                    # gapped valid from reset
     params = EXTRA.get(name) if extra is None else {**EXTRA.get(name, {}), **extra}
     run_cocotb(d, name, segs, f"corner_{key}_{name}{suffix}", seed=11, extra_params=params, sim=sim)

@@ -27,7 +27,7 @@ from user_configs import adc18_text
 
 # a user's own design: the sense ADC at 18 bits (the divider's input word), the rest as built in
 ADC18 = adc18_text()
-LONG = ["--long", "400"]
+LONG = ["--long", "150"]
 
 
 def _config(tmp_path):
