@@ -121,7 +121,7 @@ def test_two_causes_at_once_are_both_named():
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not os.environ.get("FXDSP_SLOW"), reason="200 diagnoses (~2.5 min): set FXDSP_SLOW=1")
+@pytest.mark.skipif(not os.environ.get("FXDSP_SLOW"), reason="200 diagnoses (~1.5 min): set FXDSP_SLOW=1")
 def test_confusion_matrix_over_20_cases_per_cause():
     from fxdsp.diagnose.hidden import confusion
 

@@ -69,14 +69,15 @@ class SegmentNormals:
         xs = design[:, self.alive] / self.scale[self.alive]
         self.p = xs.shape[1]
         self.weight = float(weight)  # 1/noise variance: makes channels comparable
-        # per-segment sums in one pass: outer products per row would be n*p*p memory, so
-        # accumulate X^T X per segment by a matmul on each segment's rows
+        # per-segment sums: outer products per row would be n*p*p memory, and a matmul per segment a
+        # Python loop over hundreds of segments; each of the p(p+1)/2 column products is summed per
+        # segment in one reduceat instead (the same sums)
         s = blocks.n_segments
-        self.xtx = np.empty((s, self.p, self.p))
-        for k in range(s):
-            xk = xs[blocks.edges[k]:blocks.edges[k + 1]]
-            self.xtx[k] = xk.T @ xk
         starts = blocks.edges[:-1]
+        self.xtx = np.empty((s, self.p, self.p))
+        for i in range(self.p):
+            for j in range(i, self.p):
+                self.xtx[:, i, j] = self.xtx[:, j, i] = np.add.reduceat(xs[:, i] * xs[:, j], starts)
         self.xty = np.add.reduceat(xs * target[:, None], starts, axis=0)
         self.yty = np.add.reduceat(target * target, starts)
         self.counts = np.diff(blocks.edges)
@@ -91,9 +92,30 @@ class SegmentNormals:
         except np.linalg.LinAlgError:
             return np.linalg.lstsq(xtx, xty, rcond=None)[0]
 
+    def _solve_many(self, xtx: np.ndarray, xty: np.ndarray) -> np.ndarray:
+        """:meth:`_solve` of each of a stack of systems (xtx [s, p, p], xty [s, p]) in one call."""
+        ridge = 1e-10 * np.maximum(np.trace(xtx, axis1=1, axis2=2) / max(self.p, 1), 1e-300)
+        try:
+            return np.linalg.solve(xtx + ridge[:, None, None] * np.eye(self.p), xty[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            return np.array([self._solve(a, b) for a, b in zip(xtx, xty)])
+
     @staticmethod
     def _sse(beta, xtx, xty, yty) -> float:
         return float(max(yty - 2.0 * beta @ xty + beta @ xtx @ beta, 0.0))
+
+    @staticmethod
+    def _sse_many(beta, xtx, xty, yty) -> np.ndarray:
+        """:meth:`_sse` of each of a stack (beta [s, p])."""
+        quad = np.einsum("si,sij,sj->s", beta, xtx, beta)
+        return np.maximum(yty - 2.0 * np.einsum("si,si->s", beta, xty) + quad, 0.0)
+
+    def _sums_by(self, group: np.ndarray, s: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per-group sums of the segments' normals (group: one label 0..s-1 per segment)."""
+        member = (np.asarray(group)[None, :] == np.arange(s)[:, None]).astype(float)   # [s, segments]
+        n = self.xtx.shape[0]
+        return ((member @ self.xtx.reshape(n, -1)).reshape(s, self.p, self.p), member @ self.xty,
+                member @ self.yty)
 
     def coefficients(self, beta_scaled: np.ndarray) -> np.ndarray:
         """Coefficients of the unscaled design columns (dead columns get 0)."""
@@ -107,16 +129,10 @@ class SegmentNormals:
 
     def folds(self) -> tuple[np.ndarray, np.ndarray]:
         """(training SSE, held-out SSE) per fold, both weighted."""
-        nf = self.blocks.n_folds
-        train, held = np.empty(nf), np.empty(nf)
-        for f in range(nf):
-            mask = self.blocks.fold == f
-            h = (self.xtx[mask].sum(0), self.xty[mask].sum(0), self.yty[mask].sum())
-            t = (self.tot[0] - h[0], self.tot[1] - h[1], self.tot[2] - h[2])
-            beta = self._solve(t[0], t[1])
-            train[f] = self._sse(beta, *t)
-            held[f] = self._sse(beta, *h)
-        return train * self.weight, held * self.weight
+        h = self._sums_by(self.blocks.fold, self.blocks.n_folds)
+        t = (self.tot[0] - h[0], self.tot[1] - h[1], self.tot[2] - h[2])
+        beta = self._solve_many(t[0], t[1])
+        return self._sse_many(beta, *t) * self.weight, self._sse_many(beta, *h) * self.weight
 
     def jackknife(self, by: str = "group") -> tuple[np.ndarray, np.ndarray]:
         """Delete-one-group fits: (coefficients [n_groups, p_all], training SSE [n_groups]); with
@@ -127,14 +143,12 @@ class SegmentNormals:
             group, s = self.blocks.group(), self.blocks.n_groups
         else:
             raise ValueError(f"by: expected 'group' or 'fold', got {by!r}")
-        coefs, sse = np.empty((s, self.alive.size)), np.empty(s)
-        for k in range(s):
-            m = group == k
-            t = (self.tot[0] - self.xtx[m].sum(0), self.tot[1] - self.xty[m].sum(0), self.tot[2] - self.yty[m].sum())
-            beta = self._solve(t[0], t[1])
-            coefs[k] = self.coefficients(beta)
-            sse[k] = self._sse(beta, *t)
-        return coefs, sse * self.weight
+        g = self._sums_by(group, s)
+        t = (self.tot[0] - g[0], self.tot[1] - g[1], self.tot[2] - g[2])
+        beta = self._solve_many(t[0], t[1])
+        coefs = np.zeros((s, self.alive.size))
+        coefs[:, self.alive] = beta / self.scale[self.alive]
+        return coefs, self._sse_many(beta, *t) * self.weight
 
     def heldout_rows(self, design: np.ndarray, target: np.ndarray) -> np.ndarray:
         """Held-out residual of every row (each row predicted by the fit without its fold)."""
