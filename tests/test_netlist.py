@@ -266,10 +266,10 @@ def _port_renames():
                 edited = [(f"{new} -> {y.strip()}" if field == "inputs" else f"{x.strip()} -> {new}")
                           if (x.strip() if field == "inputs" else y.strip()) == old else ln
                           for ln in net[field] for x, y in [ln.split("->")]]
-                other = {"outputs": net["outputs"]} if field == "inputs" else {}
-                extra = {k: {new if kk == old else kk: vv for kk, vv in v.items()}
-                         for k, v in net.items() if k == "input_units"} if field == "inputs" else {}
-                yield name, {**net, field: edited, **other, **extra}, new
+                # a renamed input keeps its stated unit
+                units = {"input_units": {new if k == old else k: v for k, v in net["input_units"].items()}} \
+                    if field == "inputs" and "input_units" in net else {}
+                yield name, {**net, field: edited, **units}, new
 
 
 @pytest.mark.parametrize("name,table,new", list(_port_renames()))
