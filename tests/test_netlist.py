@@ -250,19 +250,15 @@ def test_a_chain_rate_must_be_a_positive_number(value):
 # ---- chain port names the generated top cannot carry ------------------------------------------------
 def _port_renames():
     """(chain, edited table, the new name): each shipped chain's first input and first output renamed
-    to reserved words of both languages and to names its own generated top declares."""
-    from fxdsp.hdl.chain_top import _DECLARATION, chain_top
-
-    d = build()
+    to reserved words of both languages, to the top's own ports and registers, and to the names the
+    generated top gives its members (README: ``go_<member>``; ``u_<member>`` its instances)."""
     for name, net in sorted(DATA["chain"].items()):
-        top = chain_top(d, f"chain_{name}")
-        own = sorted({r.split("=")[0].split("]")[-1].strip() for r in _DECLARATION.findall(top)} - {""})
-        own = [n for n in own if n.isidentifier()]
+        member = net["instances"][-1].replace(".", "_")
         for field in ("inputs", "outputs"):
             line = net[field][0]
             a, b = (s.strip() for s in line.split("->"))
             old = a if field == "inputs" else b
-            for new in ("output", "logic", "clk", "busy", own[len(own) // 2]):
+            for new in ("output", "logic", "clk", "busy", f"go_{member}", f"u_{member}"):
                 edited = [(f"{new} -> {y.strip()}" if field == "inputs" else f"{x.strip()} -> {new}")
                           if (x.strip() if field == "inputs" else y.strip()) == old else ln
                           for ln in net[field] for x, y in [ln.split("->")]]

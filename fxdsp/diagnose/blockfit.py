@@ -86,27 +86,17 @@ class SegmentNormals:
 
     # -- solving -----------------------------------------------------------------------------
     def _solve(self, xtx: np.ndarray, xty: np.ndarray) -> np.ndarray:
-        ridge = 1e-10 * max(np.trace(xtx) / max(self.p, 1), 1e-300)
-        try:
-            return np.linalg.solve(xtx + ridge * np.eye(self.p), xty)
-        except np.linalg.LinAlgError:
-            return np.linalg.lstsq(xtx, xty, rcond=None)[0]
-
-    def _solve_many(self, xtx: np.ndarray, xty: np.ndarray) -> np.ndarray:
-        """:meth:`_solve` of each of a stack of systems (xtx [s, p, p], xty [s, p]) in one call."""
+        """The ridge-stabilised solution of each of a stack of systems (xtx [s, p, p], xty [s, p]) in
+        one call; a singular one by least squares."""
         ridge = 1e-10 * np.maximum(np.trace(xtx, axis1=1, axis2=2) / max(self.p, 1), 1e-300)
         try:
             return np.linalg.solve(xtx + ridge[:, None, None] * np.eye(self.p), xty[..., None])[..., 0]
         except np.linalg.LinAlgError:
-            return np.array([self._solve(a, b) for a, b in zip(xtx, xty)])
+            return np.array([np.linalg.lstsq(a, b, rcond=None)[0] for a, b in zip(xtx, xty)])
 
     @staticmethod
-    def _sse(beta, xtx, xty, yty) -> float:
-        return float(max(yty - 2.0 * beta @ xty + beta @ xtx @ beta, 0.0))
-
-    @staticmethod
-    def _sse_many(beta, xtx, xty, yty) -> np.ndarray:
-        """:meth:`_sse` of each of a stack (beta [s, p])."""
+    def _sse(beta, xtx, xty, yty) -> np.ndarray:
+        """The residual sum of squares of each of a stack (beta [s, p])."""
         quad = np.einsum("si,sij,sj->s", beta, xtx, beta)
         return np.maximum(yty - 2.0 * np.einsum("si,si->s", beta, xty) + quad, 0.0)
 
@@ -118,21 +108,26 @@ class SegmentNormals:
                 member @ self.yty)
 
     def coefficients(self, beta_scaled: np.ndarray) -> np.ndarray:
-        """Coefficients of the unscaled design columns (dead columns get 0)."""
-        out = np.zeros(self.alive.size)
-        out[self.alive] = beta_scaled / self.scale[self.alive]
+        """Coefficients of the unscaled design columns (dead columns get 0), of one fit or a stack."""
+        out = np.zeros(beta_scaled.shape[:-1] + self.alive.shape)
+        out[..., self.alive] = beta_scaled / self.scale[self.alive]
         return out
 
     def fit_all(self) -> tuple[np.ndarray, float]:
-        beta = self._solve(self.tot[0], self.tot[1])
-        return self.coefficients(beta), self._sse(beta, *self.tot)
+        tot = tuple(np.asarray(a)[None] for a in self.tot)
+        beta = self._solve(tot[0], tot[1])
+        return self.coefficients(beta[0]), float(self._sse(beta, *tot)[0])
+
+    def _left_out(self, group: np.ndarray, s: int):
+        """(the sums without each group, the group's own sums, the fits without it)."""
+        h = self._sums_by(group, s)
+        t = (self.tot[0] - h[0], self.tot[1] - h[1], self.tot[2] - h[2])
+        return t, h, self._solve(t[0], t[1])
 
     def folds(self) -> tuple[np.ndarray, np.ndarray]:
         """(training SSE, held-out SSE) per fold, both weighted."""
-        h = self._sums_by(self.blocks.fold, self.blocks.n_folds)
-        t = (self.tot[0] - h[0], self.tot[1] - h[1], self.tot[2] - h[2])
-        beta = self._solve_many(t[0], t[1])
-        return self._sse_many(beta, *t) * self.weight, self._sse_many(beta, *h) * self.weight
+        t, h, beta = self._left_out(self.blocks.fold, self.blocks.n_folds)
+        return self._sse(beta, *t) * self.weight, self._sse(beta, *h) * self.weight
 
     def jackknife(self, by: str = "group") -> tuple[np.ndarray, np.ndarray]:
         """Delete-one-group fits: (coefficients [n_groups, p_all], training SSE [n_groups]); with
@@ -143,25 +138,18 @@ class SegmentNormals:
             group, s = self.blocks.group(), self.blocks.n_groups
         else:
             raise ValueError(f"by: expected 'group' or 'fold', got {by!r}")
-        g = self._sums_by(group, s)
-        t = (self.tot[0] - g[0], self.tot[1] - g[1], self.tot[2] - g[2])
-        beta = self._solve_many(t[0], t[1])
-        coefs = np.zeros((s, self.alive.size))
-        coefs[:, self.alive] = beta / self.scale[self.alive]
-        return coefs, self._sse_many(beta, *t) * self.weight
+        t, _, beta = self._left_out(group, s)
+        return self.coefficients(beta), self._sse(beta, *t) * self.weight
 
     def heldout_rows(self, design: np.ndarray, target: np.ndarray) -> np.ndarray:
         """Held-out residual of every row (each row predicted by the fit without its fold)."""
         resid = np.empty(target.size)
         row_fold = self.blocks.row_fold()
         xs = design[:, self.alive] / self.scale[self.alive]
+        _, _, beta = self._left_out(self.blocks.fold, self.blocks.n_folds)
         for f in range(self.blocks.n_folds):
-            mask = self.blocks.fold == f
-            t0 = self.tot[0] - self.xtx[mask].sum(0)
-            t1 = self.tot[1] - self.xty[mask].sum(0)
-            beta = self._solve(t0, t1)
             rows = row_fold == f
-            resid[rows] = target[rows] - xs[rows] @ beta
+            resid[rows] = target[rows] - xs[rows] @ beta[f]
         return resid
 
 

@@ -239,7 +239,7 @@ def thermometer_config(te_c, output, remedies, design=None, log_rate_hz: float |
     tables.update(remedy_tables(remedies, "thermometer", design, fit, log_rate_hz))
     what = "; ".join(r.what for r in remedies) or "no remedy"
     text = config_text(tables, design.text, provenance=f"thermometer chain by fxdsp extend: {what}")
-    chain = thermometer_chain("lag" in _stages(remedies), lag_rate_hz(design, "thermometer", log_rate_hz))
+    chain = thermometer_chain("lag" in _stages(remedies), log_rate_hz)
     text = set_table_keys(text, THERMOMETER_CHAIN, chain, add_missing=True)
     config_from_text(text)   # must build
     return text, fitted, fit.changes
