@@ -307,7 +307,15 @@ def remove_stage(net: dict, stage: str, stage_in: str, stage_out: str) -> dict:
     if stage not in out["instances"]:
         return out
     pairs = [tuple(s.strip() for s in line.split(ARROW)) for line in out.get("wires", [])]
-    source = next(a for a, b in pairs if b == f"{stage}.{stage_in}")
+    ins = [tuple(s.strip() for s in line.split(ARROW)) for line in out.get("inputs", [])]
+    source = next((a for a, b in pairs if b == f"{stage}.{stage_in}"), None)
+    if source is None:   # the stage after a chain input (insert_stage_at_input): the input drives its readers
+        name = next(a for a, b in ins if b == f"{stage}.{stage_in}")
+        out["inputs"] = [f"{a} -> {b}" for a, b in ins if b != f"{stage}.{stage_in}"]
+        out["inputs"] += [f"{name} -> {b}" for a, b in pairs if a == f"{stage}.{stage_out}"]
+        out["wires"] = [f"{a} -> {b}" for a, b in pairs if a != f"{stage}.{stage_out}"]
+        out["instances"].remove(stage)
+        return out
     out["wires"] = [f"{source if a == f'{stage}.{stage_out}' else a} -> {b}" for a, b in pairs
                     if b != f"{stage}.{stage_in}"]
     out["outputs"] = [line.replace(f"{stage}.{stage_out} ", f"{source} ") for line in out["outputs"]]
@@ -320,10 +328,29 @@ def remove_stage(net: dict, stage: str, stage_in: str, stage_out: str) -> dict:
 STAGES = {"lag": ("temp", "te", ("rtd", "freq2temp"), "temp")}
 
 
-def with_stage(net: dict, stage: str, instance: str | None = None) -> dict:
+def insert_stage_at_input(net: dict, name: str, stage: str, stage_in: str, stage_out: str) -> dict:
+    """:func:`insert_stage` after the chain input ``name``: it drives ``stage`` alone, and ``stage``
+    what it drove. Returns the edited table (the argument is not changed)."""
+    out = {k: (list(v) if isinstance(v, list) else v) for k, v in net.items()}
+    if stage in out["instances"]:
+        return out
+    pairs = [tuple(s.strip() for s in line.split(ARROW)) for line in out.get("inputs", [])]
+    moved = [b for a, b in pairs if a == name]
+    if not moved:
+        raise InputError(f"{stage}: the chain has no input {name!r} to put the {stage} after")
+    out["inputs"] = [line for line, (a, _) in zip(out["inputs"], pairs) if a != name] + [f"{name} -> {stage}.{stage_in}"]
+    out["wires"] = [f"{stage}.{stage_out} -> {b}" for b in moved] + list(out.get("wires", []))
+    out["instances"].insert(0, stage)
+    return out
+
+
+def with_stage(net: dict, stage: str, instance: str | None = None, chain_input: str | None = None) -> dict:
     """``net`` (a chain table as data) with ``stage`` inserted after its thermometer (or after
-    ``instance``'s output): the chain's own outputs stay where they were."""
+    ``instance``'s output, or after the chain input ``chain_input``): the chain's own outputs stay
+    where they were."""
     stage_in, stage_out, kinds, port = STAGES[stage]
+    if chain_input is not None:
+        return insert_stage_at_input(net, chain_input, stage, stage_in, stage_out)
     if instance is None:
         instance = next((i for i in net["instances"] if i.split(".")[0] in kinds), None)
         if instance is None:

@@ -23,7 +23,7 @@ from fxdsp.chains import build
 from fxdsp.cli import main
 from fxdsp.config import Config
 from fxdsp.diagnose.logio import read_log
-from fxdsp.extend.evaluate import compensate002, heldout_rows_paper002
+from fxdsp.extend.evaluate import compensate002, heldout_rows_rate_table
 from fxdsp.netlist import with_stage
 
 ROOT = Path(__file__).parents[1]
@@ -113,7 +113,7 @@ def test_extend_a_simulated_paper002_log(logs, name, tmp_path, capsys):
     # ablation there); and in the extended config itself, the stage switched off while the tables
     # stay as calibrated, the held-out error grows
     columns = read_log(logs[name]).columns
-    held = heldout_rows_paper002(columns)
+    held = heldout_rows_rate_table(columns)
     tau = next((r["parameters"]["tau_s"] for r in rep["remedies"] if r["stage"] == "lag"), None)
     config = (out / "config.toml").read_text()
 
@@ -205,6 +205,7 @@ def test_the_regression_fails_on_a_mutated_rtl(tmp_path):
     configured half_up must report a mismatch (so 'bit-exact' in a report is evidence). (Its state
     step's rounding would not show: 20 guard bits put it 2**-20 codes below the output.)"""
     from fxdsp.extend import hardware
+    from fxdsp.extend.roles import roles_of
 
     cfg = Config(tomllib.loads((ROOT / "fxdsp" / "configs" / "default.toml").read_text()), source="default")
     cfg.data["chain"]["paper002"] = with_stage(cfg.data["chain"]["paper002"], "lag")
@@ -216,8 +217,9 @@ def test_the_regression_fails_on_a_mutated_rtl(tmp_path):
     old = "fx_convert #(.IN_W(STATE_W), .SHIFT(GUARD), .ROUNDING(ROUNDING)"
     assert text.count(old) == 1
     (rtl / "lag.v").write_text(text.replace(old, "fx_convert #(.IN_W(STATE_W), .SHIFT(GUARD), .ROUNDING(0)"))
-    good = hardware.regression(design, "paper002", True, only=("lag (per update)",))
-    bad = hardware.regression(design, "paper002", True, rtl_dir=rtl, only=("lag (per update)",))
+    roles = roles_of(design, "paper002")
+    good = hardware.regression(design, roles, True, only=("lag (per update)",))
+    bad = hardware.regression(design, roles, True, rtl_dir=rtl, only=("lag (per update)",))
     assert good["passed"] and not bad["passed"], (good, bad)
 
 
@@ -240,15 +242,17 @@ def test_extend_the_tckit_log(tmp_path, capsys):
     # fitted on Te, fed the thermometer's T) leaves much more of the output's temperature dependence
     from fxdsp.diagnose.logio import parse_mapping
     from fxdsp.extend.configure import thermometer_chain
-    from fxdsp.extend.evaluate import thermometer_bitexact, thermometer_codes
+    from fxdsp.extend.evaluate import thermometer_bitexact, thermometer_words
+    from fxdsp.extend.roles import own_thermometer_roles
 
     columns = read_log(SHARED / TCKIT_REL, parse_mapping(TCKIT_ARGS[1:6:2]), ";", TCKIT_ARGS[-1]).columns
     design = build(Config(copy.deepcopy(ext), source="ext"))
-    codes = thermometer_codes(design.blocks["lag"], columns, rep["remedies"][0]["parameters"]["tau_s"])
-    on = thermometer_bitexact(design, codes, columns["output"], None)["rms_compensated"]
+    roles = own_thermometer_roles()
+    codes = thermometer_words(design, roles, columns, rep["remedies"][0]["parameters"]["tau_s"])
+    on = thermometer_bitexact(design, roles, codes, columns["output"], None)["rms_compensated"]
     ext["chain"]["thermometer"] = thermometer_chain(False, ext["chain"]["thermometer"]["fs_hz"])   # the lag bypassed
-    off = thermometer_bitexact(build(Config(ext, source="ext, no lag")), {"T": codes["T"]}, columns["output"],
-                               None)["rms_compensated"]
+    off = thermometer_bitexact(build(Config(ext, source="ext, no lag")), roles, {"T": codes["T"], "format": codes["format"]},
+                               columns["output"], None)["rms_compensated"]
     assert off > 2 * on, (on, off)
     # the hardware arithmetic adds nothing the compensation would notice: a few output LSBs
     b = rep["bitexact_chain"]

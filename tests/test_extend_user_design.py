@@ -1,7 +1,7 @@
 """`fxdsp extend` keeps the user's design (issue 27, part 3).
 
 * The extended config equals ``--config`` but for the calibrated coefficients and the remedies'
-  keys (``fxdsp.extend.design.CALIBRATED`` / ``REMEDY_KEYS``), leaf by leaf as parsed TOML: an
+  keys (``fxdsp.extend.design.calibrated_keys`` / ``remedy_keys``), leaf by leaf as parsed TOML: an
   18-bit sense ADC stays 18 bits, in the config and in the vectors and headers generated from it.
 * A format too narrow for a remedy is exit 2 naming the field and the width it needs; ``--widen``
   widens it and lists the change.
@@ -25,14 +25,16 @@ import pytest
 from conftest import SHARED, needs_shared
 from fxdsp.cli import main
 from fxdsp.errors import InputError
-from fxdsp.extend.design import CALIBRATED, REMEDY_KEYS, Design, allowed_keys
+from fxdsp.chains import build
+from fxdsp.extend.design import Design, allowed_keys, calibrated_keys, remedy_keys
+from fxdsp.extend.roles import roles_of
 from user_configs import adc18_text
 
 TCKIT_REL = "data/tckit/hp3458abx_hp34420a_tcsweep_1vdc_nplc100_test2_oct2024.dsv"
 VBL5_ARGS = ["--map", "time_s=date", "--map", "temp_c=box_temp", "--map", "output=vbl5", "--delimiter", ";",
              "--time-format", "%d/%m/%Y-%H:%M:%S"]
 SHORT = ["--duration-scale", "0.5", "--time-step", "30"]
-# settings a calibration or a remedy must never rewrite (the test fails if CALIBRATED or REMEDY_KEYS
+# settings a calibration or a remedy must never rewrite (the test fails if calibrated_keys or remedy_keys
 # is loosened to let one through)
 DESIGN_SUFFIXES = ("_format", "rounding", "overflow", "_bits", "guard_bits")
 
@@ -88,19 +90,20 @@ def test_the_extended_config_is_the_users_but_for_calibration_and_remedies(logs,
     assert rep["design"]["changes"] == [] and "change" not in stdout
     assert rep["base_config"] == f"--config {logs['adc18']}"
     user = tomllib.loads(logs["adc18"].read_text())
-    allowed = allowed_keys("paper002", {"lag"})
+    roles = roles_of(build(), "paper002")
+    allowed = allowed_keys(roles, {"lag"})
     assert not [k for k in allowed if k.endswith(DESIGN_SUFFIXES)], allowed
-    assert set(rep["design"]["calibrated_keys"]) == set(CALIBRATED["paper002"])
+    assert set(rep["design"]["calibrated_keys"]) == set(calibrated_keys(roles))
     # config.toml: the calibrated coefficients and the lag's keys differ, and nothing else
     ext = tomllib.loads((out / "config.toml").read_text())
     changed, added, removed = diff(user, ext)
-    assert changed <= allowed and not removed and added <= set(REMEDY_KEYS["paper002"]["lag"]), (changed, added)
+    assert changed <= allowed and not removed and added <= set(remedy_keys(roles)["lag"]), (changed, added)
     assert {"piecewise.sf.coefficients", "piecewise.bias.coefficients", "lag.tau_s",
             "chain.paper002.instances", "chain.paper002.wires"} <= changed
     # config_base.toml: the calibrated coefficients only
     base = tomllib.loads((out / "config_base.toml").read_text())
     changed, added, removed = diff(user, base)
-    assert changed <= set(CALIBRATED["paper002"]) and not added and not removed, (changed, added, removed)
+    assert changed <= set(calibrated_keys(roles)) and not added and not removed, (changed, added, removed)
     # the artefacts (and so the regression, which runs on the same built design) are of that config:
     # the 18-bit input word reaches the vectors and the Verilog header
     manifest = json.loads((out / "vectors" / "manifest.json").read_text())
@@ -131,7 +134,7 @@ def test_a_remedy_that_needs_more_width_is_refused_or_widened_with_a_list(logs, 
     assert "| lag.state_guard_bits | 8 | 14 |" in (out / "report.md").read_text()
     user, ext = tomllib.loads(cfg.read_text()), tomllib.loads((out / "config.toml").read_text())
     changed, added, _ = diff(user, ext)
-    assert changed - allowed_keys("paper002", {"lag"}) == {"lag.state_guard_bits"}
+    assert changed - allowed_keys(roles_of(build(), "paper002"), {"lag"}) == {"lag.state_guard_bits"}
     assert ext["lag"]["state_guard_bits"] == 14
 
 

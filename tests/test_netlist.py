@@ -143,6 +143,25 @@ def test_the_lag_is_a_netlist_edit_and_its_inverse():
     assert d.chains["chain_paper002"].stages == ("lag",) and d.blocks["lag"].decimation > 1
 
 
+def test_a_stage_goes_in_front_of_a_chain_input_and_comes_out_again():
+    """The lag after a chain input (a thermometer read as a word, paper 000's temp): the input then
+    drives the lag alone and the lag every port the input drove; the inverse restores the table."""
+    net = DATA["chain"]["paper000"]
+    lagged = with_stage(net, "lag", chain_input="temp")
+    assert lagged["instances"][0] == "lag" and "temp -> lag.temp" in lagged["inputs"]
+    assert {"lag.te -> piecewise.k0.temp", "lag.te -> piecewise.k1.temp"} <= set(lagged["wires"])
+    assert not [line for line in lagged["inputs"] if line.startswith("temp ->") and "lag" not in line]
+    back = without_stage(lagged, "lag")
+    for key in ("inputs", "wires"):
+        assert sorted(back[key]) == sorted(net[key]), key
+    assert back["instances"] == net["instances"]
+    data = default_data()
+    data["lag"]["temp_format"] = data["piecewise"]["k0"]["temp_format"]
+    data["chain"]["paper000"] = {k: v for k, v in lagged.items() if k != "sensor"}   # qvba reads temp itself
+    d = build(Config(data, source="paper000 with a lag"))
+    assert d.chains["chain_paper000"].stages == ("lag",)
+
+
 # ---- paper 000 ------------------------------------------------------------------------------------
 def test_paper000_is_the_papers_acceleration_within_a_microg():
     """a = (Df - K0(t)) / K1(t), t = T - 25 C, with K0, K1 the cubics of the config (written here from

@@ -1,4 +1,4 @@
-"""``fxdsp extend LOG [--map C=S ...] [--chain auto|paper002|paper001|thermometer] [--config BASE] [--widen]
+"""``fxdsp extend LOG [--map C=S ...] [--chain auto|NAME] [--config BASE] [--widen]
 [--strict] [--no-rtl] --out DIR``
 
 From a measured log to a compensation the FPGA can load, with the proof that it works: diagnose the
@@ -29,16 +29,18 @@ PATHS = {"log": IN, "--apply": IN, "--config": IN, "--out": OUT_DIR}
 
 
 def configure(parser) -> None:
-    from fxdsp.extend.plan import CHAINS
-
     parser.add_argument("log", metavar="LOG", help="log file (canonical CSV, or foreign with --map)")
     parser.add_argument("--map", action="append", default=[], metavar="CANONICAL=SOURCE",
                         help="read canonical column CANONICAL from column SOURCE (repeatable)")
     parser.add_argument("--delimiter", default=",", help="field delimiter (default ','; '\\t' for tab)")
     parser.add_argument("--time-format", default=None, metavar="F", help="strptime format of the time column")
     parser.add_argument("--chain", default="auto", metavar="NAME",
-                        help=f"compensation chain: {', '.join(CHAINS)}, or auto (paper002 when the log has "
-                             "rate-table steps in rate_dps, else paper001 when it has freq_hz, else thermometer)")
+                        help="compensation chain: a chain of the config (paper002 for [chain.paper002]; its "
+                             "calibration follows its sensor: gyro_rtd from rate-table steps, gyro_freq from the "
+                             "resonator's frequency, none: a reading minus a bias polynomial of a temperature word), "
+                             "thermometer (the config's, else one extend writes), or auto (the first gyro_rtd chain "
+                             "when the log has rate-table steps in rate_dps, else the first gyro_freq chain when it "
+                             "has freq_hz, else thermometer)")
     parser.add_argument("--config", default=None, metavar="BASE.toml", help="base config (default: built-in)")
     parser.add_argument("--apply", metavar="LOG2",
                         help="run the compensation fitted on LOG on a second run's log (same --map); its "

@@ -3,10 +3,11 @@
 The extended config (``config.toml``) is the base config (``--config``, default: the built-in one)
 with three kinds of change, and no other:
 
-* the coefficients calibrated from the log, :data:`CALIBRATED` (per chain): segment breakpoints and
-  polynomial coefficients, the resonator thermometer's f0/k, paper 002's rate scale;
-* the keys of the remedies applied, :data:`REMEDY_KEYS` (per chain and stage): rewritten, or added
-  to their table when the base lacks them;
+* the coefficients calibrated from the log, :func:`calibrated_keys` (per calibration procedure, in
+  the chain's own tables, :mod:`fxdsp.extend.roles`): segment breakpoints and polynomial
+  coefficients, the resonator thermometer's f0/k, a gyro_rtd chain's rate scale;
+* the keys of the remedies applied, :func:`remedy_keys` (per procedure and stage): rewritten, or
+  added to their table when the base lacks them;
 * with ``--widen`` only, a format (or the lag's guard bits) that a calibrated coefficient or a
   remedy needs wider than the user's: the same fraction length, more integer bits. Each is listed
   in the report (``changes``: field, from, to, why). Without ``--widen`` such a need is an
@@ -23,8 +24,8 @@ lengths must pass to compensate that log without saturating):
 
 * every calibrated coefficient in its ``coef_format`` (half_up, as the engine quantises it);
 * the Horner sums (every partial acc * t + c_k) in ``acc_format``, the polynomial in ``out_format``;
-* the log's input word: ``sf_divide.in_format`` (output / 4096 mV, paper 002),
-  ``bias_subtract001.in_format`` (paper 001, thermometer); ``freq2temp`` 1/k in ``kinv_format``;
+* the log's input word: the divider's ``in_format`` (output / 4096 mV, gyro_rtd), the subtraction's
+  ``in_format`` (gyro_freq, thermometer); the resonator thermometer's 1/k in ``kinv_format``;
 * the lag: its state moves by round(alpha * d), so a difference below 0.5 / alpha state LSBs never
   moves it. With ``state_guard_bits`` g that dead band is 0.5 / (alpha 2^g) temperature codes: the
   remedy needs 2^g >= 1/alpha (a dead band of at most half a code), alpha = 1 - exp(-1/(rate tau)).
@@ -47,32 +48,47 @@ from fxdsp.errors import InputError
 from fxdsp.fixed import Format
 from fxdsp.fixed.ops import round_unfitted
 
-# chain -> the dotted keys the calibration writes (values only: never a format)
-CALIBRATED = {
-    "paper002": ("system.rate_full_scale_dps", "piecewise.sf.breakpoints_c", "piecewise.sf.coefficients",
-                 "piecewise.bias.breakpoints_c", "piecewise.bias.coefficients"),
-    "paper001": ("freq2temp.f0_hz", "freq2temp.k_hz_per_c", "piecewise.bias001.breakpoints_c",
-                 "piecewise.bias001.coefficients"),
-    "thermometer": ("piecewise.bias001.breakpoints_c", "piecewise.bias001.coefficients"),
-}
-# chain -> remedy stage -> the dotted keys the remedy writes (rewritten, or added to their table)
-REMEDY_KEYS = {
-    "paper002": {"lag": ("lag.tau_s", "chain.paper002.instances", "chain.paper002.wires"), "trim": ("demod.phase_trim_rad",),
-                 "cvd": ("rtd.law", "rtd.cvd_a", "rtd.cvd_b", "rtd.cvd_c")},
-    # the cubic bias: one more coefficient per segment, and a format for it
-    "paper001": {"order": ("piecewise.bias001.coef_format",)},
-    # the instrument's temperature arrives once per logged row: the lag updates at the log's rate
-    "thermometer": {"lag": ("lag.tau_s", "lag.rate_hz")},
-}
+def _polynomial(table: str) -> tuple[str, str]:
+    return (f"{table}.breakpoints_c", f"{table}.coefficients")
+
+
+def calibrated_keys(roles) -> tuple[str, ...]:
+    """The dotted keys the calibration of ``roles`` (:class:`fxdsp.extend.roles.Roles`) writes:
+    values only, never a format, in the chain's own tables."""
+    t = roles.tables
+    if roles.procedure == "gyro_rtd":
+        return ("system.rate_full_scale_dps", *_polynomial(t["sf"]), *_polynomial(t["bias"]))
+    if roles.procedure == "gyro_freq":
+        return (f"{t['f2t']}.f0_hz", f"{t['f2t']}.k_hz_per_c", *_polynomial(t["bias"]))
+    return _polynomial(t["bias"])
+
+
+def remedy_keys(roles) -> dict[str, tuple[str, ...]]:
+    """Remedy stage -> the dotted keys it writes (rewritten, or added to their table) in the chain of
+    ``roles``: the lag's time constant and, where the chain had no lag, the netlist edit inserting it."""
+    t, net = roles.tables, roles.netlist_table
+    lag = t.get("lag", "lag")
+    edit = () if "lag" in t or roles.written else (f"{net}.instances", f"{net}.wires", f"{net}.inputs")
+    if roles.procedure == "gyro_rtd":
+        return {"lag": (f"{lag}.tau_s", *edit), "trim": (f"{t['demod']}.phase_trim_rad",),
+                "cvd": tuple(f"{t['rtd']}.{k}" for k in ("law", "cvd_a", "cvd_b", "cvd_c"))}
+    if roles.procedure == "gyro_freq":
+        # the cubic bias: one more coefficient per segment, and a format for it
+        return {"order": (f"{t['bias']}.coef_format",)}
+    # the instrument's temperature arrives once per logged row: extend's own chain and its lag run
+    # at the log's rate
+    return {"lag": (f"{lag}.tau_s", *edit, *((f"{lag}.rate_hz",) if roles.written else ()))}
+
 
 WIDEN_HINT = "widen it in --config, or pass --widen to let extend widen it (listed in the report)"
 
 
-def allowed_keys(chain: str, stages) -> set[str]:
-    """The dotted keys an extension of ``chain`` with remedy ``stages`` may write."""
-    keys = set(CALIBRATED[chain])
+def allowed_keys(roles, stages) -> set[str]:
+    """The dotted keys an extension of the chain of ``roles`` with remedy ``stages`` may write."""
+    keys = set(calibrated_keys(roles))
+    remedies = remedy_keys(roles)
     for s in stages:
-        keys |= set(REMEDY_KEYS.get(chain, {}).get(s, ()))
+        keys |= set(remedies.get(s, ()))
     return keys
 
 
@@ -233,16 +249,16 @@ class Fitting:
                 out["out_format"] = res
         return out
 
-    def lag(self, tau_s: float, rate_hz: float) -> dict:
-        """``[lag]`` keys beyond tau_s that the remedy needs: ``state_guard_bits`` when the user's
-        leave a dead band of more than half a temperature code (``--widen``), else nothing."""
-        user = self.design.table("lag")
+    def lag(self, tau_s: float, rate_hz: float, table: str = "lag") -> dict:
+        """The lag ``table``'s keys beyond tau_s that the remedy needs: ``state_guard_bits`` when the
+        user's leave a dead band of more than half a temperature code (``--widen``), else nothing."""
+        user = self.design.table(table)
         alpha = -math.expm1(-1.0 / (rate_hz * tau_s))
         need = max(0, math.ceil(math.log2(1.0 / alpha) - 1e-12))
         g = int(user.get("state_guard_bits", 0))
         if g >= need:
             return {}
-        field = "lag.state_guard_bits"
+        field = f"{table}.state_guard_bits"
         why = (f"the lag of tau {tau_s:.4g} s updated at {rate_hz:.4g} Hz (alpha {alpha:.3g}) has a dead band of "
                f"0.5/(alpha 2^g) = {0.5 / (alpha * 2.0 ** g):.3g} temperature codes with {g} guard bits: it needs "
                f"{need} (2^g >= 1/alpha, {need - g} more state bits)")

@@ -1,7 +1,8 @@
 """Held-out compensated-output error with and without each remedy, in the log's units.
 
-paper002: the bit-exact log-rate compensation (:class:`fxdsp.repro.bitexact.Compensator002`:
-RTD code -> SF and bias engines -> divide -> subtract) of the extended config, against the
+gyro_rtd (a chain like paper 002's): the bit-exact log-rate compensation
+(:class:`fxdsp.repro.bitexact.Compensator002`: RTD code -> SF and bias engines -> divide -> subtract,
+the chain's own blocks) of the extended config, against the
 applied rate (``rate_dps``), on the rows the calibration did not read (every row outside the
 rate-table windows, :func:`fxdsp.repro.points.rate_table_windows`: ramps, dwells before their
 last hour). Error in deg/s times the calibrated SF at 25 C = the log's output unit (mV). The lag
@@ -27,6 +28,7 @@ import math
 import numpy as np
 
 from fxdsp.diagnose.extension import heldout_residual, log_rate_lag
+from fxdsp.errors import InputError
 from fxdsp.extend.plan import parameter
 from fxdsp.fixed import OverflowLog, Rules, quantize, to_float
 from fxdsp.repro.points import rate_table_windows
@@ -40,22 +42,23 @@ def trim_angle(nco) -> float:
     return float(2 * math.pi * (turn - 1.0 if turn > 0.5 else turn))
 
 
-def config_stages(design) -> tuple[set[str], float | None, float]:
-    """The stages a (paper 002) design carries: ({"lag", "trim", "cvd"} subset, lag tau, trim angle)."""
+def config_stages(chain) -> tuple[set[str], float | None, float]:
+    """The stages a gyro_rtd chain (built, :class:`fxdsp.chains.Chain`) carries: ({"lag", "trim",
+    "cvd"} subset, lag tau, trim angle), read from its own blocks."""
     on, tau = set(), None
-    if design.blocks["rtd"].physics.law == "cvd":
+    s = chain.sensor
+    if s.rtd.physics.law == "cvd":
         on.add("cvd")
-    chain = design.chains.get("chain_paper002") if design.chains else None
-    if chain is not None and chain.sensor.lag is not None:
+    if s.lag is not None:
         on.add("lag")
-        tau = chain.sensor.lag.tau_s
-    theta = trim_angle(design.blocks["demod"].nco)
-    if design.blocks["demod"].nco.trim != 0:
+        tau = s.lag.tau_s
+    theta = trim_angle(s.demod.nco)
+    if s.demod.nco.trim != 0:
         on.add("trim")
     return on, tau, theta
 
 
-def heldout_rows_paper002(columns: dict) -> np.ndarray:
+def heldout_rows_rate_table(columns: dict) -> np.ndarray:
     held = np.ones(len(columns["time_s"]), dtype=bool)
     for _, rows in rate_table_windows(columns):
         held[rows] = False
@@ -76,13 +79,15 @@ def _variants(stages: set[str]) -> dict[str, set[str]]:
 def tau_of(remedies) -> float | None:
     return parameter(remedies, "lag", "tau_s")
 
-def compensate002(columns: dict, config_text_: str, on: set[str], tau_s: float | None, theta: float):
+def compensate002(columns: dict, config_text_: str, on: set[str], tau_s: float | None, theta: float,
+                  chain: str = "chain_paper002"):
     """(rate error in deg/s per row, overflow count) of a config's bit-exact log-rate compensation
-    with the stages ``on``: the lag at the log's rate, the trim as the reference rotation."""
+    through the gyro_rtd ``chain`` with the stages ``on``: the lag at the log's rate, the trim as
+    the reference rotation."""
     from fxdsp.extend.configure import config_from_text
     from fxdsp.repro.bitexact import Compensator002
 
-    comp = Compensator002(config_from_text(config_text_))
+    comp = Compensator002(config_from_text(config_text_), chain)
     ovf = OverflowLog()
     code, out = stage_inputs(comp, columns, on, tau_s, theta, ovf)
     got = comp.run(out, code, ovf)
@@ -109,20 +114,20 @@ def stage_inputs(comp, columns: dict, on: set[str], tau_s: float | None, theta: 
     else:
         code = comp.temperature_code(columns["temp_c"], ovf)
     if "lag" in on:
-        code = log_rate_lag(comp.design.blocks["lag"], tau_s, columns["time_s"]).run(log=ovf, temp=code).outputs["te"]
+        code = log_rate_lag(comp.lag_template, tau_s, columns["time_s"]).run(log=ovf, temp=code).outputs["te"]
     out = np.asarray(columns["output"], float)
     if "trim" in on:
         out = out * math.cos(theta) + np.asarray(columns["quad"], float) * math.sin(theta)
     return code, out
 
 
-def paper002_applied(columns: dict, variants: dict, remedies) -> dict:
+def gyro_rtd_applied(columns: dict, variants: dict, remedies, roles) -> dict:
     """A second run's error (every row: nothing of it was fitted) with the configs fitted on the first."""
     errors = {}
     for name in ("before", "after"):
         v = variants["variants"][name]
         err, n_ovf = compensate002(columns, variants["_configs"][name], set(v["stages"]), tau_of(remedies),
-                                   variants["trim_rad"] or 0.0)
+                                   variants["trim_rad"] or 0.0, roles.instance)
         errors[name] = (err * v["sf_nominal_mv_per_dps"], n_ovf)
     return applied_result(errors, len(columns["time_s"]))
 
@@ -135,29 +140,29 @@ def _curvature_rms(temp_c, ref_c) -> float:
     return float(np.sqrt(np.mean(resid**2)))
 
 
-def paper002_variants(columns: dict, remedies, design) -> dict:
+def gyro_rtd_variants(columns: dict, remedies, design, roles) -> dict:
     """Per variant (a set of stages): its own calibration with those stages in place, its config
     (in the user's ``design``, :class:`fxdsp.extend.design.Design`) and its bit-exact held-out
     error. "after" is the extended config; "before" the plain calibration (no stage)."""
-    from fxdsp.extend.configure import _design, config_from_text, config_text, paper002_config, remedy_tables
+    from fxdsp.extend.configure import _design, config_from_text, config_text, gyro_rtd_config, remedy_tables
     from fxdsp.repro.bitexact import Compensator002
 
     design = _design(design)
     stages = {r.stage for r in remedies}
-    held = heldout_rows_paper002(columns)
+    held = heldout_rows_rate_table(columns)
     # the remedies' own words (trim word, lag word lengths) do not depend on the calibration
-    words = remedy_tables(remedies, "paper002", design, design.fitting())
-    probe = Compensator002(config_from_text(config_text(words, design.text, add_missing=True)))
-    theta = trim_angle(probe.design.blocks["demod"].nco) if "trim" in stages else 0.0
+    words = remedy_tables(remedies, roles, design, design.fitting())
+    probe = Compensator002(config_from_text(config_text(words, design.text, add_missing=True)), roles.instance)
+    theta = trim_angle(probe.chain.sensor.demod.nco) if "trim" in stages else 0.0
     results, series, configs, cals, changes = {}, {}, {}, {}, {}
     for name, on in _variants(stages).items():
         chosen = [r for r in remedies if r.stage in on]
         code, x = stage_inputs(probe, columns, on, tau_of(remedies), theta)
-        text, cal, changes[name] = paper002_config(columns, chosen, design, output=x,
+        text, cal, changes[name] = gyro_rtd_config(columns, chosen, design, roles, output=x,
                                                    temp_c=to_float(code, probe.rtd.temp_format)
                                                    if on & {"lag", "cvd"} else None)
         # the variant's own RTD table reads the log (the probe's is CVD whenever any variant's is)
-        err, n_ovf = compensate002(columns, text, on, tau_of(remedies), theta)
+        err, n_ovf = compensate002(columns, text, on, tau_of(remedies), theta, roles.instance)
         err = err * float(cal["sf_nominal"])
         results[name] = {"stages": sorted(on), "rms": float(np.sqrt(np.mean(err[held] ** 2))),
                          "max_abs": float(np.abs(err[held]).max()), "overflows": n_ovf,
@@ -173,15 +178,15 @@ def paper002_variants(columns: dict, remedies, design) -> dict:
             "_series": series, "_held": held, "_configs": configs, "_cals": cals, "_changes": changes}
 
 
-def compensate001(columns: dict, config_text_: str) -> tuple[np.ndarray, int]:
-    """(error in deg/h per row, overflow count) of chain_paper001 with a config: its output minus the
-    applied rate at the nominal 3600 deg/h per deg/s."""
+def compensate001(columns: dict, config_text_: str, chain: str = "chain_paper001") -> tuple[np.ndarray, int]:
+    """(error in deg/h per row, overflow count) of a gyro_freq ``chain`` with a config: its output
+    minus the applied rate at the nominal 3600 deg/h per deg/s."""
     from fxdsp.extend.configure import config_from_text
     from fxdsp.repro.bitexact import Compensator001
     from fxdsp.sim.model import PAPER001_SF0
 
     applied = PAPER001_SF0 * np.asarray(columns["rate_dps"], float) if "rate_dps" in columns else 0.0
-    got = Compensator001(config_from_text(config_text_)).compensate(columns)
+    got = Compensator001(config_from_text(config_text_), chain).compensate(columns)
     return got["rate_deg_h"] - applied, int(got["overflows"].total)
 
 
@@ -193,16 +198,17 @@ def applied_result(errors: dict, log_rows: int) -> dict:
     return {"rows": log_rows, "variants": out, "gain": gain}
 
 
-def paper001_applied(columns: dict, variants: dict) -> dict:
-    return applied_result({k: compensate001(columns, variants["_configs"][k]) for k in ("before", "after")},
+def gyro_freq_applied(columns: dict, variants: dict, roles) -> dict:
+    return applied_result({k: compensate001(columns, variants["_configs"][k], roles.instance)
+                           for k in ("before", "after")},
                           len(columns["time_s"]))
 
 
-def paper001_variants(columns: dict, remedies, design) -> dict:
-    """paper 001: before (the paper's quadratic bias) and after (with the remedies), each calibrated
-    on the plateaus; error = the bit-exact chain_paper001's output minus the applied rate (deg/h at
-    the nominal 3600 deg/h per deg/s) on the rows outside the calibration's plateaus."""
-    from fxdsp.extend.configure import paper001_config
+def gyro_freq_variants(columns: dict, remedies, design, roles) -> dict:
+    """gyro_freq (paper 001's procedure): before (the paper's quadratic bias) and after (with the
+    remedies), each calibrated on the plateaus; error = the bit-exact chain's output minus the
+    applied rate (deg/h at the nominal 3600 deg/h per deg/s) on the rows outside the plateaus."""
+    from fxdsp.extend.configure import gyro_freq_config
     from fxdsp.sim.calibration import find_plateaus
 
     thermometer = columns["ref_temp_c"] if "ref_temp_c" in columns else columns["temp_c"]
@@ -212,8 +218,8 @@ def paper001_variants(columns: dict, remedies, design) -> dict:
     stages = {r.stage for r in remedies}
     results, series, configs, cals, changes = {}, {}, {}, {}, {}
     for name, on in _variants(stages).items():
-        text, cal, changes[name] = paper001_config(columns, [r for r in remedies if r.stage in on], design)
-        err, n_ovf = compensate001(columns, text)
+        text, cal, changes[name] = gyro_freq_config(columns, [r for r in remedies if r.stage in on], design, roles)
+        err, n_ovf = compensate001(columns, text, roles.instance)
         results[name] = {"stages": sorted(on), "rms": float(np.sqrt(np.mean(err[held] ** 2))),
                          "max_abs": float(np.abs(err[held]).max()), "overflows": n_ovf}
         series[name], configs[name], cals[name] = err, text, cal
@@ -222,14 +228,29 @@ def paper001_variants(columns: dict, remedies, design) -> dict:
             "_held": held, "_configs": configs, "_cals": cals, "_changes": changes}
 
 
-def thermometer_codes(lag_block, columns: dict, tau_s: float | None) -> dict[str, np.ndarray]:
-    """The thermometer chain's temperature codes (the lag's format): the logged reading ``T`` and,
-    with a lag time constant, the bit-exact lag's output at the log's rate ``Te``."""
-    code = quantize(np.asarray(columns["temp_c"], float), lag_block.temp_format, ROUND)
+def thermometer_codes(temp_format, lag_block, columns: dict, tau_s: float | None) -> dict[str, np.ndarray]:
+    """The thermometer chain's temperature codes (in ``temp_format``, its temperature word): the
+    logged reading ``T`` and, with a lag time constant, the bit-exact lag's output at the log's
+    rate ``Te`` (``lag_block``: the word lengths and rounding of the chain's lag)."""
+    code = quantize(np.asarray(columns["temp_c"], float), temp_format, ROUND)
     codes = {"T": code}
     if tau_s is not None:
         codes["Te"] = log_rate_lag(lag_block, tau_s, columns["time_s"]).run(temp=code).outputs["te"]
     return codes
+
+
+def without_lag(config, roles):
+    """The design of ``config`` with the chain's lag removed from its netlist (the lag's table
+    stays: the same words, run apart at another rate)."""
+    import copy
+
+    from fxdsp.chains import build
+    from fxdsp.config import Config
+    from fxdsp.netlist import without_stage
+
+    data = copy.deepcopy(config.data)
+    data["chain"][roles.chain] = without_stage(data["chain"][roles.chain], "lag")
+    return build(Config(data, source=config.name + " (the chain's lag apart)"))
 
 
 def heldout_poly_residual(y: np.ndarray, temp: np.ndarray, folds: np.ndarray, order: int = 3) -> np.ndarray:
@@ -257,30 +278,37 @@ def thermometer_errors(columns: dict, codes: dict, fmt, remedies, folds: np.ndar
             "_held": np.ones(y.size, dtype=bool)}
 
 
-def thermometer_bitexact(design, codes: dict, output, fit: dict) -> dict:
-    """The config's thermometer chain (``[chain.thermometer]``: the lag if it has one, the bias
-    engine, the subtractor) on the log, bit-exact, against the float polynomial it quantises: the
-    arithmetic's own error, in the output unit. ``codes``: :func:`thermometer_codes`."""
-    from fxdsp.errors import InputError
-
-    chain = design.chain("chain_thermometer", "the thermometer chain of fxdsp extend")
-    if chain.inputs["temp"] != design.blocks["lag"].temp_format:
-        raise InputError(f"chain.thermometer: its temperature word {chain.inputs['temp']} is not the lag's "
-                         f"{design.blocks['lag'].temp_format} (lag.temp_format)")
+def thermometer_bitexact(design, roles, codes: dict, output, fit: dict) -> dict:
+    """The config's thermometer chain (the lag if it has one, the bias engine, the subtractor) on the
+    log, bit-exact, against the float polynomial it quantises: the arithmetic's own error, in the
+    output unit. ``codes``: :func:`thermometer_codes`. extend's own chain runs at the log's rate
+    whole; a chain of the config whose lag updates at its own rate runs without it on the lag's
+    log-rate output ``Te`` (the same words, alpha for the log's interval)."""
+    lagged = "lag" in design.chain(roles.instance, "fxdsp extend's thermometer calibration").stages
+    if lagged and not roles.written:
+        design = without_lag(design.config, roles)
+    chain = design.chain(roles.instance, "fxdsp extend's thermometer calibration")
+    temp, reading = roles.inputs["temp"], roles.inputs["reading"]
+    sub = chain.members[roles.table("subtract")]
+    port = next(n for n, e in chain.netlist.outputs.items() if e.instance == sub.name and e.port == "y")
     ovf = OverflowLog()
-    y = quantize(np.asarray(output, float), chain.inputs["reading"], ROUND, ovf, "output")
-    fmt = chain.outputs["compensated"]
-    r = to_float(chain.stream(ovf, temp=codes["T"], reading=y)["compensated"], fmt)
+    y = quantize(np.asarray(output, float), chain.inputs[reading], ROUND, ovf, "output")
+    fmt = chain.outputs[port]
+    word = codes["Te"] if lagged and not roles.written else codes["T"]   # Te: thermometer_words
+    if chain.inputs[temp] != codes["format"]:
+        raise InputError(f"{roles.netlist_table}: its temperature word {chain.inputs[temp]} is not the lag's "
+                         f"{codes['format']}")
+    r = to_float(chain.stream(ovf, **{temp: word, reading: y})[port], fmt)
     out = {"rms_compensated": float(np.sqrt(np.mean(r**2))), "overflows": int(ovf.total), "lsb": fmt.lsb,
            "_series": r}
     if fit is not None:
-        te = to_float(codes.get("Te", codes["T"]), design.blocks["lag"].temp_format)
+        te = to_float(codes.get("Te", codes["T"]), codes["format"])
         want = np.asarray(output, float) - np.polynomial.polynomial.polyval(te - fit["t0_c"], fit["coefficients"])
         out["max_abs_vs_float"] = float(np.abs(r - want).max())
     return out
 
 
-def thermometer_applied(columns: dict, configs: dict, remedies) -> dict:
+def thermometer_applied(columns: dict, configs: dict, remedies, roles) -> dict:
     """A second run through the bit-exact chains of the configs fitted on the first: the compensated
     output about its mean (what is left of the temperature dependence)."""
     from fxdsp.chains import build
@@ -289,10 +317,25 @@ def thermometer_applied(columns: dict, configs: dict, remedies) -> dict:
     errors = {}
     for name, stages in (("before", set()), ("after", {r.stage for r in remedies})):
         design = build(config_from_text(configs[name]))
-        codes = thermometer_codes(design.blocks["lag"], columns, tau_of(remedies) if "lag" in stages else None)
-        got = thermometer_bitexact(design, codes, columns["output"], None)
+        codes = thermometer_words(design, roles, columns, tau_of(remedies) if "lag" in stages else None)
+        got = thermometer_bitexact(design, roles, codes, columns["output"], None)
         errors[name] = (got["_series"] - got["_series"].mean(), got["overflows"])
     return applied_result(errors, len(columns["time_s"]))
+
+
+def thermometer_words(design, roles, columns: dict, tau_s: float | None) -> dict:
+    """:func:`thermometer_codes` in the temperature word of the chain's bias engine (a built design),
+    with its lag's words when ``tau_s`` is given; ``format``: that word."""
+    lag = design.blocks.get(roles.tables.get("lag", "lag").replace(".", "_"))
+    # extend's own chain reads the temperature in the lag's word (the RTD's), a config's chain in
+    # the word its bias engine reads
+    fmt = lag.temp_format if roles.written else design.blocks[roles.table("bias").replace(".", "_")].temp_format
+    chain = design.chains.get(roles.instance)
+    if tau_s is None and chain is not None and "lag" in chain.stages:
+        tau_s = lag.tau_s   # the chain's own lag, at the log's rate
+    if tau_s is not None and lag is None:
+        raise InputError(f"[{roles.tables.get('lag', 'lag')}]: the lag remedy needs a lag table in the config")
+    return {**thermometer_codes(fmt, lag, columns, tau_s), "format": fmt}
 
 
 CHANNEL_UNITS = {"output": "output units", "freq_hz": "Hz", "temp_c": "C"}   # the log's units

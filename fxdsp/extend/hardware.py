@@ -1,7 +1,7 @@
 """The extended config's hardware: golden vectors, Verilog headers and ROMs, a cocotb regression on
 Icarus, and the cost before/after from the committed hardware report.
 
-The regression streams every block of the chosen chain (and the chain_paper002 top) through its
+The regression streams every block of the chosen chain (and its generated top) through its
 RTL with this config's generated parameters, against the bit-exact model, with the generic driver
 of ``fxdsp sweep rtl`` (:func:`fxdsp.sweep.rtl.run_block`: corners first, gapped valid). A lag that
 updates on every N-th chain sample (``DECIM`` = fs / rate_hz, thousands) changes its state only a
@@ -12,15 +12,11 @@ test suite's (a 5-sample decimation in tests/hdl/test_hdl_chain_stages.py, and i
 
 from __future__ import annotations
 
-import copy
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from fxdsp.chains import build
-from fxdsp.config import Config
-from fxdsp.netlist import without_stage
 
 def chain_blocks(design, chain: str) -> tuple[str, ...]:
     """The instances ``extend`` checks for ``chain``: the config chain's members (its netlist) and
@@ -29,28 +25,24 @@ def chain_blocks(design, chain: str) -> tuple[str, ...]:
     return (*(m.replace(".", "_") for m in top.netlist.instances), top.name)
 
 
-def _per_update_lag(config: Config):
-    """The design with the chain's lag stage removed: its lag is the config's at decimation 1."""
-    data = copy.deepcopy(config.data)
-    net = data.get("chain", {}).get("paper002")
-    if net is not None:
-        data["chain"]["paper002"] = without_stage(net, "lag")
-    return build(Config(data, source=config.name + " (lag per update)"))
-
-
-def regression(design, chain: str, has_lag: bool, build_root: Path | None = None, seed: int = 0,
+def regression(design, roles, has_lag: bool, build_root: Path | None = None, seed: int = 0,
                rtl_dir: Path | None = None, only: tuple[str, ...] | None = None) -> dict:
     """Per block: ok, samples, cycles, first errors. ValueError when Icarus or cocotb is missing.
-    ``rtl_dir``: other Verilog sources (default: the package's); ``only``: these labels."""
+    ``roles``: the extended chain (:class:`fxdsp.extend.roles.Roles`); ``rtl_dir``: other Verilog
+    sources (default: the package's); ``only``: these labels."""
+    from fxdsp.extend.evaluate import without_lag
     from fxdsp.sweep.rtl import RTL_DIR, check_tools, run_block
 
     rtl_dir = RTL_DIR if rtl_dir is None else Path(rtl_dir)
     check_tools(rtl_dir)
-    # a lag member is checked per update below (in the chain it updates only every DECIM-th sample)
-    runs = [(name, design, name) for name in chain_blocks(design, chain) if not (has_lag and name == "lag")]
+    lag = roles.tables.get("lag", "lag").replace(".", "_")
+    # a lag member is checked per update below (in a config's chain it may update only every
+    # DECIM-th sample; extend's own chain updates it on every row)
+    runs = [(name, design, name) for name in chain_blocks(design, roles.chain) if not (has_lag and name == lag)]
     if has_lag:
-        lag_design = _per_update_lag(design.config) if chain == "paper002" else design
-        runs.append(("lag (per update)" if chain == "paper002" else "lag", lag_design, "lag"))
+        per_update = not roles.written
+        runs.append((f"{lag} (per update)" if per_update else lag,
+                     without_lag(design.config, roles) if per_update else design, lag))
     runs = [r for r in runs if only is None or r[0] in only]
     results = {}
     with tempfile.TemporaryDirectory(prefix="fxdsp-extend-") as tmp:

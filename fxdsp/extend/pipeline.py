@@ -12,7 +12,8 @@ from fxdsp.errors import InputError
 from fxdsp.fixed import to_float
 from fxdsp.ramps import sample_interval
 from fxdsp.extend import configure, evaluate, hardware, plan as planning, report as rp
-from fxdsp.extend.design import CALIBRATED, Design, allowed_keys, merge_changes
+from fxdsp.extend.design import Design, allowed_keys, calibrated_keys, merge_changes
+from fxdsp.extend.roles import Roles, resolve
 from fxdsp.repro.calconfig import config_text
 from fxdsp.hdl.params import design_files
 from fxdsp.outputs import json_text, write_tree
@@ -28,21 +29,21 @@ class Extension:
     time_s: np.ndarray | None = None
     model: dict = field(default_factory=dict)      # the diagnosed model, for `fxdsp simulate --model`
     remedies: list = field(default_factory=list)
+    roles: Roles | None = None                     # the extended chain (fxdsp.extend.roles)
 
     def apply(self, columns: dict, log_name: str) -> dict:
         """Run the configs fitted on this log on a second run's log; the result joins the report."""
-        chain = self.report["chain"]
-        if chain == "paper001":
-            if "freq_hz" not in columns:
-                raise InputError(f"--apply {log_name}: the paper001 chain needs the freq_hz column")
-            res = evaluate.paper001_applied(columns, self.errors)
-        elif chain == "paper002":
-            if "rate_dps" not in columns:
-                raise InputError(f"--apply {log_name}: the paper002 chain needs the rate_dps column")
-            res = evaluate.paper002_applied(columns, self.errors, self.remedies)
+        roles = self.roles
+        need = {"gyro_rtd": "rate_dps", "gyro_freq": "freq_hz"}.get(roles.procedure)
+        if need is not None and need not in columns:
+            raise InputError(f"--apply {log_name}: the {roles.chain} chain ({roles.procedure}) needs the {need} column")
+        if roles.procedure == "gyro_freq":
+            res = evaluate.gyro_freq_applied(columns, self.errors, roles)
+        elif roles.procedure == "gyro_rtd":
+            res = evaluate.gyro_rtd_applied(columns, self.errors, self.remedies, roles)
         else:
             res = evaluate.thermometer_applied(columns, {"before": self.base_config_text, "after": self.config_text},
-                                               self.remedies)
+                                               self.remedies, roles)
         self.report["applied"] = {"log": log_name, **res}
         return self.report["applied"]
 
@@ -68,14 +69,6 @@ def columns_of(series) -> dict:
     return cols
 
 
-def auto_chain(columns: dict) -> str:
-    """paper002 when the log has rate-table steps (its calibration needs them), paper001 when it has
-    the resonator's frequency, else the plain thermometer chain."""
-    if "rate_dps" in columns and np.any(np.asarray(columns["rate_dps"]) != 0):
-        return "paper002"
-    return "paper001" if "freq_hz" in columns else "thermometer"
-
-
 def extend_log(path, mapping=None, delimiter=",", time_format=None, chain="auto", base_text=None,
                rtl: bool = True, build_root=None, widen: bool = False, strict: bool = False,
                base_name: str | None = None) -> Extension:
@@ -95,40 +88,39 @@ def extend_diagnosis(diag, log_name: str, chain="auto", base_text=None, rtl: boo
     too narrow for them is widened and listed instead of refused; ``strict``: a named cause without
     a hardware remedy stops the extension instead of being reported uncompensated."""
     columns = columns_of(diag.context.series)
-    if chain == "auto":
-        chain = auto_chain(columns)
-    remedies, missing = planning.plan(diag, chain, strict)
-    stages = {r.stage for r in remedies}
     design = Design(base_text, widen, base_name)
+    roles = resolve(chain, build(configure.config_from_text(design.text)), columns)
+    remedies, missing = planning.plan(diag, roles, strict)
+    stages = {r.stage for r in remedies}
     extra = {}
-    if chain == "paper002":
-        errors = evaluate.paper002_variants(columns, remedies, design)
+    if roles.procedure == "gyro_rtd":
+        errors = evaluate.gyro_rtd_variants(columns, remedies, design, roles)
         base, ext, cal = errors["_configs"]["before"], errors["_configs"]["after"], errors["_cals"]["after"]
         extra["calibration"] = {"order": cal["order"], "sf_nominal_mv_per_dps": cal["sf_nominal"],
                                 "points": len(cal["points"]["temp_c"])}
-    elif chain == "paper001":
-        if "freq_hz" not in columns:
-            raise InputError("log: the paper001 chain needs the freq_hz column (the resonator thermometer)")
-        errors = evaluate.paper001_variants(columns, remedies, design)
+    elif roles.procedure == "gyro_freq":
+        errors = evaluate.gyro_freq_variants(columns, remedies, design, roles)
         base, ext, cal = errors["_configs"]["before"], errors["_configs"]["after"], errors["_cals"]["after"]
         extra["calibration"] = {"f0_hz": cal["f0_hz"], "k_hz_per_c": cal["k_hz_per_c"],
                                 "bias_poly": cal["bias_poly"], "thermometer_check": cal["thermometer_check"]}
     else:
         rate_hz = 1.0 / sample_interval(columns["time_s"])
         # the lag's words (guard bits: widened with --widen) before its codes are computed
-        lag_words = configure.remedy_tables(remedies, "thermometer", design, design.fitting(), rate_hz)
-        template = build(configure.config_from_text(config_text(lag_words, design.text) if lag_words
-                                                    else design.text), chains=False)
-        fmt = template.blocks["lag"].temp_format
-        codes = evaluate.thermometer_codes(template.blocks["lag"], columns, evaluate.tau_of(remedies))
+        lag_words = configure.remedy_tables(remedies, roles, design, design.fitting(), rate_hz)
+        template = build(configure.config_from_text(config_text(lag_words, design.text, add_missing=True)
+                                                    if lag_words else design.text), chains=not roles.written)
+        codes = evaluate.thermometer_words(template, roles, columns, evaluate.tau_of(remedies))
+        fmt = codes["format"]
         te_code = codes.get("Te", codes["T"])
         temp, te = to_float(codes["T"], fmt), to_float(te_code, fmt)
-        base, _, ch_base = configure.thermometer_config(temp, columns["output"], [], design, rate_hz, str(fmt))
-        ext, fit, ch_ext = configure.thermometer_config(te, columns["output"], remedies, design, rate_hz, str(fmt))
+        base, _, ch_base = configure.thermometer_config(temp, columns["output"], [], design, roles, rate_hz, str(fmt))
+        ext, fit, ch_ext = configure.thermometer_config(te, columns["output"], remedies, design, roles, rate_hz,
+                                                        str(fmt))
         errors = evaluate.thermometer_errors(columns, codes, fmt, remedies, diag.context.blocks.row_fold(),
                                              order=len(fit["coefficients"]) - 1)
         errors["_changes"] = {"before": ch_base, "after": ch_ext}
-        bx = evaluate.thermometer_bitexact(build(configure.config_from_text(ext)), codes, columns["output"], fit)
+        bx = evaluate.thermometer_bitexact(build(configure.config_from_text(ext)), roles, codes, columns["output"],
+                                           fit)
         extra["bitexact_chain"] = rp.public(bx)
         extra["fit"] = fit
     ext_cfg = configure.config_from_text(ext)
@@ -136,19 +128,20 @@ def extend_diagnosis(diag, log_name: str, chain="auto", base_text=None, rtl: boo
     files = design_files(design_built)
     changes = merge_changes({"config.toml": errors["_changes"]["after"],
                              "config_base.toml": errors["_changes"]["before"]})
-    report = {"log": log_name, "chain": chain,
+    calibrated = calibrated_keys(roles)
+    report = {"log": log_name, "chain": roles.chain, "procedure": roles.procedure,
               "base_config": design.name,
               "diagnosis": {"causes": list(diag.causes), "parameters": diag.parameters,
                             "gain": float(diag.gain["ratio"])},
               "remedies": [{"cause": r.cause, "stage": r.stage, "what": r.what, "parameters": r.parameters}
                            for r in remedies],
               "uncompensated": evaluate.uncompensated_sizes(diag, missing),
-              "design": {"calibrated_keys": list(CALIBRATED[chain]),
-                         "remedy_keys": sorted(allowed_keys(chain, stages) - set(CALIBRATED[chain])),
+              "design": {"calibrated_keys": list(calibrated),
+                         "remedy_keys": sorted(allowed_keys(roles, stages) - set(calibrated)),
                          "widen": bool(widen), "changes": changes},
               "heldout": rp.public(errors), "summary": rp.summary(errors), **extra,
-              "regression": hardware.regression(design_built, chain, "lag" in stages, build_root) if rtl else None,
-              "cost": hardware.cost(design_built, chain, "lag" in stages)}
+              "regression": hardware.regression(design_built, roles, "lag" in stages, build_root) if rtl else None,
+              "cost": hardware.cost(design_built, roles.chain, "lag" in stages)}
     from fxdsp.diagnose.report import replay_model
 
-    return Extension(report, ext, base, files, errors, columns["time_s"], replay_model(diag), remedies)
+    return Extension(report, ext, base, files, errors, columns["time_s"], replay_model(diag), remedies, roles)

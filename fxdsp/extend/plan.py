@@ -1,10 +1,11 @@
-"""Which named cause the FPGA can remedy, and how, per chain.
+"""Which named cause the FPGA can remedy, and how, per calibration procedure (the chain's sensor,
+:mod:`fxdsp.extend.roles`).
 
 A remedy changes the compensation hardware, never the sensor: a lag filter on the temperature code
 before the coefficient engines (``thermal_lag``), a phase trim of the demodulator's reference
 (``quadrature_leak``), a Callendar-Van Dusen RTD table (``rtd_nonlinearity``: the element's
 curvature, read with the linear law), a higher polynomial order (``frequency_nonlinearity`` in
-the paper 001 chain: a resonator that turns over bends its linear frequency thermometer).
+a ``gyro_freq`` chain: a resonator that turns over bends its linear frequency thermometer).
 A cause with no remedy in the chosen chain (hysteresis, ramp rate, aging, warm-up, a rate-cubic SF
 non-linearity, ...) does not stop the others: :func:`plan` returns the remedies it has and the
 causes it leaves uncompensated, and the report states each of those with its held-out size in the
@@ -18,8 +19,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from fxdsp.errors import InputError
-
-CHAINS = ("paper002", "paper001", "thermometer")
 
 
 @dataclass(frozen=True)
@@ -57,17 +56,17 @@ def _cvd(diag) -> Remedy:
                   "curvature, read linearly until now)", {"b_per_c": b})
 
 
-# chain -> cause -> remedy builder; "none" needs none
+# procedure -> cause -> remedy builder; "none" needs none
 REMEDIES = {
-    "paper002": {"thermal_lag": _lag, "quadrature_leak": _trim, "rtd_nonlinearity": _cvd},
-    "paper001": {"frequency_nonlinearity": _cubic},
+    "gyro_rtd": {"thermal_lag": _lag, "quadrature_leak": _trim, "rtd_nonlinearity": _cvd},
+    "gyro_freq": {"frequency_nonlinearity": _cubic},
     # the thermometer chain's bias polynomial is already a cubic: a curved readout needs nothing more
     "thermometer": {"thermal_lag": _lag},
 }
 ABSORBED = {"thermometer": {"rtd_nonlinearity": "absorbed by the cubic bias polynomial"},
             # the resonator is its own thermometer: the chamber thermometer's lag and curvature do not
             # reach a compensation driven by freq_hz
-            "paper001": {"thermal_lag": "the resonant frequency reads the die itself",
+            "gyro_freq": {"thermal_lag": "the resonant frequency reads the die itself",
                          "rtd_nonlinearity": "the chamber thermometer is not in the path"}}
 
 
@@ -76,17 +75,17 @@ def parameter(remedies, stage: str, key: str):
     return next((r.parameters[key] for r in remedies if r.stage == stage), None)
 
 
-def plan(diag, chain: str, strict: bool = False) -> tuple[list[Remedy], list[tuple[str, str]]]:
-    """(the remedies of every named cause that has one in ``chain``, in the diagnosis's order; the
-    named causes left uncompensated, as (cause, reason)). ``strict``: InputError (exit 2) naming the
-    causes that have no remedy instead."""
-    if chain not in REMEDIES:
-        raise InputError(f"--chain: unknown chain {chain!r}; expected one of {', '.join(CHAINS)}")
-    table, absorbed = REMEDIES[chain], ABSORBED.get(chain, {})
+def plan(diag, roles, strict: bool = False) -> tuple[list[Remedy], list[tuple[str, str]]]:
+    """(the remedies of every named cause that has one in the chain of ``roles``
+    (:class:`fxdsp.extend.roles.Roles`), in the diagnosis's order; the named causes left
+    uncompensated, as (cause, reason)). ``strict``: InputError (exit 2) naming the causes that have
+    no remedy instead."""
+    table, absorbed = REMEDIES[roles.procedure], ABSORBED.get(roles.procedure, {})
+    where = f"the {roles.chain} chain ({roles.procedure} calibration)"
     missing = [c for c in diag.causes if c not in table and c not in absorbed and c != "none"]
     if missing and strict:
         raise InputError(f"extend: {', '.join(missing)} {'has' if len(missing) == 1 else 'have'} no hardware "
-                         f"remedy in the {chain} chain (remedies: {', '.join(sorted(table))}); "
+                         f"remedy in {where} (remedies: {', '.join(sorted(table))}); "
                          f"diagnosed causes: {', '.join(diag.causes)} (--strict)")
-    reason = f"no hardware remedy in the {chain} chain (remedies: {', '.join(sorted(table))})"
+    reason = f"no hardware remedy in {where} (remedies: {', '.join(sorted(table))})"
     return [table[c](diag) for c in diag.causes if c in table], [(c, reason) for c in missing]

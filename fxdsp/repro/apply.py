@@ -29,7 +29,7 @@ def calibrated_config(paper: str, log: dict, order: int = 1, base_text: str | No
             from fxdsp.extend.evaluate import config_stages, stage_inputs
 
             comp = Compensator002(config_from_text(base_text))
-            on, tau, theta = config_stages(comp.design)
+            on, tau, theta = config_stages(comp.chain)
         if on:
             code, out = stage_inputs(comp, log, on, tau, theta)
             temp = to_float(code, comp.rtd.temp_format) if on & {"lag", "cvd"} else None
@@ -68,7 +68,7 @@ def apply_config(paper: str, config_text_: str, log: dict) -> dict:
         from fxdsp.extend.evaluate import config_stages, stage_inputs
 
         comp = Compensator002(cfg)
-        on, tau, theta = config_stages(comp.design)
+        on, tau, theta = config_stages(comp.chain)
         ovf = OverflowLog()
         code, x = stage_inputs(comp, log, on, tau, theta, ovf)   # the config's stages (none: as before)
         out = comp.run(x, code, ovf)

@@ -49,16 +49,21 @@ def _finite(name: str, values) -> np.ndarray:
 class Compensator002:
     """Paper 002 at log rate: output (mV) and RTD temperature (C) -> rate (deg/s), bit-exact."""
 
-    def __init__(self, config: Config | str | None):
+    def __init__(self, config: Config | str | None, chain: str = "chain_paper002"):
         d = build(config)
         self.design = d
-        self.rtd = d.blocks["rtd"]
-        self.sf, self.divide = d.blocks["piecewise_sf"], d.blocks["sf_divide"]
-        self.bias, self.subtract = d.blocks["piecewise_bias"], d.blocks["bias_subtract"]
+        # the blocks by role in the config's gyro_rtd chain (fxdsp.sensors.GyroRtd), whatever their names
+        self.chain = d.chain(chain, "the paper 002 log-rate compensation")
+        s = self.chain.sensor
+        if s is None or s.name != "gyro_rtd":
+            raise InputError(f"chain.{chain.removeprefix('chain_')}.sensor: the paper 002 compensation reads a gyro_rtd")
+        self.rtd, self.sf, self.divide, self.bias, self.subtract = s.rtd, s.sf, s.divide, s.bias, s.subtract
         if self.subtract.in_format != self.divide.out_format:
-            raise ValueError(f"bias_subtract: its input {self.subtract.in_format} must equal sf_divide.out_format "
-                             f"{self.divide.out_format} for the log-rate path")
-        self.lag = d.blocks.get("lag")
+            raise ValueError(f"{self.subtract.name}: its input {self.subtract.in_format} must equal "
+                             f"{self.divide.name}.out_format {self.divide.out_format} for the log-rate path")
+        self.lag = s.lag
+        # the words of the lag a log-rate run uses: the chain's, else the config's [lag] table
+        self.lag_template = s.lag if s.lag is not None else d.blocks.get("lag")
         self.rate_fs_dps = d.rate_full_scale_dps  # 1 FS of the quotient = this many deg/s
 
     def temperature_code(self, temp_c, log: OverflowLog | None = None) -> np.ndarray:
@@ -90,11 +95,11 @@ class Compensator002:
 
     def compensate_lagged(self, log_data: dict) -> dict[str, np.ndarray]:
         """RTD code -> ``lag`` block (die-temperature estimate, config's [lag]) -> compensation."""
-        if self.lag is None:
+        if self.lag_template is None:
             raise ValueError("config: has no [lag] table for the lag-aware temperature estimate")
         ovf = OverflowLog()
         code = self.temperature_code(log_data["temp_c"], ovf)
-        te = self.lag.run(log=ovf, temp=code).outputs["te"]
+        te = self.lag_template.run(log=ovf, temp=code).outputs["te"]
         return self.run(log_data["output"], te, ovf)
 
     def frequency_thermometer(self, f0_hz: float, k_hz_per_c: float) -> Freq2Temp:
@@ -113,17 +118,26 @@ class Compensator002:
 class Compensator001:
     """Paper 001: freq_hz and output (deg/h) -> compensated rate (deg/h), through chain_paper001."""
 
-    def __init__(self, config: Config | str | None):
+    def __init__(self, config: Config | str | None, chain: str = "chain_paper001"):
         self.design = build(config)
-        self.chain = self.design.chains["chain_paper001"]
+        # the blocks and ports by role in the config's gyro_freq chain (fxdsp.sensors.GyroFreq)
+        self.chain = self.design.chain(chain, "the paper 001 compensation")
+        s = self.chain.sensor
+        if s is None or s.name != "gyro_freq":
+            raise InputError(f"chain.{chain.removeprefix('chain_')}.sensor: the paper 001 compensation reads a gyro_freq")
+        outs = self.chain.netlist.outputs
+        self.rate_port = next(n for n, e in outs.items() if e.instance == s.subtract.name and e.port == "y")
 
     def compensate(self, log_data: dict) -> dict[str, np.ndarray]:
         ovf = OverflowLog()
-        f = quantize(_finite("freq_hz", log_data["freq_hz"]), self.chain.sensor.f2t.freq_format, ROUND, ovf, "freq")
-        r = quantize(_finite("output", log_data["output"]), self.chain.sensor.subtract.in_format, ROUND, ovf, "rate")
-        res = self.chain.run(ovf, f=f, rate_in=r)
+        s = self.chain.sensor
+        f = quantize(_finite("freq_hz", log_data["freq_hz"]), s.f2t.freq_format, ROUND, ovf, "freq")
+        r = quantize(_finite("output", log_data["output"]), s.subtract.in_format, ROUND, ovf, "rate")
+        res = self.chain.run(ovf, **{s.f: f, s.rate_in: r})
         out = self.chain.real_outputs(res)
-        return {"rate_deg_h": out["rate"], "temp_c": out["temp"], "overflows": ovf}
+        # the resonator thermometer's temperature, from its own block (a chain need not output it)
+        temp = s.f2t.real_outputs(s.f2t.run(OverflowLog(), f=f))["temp"]
+        return {"rate_deg_h": out[self.rate_port], "temp_c": temp, "overflows": ovf}
 
 
 class Compensator000:

@@ -71,10 +71,11 @@ def data_point_error_c(f0_hz: float, k_hz_per_c: float, t_c: float = -10.0, f_hz
     return (f_hz - f0_hz) / k_hz_per_c - t_c
 
 
-def check_thermometer(config, ref_temp_c, freq_hz, tol_c: float = THERMO_TOL_C) -> dict:
-    """Run the config's freq2temp bit-exactly on calibration points (mean frequency, reference
-    temperature) and flag a mean offset beyond ``tol_c``: what a rounded f0 is caught by."""
-    comp = Compensator001(config)
+def check_thermometer(config, ref_temp_c, freq_hz, tol_c: float = THERMO_TOL_C, chain: str = "chain_paper001") -> dict:
+    """Run the freq2temp of the config's gyro_freq ``chain`` bit-exactly on calibration points (mean
+    frequency, reference temperature) and flag a mean offset beyond ``tol_c``: what a rounded f0
+    is caught by."""
+    comp = Compensator001(config, chain)
     f2t = comp.chain.sensor.f2t
     f = quantize(np.asarray(freq_hz, float), f2t.freq_format, Rules("half_up", "saturate"))
     t = f2t.run(OverflowLog(), f=f)
