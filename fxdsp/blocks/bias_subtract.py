@@ -36,7 +36,14 @@ class BiasSubtractDatapath(Datapath):
     """Fields in the order of the ``bias_subtract`` RTL module's parameters."""
 
     MODULE = "bias_subtract"
-    RTL = RtlPorts()
+    RTL = RtlPorts(signed=("x", "bias", "y"))
+    LATENCY = 2
+
+    @staticmethod
+    def serial_cycles(p: dict, unroll: int = 1) -> int:
+        """Two registered stages (difference, then round and fit), whatever the parameters."""
+        return 2
+
     in_w: int
     bias_w: int
     out_w: int

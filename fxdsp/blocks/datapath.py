@@ -94,18 +94,48 @@ class RtlPorts:
     mac_bundle: bool = False    # the shared-multiplier bundle (mac_*, fx_mac_port): tied off on its own multiplier
     aux: bool = False           # the auxiliary low-pass channel (aux_*, read only with AUX_LPF = 1)
     second_set: bool = False    # a second coefficient set's outputs (out_valid_1, y_1, ovf_1; SETS = 2)
+    signed: tuple[str, ...] = ()   # ports the RTL treats as signed (sign-extended, compared, subtracted):
+                                   # the model allows an unsigned format there, the RTL does not
 
     def variant(self) -> dict | None:
         """The parameters selecting the serial variant (None: the module has none)."""
         return {"ARCH": 1} if self.serial else None
 
 
+def limbs(a_w: int, b_w: int) -> int:
+    """16 x 16 limb products of an a_w x b_w-bit product on the shared multiplier (fx_mac_serial)."""
+    return (a_w + 15) // 16 * ((b_w + 15) // 16)
+
+
 @dataclass(frozen=True, eq=False)
 class Datapath:
-    """Base of every block's datapath description (subclasses add the fields)."""
+    """Base of every block's datapath description (subclasses add the fields).
+
+    Beside the arithmetic, each subclass states its RTL's timing once, as functions of the module's
+    parameters ``p`` (the generated header's values, :meth:`verilog`): the one-sample-per-clock
+    variant's latency, the serial variant's cycles per sample (its header's documented schedule)
+    and the widest operands it issues on a shared multiplier. The long-stream tests measure the RTL
+    against them, and the chain tops' schedules are built from them (:mod:`fxdsp.hdl.schedule`)."""
 
     MODULE = ""   # the RTL module (class attribute of each subclass); every subclass has ``ovf``
     RTL = RtlPorts()   # its interface (class attribute of each subclass)
+    LATENCY = 1   # ARCH = 0: edges from the accepting edge to out_valid (the header's "Latency")
+
+    @classmethod
+    def latency(cls, p: dict, unroll: int = 1) -> int:
+        """The one-sample-per-clock variant's latency at parameters ``p``."""
+        return cls.LATENCY
+
+    @staticmethod
+    def serial_cycles(p: dict, unroll: int = 1) -> int:
+        """ARCH = 1: edges from a sample's accepting edge to its successor's, back to back."""
+        raise ValueError("the module has no serial variant")
+
+    @staticmethod
+    def mac_operands(p: dict) -> tuple[int, int]:
+        """The widest (a, b) operands the serial variant issues on its multiplier bundle (the
+        header's fx_mac_port A_W / B_W): what a multiplier shared by several blocks must take."""
+        raise ValueError("the module has no multiplier bundle")
 
     def verilog(self, instance: str) -> tuple[dict[str, int | str], dict[str, Rom], set[str]]:
         """The RTL module's parameters in declaration order, the ROMs by file name and the names

@@ -45,7 +45,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, product_format, quantize, resize
 from ..fixed.kernels import convert, shift_right_round
 from .base import Block, corner_codes
-from .datapath import Datapath, OvfField, Rom, RtlPorts, const, info, nested
+from .datapath import Datapath, limbs, OvfField, Rom, RtlPorts, const, info, nested
 from .iir import Iir, IirDatapath
 
 
@@ -244,6 +244,38 @@ class DemodDatapath(Datapath):
 
     MODULE = "demod"
     RTL = RtlPorts(ready=True, serial=True, mac_bundle=True, aux=True)
+    LATENCY = 2
+
+    @staticmethod
+    def _mixer_operands(p: dict) -> tuple[int, int]:
+        """The mixers' and the CORDIC gain's products: a max(DW, XW) bits, DW = INTERP_BITS +
+        TWO_PI_W + 3, XW = max(IN_W, DATA_W + 3); b max(TWO_PI_W + 1, NCO_W, INV_K_W + max(0,
+        MIX_SHIFT - AMP_SHIFT)) bits."""
+        dw = p["INTERP_BITS"] + 2 + p["TWO_PI_W"] + 1
+        xw = max(p["IN_W"], p["DATA_W"] + 3)
+        ikw = p["INV_K_W"] + max(0, p["MIX_SHIFT"] - p["AMP_SHIFT"])
+        return max(dw, xw), max(p["TWO_PI_W"] + 1, p["NCO_W"], ikw)
+
+    @staticmethod
+    def _lpf_operands(p: dict) -> tuple[int, int]:
+        """The low-pass filter's products (the iir's, with its LPF_ parameters)."""
+        return max(p["LPF_ACOEF_W"], p["LPF_OUT_SHIFT"] + 2), p["DATA_W"]
+
+    @staticmethod
+    def serial_cycles(p: dict, unroll: int = 1) -> int:
+        """hdl/rtl/demod.v, ARCH = 1: 6 N + 30 + 3 ITERATIONS + F, N the limb products of the
+        mixers' operands, F = 2 LPF_SECTIONS (7 M + 10) the two-channel serial iir's cycles (M the
+        limb products of its operands): the pre-rotation and every CORDIC step take three cycles."""
+        n = limbs(*DemodDatapath._mixer_operands(p))
+        m = limbs(*DemodDatapath._lpf_operands(p))
+        return 6 * n + 30 + 3 * p["ITERATIONS"] + 2 * p["LPF_SECTIONS"] * (7 * m + 10)
+
+    @staticmethod
+    def mac_operands(p: dict) -> tuple[int, int]:
+        """The mixers, the CORDIC gain and the low-pass filter's products on the one bundle."""
+        (a, b), (fa, fb) = DemodDatapath._mixer_operands(p), DemodDatapath._lpf_operands(p)
+        return max(a, fa), max(b, fb)
+
     in_w: int
     data_w: int
     phase_bits: int

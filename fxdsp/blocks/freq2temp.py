@@ -24,7 +24,7 @@ import numpy as np
 from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, product_format, quantize, resize, sub
 from .base import Block, corner_codes
-from .datapath import Datapath, OvfField, RtlPorts, const, info
+from .datapath import Datapath, limbs, OvfField, RtlPorts, const, info
 
 
 @dataclass(frozen=True, eq=False)
@@ -32,7 +32,13 @@ class Freq2TempDatapath(Datapath):
     """Fields in the order of the ``freq2temp`` RTL module's parameters."""
 
     MODULE = "freq2temp"
-    RTL = RtlPorts(ready=True, serial=True)
+    RTL = RtlPorts(ready=True, serial=True, signed=("temp",))
+
+    @staticmethod
+    def serial_cycles(p: dict, unroll: int = 1) -> int:
+        """hdl/rtl/freq2temp.v: N + 7, N the limb products of d (FREQ_W + 1 bits) x KINV (KINV_W bits)."""
+        return limbs(p["FREQ_W"] + 1, p["KINV_W"]) + 7
+
     freq_w: int
     kinv_w: int
     temp_w: int

@@ -41,7 +41,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, quantize
 from ..fixed.kernels import fit, shift_right_round
 from .base import Block, corner_codes, random_codes
-from .datapath import Datapath, OvfField, Rom, RtlPorts, info, signed_width
+from .datapath import Datapath, limbs, OvfField, Rom, RtlPorts, info, signed_width
 
 DESIGNS = ("butter", "cheby1", "bessel")
 BTYPES = ("lowpass", "highpass")
@@ -114,6 +114,17 @@ class IirDatapath(Datapath):
 
     MODULE = "iir"
     RTL = RtlPorts(ready=True, serial=True, mac_bundle=True)
+
+    @staticmethod
+    def serial_cycles(p: dict, unroll: int = 1) -> int:
+        """hdl/rtl/iir.v: SECTIONS * (7 N + 10) + 1 cycles, N the 16 x 16 limb products of one
+        coefficient-or-error x data product."""
+        return p["SECTIONS"] * (7 * limbs(*IirDatapath.mac_operands(p)) + 10) + 1
+
+    @staticmethod
+    def mac_operands(p: dict) -> tuple[int, int]:
+        return max(p["ACOEF_W"], p["OUT_SHIFT"] + 2), p["DATA_W"]
+
     data_w: int
     sections: int
     coef_w: int          # ROM word: the wider of num_format and den_format (>= 4 for the c weights)

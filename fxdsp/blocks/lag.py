@@ -41,7 +41,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules
 from ..fixed.kernels import convert, shift_right_round
 from .base import Block, corner_codes
-from .datapath import Datapath, OvfField, RtlPorts, info
+from .datapath import Datapath, limbs, OvfField, RtlPorts, info
 
 
 @njit(cache=True)
@@ -79,7 +79,17 @@ class LagDatapath(Datapath):
     """Fields in the order of the ``lag`` RTL module's parameters."""
 
     MODULE = "lag"
-    RTL = RtlPorts(ready=True, serial=True)
+    RTL = RtlPorts(ready=True, serial=True, signed=("temp",))
+
+    @staticmethod
+    def serial_cycles(p: dict, unroll: int = 1) -> int:
+        """hdl/rtl/lag.v: N + 11 cycles per update sample, N the 16 x 16 limb products of d
+        (STATE_W + 1 bits) x alpha (ALPHA_W + 1 bits); at DECIM = 1 every sample updates (with
+        DECIM > 1 a held sample takes 1 cycle: no one figure, a ValueError)."""
+        if p["DECIM"] != 1:
+            raise ValueError("lag: DECIM > 1: the samples between updates take 1 cycle, the updates this many")
+        return limbs(p["STATE_W"] + 1, p["ALPHA_W"] + 1) + 11
+
     temp_w: int
     guard: int           # g: state fraction bits beyond the temperature code
     state_w: int

@@ -33,7 +33,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, product_format, quantize, sum_format
 from ..fixed.kernels import convert
 from .base import Block
-from .datapath import Datapath, OvfField, Rom, RtlPorts, const, frozen_array, info, packed, signed_width
+from .datapath import Datapath, limbs, OvfField, Rom, RtlPorts, const, frozen_array, info, packed, signed_width
 
 
 @njit(cache=True)
@@ -75,7 +75,18 @@ class PiecewiseDatapath(Datapath):
     """Fields in the order of the ``piecewise`` RTL module's parameters."""
 
     MODULE = "piecewise"
-    RTL = RtlPorts(ready=True, serial=True, mac_bundle=True, second_set=True)
+    RTL = RtlPorts(ready=True, serial=True, mac_bundle=True, second_set=True, signed=("temp",))
+
+    @staticmethod
+    def serial_cycles(p: dict, unroll: int = 1) -> int:
+        """hdl/rtl/piecewise.v: ORDER (N + 11) + 7, N the limb products of acc (ACC_W bits) x t
+        (T_W + 1 bits)."""
+        return p["ORDER"] * (limbs(*PiecewiseDatapath.mac_operands(p)) + 11) + 7
+
+    @staticmethod
+    def mac_operands(p: dict) -> tuple[int, int]:
+        return p["ACC_W"], p["T_W"] + 1
+
     t_w: int
     order: int
     segments: int

@@ -35,7 +35,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, quantize
 from ..fixed.kernels import convert
 from .base import Block, corner_codes, random_codes
-from .datapath import Datapath, OvfField, Rom, RtlPorts, info
+from .datapath import Datapath, limbs, OvfField, Rom, RtlPorts, info
 
 
 @njit(cache=True)
@@ -116,7 +116,18 @@ class RtdDatapath(Datapath):
     """Fields in the order of the ``rtd`` RTL module's parameters."""
 
     MODULE = "rtd"
-    RTL = RtlPorts(ready=True, serial=True, mac_bundle=True)
+    RTL = RtlPorts(ready=True, serial=True, mac_bundle=True, signed=("temp",))
+
+    @staticmethod
+    def serial_cycles(p: dict, unroll: int = 1) -> int:
+        """hdl/rtl/rtd.v: N + 10 cycles, N the 16 x 16 limb products of the diff (LUT_W + 1 bits) x
+        frac (S + 1 bits) product."""
+        return limbs(*RtdDatapath.mac_operands(p)) + 10
+
+    @staticmethod
+    def mac_operands(p: dict) -> tuple[int, int]:
+        return p["LUT_W"] + 1, p["ADC_W"] - p["LUT_INDEX_BITS"] + 1
+
     adc_w: int
     lut_index_bits: int      # k: segment index = top k bits of the offset-binary code
     lut_w: int

@@ -55,7 +55,23 @@ class SfDivideDatapath(Datapath):
     """Fields in the order of the ``sf_divide`` RTL module's parameters."""
 
     MODULE = "sf_divide"
-    RTL = RtlPorts(ready=True, serial=True)
+    RTL = RtlPorts(ready=True, serial=True, signed=("y",))
+
+    @staticmethod
+    def steps(p: dict, unroll: int = 1) -> int:
+        """The restoring divider's steps (hdl/rtl/sf_divide.v): ceil((IN_W + NUM_SHIFT) / UNROLL)."""
+        return -(-(p["IN_W"] + p["NUM_SHIFT"]) // unroll)
+
+    @classmethod
+    def latency(cls, p: dict, unroll: int = 1) -> int:
+        return cls.steps(p, unroll) + 1
+
+    @staticmethod
+    def serial_cycles(p: dict, unroll: int = 1) -> int:
+        """The pipelined divider (ARCH = 1), from its accepting edge to its successor's: its
+        latency, its steps + 6."""
+        return SfDivideDatapath.steps(p, unroll) + 6
+
     in_w: int
     sf_w: int
     sf_signed: int

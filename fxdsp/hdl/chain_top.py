@@ -119,10 +119,9 @@ class _Top:
         return self.inst[_v(m)].rtl.ready
 
     def mac_width(self) -> tuple[int, int]:
-        from .params import instance
         from .schedule import mac_operands, whole_limbs
 
-        ops = [mac_operands(self.inst[_v(m)].module, instance(self.design, _v(m)).params) for m in self.on_mac]
+        ops = [mac_operands(self.design, _v(m)) for m in self.on_mac]
         return whole_limbs(max(a for a, _ in ops)), whole_limbs(max(b for _, b in ops))
 
     def instance_text(self, m: str, extra: list[str], conns_extra: list[str], outs: dict[str, str],

@@ -110,7 +110,7 @@ def wrapper(design, name: str, cut: bool = False) -> str:
         if has_divider(design, name):
             over.append(".DIV_UNROLL(1)")
     elif rtl.mac_bundle:
-        a_w, b_w = (whole_limbs(w) for w in mac_operands(inst.module, hp.instance(design, name).params))
+        a_w, b_w = (whole_limbs(w) for w in mac_operands(design, name))
         over.append(f".EXT_MAC(1), .MAC_A_W({a_w}), .MAC_B_W({b_w})")
         lines += [f"    wire {w}mac_{sig};" for _, sig, w in MAC_PORTS]
         lines += [f"    localparam integer MAC_A_W = {a_w};", f"    localparam integer MAC_B_W = {b_w};",

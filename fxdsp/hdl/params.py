@@ -36,16 +36,10 @@ class Instance:
     consts: tuple[str, ...] = ()   # parameters that are 64-bit two's-complement constants
 
 
-# ports the RTL treats as signed wires (sign-extended, compared, subtracted): the model allows
-# unsigned formats there, the RTL does not
-SIGNED_PORTS = {"rtd": ("temp",), "piecewise": ("temp",), "sf_divide": ("y",), "bias_subtract": ("x", "bias", "y"),
-                "freq2temp": ("temp",), "lag": ("temp",)}
-
-
 def _check_rtl_limits(design: Design, name: str, dp) -> None:
     """The RTL's own limits: a config the Python model accepts but the RTL cannot build."""
     ports = design.instances[name].ports
-    for port in SIGNED_PORTS.get(dp.MODULE, ()):
+    for port in dp.RTL.signed:   # the model allows an unsigned format there, the RTL does not
         if not ports[port].format.signed:
             raise ValueError(f"hdl: {name}.{port} {ports[port].format} must be signed for the RTL")
     iir = dp if dp.MODULE == "iir" else getattr(dp, "lpf", None)

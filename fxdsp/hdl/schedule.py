@@ -1,86 +1,9 @@
-"""Cycles per sample of the serial variants (ARCH = 1), stated once from each module's documented
-schedule (the headers of hdl/rtl/*.v), as functions of the module's parameters (the generated
-headers' values), and of a generated chain top (:mod:`fxdsp.hdl.chain_top`) from its netlist. The
+"""Cycles per sample: a block's from its datapath description (each states its module's documented
+schedule and latency as functions of the module's parameters, :class:`fxdsp.blocks.datapath.Datapath`),
+a generated chain top's (:mod:`fxdsp.hdl.chain_top`) from its netlist and its members'. The
 long-stream tests measure the RTL against them, back to back."""
 
 from __future__ import annotations
-
-
-def iir_cycles_per_sample(p: dict) -> int:
-    """The serial iir's documented schedule (hdl/rtl/iir.v): SECTIONS * (7 N + 10) + 1 cycles, N the
-    16 x 16 limb products of one coefficient-or-error x data product."""
-    limbs = (max(p["ACOEF_W"], p["OUT_SHIFT"] + 2) + 15) // 16 * ((p["DATA_W"] + 15) // 16)
-    return p["SECTIONS"] * (7 * limbs + 10) + 1
-
-
-def rtd_cycles_per_sample(p: dict) -> int:
-    """The serial rtd's documented schedule (hdl/rtl/rtd.v): N + 10 cycles, N the 16 x 16 limb
-    products of the diff (LUT_W + 1 bits) x frac (S + 1 bits) product."""
-    s = p["ADC_W"] - p["LUT_INDEX_BITS"]
-    return (p["LUT_W"] + 1 + 15) // 16 * ((s + 1 + 15) // 16) + 10
-
-
-def lag_cycles_per_sample(p: dict) -> int:
-    """The serial lag's documented schedule (hdl/rtl/lag.v): N + 11 cycles per update sample, N the
-    16 x 16 limb products of d (STATE_W + 1 bits) x alpha (ALPHA_W + 1 bits); at DECIM = 1 (the
-    default config) every sample updates (a held sample takes 1 cycle)."""
-    if p["DECIM"] != 1:
-        raise ValueError("lag: DECIM > 1: the samples between updates take 1 cycle, the updates this many")
-    return (p["STATE_W"] + 1 + 15) // 16 * ((p["ALPHA_W"] + 1 + 15) // 16) + 11
-
-
-def limbs(a_w: int, b_w: int) -> int:
-    """16 x 16 limb products of an a_w x b_w-bit product on fx_mac_serial."""
-    return (a_w + 15) // 16 * ((b_w + 15) // 16)
-
-
-def piecewise_cycles_per_sample(p: dict) -> int:
-    """The serial piecewise's documented schedule (hdl/rtl/piecewise.v): ORDER (N + 11) + 7, N the
-    limb products of acc (ACC_W bits) x t (T_W + 1 bits)."""
-    return p["ORDER"] * (limbs(p["ACC_W"], p["T_W"] + 1) + 11) + 7
-
-
-def freq2temp_cycles_per_sample(p: dict) -> int:
-    """The serial freq2temp's documented schedule (hdl/rtl/freq2temp.v): N + 7, N the limb products
-    of d (FREQ_W + 1 bits) x KINV (KINV_W bits)."""
-    return limbs(p["FREQ_W"] + 1, p["KINV_W"]) + 7
-
-
-def demod_cycles_per_sample(p: dict) -> int:
-    """The demod's edges from its accepting edge to its successor's (hdl/rtl/demod.v; for a serial
-    block with one sample in flight, its cycles per sample). ARCH = 1 (serial): 6 N + 30 + 3 ITERATIONS
-    + F, N the limb products of its shared MAC (a: max(DW, XW) bits, DW = INTERP_BITS + TWO_PI_W + 3,
-    XW = max(IN_W, DATA_W + 3); b: max(TWO_PI_W + 1, NCO_W, INV_K_W + max(0, MIX_SHIFT - AMP_SHIFT))
-    bits), F = 2 LPF_SECTIONS (7 M + 10) the two-channel serial iir's cycles (M its limb products);
-    206 at the default config (the pre-rotation and every CORDIC step take three cycles: one shifter)."""
-    dw = p["INTERP_BITS"] + 2 + p["TWO_PI_W"] + 1
-    xw = max(p["IN_W"], p["DATA_W"] + 3)
-    ikw = p["INV_K_W"] + max(0, p["MIX_SHIFT"] - p["AMP_SHIFT"])
-    n = limbs(max(dw, xw), max(p["TWO_PI_W"] + 1, p["NCO_W"], ikw))
-    m = limbs(max(p["LPF_ACOEF_W"], p["LPF_OUT_SHIFT"] + 2), p["DATA_W"])
-    return 6 * n + 30 + 3 * p["ITERATIONS"] + 2 * p["LPF_SECTIONS"] * (7 * m + 10)
-
-
-def divider_steps(p: dict, unroll: int = 1) -> int:
-    """The restoring divider's steps (hdl/rtl/sf_divide.v): ceil((IN_W + NUM_SHIFT) / UNROLL)."""
-    return -(-(p["IN_W"] + p["NUM_SHIFT"]) // unroll)
-
-
-def sf_divide_cycles_per_sample(p: dict, unroll: int = 1) -> int:
-    """The pipelined divider (ARCH = 1, hdl/rtl/sf_divide.v), from its accepting edge to its
-    successor's: its latency, its steps + 6."""
-    return divider_steps(p, unroll) + 6
-
-
-# per module: edges from a serial member's accepting edge to its successor's (its cycles per sample)
-SERIAL_CYCLES = {"iir": iir_cycles_per_sample, "rtd": rtd_cycles_per_sample, "lag": lag_cycles_per_sample,
-                 "piecewise": piecewise_cycles_per_sample, "freq2temp": freq2temp_cycles_per_sample,
-                 "demod": demod_cycles_per_sample, "sf_divide": sf_divide_cycles_per_sample,
-                 "bias_subtract": lambda _p: 2}   # two registered stages (difference, then round and fit)
-
-# per module: the one-sample-per-clock variant's latency (ARCH = 0, each header's "Latency"), edges
-# from the accepting edge to out_valid; the divider's is its steps + 1
-PER_CLOCK_LATENCY = {"iir": 1, "rtd": 1, "lag": 1, "piecewise": 1, "freq2temp": 1, "demod": 2, "bias_subtract": 2}
 
 
 def whole_limbs(w: int) -> int:
@@ -88,33 +11,22 @@ def whole_limbs(w: int) -> int:
     return max(16, -(-w // 16) * 16)
 
 
-def mac_operands(module: str, p: dict) -> tuple[int, int]:
-    """The widest (a, b) operands a serial block issues on its multiplier bundle (each header's
-    fx_mac_port A_W / B_W): what a multiplier shared by several blocks must take."""
-    if module == "rtd":
-        return p["LUT_W"] + 1, p["ADC_W"] - p["LUT_INDEX_BITS"] + 1
-    if module == "piecewise":
-        return p["ACC_W"], p["T_W"] + 1
-    if module == "iir":
-        return max(p["ACOEF_W"], p["OUT_SHIFT"] + 2), p["DATA_W"]
-    if module == "demod":
-        dw = p["INTERP_BITS"] + 2 + p["TWO_PI_W"] + 1
-        xw = max(p["IN_W"], p["DATA_W"] + 3)
-        ikw = p["INV_K_W"] + max(0, p["MIX_SHIFT"] - p["AMP_SHIFT"])
-        lpf_a = max(p["LPF_ACOEF_W"], p["LPF_OUT_SHIFT"] + 2)
-        return max(dw, xw, lpf_a), max(p["TWO_PI_W"] + 1, p["NCO_W"], ikw, p["DATA_W"])
-    raise ValueError(f"{module} has no multiplier bundle")
+def mac_operands(design, name: str) -> tuple[int, int]:
+    """The widest (a, b) operands instance ``name`` issues on its multiplier bundle at the design's
+    parameters (its datapath's :meth:`~fxdsp.blocks.datapath.Datapath.mac_operands`)."""
+    from .params import instance
+
+    return design.instances[name].block.datapath.mac_operands(instance(design, name).params)
 
 
 def member_cycles(design, name: str, arch: int = 1, unroll: int = 1) -> int:
     """A block instance's cycles from its accepting edge to its successor's at the design's parameters:
-    ARCH = 1 its serial cycles per sample, ARCH = 0 its latency (``unroll``: the divider's UNROLL)."""
+    ARCH = 1 its serial cycles per sample, ARCH = 0 its latency (``unroll``: the divider's UNROLL),
+    each its datapath's (:class:`fxdsp.blocks.datapath.Datapath`)."""
     from .params import instance
 
-    module, p = design.instances[name].module, instance(design, name).params
-    if module == "sf_divide":
-        return sf_divide_cycles_per_sample(p, unroll) if arch else divider_steps(p, unroll) + 1
-    return SERIAL_CYCLES[module](p) if arch else PER_CLOCK_LATENCY[module]
+    dp, p = design.instances[name].block.datapath, instance(design, name).params
+    return dp.serial_cycles(p, unroll) if arch else dp.latency(p, unroll)
 
 
 def cycles_per_sample(design, name: str, arch: int = 1, unroll: int = 1) -> int:

@@ -4,10 +4,7 @@ divider: on Verilator, one block on Icarus too (the harness on both simulators);
 
 import pytest
 
-from fxdsp.hdl import params as hp
-from fxdsp.hdl.schedule import (chain_schedule, demod_cycles_per_sample, freq2temp_cycles_per_sample,
-                                 iir_cycles_per_sample, member_cycles, piecewise_cycles_per_sample,
-                                 rtd_cycles_per_sample, sf_divide_cycles_per_sample)
+from fxdsp.hdl.schedule import chain_schedule, member_cycles
 from hdl_util import SERIAL
 from long_common import N_LONG, default_design, long_stream, on_simulators
 
@@ -38,8 +35,7 @@ def _chain_paper001_cycles_per_sample(d) -> int:
     is decided the cycle after its driver's result is captured and registered into its in_valid (+2
     per member beyond its own cycles); out_valid a cycle after the last capture and the next sample
     taken as it leaves (+2): freq2temp, then piecewise_bias001, then the subtraction."""
-    return (freq2temp_cycles_per_sample(hp.instance(d, "freq2temp").params) + 2
-            + piecewise_cycles_per_sample(hp.instance(d, "piecewise_bias001").params) + 2 + (2 + 2) + 2)
+    return member_cycles(d, "freq2temp") + 2 + member_cycles(d, "piecewise_bias001") + 2 + (2 + 2) + 2
 
 
 def _chain_paper002_cycles_per_sample(d) -> int:
@@ -47,12 +43,9 @@ def _chain_paper002_cycles_per_sample(d) -> int:
     the divider and (SF's engine's second coefficient set, its pass as SF's result leaves) bias(T); the
     demodulator after the divider's result and the bias pass (they share the multiplier); then the
     subtraction and the output low-pass (on the demodulator's filter engine)."""
-    par = lambda n: hp.instance(d, n).params  # noqa: E731
-    divider = sf_divide_cycles_per_sample(par("sf_divide"))
-    bias_pass = piecewise_cycles_per_sample(par("piecewise_bias"))
-    return (rtd_cycles_per_sample(par("rtd")) + 2 + piecewise_cycles_per_sample(par("piecewise_sf"))
-            + max(divider + 2, bias_pass) + 2 + demod_cycles_per_sample(par("demod")) + 2 + (2 + 2)
-            + iir_cycles_per_sample(par("iir")) + 2 + 2)
+    c = lambda n: member_cycles(d, n)  # noqa: E731
+    return (c("rtd") + 2 + c("piecewise_sf") + max(c("sf_divide") + 2, c("piecewise_bias")) + 2 + c("demod") + 2
+            + (2 + 2) + c("iir") + 2 + 2)
 
 
 # the paper chains' schedules written out here; a block's is its module's (fxdsp.hdl.schedule), any
