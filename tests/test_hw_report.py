@@ -361,6 +361,11 @@ def test_tool_warnings_are_kept_but_the_two_every_placement_gives():
            "warnings": report_cli.tool_warnings(text)}
     text = markdown([row], 40.0)
     assert "1:" in text and "* iir (iCE40): Warning: Literal has a width" in text
+    # a warning nobody has explained says so; an explained one carries its reason
+    assert "(harmless: NOT EXPLAINED)" in text
+    resize = "Warning: Resizing cell port iir.g_ser.ram_e.0.0.ADDRARDADDR from 17 bits to 16 bits."
+    text = markdown([{**row, "warnings": [resize]}], 40.0)
+    assert f"{resize} (harmless: yosys's 7-series memory mapping" in text and "NOT EXPLAINED" not in text
     assert "none." in markdown([{**row, "warnings": []}], 40.0)
 
 

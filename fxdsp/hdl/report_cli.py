@@ -180,6 +180,20 @@ def _read_and_chparam(design, work: Path, chparam: str) -> str:
 HARMLESS = ("No PCF file specified", "Max frequency for clock")
 
 
+# warnings that are reported, each with why it is harmless (a warning matching none of these is
+# listed as "not explained": it is news, and someone has to read it)
+EXPLAINED = (
+    ("Resizing cell port", "yosys's 7-series memory mapping connects a block RAM's ports at its template's "
+     "widths; the cell's port is narrower, and the bits dropped are a cascade address bit held constant or "
+     "read-data bits nothing reads (the xc7 columns count cells, which this does not change)"),
+)
+
+
+def why_harmless(warning: str) -> str | None:
+    """Why a reported tool warning is harmless (:data:`EXPLAINED`), or None when nobody has said."""
+    return next((why for pattern, why in EXPLAINED if pattern in warning), None)
+
+
 def tool_warnings(text: str) -> list[str]:
     """The warnings of a yosys or nextpnr run but :data:`HARMLESS`, each once, in order."""
     out: list[str] = []
@@ -520,7 +534,8 @@ def markdown(rows, freq, source_sha256: str = "") -> str:
               + " / ".join(f"'{h}'" for h in HARMLESS) + " are left out: the wrapper's pins are placed without "
               "constraints, and a seed below the target is the Fmax column): "
               + ("none." if not warned else f"{len(warned)}:"), ""]
-    lines += [f"* {name} ({tool}): {w}" for name, tool, w in warned]
+    lines += [f"* {name} ({tool}): {w} (harmless: {why_harmless(w) or 'NOT EXPLAINED'})"
+              for name, tool, w in warned]
     swept = [r for r in rows if r.get("fmax_seeds") and r.get("critical_path")]
     if swept:
         lines += ["", "Critical path of each swept row's slowest seed (nextpnr, posedge to posedge):", ""]
