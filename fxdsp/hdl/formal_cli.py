@@ -1,4 +1,4 @@
-"""``fxdsp formal [--config F] [--only NAMES] [--depth N] [--bounded-only] [--rtl DIR] --out DIR``
+"""``fxdsp formal [--config F] [--only NAMES] [--depth N] [--bounded-only] [--miter] [--rtl DIR] --out DIR``
 
 Formal proofs (yosys-smtbmc, the yices solver) of the serial variant of every block and chain top of
 F (or those named), :mod:`fxdsp.hdl.formal`: a block's one sample in flight, out_valid exactly the
@@ -8,6 +8,11 @@ to their contracts: at most one multiplier request per cycle, its handshake, its
 sample able to go through. A bounded proof to N cycles from reset (default: a block's two samples
 back to back, 2 C + 4; a top's 24 cycles) and a k-induction of that length: a pass of both holds for
 every cycle (``--bounded-only``: the bounded proof alone).
+
+``--miter``: equivalence of each smaller block's serial variant (sf_divide, piecewise, lag) with its
+one-sample-per-clock variant, bounded over two samples from reset with every input free, word for
+word and flag for flag (:func:`fxdsp.hdl.formal.miter`); on the narrow word lengths of the
+package's ``configs/formal_narrow.toml`` unless ``--config`` names another.
 
 ``DIR/report.json`` and ``DIR/report.md``: per DUT and mode the verdict, the depth, the seconds and,
 for a failure, the failing assertions and the counterexample's waveform (``DIR/traces/*.vcd``).
@@ -37,6 +42,9 @@ def configure(parser) -> None:
                         help="the bounded proof from reset only (no induction: not every cycle)")
     parser.add_argument("--timeout", type=float, default=3600, metavar="S",
                         help="seconds per solver run; a proof without an answer by then is undecided (default 3600)")
+    parser.add_argument("--miter", action="store_true",
+                        help="prove each smaller block's serial variant equal to its one-sample-per-clock one "
+                             "(bounded, two samples; default config: the package's narrow formal_narrow.toml)")
     parser.add_argument("--rtl", default=None, metavar="DIR", help="Verilog sources (default: the RTL in the package)")
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder: report and traces")
 
@@ -51,7 +59,7 @@ def markdown(report: dict) -> str:
              "| DUT | mode | depth (cycles) | cycles per sample | verdict | seconds | failing |",
              "|---|---|---:|---:|---|---:|---|"]
     for r in report["proofs"]:
-        lines.append(f"| {r['dut']} | {r['mode']} | {r['depth']} | {r['cycles_per_sample']} | "
+        lines.append(f"| {r['dut']} | {r['mode']} | {r['depth']} | {r['cycles_per_sample'] or '-'} | "
                      f"{_verdict(r)} | {r['seconds']} | {r['failing'] or ''} |")
     return "\n".join(lines) + "\n"
 
@@ -71,8 +79,9 @@ def run(args) -> int:
         raise InputError(f"--depth: need at least 2 cycles, got {args.depth}")
     if args.rtl is not None and not sorted(Path(args.rtl).glob("*.v")):
         raise InputError(f"--rtl: no Verilog sources (*.v) in {args.rtl}")
-    design = build(args.config)
-    duts = formal.serial_duts(design)
+    config = args.config or (formal.MITER_CONFIG if args.miter else None)
+    design = build(config)
+    duts = formal.miter_duts(design) if args.miter else formal.serial_duts(design)
     if args.only is not None:
         only = [n.strip() for n in args.only.split(",") if n.strip()]
         if not only:
@@ -81,18 +90,19 @@ def run(args) -> int:
             if n not in design.instances:
                 raise InputError(f"--only: {n!r} is not a block or chain of the config ({', '.join(design.instances)})")
             if n not in duts:
-                raise InputError(f"--only: {n!r} has no serial variant to prove (those with one: {', '.join(duts)})")
+                raise InputError(f"--only: {n!r} has no {'miter' if args.miter else 'serial variant'} to prove "
+                                 f"(those with one: {', '.join(duts) or 'none'})")
         duts = [n for n in duts if n in only]
     formal.require_tools()
     proofs = []
-    modes = (False,) if args.bounded_only else (False, True)
+    modes = (False,) if args.bounded_only or args.miter else (False, True)
     with staged() as stage, tempfile.TemporaryDirectory(prefix="fxdsp_formal_") as tmp:
         out = stage.dir(args.out)
         for name in tqdm(duts, desc="formal", unit="DUT", disable=None):
             for ind in modes:
                 p = formal.prove(design, name, Path(tmp) / name, depth=args.depth, induction=ind,
                                  rtl=Path(args.rtl) if args.rtl else None, cut=bool(design.instances[name].members),
-                                 timeout=args.timeout)
+                                 timeout=args.timeout, equivalence=args.miter)
                 trace = None
                 if p.trace is not None:
                     trace = f"traces/{name}_{p.mode}.vcd"
@@ -102,7 +112,16 @@ def run(args) -> int:
                                "cycles_per_sample": cycles_per_sample(design, name, arch=1),
                                "passed": p.passed, "seconds": round(p.seconds, 1), "failing": p.detail,
                                "trace": trace})
-        report = {"config": str(args.config or "built-in"), "properties": formal.PROPERTIES, "proofs": proofs}
+        if args.miter and args.only is None:   # the miters' multiplier keeps fx_mac_serial's timing
+            for a_w, b_w in formal.MAC_TIMING_WIDTHS:
+                for ind in (False, True):
+                    p = formal.mac_timing(a_w, b_w, Path(tmp) / f"mac{a_w}x{b_w}_{ind}", induction=ind,
+                                          rtl=Path(args.rtl) if args.rtl else None, timeout=args.timeout)
+                    proofs.append({"dut": p.name, "mode": p.mode, "depth": p.depth, "cycles_per_sample": None,
+                                   "passed": p.passed, "seconds": round(p.seconds, 1), "failing": p.detail,
+                                   "trace": None})
+        report = {"config": str(config or "built-in"), "proofs": proofs,
+                  "properties": formal.MITER_PROPERTIES if args.miter else formal.PROPERTIES}
         (out / "report.json").write_text(json_text(report, "report.json", indent=1), encoding="utf-8")
         (out / "report.md").write_text(markdown(report), encoding="utf-8")
     bad = [p for p in proofs if not p["passed"]]

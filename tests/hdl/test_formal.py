@@ -1,8 +1,10 @@
 """Formal proofs of the serial interface (fxdsp.hdl.formal, yosys-smtbmc + yices): the proofs that
 take seconds pass here, bounded (two samples from a reset, reset and gaps free at every cycle) and by
 induction of that length (together: every cycle); each property fails on an RTL bug injected into a copy of the sources, named
-by its label, with a counterexample trace. The long proofs (the iir, the demodulator, the divider,
-the tops) run in `make formal`."""
+by its label, with a counterexample trace. The miters (serial = one-sample-per-clock) of the lag and
+the divider at the narrow widths of configs/formal_narrow.toml pass and fail on a bug in one variant;
+the miters' multiplier keeps fx_mac_serial's timing. The long proofs (the iir, the demodulator, the
+divider, the piecewise miter) run in `make formal`."""
 
 from __future__ import annotations
 
@@ -93,6 +95,42 @@ def test_the_stated_latency_is_exact(design, tmp_path, monkeypatch):
         monkeypatch.setattr(formal, "cycles_per_sample", lambda *a, off=off, **k: real(*a, **k) + off)
         p = formal.prove(design, "freq2temp", tmp_path / str(off))
         assert not p.passed and "out_valid_for_the_sample_at_its_cycle" in p.detail, (off, p.detail)
+
+
+@pytest.fixture(scope="module")
+def narrow():
+    from fxdsp.chains import build
+
+    return build(formal.MITER_CONFIG)
+
+
+# (the DUT, a bug in its serial variant only: (old, new) in its RTL file, the assertion that must fail)
+MITER_MUTANTS = {"lag": ("lag.v", (".ROUNDING(ROUNDING), .SHIFT(ALPHA_S), .OUT_W(RW)) u_step_s",
+                                   ".ROUNDING(0), .SHIFT(ALPHA_S), .OUT_W(RW)) u_step_s"), "same_te"),
+                 "sf_divide": ("sf_divide.v", ("neg_r <= neg;", "neg_r <= 1'b0;"), "same_y")}
+
+
+@pytest.mark.parametrize("name", sorted(MITER_MUTANTS))
+def test_the_serial_variant_equals_the_one_per_clock_by_a_miter(narrow, tmp_path, name):
+    """Two samples from reset, every input free: equal word for word and flag for flag (and a second
+    answer compared, else vacuous); a rounding bug in the serial variant alone fails, with a trace."""
+    p = formal.prove(narrow, name, tmp_path / "ok", equivalence=True)
+    assert p.passed, (p.mode, p.detail)
+    file, edit, label = MITER_MUTANTS[name]
+    rtl = mutated_rtl(tmp_path / "rtl", file, [edit])
+    p = formal.prove(narrow, name, tmp_path / "bug", equivalence=True, rtl=rtl)
+    assert not p.passed and label in p.detail, p.detail
+    assert p.trace is not None and p.trace.stat().st_size > 0
+
+
+def test_the_miters_multiplier_keeps_the_real_ones_timing(tmp_path):
+    for induction in (False, True):
+        p = formal.mac_timing(16, 16, tmp_path / str(induction), induction=induction)
+        assert p.passed, (p.mode, p.detail)
+    rtl = mutated_rtl(tmp_path / "rtl", "fx_mac_serial.v", [("assign in_ready = ~busy | last;",
+                                                              "assign in_ready = ~busy;")])
+    p = formal.mac_timing(16, 16, tmp_path / "bug", rtl=rtl)
+    assert not p.passed and "same_in_ready" in p.detail, p.detail
 
 
 def test_formal_command(tmp_path, capsys):
