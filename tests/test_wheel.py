@@ -84,8 +84,8 @@ def test_demo_vectors_and_hdl_gen_from_another_folder(installed):
     work = installed[2]
     fxdsp(installed, "demo")
     assert (work / "vectors" / "manifest.json").is_file()
-    fxdsp(installed, "vectors", "--out", "v2")
-    assert (work / "v2" / "manifest.json").read_bytes() == (work / "vectors" / "manifest.json").read_bytes()
+    # the installed package's demo writes the committed default set, byte for byte
+    assert (work / "vectors" / "manifest.json").read_bytes() == (ROOT / "vectors" / "manifest.json").read_bytes()
     fxdsp(installed, "hdl-gen", "--out", "gen")
     assert sorted(p.name for p in (work / "gen").glob("*.vh")) == sorted(p.name for p in (ROOT / "hdl" / "gen").glob("*.vh"))
 

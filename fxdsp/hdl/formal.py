@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -394,6 +395,20 @@ def prove(design, name: str, d: Path, depth: int | None = None, induction: bool 
     return _check(name, mode, d, script, depth, induction, timeout, cover)
 
 
+def _run(cmd: list[str], d: Path, env: dict, timeout: float) -> subprocess.CompletedProcess:
+    """``cmd`` in ``d``; at ``timeout`` its whole process group is killed (yosys-smtbmc's solver is a
+    child of its own: killing yosys-smtbmc alone left yices running) and TimeoutExpired raised."""
+    proc = subprocess.Popen(cmd, cwd=d, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.communicate()
+        raise
+    return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
+
+
 def _check(name: str, mode: str, d: Path, script: str, depth: int, induction: bool, timeout: float,
            cover: tuple[int, str] | None = None) -> Proof:
     """Run the yosys ``script`` (it writes fx_formal.smt2) and yosys-smtbmc in ``d``: BMC to ``depth``
@@ -405,8 +420,7 @@ def _check(name: str, mode: str, d: Path, script: str, depth: int, induction: bo
     t0 = time.perf_counter()
     undecided = Proof(name, mode, depth, False, 0.0, f"undecided: the tools gave no answer within {timeout:g} s", None)
     try:
-        r = subprocess.run([yosys, "-q", "-l", "yosys.log", "fx_formal.ys"], cwd=d, capture_output=True, text=True,
-                           env=env, timeout=timeout)
+        r = _run([yosys, "-q", "-l", "yosys.log", "fx_formal.ys"], d, env, timeout)
     except subprocess.TimeoutExpired:
         return undecided
     if r.returncode != 0:
@@ -417,7 +431,7 @@ def _check(name: str, mode: str, d: Path, script: str, depth: int, induction: bo
         cmd.insert(1, "-i")
     cmd.append("fx_formal.smt2")
     try:
-        r = subprocess.run(cmd, cwd=d, capture_output=True, text=True, env=env, timeout=timeout)
+        r = _run(cmd, d, env, timeout)
     except subprocess.TimeoutExpired:
         return undecided
     out = r.stdout + r.stderr
@@ -427,8 +441,7 @@ def _check(name: str, mode: str, d: Path, script: str, depth: int, induction: bo
     if passed and cover is not None:
         reach, why = cover
         try:
-            r = subprocess.run([smtbmc, "-s", SOLVER, "--presat", "-c", "-t", str(reach), "fx_formal.smt2"], cwd=d,
-                               capture_output=True, text=True, env=env, timeout=timeout)
+            r = _run([smtbmc, "-s", SOLVER, "--presat", "-c", "-t", str(reach), "fx_formal.smt2"], d, env, timeout)
         except subprocess.TimeoutExpired:
             return undecided
         (d / "smtbmc_cover.log").write_text(r.stdout + r.stderr, encoding="utf-8")
