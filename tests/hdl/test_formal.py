@@ -1,10 +1,10 @@
 """Formal proofs of the serial interface (fxdsp.hdl.formal, yosys-smtbmc + yices): the proofs that
 take seconds pass here, bounded (two samples from a reset, reset and gaps free at every cycle) and by
 induction of that length (together: every cycle); each property fails on an RTL bug injected into a copy of the sources, named
-by its label, with a counterexample trace. The miters (serial = one-sample-per-clock) of the lag and
-the divider at the narrow widths of configs/formal_narrow.toml pass and fail on a bug in one variant;
-the miters' multiplier keeps fx_mac_serial's timing. The long proofs (the iir, the demodulator, the
-divider, the piecewise miter) run in `make formal`."""
+by its label, with a counterexample trace. The lag's miter (serial = one-sample-per-clock, at the
+narrow widths of configs/formal_narrow.toml) passes and fails on a bug in one variant, as the
+divider's does; the miters' multiplier keeps fx_mac_serial's timing. The long proofs (the iir, the
+demodulator, the divider's and piecewise's passing miters) run in `make formal`."""
 
 from __future__ import annotations
 
@@ -113,10 +113,11 @@ MITER_MUTANTS = {"lag": ("lag.v", (".ROUNDING(ROUNDING), .SHIFT(ALPHA_S), .OUT_W
 
 
 @pytest.mark.parametrize("name", sorted(MITER_MUTANTS))
-def test_the_serial_variant_equals_the_one_per_clock_by_a_miter(narrow, tmp_path, name):
-    """Two samples from reset, every input free: equal word for word and flag for flag (and a second
-    answer compared, else vacuous); a rounding bug in the serial variant alone fails, with a trace.
-    (The divider's passing miter, 10 s, and the piecewise one, 100 s, run in `make formal`.)"""
+def test_the_miter_passes_and_a_bug_in_one_variant_fails_it(narrow, tmp_path, name):
+    """The miter (two samples from reset, every input free: equal word for word and flag for flag, a second
+    answer compared, else vacuous) passes on the lag, the same generated miter then fails on a
+    rounding bug in either block's serial variant alone, with a trace. The divider's passing miter
+    (10 s) and the piecewise one (100 s) run in `make formal`: the 8-minute budget of `make test`."""
     if name == "lag":
         p = formal.prove(narrow, name, tmp_path / "ok", equivalence=True)
         assert p.passed, (p.mode, p.detail)
