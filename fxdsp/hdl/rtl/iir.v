@@ -542,6 +542,19 @@ module iir #(
                     endcase
                 end
             end
+`ifdef FORMAL
+            // invariants of every state reachable from rst (proven with the rest, fxdsp.hdl.formal):
+            // stated so that an induction proof starts only from states a reset can reach (from an
+            // idle state with rk = 7 the seventh product was never counted and the FSM waited forever)
+            always @* begin
+                if (!rst) begin
+                    fsm_state_is_one_of_seven: assert(st <= S_UPD);
+                    returned_product_index_in_range: assert(rk <= K_C2);
+                    section_in_range: assert(sec <= SEC_LAST);
+                    idle_means_no_product_in_flight: assert(st != S_IDLE || (rk == K_B0 && !lo_go && !hi_go));
+                end
+            end
+`endif
         end
     endgenerate
 endmodule
