@@ -63,6 +63,13 @@ class Sensor:
             raise self._fail(f"{block.name}.{port} driven by a chain input, not by {src}")
         return src
 
+    def output_of(self, block, port: str) -> str:
+        """The name of the chain output that ``block``'s output ``port`` drives."""
+        for name, src in self.net.outputs.items():
+            if src == Endpoint(block.name, port):
+                return name
+        raise self._fail(f"{block.name}.{port} among the chain's outputs")
+
     def stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
         raise NotImplementedError
 

@@ -25,6 +25,7 @@ import pytest
 
 from fxdsp.cli import main
 from fxdsp.config import default_config_text
+from user_configs import leaves
 
 SHORT = ["--duration-scale", "0.5", "--time-step", "30"]
 HEADER = re.compile(r"^\[([^\]]+)\]", re.M)
@@ -54,13 +55,6 @@ def copied(text: str, renames: dict[str, str], edits: dict[str, dict] | None = N
                         body = f"{head}\n{key} = {value}\n{rest}"
                 out.append(body.rstrip() + "\n\n")
     return "".join(out)
-
-
-def leaves(data: dict, prefix: str = "") -> dict:
-    out = {}
-    for k, v in data.items():
-        out.update(leaves(v, f"{prefix}{k}.") if isinstance(v, dict) else {f"{prefix}{k}": v})
-    return out
 
 
 def changed(a: dict, b: dict) -> set[str]:
@@ -189,4 +183,11 @@ def test_a_chain_extend_has_no_calibration_for_is_one_line(made, capsys):
     assert code == 2 and err.count("\n") == 1 and "qvba" in err, err
     code, err = run(capsys, "extend", folder / "gyro_rtd.csv", "--chain", "mygyro", "--no-rtl", "--out", folder / "x")
     assert code == 2 and err.count("\n") == 1 and "mygyro" in err and "paper002" in err, err
+    # a thermometer chain whose compensated reading is not among its outputs (it was a traceback)
+    hidden = folder / "hidden.toml"
+    hidden.write_text(paths["thermometer"].read_text().replace('outputs = ["bias_subtract3.y -> out"]',
+                                                               'outputs = ["piecewise.q3.y -> q"]'))
+    code, err = run(capsys, "extend", folder / "thermometer.csv", "--config", hidden, "--chain", "mythermo",
+                    "--widen", "--no-rtl", "--out", folder / "x")
+    assert code == 2 and err.count("\n") == 1 and "bias_subtract3.y" in err and "chain.mythermo" in err, err
     assert not (folder / "x").exists()

@@ -28,7 +28,7 @@ from fxdsp.errors import InputError
 from fxdsp.chains import build
 from fxdsp.extend.design import Design, allowed_keys, calibrated_keys, remedy_keys
 from fxdsp.extend.roles import roles_of
-from user_configs import adc18_text
+from user_configs import adc18_text, leaves
 
 TCKIT_REL = "data/tckit/hp3458abx_hp34420a_tcsweep_1vdc_nplc100_test2_oct2024.dsv"
 VBL5_ARGS = ["--map", "time_s=date", "--map", "temp_c=box_temp", "--map", "output=vbl5", "--delimiter", ";",
@@ -37,18 +37,6 @@ SHORT = ["--duration-scale", "0.5", "--time-step", "30"]
 # settings a calibration or a remedy must never rewrite (the test fails if calibrated_keys or remedy_keys
 # is loosened to let one through)
 DESIGN_SUFFIXES = ("_format", "rounding", "overflow", "_bits", "guard_bits")
-
-
-def leaves(data: dict, prefix: str = "") -> dict:
-    """{dotted path: value} of every leaf of parsed TOML (a list is one leaf)."""
-    out = {}
-    for k, v in data.items():
-        path = f"{prefix}{k}"
-        if isinstance(v, dict):
-            out.update(leaves(v, path + "."))
-        else:
-            out[path] = v
-    return out
 
 
 def diff(base: dict, new: dict) -> tuple[set, set, set]:

@@ -16,3 +16,11 @@ def adc18_text(**edits) -> str:
         table, _, key = dotted.rpartition(".")
         text = set_table_keys(text, table, {key: value})
     return text
+
+
+def leaves(data: dict, prefix: str = "") -> dict:
+    """{dotted path: value} of every leaf of parsed TOML (a list is one leaf)."""
+    out = {}
+    for k, v in data.items():
+        out.update(leaves(v, f"{prefix}{k}.") if isinstance(v, dict) else {f"{prefix}{k}": v})
+    return out

@@ -228,17 +228,6 @@ def gyro_freq_variants(columns: dict, remedies, design, roles) -> dict:
             "_held": held, "_configs": configs, "_cals": cals, "_changes": changes}
 
 
-def thermometer_codes(temp_format, lag_block, columns: dict, tau_s: float | None) -> dict[str, np.ndarray]:
-    """The thermometer chain's temperature codes (in ``temp_format``, its temperature word): the
-    logged reading ``T`` and, with a lag time constant, the bit-exact lag's output at the log's
-    rate ``Te`` (``lag_block``: the word lengths and rounding of the chain's lag)."""
-    code = quantize(np.asarray(columns["temp_c"], float), temp_format, ROUND)
-    codes = {"T": code}
-    if tau_s is not None:
-        codes["Te"] = log_rate_lag(lag_block, tau_s, columns["time_s"]).run(temp=code).outputs["te"]
-    return codes
-
-
 def without_lag(config, roles):
     """The design of ``config`` with the chain's lag removed from its netlist (the lag's table
     stays: the same words, run apart at another rate)."""
@@ -262,7 +251,7 @@ def heldout_poly_residual(y: np.ndarray, temp: np.ndarray, folds: np.ndarray, or
 def thermometer_errors(columns: dict, codes: dict, fmt, remedies, folds: np.ndarray, order: int = 3) -> dict:
     """Held-out rms of the output compensated by a polynomial of ``order`` (the config's bias
     polynomial), with and without the lag (float fits on the bit-exact temperature ``codes`` of
-    :func:`thermometer_codes`, in ``fmt``)."""
+    :func:`thermometer_words`, in ``fmt``)."""
     stages = {r.stage for r in remedies}
     y = np.asarray(columns["output"], float)
     results, series = {}, {}
@@ -281,16 +270,14 @@ def thermometer_errors(columns: dict, codes: dict, fmt, remedies, folds: np.ndar
 def thermometer_bitexact(design, roles, codes: dict, output, fit: dict) -> dict:
     """The config's thermometer chain (the lag if it has one, the bias engine, the subtractor) on the
     log, bit-exact, against the float polynomial it quantises: the arithmetic's own error, in the
-    output unit. ``codes``: :func:`thermometer_codes`. extend's own chain runs at the log's rate
+    output unit. ``codes``: :func:`thermometer_words`. extend's own chain runs at the log's rate
     whole; a chain of the config whose lag updates at its own rate runs without it on the lag's
     log-rate output ``Te`` (the same words, alpha for the log's interval)."""
-    lagged = "lag" in design.chain(roles.instance, "fxdsp extend's thermometer calibration").stages
-    if lagged and not roles.written:
-        design = without_lag(design.config, roles)
     chain = design.chain(roles.instance, "fxdsp extend's thermometer calibration")
-    temp, reading = roles.inputs["temp"], roles.inputs["reading"]
-    sub = chain.members[roles.table("subtract")]
-    port = next(n for n, e in chain.netlist.outputs.items() if e.instance == sub.name and e.port == "y")
+    lagged = "lag" in chain.stages
+    if lagged and not roles.written:
+        chain = without_lag(design.config, roles).chains[roles.instance]
+    temp, reading, port = roles.inputs["temp"], roles.inputs["reading"], roles.outputs["compensated"]
     ovf = OverflowLog()
     y = quantize(np.asarray(output, float), chain.inputs[reading], ROUND, ovf, "output")
     fmt = chain.outputs[port]
@@ -324,8 +311,9 @@ def thermometer_applied(columns: dict, configs: dict, remedies, roles) -> dict:
 
 
 def thermometer_words(design, roles, columns: dict, tau_s: float | None) -> dict:
-    """:func:`thermometer_codes` in the temperature word of the chain's bias engine (a built design),
-    with its lag's words when ``tau_s`` is given; ``format``: that word."""
+    """The thermometer chain's temperature codes in the word of its bias engine (a built design):
+    the logged reading ``T`` and, with a lag time constant ``tau_s`` (else the chain's own lag's, if
+    it has one), ``Te``, the bit-exact lag's output at the log's rate; ``format``: that word."""
     lag = design.blocks.get(roles.tables.get("lag", "lag").replace(".", "_"))
     # extend's own chain reads the temperature in the lag's word (the RTD's), a config's chain in
     # the word its bias engine reads
@@ -335,7 +323,11 @@ def thermometer_words(design, roles, columns: dict, tau_s: float | None) -> dict
         tau_s = lag.tau_s   # the chain's own lag, at the log's rate
     if tau_s is not None and lag is None:
         raise InputError(f"[{roles.tables.get('lag', 'lag')}]: the lag remedy needs a lag table in the config")
-    return {**thermometer_codes(fmt, lag, columns, tau_s), "format": fmt}
+    code = quantize(np.asarray(columns["temp_c"], float), fmt, ROUND)
+    codes = {"T": code, "format": fmt}
+    if tau_s is not None:   # the bit-exact lag's output at the log's rate: the lag's words, alpha for its interval
+        codes["Te"] = log_rate_lag(lag, tau_s, columns["time_s"]).run(temp=code).outputs["te"]
+    return codes
 
 
 CHANNEL_UNITS = {"output": "output units", "freq_hz": "Hz", "temp_c": "C"}   # the log's units

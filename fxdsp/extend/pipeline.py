@@ -8,12 +8,11 @@ from pathlib import Path
 import numpy as np
 
 from fxdsp.chains import build
-from fxdsp.errors import InputError
 from fxdsp.fixed import to_float
 from fxdsp.ramps import sample_interval
 from fxdsp.extend import configure, evaluate, hardware, plan as planning, report as rp
 from fxdsp.extend.design import Design, allowed_keys, calibrated_keys, merge_changes
-from fxdsp.extend.roles import Roles, resolve
+from fxdsp.extend.roles import Roles, needs_column, resolve
 from fxdsp.repro.calconfig import config_text
 from fxdsp.hdl.params import design_files
 from fxdsp.outputs import json_text, write_tree
@@ -34,9 +33,7 @@ class Extension:
     def apply(self, columns: dict, log_name: str) -> dict:
         """Run the configs fitted on this log on a second run's log; the result joins the report."""
         roles = self.roles
-        need = {"gyro_rtd": "rate_dps", "gyro_freq": "freq_hz"}.get(roles.procedure)
-        if need is not None and need not in columns:
-            raise InputError(f"--apply {log_name}: the {roles.chain} chain ({roles.procedure}) needs the {need} column")
+        needs_column(roles, columns, f"--apply {log_name}")
         if roles.procedure == "gyro_freq":
             res = evaluate.gyro_freq_applied(columns, self.errors, roles)
         elif roles.procedure == "gyro_rtd":
@@ -89,7 +86,7 @@ def extend_diagnosis(diag, log_name: str, chain="auto", base_text=None, rtl: boo
     a hardware remedy stops the extension instead of being reported uncompensated."""
     columns = columns_of(diag.context.series)
     design = Design(base_text, widen, base_name)
-    roles = resolve(chain, build(configure.config_from_text(design.text)), columns)
+    roles = resolve(chain, build(configure.config_from_text(design.text)), columns, design.name)
     remedies, missing = planning.plan(diag, roles, strict)
     stages = {r.stage for r in remedies}
     extra = {}

@@ -31,6 +31,10 @@ from fxdsp.sensors import Sensor
 # sensor -> the calibration procedure that reads it (a chain without a sensor: "thermometer")
 PROCEDURES = {"gyro_rtd": "gyro_rtd", "gyro_freq": "gyro_freq", None: "thermometer"}
 OWN_THERMOMETER = "thermometer"   # the chain extend writes when the config has no thermometer chain
+# the blocks a procedure may read, by the sensor model's attribute of each (its role)
+ROLES = ("rtd", "sf", "bias", "divide", "subtract", "demod", "lag", "f2t")
+# the log column each procedure calibrates from, beyond temp_c and output
+NEEDS = {"gyro_rtd": "rate_dps", "gyro_freq": "freq_hz"}
 
 
 @dataclass(frozen=True)
@@ -39,6 +43,7 @@ class Roles:
     procedure: str                 # "gyro_rtd", "gyro_freq" or "thermometer"
     tables: dict = field(default_factory=dict)   # role -> config table ("sf" -> "piecewise.sf")
     inputs: dict = field(default_factory=dict)   # role -> chain input ("temp" -> "temp")
+    outputs: dict = field(default_factory=dict)  # role -> chain output ("compensated" -> "compensated")
     written: bool = False          # the chain is extend's own, written into the extended config
 
     @property
@@ -76,6 +81,7 @@ class ThermometerShape(Sensor):
         if self.lag is not None and self.driver(self.bias, "temp") is not self.lag:
             raise self._fail(f"its lag {self.lag.name} driving {self.bias.name}.temp")
         self.temp, self.reading = self.input_of(fed, "temp"), self.input_of(self.subtract, "x")
+        self.compensated = self.output_of(self.subtract, "y")
 
 
 def _roles(chain_name: str, chain, written: bool = False) -> Roles:
@@ -88,12 +94,10 @@ def _roles(chain_name: str, chain, written: bool = False) -> Roles:
     procedure = PROCEDURES[kind]
     if procedure == "thermometer":
         sensor = ThermometerShape(chain)
-    names = {"rtd": "rtd", "sf": "sf", "bias": "bias", "divide": "divide", "subtract": "subtract",
-             "demod": "demod", "lag": "lag", "f2t": "f2t"}
-    tables = {role: getattr(sensor, attr).name for role, attr in names.items()
-              if getattr(sensor, attr, None) is not None}
+    tables = {role: getattr(sensor, role).name for role in ROLES if getattr(sensor, role, None) is not None}
     inputs = {role: getattr(sensor, role) for role in ("temp", "reading") if hasattr(sensor, role)}
-    return Roles(chain_name, procedure, tables, inputs, written)
+    outputs = {role: getattr(sensor, role) for role in ("compensated",) if hasattr(sensor, role)}
+    return Roles(chain_name, procedure, tables, inputs, outputs, written)
 
 
 def roles_of(design, chain: str) -> Roles:
@@ -104,19 +108,28 @@ def roles_of(design, chain: str) -> Roles:
 def own_thermometer_roles() -> Roles:
     """The roles of the thermometer chain extend writes (:func:`fxdsp.extend.configure.thermometer_chain`)."""
     return Roles(OWN_THERMOMETER, "thermometer", {"bias": "piecewise.bias001", "subtract": "bias_subtract001",
-                                                  "lag": "lag"}, {"temp": "temp", "reading": "reading"}, True)
+                                                  "lag": "lag"}, {"temp": "temp", "reading": "reading"},
+                 {"compensated": "compensated"}, True)
 
 
 def _has_rate_steps(columns: dict) -> bool:
     return "rate_dps" in columns and bool(np.any(np.asarray(columns["rate_dps"]) != 0))
 
 
-def resolve(chain: str, design, columns: dict) -> Roles:
+def needs_column(roles: Roles, columns: dict, what: str = "log") -> None:
+    """InputError when the log (``what``) lacks the column the chain's procedure calibrates from."""
+    need = NEEDS.get(roles.procedure)
+    if need is not None and need not in columns:
+        raise InputError(f"{what}: the {roles.chain} chain ({roles.procedure}) needs the {need} column")
+
+
+def resolve(chain: str, design, columns: dict, config_name: str | None = None) -> Roles:
     """The chain to extend and its roles. ``chain``: a chain of the config (``paper002`` for
     ``[chain.paper002]``), ``thermometer`` (the config's, else the one extend writes), or ``auto``:
     the config's first ``gyro_rtd`` chain when the log has rate-table steps (its calibration needs
     them), else its first ``gyro_freq`` chain when the log has the resonator's frequency, else the
-    thermometer chain. ``design``: the base config, built."""
+    thermometer chain. ``design``: the base config, built; ``config_name``: how errors name it."""
+    config_name = config_name or design.config.name
     chains = {name.removeprefix("chain_"): c for name, c in design.chains.items()}
     if chain == "auto":
         want = "gyro_rtd" if _has_rate_steps(columns) else "gyro_freq" if "freq_hz" in columns else None
@@ -126,16 +139,14 @@ def resolve(chain: str, design, columns: dict) -> Roles:
             found = [n for n, c in chains.items() if c.sensor is not None and c.sensor.name == want]
             if not found:
                 raise InputError(f"--chain auto: the log calls for a chain whose sensor is {want!r}, and "
-                                 f"{design.config.name} has none (its chains: {', '.join(chains) or 'none'}); "
+                                 f"{config_name} has none (its chains: {', '.join(chains) or 'none'}); "
                                  "name one with --chain")
             chain = found[0]
     if chain not in chains:
         if chain == OWN_THERMOMETER:
             return own_thermometer_roles()
-        raise InputError(f"--chain: {chain!r} is not a chain of {design.config.name}; expected auto, "
+        raise InputError(f"--chain: {chain!r} is not a chain of {config_name}; expected auto, "
                          f"{', '.join(chains)} or {OWN_THERMOMETER}")
     roles = _roles(chain, chains[chain])
-    needs = {"gyro_rtd": "rate_dps", "gyro_freq": "freq_hz"}.get(roles.procedure)
-    if needs is not None and needs not in columns:
-        raise InputError(f"log: the {chain} chain (sensor {roles.procedure}) needs the {needs} column")
+    needs_column(roles, columns)
     return roles

@@ -207,11 +207,11 @@ def miter(design, name: str) -> str:
         ins.append(f".{p.name}({p.name})")
     for p in inst.outputs:
         lines.append(f"    wire [{p.format.wl - 1}:0] ser_{p.name}, par_{p.name};")
-    for tag, arch, valid, extra in (("ser", 1, "in_valid", ""), ("par", 0, "take", "")):
+    for tag, arch, valid in (("ser", 1, "in_valid"), ("par", 0, "take")):
         conns = [".clk(clk)", ".rst(rst)", f".in_valid({valid})", f".in_ready({tag}_ready)", *ins,
                  f".out_valid({tag}_valid)", *[f".{p.name}({tag}_{p.name})" for p in inst.outputs],
                  f".ovf({tag}_ovf)", *tie_offs(inst, mac=True)]
-        lines += [f"    {inst.module} #(", f'`include "{name}_params.vh"', f"        , .ARCH({arch}){extra}",
+        lines += [f"    {inst.module} #(", f'`include "{name}_params.vh"', f"        , .ARCH({arch})",
                   f"    ) u_{tag} (", "        " + ",\n        ".join(conns), "    );"]
     outs = [p.name for p in inst.outputs]
     lines += ["    // the per-clock answer, held from its out_valid to the serial one's",

@@ -82,13 +82,18 @@ def run(args) -> int:
     config = args.config or (formal.MITER_CONFIG if args.miter else None)
     design = build(config)
     duts = formal.miter_duts(design) if args.miter else formal.serial_duts(design)
+    where = (f"--config {args.config}" if args.config else
+             f"the miters' config {config}" if args.miter else "the built-in config")
+    if args.miter and not duts:   # the multiplier-timing proofs alone would pass and prove no miter
+        raise InputError(f"--miter: {where} has no {', '.join(formal.MITER_BLOCKS)} block with a serial variant to "
+                         "compare with its one-sample-per-clock variant")
     if args.only is not None:
         only = [n.strip() for n in args.only.split(",") if n.strip()]
         if not only:
             raise InputError("--only: no block or chain named")
         for n in only:
             if n not in design.instances:
-                raise InputError(f"--only: {n!r} is not a block or chain of the config ({', '.join(design.instances)})")
+                raise InputError(f"--only: {n!r} is not a block or chain of {where} ({', '.join(design.instances)})")
             if n not in duts:
                 raise InputError(f"--only: {n!r} has no {'miter' if args.miter else 'serial variant'} to prove "
                                  f"(those with one: {', '.join(duts) or 'none'})")

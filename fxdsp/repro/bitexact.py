@@ -125,8 +125,7 @@ class Compensator001:
         s = self.chain.sensor
         if s is None or s.name != "gyro_freq":
             raise InputError(f"chain.{chain.removeprefix('chain_')}.sensor: the paper 001 compensation reads a gyro_freq")
-        outs = self.chain.netlist.outputs
-        self.rate_port = next(n for n, e in outs.items() if e.instance == s.subtract.name and e.port == "y")
+        self.rate_port = s.output_of(s.subtract, "y")
 
     def compensate(self, log_data: dict) -> dict[str, np.ndarray]:
         ovf = OverflowLog()

@@ -162,8 +162,13 @@ def test_formal_command(tmp_path, capsys):
     assert main(["formal", "--only", "iir", "--bounded-only", "--timeout", "1", "--out", str(tmp_path / "t")]) == 1
     assert "UNDECIDED iir" in capsys.readouterr().out
     # bad input: one line, exit 2, nothing written
+    # a config with no block a miter compares (the multiplier-timing proofs alone would pass)
+    plain = tmp_path / "plain.toml"
+    plain.write_text('[stimulus]\nseed = 1\nsamples = 64\n[system]\nfs_hz = 1000.0\nrate_full_scale_dps = 1.0\n'
+                     '[bias_subtract]\nin_format = "s8.4"\nbias_format = "s8.4"\nout_format = "s9.4"\n'
+                     'rounding = "floor"\noverflow = "wrap"\n')
     for args in (["--only", "nope"], ["--only", "bias_subtract"], ["--depth", "1"], ["--timeout", "0"],
-                 ["--timeout", "inf"]):
+                 ["--timeout", "inf"], ["--miter", "--only", "rtd"], ["--miter", "--config", str(plain)]):
         bad = tmp_path / "bad"
         assert main(["formal", *args, "--out", str(bad)]) == 2
         err = capsys.readouterr().err
