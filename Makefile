@@ -51,10 +51,11 @@ clean:
 .PHONY: hdl-gen hdl-lint hdl-mutation hw-report formal
 
 # every formal proof of the default config (fxdsp formal): the serial blocks and the chain
-# tops, bounded from reset and by induction; then the miters (each smaller block's serial variant
-# equal to its one-sample-per-clock one, at the narrow widths of fxdsp/configs/formal_narrow.toml);
-# reports and counterexample traces in build/formal/ and build/formal_miter/. The proofs that take
-# seconds also run in `make test` (tests/hdl/test_formal.py)
+# tops, by induction and bounded from reset to the same length; then the miters (each smaller
+# block's serial variant equal to its one-sample-per-clock one, at the narrow widths of
+# fxdsp/configs/formal_narrow.toml); reports and counterexample traces in build/formal/ and
+# build/formal_miter/. Every proof but the demodulator's and the slower miters also runs in
+# `make test` (tests/hdl/test_formal.py)
 formal: $(STAMP) hdl-tools
 	$(VENV)/bin/fxdsp formal --out build/formal; a=$$?; \
 	$(VENV)/bin/fxdsp formal --miter --out build/formal_miter; b=$$?; test $$a -eq 0 -a $$b -eq 0

@@ -12,7 +12,10 @@ C the stated cycles per sample:
   (in_ready back within the stated cycles, and no sample taken over one in flight). Latency and cycles
   per sample are thereby those stated.
 * **the shared multiplier**: a block's bundle request (mac_in_valid, on an external fx_mac_serial as a
-  top connects it) only while a sample is in flight.
+  top connects it) only while a sample is in flight, and every product back before the sample leaves
+  (the multiplier's own count, fx_mac_serial's ``f_in_flight`` under FORMAL, is 0 when idle). A block
+  that states its own count of products in flight (an output ``f_mac_in_flight`` under FORMAL: iir,
+  demod) is held to the multiplier's, cycle by cycle.
 
 A generated top is proven compositionally (``cut``): its members and the multiplier are cut (yosys
 ``cutpoint``: their outputs free), constrained only by the contracts the top states of them under
@@ -24,23 +27,37 @@ checked in simulation (tests/hdl, the long streams), not here.
 
 A bounded proof (BMC) to ``depth`` cycles covers every input sequence from reset; an induction proof
 (``induction=True``) of the same length then covers every reachable cycle (k-induction: the bounded
-run is its base case). A block's default length is two samples back to back after a reset (2 C + 4):
-freq2temp's induction does not close at C + 2, piecewise_k0's does (and its bounded run takes 22 s
-there, no answer in 300 s at 2 C + 4): ``depth`` chooses. A failure leaves a VCD trace of the
+run is its base case). :func:`prove_every_cycle` takes the shortest length at which the induction
+closes (:func:`lengths`: C + 2, else 2 C + 4, the default of :func:`prove`; freq2temp's needs the
+second), then the bounded proof of that length: the bounded proof is the costly one (demod's at
+2 C + 4, 416 cycles, got no answer in 10 minutes; at C + 2 it passes). The inductions close at one
+sample because the blocks state the invariants of their reachable states under FORMAL (iir, demod)
+and the multiplier's bookkeeping is tied to theirs (above). A failure leaves a VCD trace of the
 counterexample.
+
+The design is flattened before the SMT2 is written: a submodule's outputs are ports that yosys keeps,
+flattened they are wires it removes when nothing reads them, and with them every datapath register
+that only feeds an unconnected output (demod: 1335 state bits to 60; the iir's bounded proof at 110
+cycles from 824 s to 85 s).
 
 Equivalence (``equivalence=True``, :func:`miter`): a block's serial variant against its
 one-sample-per-clock variant, bounded over two samples from reset, on one product operator
 (:data:`IDEAL_MAC` stands for fx_mac_serial, whose timing :func:`miter` relies on and the interface
 proofs above establish; its limb-serial product is its own tests'). At the default widths these
-miters get no answer in minutes; ``fxdsp formal --miter`` proves them at the narrow widths of
-``configs/formal_narrow.toml``.
+miters get no answer in minutes (lag and divider, 300 s each, on either engine); ``fxdsp formal
+--miter`` proves them at the narrow widths of ``configs/formal_narrow.toml`` (abc bmc3: lag 3 s,
+divider 5 s, piecewise 6 s; yosys-smtbmc had taken 10, 12 and 96 s).
+
+Engines: k-induction and the cut tops' proofs (assumptions, checked satisfiable) on yosys-smtbmc with
+yices; every other bounded proof on abc's bmc3 (:func:`_bmc3`), a failure replayed by yosys-smtbmc
+for its assertions' names and trace.
 Nothing here prints: the verdict is a :class:`Proof`.
 """
 
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -61,7 +78,8 @@ SOLVER = "yices"    # yosys-smtbmc's default; yices-smt2 from the PyPI yices-sol
 CUT_DEPTH = 24
 PROPERTIES = ("one sample in flight; out_valid exactly C - 1 edges after the accepting edge (C the stated "
               "cycles per sample: no sample lost, duplicated or invented); in_ready when idle or as the sample "
-              "leaves, never while one is in flight; multiplier requests only inside a sample; in_valid, data "
+              "leaves, never while one is in flight; multiplier requests only inside a sample, every product back "
+              "before it leaves (the block's own count of products in flight the multiplier's, where it states one); in_valid, data "
               "and reset free at every cycle. A generated top with its members cut (each member's contract, "
               "proven of its block, assumed: out_valid only for a sample it took, a request only while it or "
               "its guest has one in flight): at most one request per cycle, out_valid only for the sample in "
@@ -90,7 +108,19 @@ class Proof:
     trace: Path | None  # the counterexample's VCD
 
 
-def wrapper(design, name: str, cut: bool = False) -> str:
+COUNT_PORT = "f_mac_in_flight"
+
+
+def counts_its_products(rtl_dir: Path, module: str) -> bool:
+    """Whether ``module``'s source in ``rtl_dir`` states, under FORMAL, its own count of the products
+    it has in flight on the shared multiplier (an output :data:`COUNT_PORT`): the wrapper then holds
+    the multiplier's own count to it (iir and demod do, so that their inductions close at one sample)."""
+    src = Path(rtl_dir) / f"{module}.v"
+    return src.exists() and re.search(rf"\boutput\s+wire\s+\[2:0\]\s+{COUNT_PORT}\b",
+                                      src.read_text(encoding="utf-8")) is not None
+
+
+def wrapper(design, name: str, cut: bool = False, rtl_dir: Path = RTL_DIR) -> str:
     """The Verilog of the formal wrapper ``fx_formal`` around instance ``name``'s serial variant.
     ``cut``: a chain top whose members are cut (their outputs free but for their contracts, assumed:
     :meth:`fxdsp.hdl.chain_top._Top.formal_lines`): the top's own rules only, its handshake without
@@ -119,6 +149,7 @@ def wrapper(design, name: str, cut: bool = False) -> str:
     lines += ["    wire in_ready, out_valid;"]
     over = [".ARCH(1)"]
     mac_req = None   # a block's bundle request; a top's one multiplier is its own (its one_request)
+    counted = False  # the block states its own count of products in flight (f_mac_in_flight)
     if inst.members:
         if has_divider(design, name):
             over.append(".DIV_UNROLL(1)")
@@ -128,12 +159,17 @@ def wrapper(design, name: str, cut: bool = False) -> str:
         lines += [f"    wire {w}mac_{sig};" for _, sig, w in MAC_PORTS]
         lines += [f"    localparam integer MAC_A_W = {a_w};", f"    localparam integer MAC_B_W = {b_w};",
                   "    wire sh_ready, sh_valid;", "    wire [MAC_A_W+MAC_B_W-1:0] sh_p;",
+                  "    wire [2:0] mac_in_flight;   // products taken and not yet answered (fx_mac_serial, FORMAL)",
                   "    fx_mac_serial #(.A_W(MAC_A_W), .B_W(MAC_B_W), .VAR_N(1)) u_mac (.clk(clk), .rst(rst),",
                   "        .in_valid(mac_req), .in_ready(sh_ready), .a(mac_a), .b(mac_b), .na(mac_na), .nb(mac_nb),",
-                  "        .out_valid(sh_valid), .p(sh_p));"]
+                  "        .out_valid(sh_valid), .p(sh_p), .f_in_flight(mac_in_flight));"]
         conns += [f".{port}(mac_{sig})" for port, sig, _ in MAC_PORTS]
         conns += [".mac_in_ready(sh_ready)", ".mac_out_valid(sh_valid)", ".mac_p(sh_p)"]
         mac_req = "mac_req"
+        if counts_its_products(rtl_dir, inst.module):
+            lines.append("    wire [2:0] dut_in_flight;   // the block's own count of its products in flight")
+            conns.append(".f_mac_in_flight(dut_in_flight)")
+            counted = True
     if not inst.members:
         conns += tie_offs(inst, mac=False)
     header = [] if inst.members else [f'`include "{name}_params.vh"']   # a top reads its headers itself
@@ -170,8 +206,16 @@ def wrapper(design, name: str, cut: bool = False) -> str:
                  "            in_ready_when_idle_or_leaving: assert(in_ready == (!pend || out_valid));",
                  "            a_sample_goes_through: cover(out_valid && pend);"]),
               *([] if mac_req is None else
-                ["            // the shared multiplier: a request only while a sample is in flight",
-                 f"            mac_request_only_in_a_sample: assert(!{mac_req} || pend);"]),
+                ["            // the shared multiplier: a request only while a sample is in flight, and every",
+                 "            // product back before the sample leaves (the multiplier free for another block)",
+                 f"            mac_request_only_in_a_sample: assert(!{mac_req} || pend);",
+                 "            // (so an induction never starts from a product in flight that no request of the",
+                 "            // sample put there: demod's failed so at 208 cycles)",
+                 "            products_all_back_when_idle: assert(pend || mac_in_flight == 3'd0);"]),
+              *([] if not counted else
+                ["            // the block's bookkeeping of the multiplier is the multiplier's (an induction then",
+                 "            // never starts from products the block's state does not account for)",
+                 "            the_block_accounts_for_every_product: assert(dut_in_flight == mac_in_flight);"]),
               "        end",
               "    end",
               "endmodule", "`default_nettype wire", ""]
@@ -327,7 +371,7 @@ def _tool(name: str) -> str:
     return found
 
 
-TOOLS = ("yosys", "yosys-smtbmc", "yices-smt2")
+TOOLS = ("yosys", "yosys-smtbmc", "yosys-abc", "yices-smt2")
 
 
 def require_tools() -> None:
@@ -363,7 +407,7 @@ def prove(design, name: str, d: Path, depth: int | None = None, induction: bool 
         (d / rel).write_text(text, encoding="ascii")
     if cut and not design.instances[name].members:
         raise ValueError(f"formal: {name} is a block: only a chain top has members to cut")
-    (d / "fx_formal.v").write_text(miter(design, name) if equivalence else wrapper(design, name, cut),
+    (d / "fx_formal.v").write_text(miter(design, name) if equivalence else wrapper(design, name, cut, rtl or RTL_DIR),
                                    encoding="ascii")
     c = cycles_per_sample(design, name, arch=1)
     depth = depth or (CUT_DEPTH if cut else 2 * c + 4)
@@ -385,14 +429,46 @@ def prove(design, name: str, d: Path, depth: int | None = None, induction: bool 
     # ROM file names are another config's)
     defer = " -defer" if equivalence else ""
     script = (f"read_verilog -formal{defer}{define} -I. " + " ".join(_local(d, sources)) + " fx_formal.v\n"
-              f"{cutting}prep -top fx_formal\nasync2sync\ndffunmap\n{UNSRC}write_smt2 -wires fx_formal.smt2\n")
+              f"{cutting}prep -flatten -top fx_formal\nasync2sync\ndffunmap\n{UNSRC}write_smt2 -wires fx_formal.smt2\n")
     mode = ("induction" if induction else "bmc") + (" (miter)" if equivalence else "") + (" (members cut)" if cut else "")
     # not vacuous: a miter compares a second sample's answer within the proof's length; a cut top lets
     # a sample go through within its stated schedule under the assumptions (members answering at their
     # stated cycles are one behaviour the contracts admit; the search stops there)
     cover = ((depth, f"vacuous: no second answer is compared in {depth} cycles") if equivalence else
              (c + 4, f"vacuous: no sample goes through in {c + 4} cycles under the members' contracts") if cut else None)
-    return _check(name, mode, d, script, depth, induction, timeout, cover, assumptions=cut)
+    # a block's bounded proof on abc's bmc3 (no assumptions, no miter: :func:`_bmc3`)
+    return _check(name, mode, d, script, depth, induction, timeout, cover, assumptions=cut,
+                  aiger=not (induction or cut))
+
+
+def lengths(design, name: str, cut: bool = False) -> tuple[int, ...]:
+    """The lengths a proof of every cycle tries, shortest first (:func:`prove_every_cycle`): a cut
+    top's :data:`CUT_DEPTH`; a block's one sample and the cycle after it (C + 2), then two samples
+    back to back after a reset (2 C + 4), where the induction of the iir and freq2temp closes."""
+    if cut:
+        return (CUT_DEPTH,)
+    c = cycles_per_sample(design, name, arch=1)
+    return (c + 2, 2 * c + 4)
+
+
+def prove_every_cycle(design, name: str, d: Path, rtl: Path | None = None, cut: bool = False,
+                      timeout: float = 3600, tops: dict[str, str] | None = None) -> list[Proof]:
+    """Instance ``name``'s contract at every reachable cycle: k-induction at the shortest of
+    :func:`lengths` at which it closes, then the bounded proof from reset of that length (its base
+    case): both pass, or the answer is a failure. [bounded, induction], the bounded proof first. An
+    induction that fails at every length (which a real bug does; from an unreachable state it may
+    too) is followed by the bounded proof of the longest: a real bug's counterexample from reset.
+    The bounded proof is the costly one (its length is the solver's depth, every input and reset
+    free at each cycle), so it runs once, at the length the induction needs: demod's at 2 C + 4
+    (416 cycles) got no answer in 10 minutes."""
+    d = Path(d)
+    for k in lengths(design, name, cut):
+        ind = prove(design, name, d / f"induction{k}", depth=k, induction=True, rtl=rtl, tops=tops, cut=cut,
+                    timeout=timeout)
+        if ind.passed or ind.detail.startswith("undecided"):
+            break
+    bmc = prove(design, name, d / f"bmc{ind.depth}", depth=ind.depth, rtl=rtl, tops=tops, cut=cut, timeout=timeout)
+    return [bmc, ind]
 
 
 def _run(cmd: list[str], d: Path, env: dict, timeout: float) -> subprocess.CompletedProcess:
@@ -428,8 +504,38 @@ def _local(d: Path, sources) -> list[str]:
     return out
 
 
+# The bounded proof of a block on an AIG (yosys write_aiger) by abc's bmc3, yosys's own yosys-abc (the
+# SymbiYosys "abc bmc3" engine): demod's 208 cycles in 65 s where yosys-smtbmc with yices had no answer
+# in 18 minutes, piecewise_k0's 60 in 0.9 s against 15 s. Every assertion is a bad-state output; a
+# failure is then replayed by yosys-smtbmc to the frame abc names (asserts checked there only), for the
+# failing assertions' names and the VCD trace. The flattened netlist is the SMT2's, bit-blasted.
+AIGER = ("chformal -cover -remove\nopt_clean\nmemory_map\nopt -full -keepdc\ntechmap\nopt -fast\ndffunmap\n"
+         "abc -g AND -fast\nopt_clean\nwrite_aiger -I -B -zinit -map fx_formal.aim fx_formal.aig\n")
+_BMC3_PASS = re.compile(r"No output asserted in (\d+) frames")
+_BMC3_FAIL = re.compile(r"Output \d+ of miter \S+ was asserted in frame (\d+)")
+
+
+def _bmc3(name: str, d: Path, script: str, depth: int, env: dict, timeout: float) -> int | None:
+    """abc bmc3 to ``depth`` frames on the AIG of ``script``'s netlist: None when no assertion fails
+    in them, else the first failing frame. Raises TimeoutExpired (undecided)."""
+    yosys, abc = _tool("yosys"), _tool("yosys-abc")
+    aig = script.split(UNSRC)[0] + AIGER
+    (d / "fx_formal_aig.ys").write_text(aig, encoding="ascii")
+    r = _run([yosys, "-q", "-l", "yosys_aig.log", "fx_formal_aig.ys"], d, env, timeout)
+    if r.returncode != 0:
+        raise RuntimeError(f"formal: yosys (AIG) failed on {name}: {(r.stderr or r.stdout).strip()[-2000:]}")
+    r = _run([abc, "-c", f"read_aiger fx_formal.aig; fold; strash; bmc3 -F {depth}"], d, env, timeout)
+    (d / "abc_bmc3.log").write_text(r.stdout + r.stderr, encoding="utf-8")
+    fail, ok = _BMC3_FAIL.search(r.stdout), _BMC3_PASS.search(r.stdout)
+    if fail is not None:
+        return int(fail.group(1))
+    if r.returncode == 0 and ok is not None and int(ok.group(1)) >= depth:
+        return None
+    raise RuntimeError(f"formal: abc bmc3 gave no verdict on {name}: {(r.stdout + r.stderr).strip()[-2000:]}")
+
+
 def _check(name: str, mode: str, d: Path, script: str, depth: int, induction: bool, timeout: float,
-           cover: tuple[int, str] | None = None, assumptions: bool = False) -> Proof:
+           cover: tuple[int, str] | None = None, assumptions: bool = False, aiger: bool = False) -> Proof:
     """Run the yosys ``script`` (it writes fx_formal.smt2) and yosys-smtbmc in ``d``: BMC to ``depth``
     or k-induction of that length; after a pass, ``cover`` = (cycles, why vacuous): the covers must be
     reached within that many cycles. ``assumptions``: the wrapper assumes (a cut top's member
@@ -448,7 +554,17 @@ def _check(name: str, mode: str, d: Path, script: str, depth: int, induction: bo
     if r.returncode != 0:
         raise RuntimeError(f"formal: yosys failed on {name}: {(r.stderr or r.stdout).strip()[-2000:]}")
     trace = d / "trace.vcd"
-    cmd = [smtbmc, "-s", SOLVER, *(["--presat"] if assumptions else []), "-t", str(depth), "--dump-vcd", str(trace)]
+    steps, skip = depth, ""
+    if aiger:   # the verdict from abc; yosys-smtbmc only replays a failure, to its frame
+        try:
+            frame = _bmc3(name, d, script, depth, env, timeout)
+        except subprocess.TimeoutExpired:
+            return undecided
+        if frame is None:
+            return Proof(name, mode, depth, True, time.perf_counter() - t0, "", None)
+        steps, skip = frame + 1, f"{frame}:"   # -t skip:steps: the assertions checked at the last only
+    cmd = [smtbmc, "-s", SOLVER, *(["--presat"] if assumptions else []), "-t", f"{skip}{steps}",
+           "--dump-vcd", str(trace)]
     if induction:
         cmd.insert(1, "-i")
     cmd.append("fx_formal.smt2")
@@ -459,6 +575,8 @@ def _check(name: str, mode: str, d: Path, script: str, depth: int, induction: bo
     out = r.stdout + r.stderr
     (d / f"smtbmc_{mode.split()[0]}.log").write_text(out, encoding="utf-8")
     passed = r.returncode == 0 and "PASSED" in out
+    if aiger and passed:   # the two tools disagree: a tool bug, never a verdict
+        raise RuntimeError(f"formal: abc bmc3 failed {name} in frame {steps - 1}, yosys-smtbmc passes it there")
     detail = "" if passed else failed_assertions(out)
     if passed and cover is not None:
         reach, why = cover

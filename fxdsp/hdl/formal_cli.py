@@ -1,13 +1,15 @@
 """``fxdsp formal [--config F] [--only NAMES] [--depth N] [--bounded-only] [--miter] [--rtl DIR] --out DIR``
 
-Formal proofs (yosys-smtbmc, the yices solver) of the serial variant of every block and chain top of
+Formal proofs (yosys-smtbmc with the yices solver, abc bmc3 for the bounded ones) of the serial variant of every block and chain top of
 F (or those named), :mod:`fxdsp.hdl.formal`: a block's one sample in flight, out_valid exactly the
 stated cycles per sample after the accepting edge, in_ready back when the sample leaves and never
 while one is in flight, multiplier requests only inside a sample; a chain top with its members cut
 to their contracts: at most one multiplier request per cycle, its handshake, its bookkeeping, and a
-sample able to go through. A bounded proof to N cycles from reset (default: a block's two samples
-back to back, 2 C + 4; a top's 24 cycles) and a k-induction of that length: a pass of both holds for
-every cycle (``--bounded-only``: the bounded proof alone).
+sample able to go through. A k-induction of length N and the bounded proof to N cycles from reset
+(its base case): a pass of both holds for every cycle. Without ``--depth``, N is the shortest of
+:func:`fxdsp.hdl.formal.lengths` at which the induction closes (a block's C + 2, else 2 C + 4; a
+top's 24 cycles). ``--bounded-only``: the bounded proof alone (default N: a block's two samples back
+to back, 2 C + 4; a top's 24).
 
 ``--miter``: equivalence of each smaller block's serial variant (sf_divide, piecewise, lag) with its
 one-sample-per-clock variant, bounded over two samples from reset with every input free, word for
@@ -37,7 +39,8 @@ def configure(parser) -> None:
     parser.add_argument("--only", default=None, metavar="NAMES",
                         help="comma-separated blocks or chains (default: every one with a serial variant)")
     parser.add_argument("--depth", type=int, default=None, metavar="N",
-                        help="length of the proofs (default: a block's two samples, 2 x its cycles per sample + 4; a top's 24)")
+                        help="length of the proofs (default: the shortest at which the induction closes, C + 2 or 2 C + 4 for a "
+                             "block of C cycles per sample, 24 for a top; --bounded-only: 2 C + 4)")
     parser.add_argument("--bounded-only", action="store_true",
                         help="the bounded proof from reset only (no induction: not every cycle)")
     parser.add_argument("--timeout", type=float, default=3600, metavar="S",
@@ -101,13 +104,18 @@ def run(args) -> int:
     formal.require_tools()
     proofs = []
     modes = (False,) if args.bounded_only or args.miter else (False, True)
+    every_cycle = len(modes) == 2 and args.depth is None   # the length the induction needs (formal.lengths)
     with staged() as stage, tempfile.TemporaryDirectory(prefix="fxdsp_formal_") as tmp:
         out = stage.dir(args.out)
+        rtl = Path(args.rtl) if args.rtl else None
         for name in tqdm(duts, desc="formal", unit="DUT", disable=None):
-            for ind in modes:
-                p = formal.prove(design, name, Path(tmp) / name, depth=args.depth, induction=ind,
-                                 rtl=Path(args.rtl) if args.rtl else None, cut=bool(design.instances[name].members),
-                                 timeout=args.timeout, equivalence=args.miter)
+            cut = bool(design.instances[name].members)
+            if every_cycle:
+                done = formal.prove_every_cycle(design, name, Path(tmp) / name, rtl=rtl, cut=cut, timeout=args.timeout)
+            else:
+                done = [formal.prove(design, name, Path(tmp) / name / str(ind), depth=args.depth, induction=ind, rtl=rtl,
+                                     cut=cut, timeout=args.timeout, equivalence=args.miter) for ind in modes]
+            for p in done:
                 trace = None
                 if p.trace is not None:
                     trace = f"traces/{name}_{p.mode}.vcd"

@@ -1,13 +1,15 @@
-"""Formal proofs of the serial interface (fxdsp.hdl.formal, yosys-smtbmc + yices): the proofs that
-take seconds pass here, bounded (two samples from a reset, reset and gaps free at every cycle) and by
-induction of that length (together: every cycle); each property fails on an RTL bug injected into a copy of the sources, named
-by its label, with a counterexample trace. The lag's miter (serial = one-sample-per-clock, at the
-narrow widths of configs/formal_narrow.toml) passes and fails on a bug in one variant, as the
-divider's does; the miters' multiplier keeps fx_mac_serial's timing. The long proofs (the iir, the
-demodulator, the divider's and piecewise's passing miters) run in `make formal`."""
+"""Formal proofs of the serial interface (fxdsp.hdl.formal: yosys-smtbmc + yices for the inductions,
+abc bmc3 for the bounded proofs): every block but the demodulator is proven here, by induction at
+the shortest length that closes and bounded from reset to that length (together: every cycle; reset
+and gaps free at every cycle); each property fails on an RTL bug injected into a copy of the
+sources, named by its label, with a counterexample trace. Every block's miter (serial = one-sample-
+per-clock, at the narrow widths of configs/formal_narrow.toml) passes and fails on a bug in one
+variant; the miters' multiplier keeps fx_mac_serial's timing. The demodulator's proof (induction
+77 s, bounded 69 s) runs in `make formal`."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -24,13 +26,22 @@ def design():
     return design_of()
 
 
-@pytest.mark.parametrize("name", ["rtd", "freq2temp", "lag"])
-def test_the_serial_contract_is_proven_bounded_and_by_induction(design, name, tmp_path):
-    for induction in (False, True):
-        p = formal.prove(design, name, tmp_path / str(induction), induction=induction)
-        assert p.passed, (p.mode, p.detail)
-        # two samples back to back after the reset: deep enough to see a second acceptance
-        assert p.depth >= 2 * formal.cycles_per_sample(design, name, arch=1)
+# the blocks whose proof takes minutes: `make formal` (demod: induction 77 s, bounded 69 s, at 208 cycles)
+LONG = {"demod"}
+
+
+def _blocks():
+    d = design_of()
+    return [n for n in formal.serial_duts(d) if not d.instances[n].members and n not in LONG]
+
+
+@pytest.mark.parametrize("name", _blocks())
+def test_the_serial_contract_is_proven_for_every_cycle(design, name, tmp_path):
+    """Every serial block of the default config but those in LONG: k-induction at the shortest
+    length that closes and the bounded proof from reset of that length (its base case)."""
+    bmc, ind = formal.prove_every_cycle(design, name, tmp_path)
+    assert bmc.passed and ind.passed, (bmc.detail, ind.detail)
+    assert bmc.depth == ind.depth >= formal.cycles_per_sample(design, name, arch=1) + 2
 
 
 # (name, what the bug is, the DUT, the RTL file, (old, new), the assertion that must fail, BMC depth)
@@ -44,6 +55,14 @@ MUTANTS = [
     ("request_while_idle", "rtd: the multiplier requested while idle (another block's product disturbed)",
      "rtd", "rtd.v", (".in_valid(st == S_MAC)", ".in_valid((st == S_MAC) | (st == S_IDLE))"),
      "mac_request_only_in_a_sample", None),
+    ("product_left_behind", "rtd: one more product requested as the sample leaves (the multiplier still busy "
+     "with it when the next block's request comes)",
+     "rtd", "rtd.v", (".in_valid(st == S_MAC)", ".in_valid((st == S_MAC) | out_valid)"),
+     "products_all_back_when_idle", None),
+    ("product_counted_before_taken", "iir: a product counted as issued while the multiplier is still busy "
+     "(its bookkeeping no longer the multiplier's)",
+     "iir", "iir.v", ("wire issue = mac_req && mac_ready;", "wire issue = mac_req;"),
+     "the_block_accounts_for_every_product", 40),
 ]
 
 
@@ -112,15 +131,20 @@ MITER_MUTANTS = {"lag": ("lag.v", (".ROUNDING(ROUNDING), .SHIFT(ALPHA_S), .OUT_W
                  "sf_divide": ("sf_divide.v", ("neg_r <= neg;", "neg_r <= 1'b0;"), "same_y")}
 
 
+def test_every_miter_passes(narrow, tmp_path):
+    """Each block's miter (two samples from reset, every input free: equal word for word and flag for
+    flag, a second answer compared, else vacuous) at the narrow widths of formal_narrow.toml."""
+    names = formal.miter_duts(narrow)
+    assert {narrow.instances[n].module for n in names} == set(formal.MITER_BLOCKS)
+    for name in names:
+        p = formal.prove(narrow, name, tmp_path / name, equivalence=True)
+        assert p.passed, (name, p.mode, p.detail)
+
+
 @pytest.mark.parametrize("name", sorted(MITER_MUTANTS))
-def test_the_miter_passes_and_a_bug_in_one_variant_fails_it(narrow, tmp_path, name):
-    """The miter (two samples from reset, every input free: equal word for word and flag for flag, a second
-    answer compared, else vacuous) passes on the lag, the same generated miter then fails on a
-    rounding bug in either block's serial variant alone, with a trace. The divider's passing miter
-    (10 s) and the piecewise one (100 s) run in `make formal`: the 8-minute budget of `make test`."""
-    if name == "lag":
-        p = formal.prove(narrow, name, tmp_path / "ok", equivalence=True)
-        assert p.passed, (p.mode, p.detail)
+def test_a_bug_in_one_variant_fails_its_miter(narrow, tmp_path, name):
+    """The same generated miter fails on a rounding bug in either block's serial variant alone, with
+    a trace."""
     file, edit, label = MITER_MUTANTS[name]
     rtl = mutated_rtl(tmp_path / "rtl", file, [edit])
     p = formal.prove(narrow, name, tmp_path / "bug", equivalence=True, rtl=rtl)
@@ -157,6 +181,13 @@ def test_formal_command(tmp_path, capsys):
     assert main(["formal", "--only", "rtd", "--bounded-only", "--out", str(out)]) == 0
     text = (out / "report.md").read_text()
     assert "| rtd | bmc |" in text and "proven" in text
+    # every cycle: each DUT's induction at the shortest length that closes, the bounded proof at it
+    assert main(["formal", "--only", "rtd,freq2temp", "--out", str(tmp_path / "every")]) == 0
+    rows = json.loads((tmp_path / "every" / "report.json").read_text())["proofs"]
+    assert [(r["dut"], r["mode"]) for r in rows] == [("rtd", "bmc"), ("rtd", "induction"),
+                                                     ("freq2temp", "bmc"), ("freq2temp", "induction")]
+    for r in rows:
+        assert r["passed"] and r["depth"] in formal.lengths(design_of(), r["dut"]), r
     capsys.readouterr()
     # a proof the solver does not finish in time is undecided, not proven: exit 1, said so
     assert main(["formal", "--only", "iir", "--bounded-only", "--timeout", "1", "--out", str(tmp_path / "t")]) == 1

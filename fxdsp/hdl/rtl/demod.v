@@ -149,6 +149,12 @@ module demod #(
     output wire                          aux_out_valid,
     output wire [DATA_W-1:0]             aux_y,
     output wire [LPF_SECTIONS-1:0]       aux_ovf
+`ifdef FORMAL
+    ,
+    // the products requested on the mac_* bundle and not yet answered (ARCH = 1, EXT_MAC = 1): a
+    // formal proof holds the external multiplier's own count to it (fxdsp.hdl.formal)
+    output wire [2:0]                    f_mac_in_flight
+`endif
 );
     localparam integer MW = IN_W + NCO_W;
     localparam integer WW = DATA_W + 3;        // CORDIC work: DATA_W + 2 guard bits, + 1 spare
@@ -174,6 +180,9 @@ module demod #(
             /* verilator lint_on UNUSEDSIGNAL */
         end
         if (ARCH == 0) begin : g_par
+`ifdef FORMAL
+            assign f_mac_in_flight = 3'd0;
+`endif
             assign in_ready = 1'b1;
             // no multiplier in this variant: the bundle unused
             assign mac_in_valid = 1'b0;
@@ -526,14 +535,29 @@ module demod #(
             wire [LCH*LPF_SECTIONS-1:0] lpf_oall;
             wire aux_go;
             wire [LCH*DATA_W-1:0] lpf_x;        // {[aux_x,] q, i}
+`ifdef FORMAL
+            wire lpf_idle;                      // the engine's in_ready: no pass in it
+            wire [2:0] lpf_in_flight;           // its products on the multiplier
+`endif
             iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .ACOEF_W(LPF_ACOEF_W), .SHIFT_B(LPF_SHIFT_B),
                   .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
                   .OVERFLOW(LPF_OVERFLOW), .ARCH(1), .CHANNELS(LCH), .COEF_SETS((AUX_LPF != 0) ? LCH : 1),
                   .SPLIT(AUX_LPF), .EXT_MAC(1), .MAC_A_W(DA_W), .MAC_B_W(DB_W), .COEF_FILE(LPF_COEF_FILE), .ACOEF_FILE(LPF_ACOEF_FILE),
                   .SETS_FILE(AUX_COEF_FILE)) u_lpf
-                (.clk(clk), .rst(rst), .in_valid(lpf_go | aux_go), .in_ready(), .x(lpf_x), .out_valid(lpf_done),
+                (.clk(clk), .rst(rst), .in_valid(lpf_go | aux_go),
+`ifdef FORMAL
+                 .in_ready(lpf_idle),   // read only by the invariants below
+`else
+                 .in_ready(),
+`endif
+                 .x(lpf_x), .out_valid(lpf_done),
                  .y(lpf_yall), .ovf(lpf_oall), .mac_in_valid(lp_v), .mac_in_ready(sh_ready), .mac_a(lp_a), .mac_b(lp_b),
+`ifdef FORMAL
+                 .mac_na(lp_na), .mac_nb(lp_nb), .mac_out_valid(sh_valid & lpf_own), .mac_p(sh_p),
+                 .f_mac_in_flight(lpf_in_flight));
+`else
                  .mac_na(lp_na), .mac_nb(lp_nb), .mac_out_valid(sh_valid & lpf_own), .mac_p(sh_p));
+`endif
             wire lpf_v = lpf_done && !aux_busy;
             wire [2*DATA_W-1:0] lpf_y;          // {q, i} of the engine's outputs ...
             wire [2*LPF_SECTIONS-1:0] lpf_o;    // ... and their flags {lpf_q[S], lpf_i[S]}
@@ -705,6 +729,48 @@ module demod #(
                     endcase
                 end
             end
+`ifdef FORMAL
+            // the products in flight: the demodulator's (those its states have issued, less those
+            // returned, rk; products are numbered R_* in their order) and the filter engine's
+            reg [2:0] issued;
+            always @* begin
+                case (st)
+                    S_IDLE, S_RD:        issued = rk;   // none in flight (S_RD: delta * TWO_PI being taken)
+                    S_NB, S_WD, S_PC:    issued = R_C;  // d issued
+                    S_PM:                issued = R_M;  // and mb * d
+                    S_WSIN, S_PI:        issued = R_I;  // and -cb * d
+                    S_PQ:                issued = R_Q;  // and x * cos
+                    S_WA:                issued = R_A + 3'd1;
+                    default:             issued = R_A;  // S_WMIX .. S_PA: and x * -sin
+                endcase
+            end
+            assign f_mac_in_flight = (issued - rk) + lpf_in_flight;
+            // invariants of every state reachable from rst (proven with the rest, fxdsp.hdl.formal):
+            // stated so that an induction proof starts only from states a reset can reach (from an
+            // unused FSM code, or with the filter engine running a pass nobody gave it, the induction
+            // of the interface failed at 208 cycles: the engine's requests took the multiplier's
+            // answers, rk passed R_A and the FSM waited in S_WSIN forever)
+            always @* begin
+                if (!rst) begin
+                    fsm_state_is_one_of_fourteen: assert(st <= S_WA);
+                    // rk: the products returned so far, by the state that waits for them
+                    returned_products_match_the_state: assert(
+                        (st == S_IDLE) ? (rk == R_D || rk == R_A + 3'd1) :
+                        (st <= S_WD)   ? (rk == R_D) :
+                        (st <= S_PM)   ? (rk == R_C) :
+                        (st == S_WSIN) ? (rk >= R_C && rk <= R_I) :
+                        (st <= S_PQ)   ? (rk == R_I) :
+                        (st == S_WMIX) ? (rk >= R_I && rk <= R_A) :
+                        (st <= S_PA)   ? (rk == R_A) : (rk == R_A || rk == R_A + 3'd1));
+                    // the filter engine runs only for S_LPF or the aux pass, and does run there
+                    engine_busy_only_when_given_a_pass: assert(lpf_idle || lpf_own);
+                    engine_busy_while_waited_for: assert(!lpf_own || !lpf_idle || lpf_done);
+                    aux_pass_only_while_idle: assert(!aux_busy || st == S_IDLE);
+                    first_mixer_output_only_in_s_wmix: assert(!got_i || st >= S_WMIX || st == S_IDLE);
+                    no_conversion_out_while_idle: assert(st != S_IDLE || !mix_v);
+                end
+            end
+`endif
         end
     endgenerate
 endmodule

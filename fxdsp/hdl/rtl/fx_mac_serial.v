@@ -55,6 +55,12 @@ module fx_mac_serial #(
     /* verilator lint_on UNUSEDSIGNAL */
     output reg                       out_valid,  // one cycle per product, in the order accepted
     output wire signed [A_W+B_W-1:0] p           // a * b, exact, while out_valid
+`ifdef FORMAL
+    ,
+    // the products taken and not yet answered (those whose out_valid cycle has not passed): a
+    // formal proof ties its caller's state to it (fxdsp.hdl.formal: nothing in flight while idle)
+    output wire [2:0]                f_in_flight
+`endif
 );
     localparam integer LIMB  = 16;                           // SB_MAC16 operand width
     localparam integer A_UP  = A_W + LIMB - 1;
@@ -246,6 +252,12 @@ module fx_mac_serial #(
         /* verilator lint_on UNUSEDSIGNAL */
         assign p = field[P_W-1:0];
     endgenerate
+`ifdef FORMAL
+    // a product is selected (busy) until its last limb pair, then in one of the three stages (l_q),
+    // then out: at most five at once
+    // (one-bit terms summed in the 3-bit context of the assignment)
+    assign f_in_flight = busy + l_q[0] + l_q[1] + l_q[2] + out_valid;
+`endif
 endmodule
 
 `default_nettype wire

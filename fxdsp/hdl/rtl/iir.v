@@ -97,6 +97,12 @@ module iir #(
     output wire [3:0]                    mac_nb,
     input  wire                          mac_out_valid,
     input  wire [MAC_A_W+MAC_B_W-1:0]    mac_p
+`ifdef FORMAL
+    ,
+    // the products requested on the mac_* bundle and not yet answered (ARCH = 1, EXT_MAC = 1): a
+    // formal proof holds the external multiplier's own count to it (fxdsp.hdl.formal)
+    output wire [2:0]                    f_mac_in_flight
+`endif
 );
     localparam integer E_W = OUT_SHIFT + 2;
     localparam integer C_W = 4;                  // |c| <= 2 (checked by the generator)
@@ -119,6 +125,9 @@ module iir #(
                                    COEF_SETS, SPLIT, CHANNELS); $finish; end
         end
         if (ARCH == 0) begin : g_par
+`ifdef FORMAL
+            assign f_mac_in_flight = 3'd0;
+`endif
             // ---- one sample per cycle: the cascade is combinational ----
             assign in_ready = 1'b1;
             // no multiplier in this variant: the bundle unused
@@ -543,6 +552,8 @@ module iir #(
                 end
             end
 `ifdef FORMAL
+            // products issued (k) less those returned (rk): the multiplier's own count must agree
+            assign f_mac_in_flight = (st == S_MAC) ? k - rk : 3'd0;
             // invariants of every state reachable from rst (proven with the rest, fxdsp.hdl.formal):
             // stated so that an induction proof starts only from states a reset can reach (from an
             // idle state with rk = 7 the seventh product was never counted and the FSM waited forever)
