@@ -546,18 +546,13 @@ module demod #(
                   .SETS_FILE(AUX_COEF_FILE)) u_lpf
                 (.clk(clk), .rst(rst), .in_valid(lpf_go | aux_go),
 `ifdef FORMAL
-                 .in_ready(lpf_idle),   // read only by the invariants below
+                 .in_ready(lpf_idle), .f_mac_in_flight(lpf_in_flight),   // read only by the invariants below
 `else
                  .in_ready(),
 `endif
                  .x(lpf_x), .out_valid(lpf_done),
                  .y(lpf_yall), .ovf(lpf_oall), .mac_in_valid(lp_v), .mac_in_ready(sh_ready), .mac_a(lp_a), .mac_b(lp_b),
-`ifdef FORMAL
-                 .mac_na(lp_na), .mac_nb(lp_nb), .mac_out_valid(sh_valid & lpf_own), .mac_p(sh_p),
-                 .f_mac_in_flight(lpf_in_flight));
-`else
                  .mac_na(lp_na), .mac_nb(lp_nb), .mac_out_valid(sh_valid & lpf_own), .mac_p(sh_p));
-`endif
             wire lpf_v = lpf_done && !aux_busy;
             wire [2*DATA_W-1:0] lpf_y;          // {q, i} of the engine's outputs ...
             wire [2*LPF_SECTIONS-1:0] lpf_o;    // ... and their flags {lpf_q[S], lpf_i[S]}
