@@ -112,18 +112,19 @@ def logic(text: str) -> str:
     return " ".join(synthesised(_code(text)).split())
 
 
-def rtl_closure(module: str, generated: str | None = None) -> list[Path]:
+def rtl_closure(module: str, generated: str | None = None, rtl_dir: Path = RTL_DIR) -> list[Path]:
     """The RTL files a synthesis of ``module`` reads: its own file and, transitively, the file of
     every module whose name appears in the code (comments stripped) of one already taken. Naming a
     module is enough to count it: an over-approximation (a row re-run for nothing), never a miss.
-    ``generated``: the text of a generated top ``module`` (not in the RTL folder)."""
-    files = sorted(RTL_DIR.glob("*.v"))
+    ``generated``: the text of a generated top ``module`` (not in the RTL folder). ``rtl_dir``: the
+    folder of the sources (a formal proof's mutant copy)."""
+    files = sorted(Path(rtl_dir).glob("*.v"))
     code = {p: _code(p.read_text(encoding="utf-8")) for p in files}
     defined = {m: p for p in files for m in _MODULE.findall(code[p])}
     if generated is not None:
         todo, seen = [defined[w] for w in set(_WORD.findall(_code(generated))) if w in defined], set()
     elif module not in defined:
-        raise ValueError(f"module: {module!r} is defined in no file of {RTL_DIR}")
+        raise ValueError(f"module: {module!r} is defined in no file of {rtl_dir}")
     else:
         todo, seen = [defined[module]], set()
     while todo:
