@@ -112,13 +112,14 @@ def logic(text: str) -> str:
     return " ".join(synthesised(_code(text)).split())
 
 
-def rtl_closure(module: str, generated: str | None = None, rtl_dir: Path = RTL_DIR) -> list[Path]:
+def rtl_closure(module: str, generated: str | None = None, rtl_dir: Path | None = None) -> list[Path]:
     """The RTL files a synthesis of ``module`` reads: its own file and, transitively, the file of
     every module whose name appears in the code (comments stripped) of one already taken. Naming a
     module is enough to count it: an over-approximation (a row re-run for nothing), never a miss.
     ``generated``: the text of a generated top ``module`` (not in the RTL folder). ``rtl_dir``: the
-    folder of the sources (a formal proof's mutant copy)."""
-    files = sorted(Path(rtl_dir).glob("*.v"))
+    folder of the sources (default the package's RTL; a formal proof's mutant copy)."""
+    rtl_dir = Path(rtl_dir or RTL_DIR)   # read at the call (the tests point RTL_DIR at a copy)
+    files = sorted(rtl_dir.glob("*.v"))
     code = {p: _code(p.read_text(encoding="utf-8")) for p in files}
     defined = {m: p for p in files for m in _MODULE.findall(code[p])}
     if generated is not None:
