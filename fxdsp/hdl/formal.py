@@ -112,13 +112,18 @@ class Proof:
 COUNT_PORT = "f_mac_in_flight"
 
 
+def _declares(rtl_dir: Path, module: str, port: str) -> bool:
+    """Whether ``module``'s source in ``rtl_dir`` declares the 3-bit output ``port``."""
+    src = Path(rtl_dir) / f"{module}.v"
+    return src.exists() and re.search(rf"\boutput\s+wire\s+\[2:0\]\s+{port}\b",
+                                      src.read_text(encoding="utf-8")) is not None
+
+
 def counts_its_products(rtl_dir: Path, module: str) -> bool:
     """Whether ``module``'s source in ``rtl_dir`` states, under FORMAL, its own count of the products
     it has in flight on the shared multiplier (an output :data:`COUNT_PORT`): the wrapper then holds
     the multiplier's own count to it (iir and demod do, so that their inductions close at one sample)."""
-    src = Path(rtl_dir) / f"{module}.v"
-    return src.exists() and re.search(rf"\boutput\s+wire\s+\[2:0\]\s+{COUNT_PORT}\b",
-                                      src.read_text(encoding="utf-8")) is not None
+    return _declares(rtl_dir, module, COUNT_PORT)
 
 
 def wrapper(design, name: str, cut: bool = False, rtl_dir: Path = RTL_DIR) -> str:
@@ -155,6 +160,10 @@ def wrapper(design, name: str, cut: bool = False, rtl_dir: Path = RTL_DIR) -> st
         if has_divider(design, name):
             over.append(".DIV_UNROLL(1)")
     elif rtl.mac_bundle:
+        if not _declares(rtl_dir, "fx_mac_serial", "f_in_flight"):   # a user's RTL folder of an older copy
+            raise InputError(f"--rtl: {Path(rtl_dir) / 'fx_mac_serial.v'} declares no f_in_flight output under "
+                             "FORMAL (the multiplier's count of products in flight, which the proofs read): copy "
+                             "it from the package's RTL")
         a_w, b_w = (whole_limbs(w) for w in mac_operands(design, name))
         over.append(f".EXT_MAC(1), .MAC_A_W({a_w}), .MAC_B_W({b_w})")
         lines += [f"    wire {w}mac_{sig};" for _, sig, w in MAC_PORTS]
