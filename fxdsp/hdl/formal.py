@@ -93,6 +93,11 @@ MITER_PROPERTIES = ("the serial variant (ARCH = 1, an ideal multiplier with fx_m
                     "in_valid, data and reset free at every cycle, two samples from reset")
 
 
+class RtlRejected(RuntimeError):
+    """yosys refused the sources of a proof (its last ERROR line). The package's own RTL refused is a
+    bug; a user's ``--rtl`` folder refused is their input (the CLI says so, exit 2)."""
+
+
 class FormalToolMissing(InputError):
     """yosys, yosys-smtbmc or the solver is not installed: what to install (bad input of the
     machine, one line and exit status 2 from the CLI, like a missing simulator)."""
@@ -112,21 +117,16 @@ class Proof:
 COUNT_PORT = "f_mac_in_flight"
 
 
-def _declares(rtl_dir: Path, module: str, port: str) -> bool:
-    """Whether ``module``'s source in ``rtl_dir`` declares the 3-bit output ``port``."""
-    src = Path(rtl_dir) / f"{module}.v"
-    return src.exists() and re.search(rf"\boutput\s+wire\s+\[2:0\]\s+{port}\b",
-                                      src.read_text(encoding="utf-8")) is not None
-
-
 def counts_its_products(rtl_dir: Path, module: str) -> bool:
     """Whether ``module``'s source in ``rtl_dir`` states, under FORMAL, its own count of the products
     it has in flight on the shared multiplier (an output :data:`COUNT_PORT`): the wrapper then holds
     the multiplier's own count to it (iir and demod do, so that their inductions close at one sample)."""
-    return _declares(rtl_dir, module, COUNT_PORT)
+    src = Path(rtl_dir) / f"{module}.v"
+    return src.exists() and re.search(rf"\boutput\s+wire\s+\[2:0\]\s+{COUNT_PORT}\b",
+                                      src.read_text(encoding="utf-8")) is not None
 
 
-def wrapper(design, name: str, cut: bool = False, rtl_dir: Path = RTL_DIR) -> str:
+def wrapper(design, name: str, cut: bool = False, rtl_dir: Path | None = None) -> str:
     """The Verilog of the formal wrapper ``fx_formal`` around instance ``name``'s serial variant.
     ``cut``: a chain top whose members are cut (their outputs free but for their contracts, assumed:
     :meth:`fxdsp.hdl.chain_top._Top.formal_lines`): the top's own rules only, its handshake without
@@ -134,6 +134,7 @@ def wrapper(design, name: str, cut: bool = False, rtl_dir: Path = RTL_DIR) -> st
     as it leaves), and a cover that a sample can go through (the assumptions are not vacuous)."""
     inst = design.instances[name]
     rtl = inst.rtl
+    rtl_dir = Path(rtl_dir or RTL_DIR)
     if not rtl.serial:
         raise ValueError(f"formal: {name} has no serial variant (its module {inst.module} takes one sample per clock)")
     c = cycles_per_sample(design, name, arch=1)
@@ -160,10 +161,6 @@ def wrapper(design, name: str, cut: bool = False, rtl_dir: Path = RTL_DIR) -> st
         if has_divider(design, name):
             over.append(".DIV_UNROLL(1)")
     elif rtl.mac_bundle:
-        if not _declares(rtl_dir, "fx_mac_serial", "f_in_flight"):   # a user's RTL folder of an older copy
-            raise InputError(f"--rtl: {Path(rtl_dir) / 'fx_mac_serial.v'} declares no f_in_flight output under "
-                             "FORMAL (the multiplier's count of products in flight, which the proofs read): copy "
-                             "it from the package's RTL")
         a_w, b_w = (whole_limbs(w) for w in mac_operands(design, name))
         over.append(f".EXT_MAC(1), .MAC_A_W({a_w}), .MAC_B_W({b_w})")
         lines += [f"    wire {w}mac_{sig};" for _, sig, w in MAC_PORTS]
@@ -417,7 +414,7 @@ def prove(design, name: str, d: Path, depth: int | None = None, induction: bool 
         (d / rel).write_text(text, encoding="ascii")
     if cut and not design.instances[name].members:
         raise ValueError(f"formal: {name} is a block: only a chain top has members to cut")
-    (d / "fx_formal.v").write_text(miter(design, name) if equivalence else wrapper(design, name, cut, rtl or RTL_DIR),
+    (d / "fx_formal.v").write_text(miter(design, name) if equivalence else wrapper(design, name, cut, rtl),
                                    encoding="ascii")
     c = cycles_per_sample(design, name, arch=1)
     depth = depth or (CUT_DEPTH if cut else 2 * c + 4)
@@ -428,14 +425,10 @@ def prove(design, name: str, d: Path, depth: int | None = None, induction: bool 
     sources = rtl_closure(inst.module, top_text, Path(rtl or RTL_DIR))
     if not inst.members and inst.rtl.mac_bundle:   # the wrapper's multiplier
         sources = sorted(set(sources) | {Path(rtl or RTL_DIR) / "fx_mac_serial.v"})
-    if equivalence:   # one product operator on both sides (IDEAL_MAC)
+    if equivalence:   # one product operator on both sides (IDEAL_MAC, in fx_mac_serial's place)
         (d / "fx_mac_ideal.v").write_text(IDEAL_MAC, encoding="ascii")
-        # the block's module and the primitives it is built of (a design without the other blocks'
-        # tables has none of their ROM files)
-        module = design.instances[name].module
-        sources = [s for s in sources if s.stem == module or (s.name.startswith("fx_") and s.name != "fx_mac_serial.v")]
-        sources.append(d / "fx_mac_ideal.v")
-    if design.instances[name].members:
+        sources = [s for s in sources if s.name != "fx_mac_serial.v"] + [d / "fx_mac_ideal.v"]
+    if inst.members:
         sources.append(d / f"{name}.v")
     define = " -DFXDSP_CUT_MEMBERS" if cut else ""
     # cut: every module instance of the top (its members and the shared multiplier) replaced by free
@@ -521,8 +514,8 @@ def _local(d: Path, sources) -> list[str]:
 
 
 # The bounded proof of a block on an AIG (yosys write_aiger) by abc's bmc3, yosys's own yosys-abc (the
-# SymbiYosys "abc bmc3" engine): demod's 208 cycles in 65 s where yosys-smtbmc with yices had no answer
-# in 18 minutes, piecewise_k0's 60 in 0.9 s against 15 s. Every assertion is a bad-state output; a
+# SymbiYosys "abc bmc3" engine): demod's 208 cycles in 69 s where yosys-smtbmc with yices had no answer
+# in 19 minutes, piecewise_k0's 60 in 0.9 s against 15 s. Every assertion is a bad-state output; a
 # failure is then replayed by yosys-smtbmc to the frame abc names (asserts checked there only), for the
 # failing assertions' names and the VCD trace. The flattened netlist is the SMT2's, bit-blasted.
 AIGER = ("chformal -cover -remove\nopt_clean\nmemory_map\nopt -full -keepdc\ntechmap\nopt -fast\ndffunmap\n"
@@ -563,7 +556,8 @@ def _check(name: str, mode: str, d: Path, script: str, depth: int, induction: bo
     except subprocess.TimeoutExpired:
         return undecided
     if r.returncode != 0:
-        raise RuntimeError(f"formal: yosys failed on {name}: {(r.stderr or r.stdout).strip()[-2000:]}")
+        said = (r.stderr or r.stdout).strip().splitlines() or ["(no message)"]
+        raise RtlRejected(next((line for line in reversed(said) if "ERROR" in line), said[-1]).strip())
     trace = d / "trace.vcd"
     steps, skip = depth, ""
     if aiger:   # the verdict from abc; yosys-smtbmc only replays a failure, to its frame

@@ -105,38 +105,43 @@ def run(args) -> int:
     proofs = []
     modes = (False,) if args.bounded_only or args.miter else (False, True)
     every_cycle = len(modes) == 2 and args.depth is None   # the length the induction needs (formal.lengths)
-    with staged() as stage, tempfile.TemporaryDirectory(prefix="fxdsp_formal_") as tmp:
-        out = stage.dir(args.out)
-        rtl = Path(args.rtl) if args.rtl else None
-        for name in tqdm(duts, desc="formal", unit="DUT", disable=None):
-            cut = bool(design.instances[name].members)
-            if every_cycle:
-                done = formal.prove_every_cycle(design, name, Path(tmp) / name, rtl=rtl, cut=cut, timeout=args.timeout)
-            else:
-                done = [formal.prove(design, name, Path(tmp) / name / str(ind), depth=args.depth, induction=ind, rtl=rtl,
-                                     cut=cut, timeout=args.timeout, equivalence=args.miter) for ind in modes]
-            for p in done:
-                trace = None
-                if p.trace is not None:
-                    trace = f"traces/{name}_{p.mode}.vcd"
-                    (out / "traces").mkdir(exist_ok=True)
-                    (out / trace).write_bytes(p.trace.read_bytes())
-                proofs.append({"dut": name, "mode": p.mode, "depth": p.depth,
-                               "cycles_per_sample": cycles_per_sample(design, name, arch=1),
-                               "passed": p.passed, "seconds": round(p.seconds, 1), "failing": p.detail,
-                               "trace": trace})
-        if args.miter and args.only is None:   # the miters' multiplier keeps fx_mac_serial's timing
-            for a_w, b_w in formal.MAC_TIMING_WIDTHS:
-                for ind in (False, True):
-                    p = formal.mac_timing(a_w, b_w, Path(tmp) / f"mac{a_w}x{b_w}_{ind}", induction=ind,
-                                          rtl=Path(args.rtl) if args.rtl else None, timeout=args.timeout)
-                    proofs.append({"dut": p.name, "mode": p.mode, "depth": p.depth, "cycles_per_sample": None,
+    try:
+        with staged() as stage, tempfile.TemporaryDirectory(prefix="fxdsp_formal_") as tmp:
+            out = stage.dir(args.out)
+            rtl = Path(args.rtl) if args.rtl else None
+            for name in tqdm(duts, desc="formal", unit="DUT", disable=None):
+                cut = bool(design.instances[name].members)
+                if every_cycle:
+                    done = formal.prove_every_cycle(design, name, Path(tmp) / name, rtl=rtl, cut=cut, timeout=args.timeout)
+                else:
+                    done = [formal.prove(design, name, Path(tmp) / name / str(ind), depth=args.depth, induction=ind, rtl=rtl,
+                                         cut=cut, timeout=args.timeout, equivalence=args.miter) for ind in modes]
+                for p in done:
+                    trace = None
+                    if p.trace is not None:
+                        trace = f"traces/{name}_{p.mode}.vcd"
+                        (out / "traces").mkdir(exist_ok=True)
+                        (out / trace).write_bytes(p.trace.read_bytes())
+                    proofs.append({"dut": name, "mode": p.mode, "depth": p.depth,
+                                   "cycles_per_sample": cycles_per_sample(design, name, arch=1),
                                    "passed": p.passed, "seconds": round(p.seconds, 1), "failing": p.detail,
-                                   "trace": None})
-        report = {"config": str(config or "built-in"), "proofs": proofs,
-                  "properties": formal.MITER_PROPERTIES if args.miter else formal.PROPERTIES}
-        (out / "report.json").write_text(json_text(report, "report.json", indent=1), encoding="utf-8")
-        (out / "report.md").write_text(markdown(report), encoding="utf-8")
+                                   "trace": trace})
+            if args.miter and args.only is None:   # the miters' multiplier keeps fx_mac_serial's timing
+                for a_w, b_w in formal.MAC_TIMING_WIDTHS:
+                    for ind in (False, True):
+                        p = formal.mac_timing(a_w, b_w, Path(tmp) / f"mac{a_w}x{b_w}_{ind}", induction=ind,
+                                              rtl=rtl, timeout=args.timeout)
+                        proofs.append({"dut": p.name, "mode": p.mode, "depth": p.depth, "cycles_per_sample": None,
+                                       "passed": p.passed, "seconds": round(p.seconds, 1), "failing": p.detail,
+                                       "trace": None})
+            report = {"config": str(config or "built-in"), "proofs": proofs,
+                      "properties": formal.MITER_PROPERTIES if args.miter else formal.PROPERTIES}
+            (out / "report.json").write_text(json_text(report, "report.json", indent=1), encoding="utf-8")
+            (out / "report.md").write_text(markdown(report), encoding="utf-8")
+    except formal.RtlRejected as exc:
+        if args.rtl is None:   # the package's own RTL refused: a bug, with its traceback
+            raise
+        raise InputError(f"--rtl {args.rtl}: yosys rejects it: {exc}") from None
     bad = [p for p in proofs if not p["passed"]]
     for p in bad:
         sys.stdout.write(f"formal: {_verdict(p).upper()} {p['dut']} ({p['mode']}, {p['depth']} cycles): {p['failing']}"

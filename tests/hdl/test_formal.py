@@ -198,12 +198,14 @@ def test_formal_command(tmp_path, capsys):
     plain.write_text('[stimulus]\nseed = 1\nsamples = 64\n[system]\nfs_hz = 1000.0\nrate_full_scale_dps = 1.0\n'
                      '[bias_subtract]\nin_format = "s8.4"\nbias_format = "s8.4"\nout_format = "s9.4"\n'
                      'rounding = "floor"\noverflow = "wrap"\n')
-    # an RTL folder whose multiplier does not state its count of products in flight (an older copy)
+    # a user's RTL folder that yosys rejects: a multiplier that does not state its count of products in
+    # flight (an older copy), a syntax error
     older = mutated_rtl(tmp_path / "older", "fx_mac_serial.v", [("output wire [2:0]                f_in_flight",
                                                                  "output wire [2:0]                f_gone")])
+    broken = mutated_rtl(tmp_path / "broken", "rtd.v", [("endmodule", "endmodule endmodule")])
     for args in (["--only", "nope"], ["--only", "bias_subtract"], ["--depth", "1"], ["--timeout", "0"],
                  ["--timeout", "inf"], ["--miter", "--only", "rtd"], ["--miter", "--config", str(plain)],
-                 ["--only", "rtd", "--rtl", str(older)]):
+                 ["--only", "rtd", "--rtl", str(older)], ["--only", "rtd", "--rtl", str(broken)]):
         bad = tmp_path / "bad"
         assert main(["formal", *args, "--out", str(bad)]) == 2
         err = capsys.readouterr().err
