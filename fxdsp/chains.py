@@ -156,6 +156,8 @@ class Instance:
     inputs: tuple[Port, ...]
     outputs: tuple[Port, ...]
     members: tuple[str, ...] = ()     # a chain's member instances, in ovf bit order
+    hardware: bool = True             # it has RTL (a block whose datapath states an RTL interface; a chain
+                                      # whose members all have): the HDL commands and tests take only these
 
     @property
     def has_ready(self) -> bool:
@@ -170,6 +172,8 @@ class Instance:
     def rtl(self) -> RtlPorts:
         """The RTL interface: a block's is its datapath's; a chain top (generated)
         takes one sample at a time (in_ready) and has a serial variant (ARCH = 1), no bundle."""
+        if not self.hardware:
+            raise ValueError(f"{self.name}: has no RTL (its datapath states no RTL interface)")
         if self.members:
             return RtlPorts(ready=True, serial=True)
         return self.block.datapath.RTL
@@ -191,6 +195,12 @@ class Design:
     @property
     def all(self) -> dict[str, Block]:
         return {**self.blocks, **self.chains}
+
+    @property
+    def hardware(self) -> dict[str, Instance]:
+        """The instances that have RTL: what the HDL commands (hdl-gen, rtl, formal, hw-report) and
+        their tests work on."""
+        return {n: i for n, i in self.instances.items() if i.hardware}
 
     def chain(self, name: str, purpose: str) -> Chain:
         """The chain ``name``; a config that does not declare it is bad input naming what needs it."""
@@ -275,7 +285,8 @@ def _instance_table(design: "Design", quantities: Quantities) -> dict[str, Insta
         module = name if members else block.datapath.MODULE
         if name != block.name.replace(".", "_"):
             raise AssertionError(f"instance {name} is not named after its config table {block.name}")
-        table[name] = Instance(name, block.name, block, module, ports[0], ports[1], members)
+        hardware = all(table[m].hardware for m in members) if members else block.datapath.RTL is not None
+        table[name] = Instance(name, block.name, block, module, ports[0], ports[1], members, hardware)
     return table
 
 

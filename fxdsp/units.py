@@ -30,7 +30,8 @@ QUANTITIES = ("C", "Hz", "Hz/g", "g", "1", "FS", "deg/h", "rad", "sensor")
 # kind -> port -> quantity, whatever the wiring (physical by construction)
 INTRINSIC: dict[str, dict[str, str]] = {
     "rtd": {"temp": "C"}, "freq2temp": {"f": "Hz", "temp": "C"}, "lag": {"temp": "C", "te": "C"},
-    "piecewise": {"temp": "C"}, "demod": {"phase": "rad"},
+    "piecewise": {"temp": "C"}, "demod": {"phase": "rad"}, "drive": {"x": "1", "dac": "1", "amp": "1", "f": "Hz",
+                                                                   "phase": "rad"},
 }
 
 Units = dict[str, "str | None"]

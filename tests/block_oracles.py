@@ -225,3 +225,101 @@ def lag(block, temps) -> list[int]:
                        block.rules.overflow)[0]
         out.append(held)
     return out
+
+
+class _Cascade:
+    """DF-I sections with error feedback, one sample at a time (:func:`iir`'s arithmetic, streaming)."""
+
+    def __init__(self, block):
+        self.block = block
+        self.state = [[Fraction(0)] * 6 for _ in range(block.b.shape[0])]
+
+    def step(self, v: int) -> int:
+        blk = self.block
+        nf, df, d = blk.num_format.fl, blk.den_format.fl, blk.data_format
+        for s, st in enumerate(self.state):
+            b = [Fraction(int(c), 1 << nf) for c in blk.b[s]]
+            a = [Fraction(int(c), 1 << df) for c in blk.a[s]]
+            c = [int(w) for w in blk.c[s]]
+            x1, x2, y1, y2, e1, e2 = st
+            xv = Fraction(v, 1 << d.fl)
+            acc = b[0] * xv + b[1] * x1 + b[2] * x2 - a[0] * y1 - a[1] * y2 + c[0] * e1 + c[1] * e2
+            r = round_to_int(acc * (1 << d.fl), blk.rules.rounding)
+            y, o = fit(r, d, blk.rules.overflow)
+            e = Fraction(0) if o else acc - Fraction(r, 1 << d.fl)
+            self.state[s] = [xv, x1, Fraction(y, 1 << d.fl), y1, e, e1]
+            v = y
+        return v
+
+
+def _pi(e: int, integ: int, kp: int, ki: int, shift: int, lo: int, hi: int, rounding: str) -> tuple[int, int]:
+    """(output, integrator): integrate unless the output is limited in the direction e pushes it;
+    both kept within the limits."""
+    new = integ + ki * e
+    out = round_to_int(Fraction(kp * e + new, 1 << shift), rounding)
+    if (out > hi and e > 0) or (out < lo and e < 0):
+        new = integ
+        out = round_to_int(Fraction(kp * e + new, 1 << shift), rounding)
+    return min(max(out, lo), hi), min(max(new, lo << shift), hi << shift)
+
+
+def drive(block, xs) -> dict[str, list[int]]:
+    """The drive loop, sample by sample, from its docstring: mixers on the NCO, the low-pass per
+    channel, every update_every samples the CORDIC and the two PIs, the advanced carrier times the
+    gain into the DAC, the accumulator stepped by the frequency word."""
+    import numpy as np
+
+    nco, dp, rules = block.nco, block.datapath, block.rules
+    P, d, ang = nco.phase_bits, block.data_format, block.angle_format
+    table = nco_table(nco.lut_bits, nco.lut_format)
+    lpf = [_Cascade(block.lpf), _Cascade(block.lpf)]
+    gain_k = float(np.prod(np.sqrt(1.0 + 2.0 ** (-2.0 * np.arange(block.iterations)))))
+    inv_k = round_to_int(Fraction(1.0 / gain_k) * (1 << 17), "half_up")   # 1/K on s18.17
+    pi_word = round_to_int(Fraction(math.pi) * (1 << ang.fl), "half_up")
+    set_word = round_to_int(Fraction(block.phase_setpoint_rad) * (1 << ang.fl), "half_up")
+    word = lambda v, fl: round_to_int(Fraction(v) * (1 << fl), "half_up")  # noqa: E731  (design constants)
+    min_amp, amp_set = word(block.pll_min_amp, d.fl), word(block.amp_setpoint, d.fl)
+    gain_max = word(block.gain_max, block.gain_format.fl)
+    adv = word(block.advance_samples, dp.advance_bits)
+    center = word(Fraction(block.f_hz) / Fraction(block.fs_hz), P)
+    rng_f = word(Fraction(block.lock_range_hz) / Fraction(block.fs_hz), P)
+
+    def hz(ftw: int) -> int:
+        v = Fraction(ftw) * Fraction(block.fs_hz) / (1 << P)
+        return fit(round_to_int(v * (1 << block.freq_format.fl), rules.rounding), block.freq_format, rules.overflow)[0]
+
+    phase, ftw, integ_f, integ_a, gain, count = 0, center, 0, 0, 0, 0
+    f_word, amp, err = hz(center), 0, 0
+    out = {"dac": [], "f": [], "amp": [], "phase": []}
+    for x in xs:
+        cos_w, msin_w = nco_wave(nco, phase, table)
+        ch = []
+        for wave, filt in zip((cos_w, msin_w), lpf):
+            v = 2 * Fraction(int(x), 1 << block.in_format.fl) * Fraction(wave, 1 << nco.lut_format.fl)
+            ch.append(filt.step(fit(round_to_int(v * (1 << d.fl), rules.rounding), d, rules.overflow)[0]))
+        count += 1
+        if count >= dp.update_every:
+            count = 0
+            (xk,), (z,) = cordic(block, [ch[0]], [ch[1]])
+            amp = fit(round_to_int(Fraction(xk * inv_k, 1 << 17), rules.rounding), d, rules.overflow)[0]
+            e = z - set_word
+            while e > pi_word:
+                e -= 2 * pi_word
+            while e <= -pi_word:
+                e += 2 * pi_word
+            err = e
+            if amp >= min_amp:
+                df, integ_f = _pi(e, integ_f, dp.kp_f, dp.ki_f, dp.pi_shift_f, -rng_f, rng_f, rules.rounding)
+                ftw = center + df
+                f_word = hz(ftw)
+            gain, integ_a = _pi(amp_set - amp, integ_a, dp.kp_a, dp.ki_a, dp.pi_shift_a, 0, gain_max,
+                                rules.rounding)
+        carrier = nco_wave(nco, (phase + ((ftw * adv) >> dp.advance_bits)) % (1 << P), table)[1]
+        v = Fraction(gain, 1 << block.gain_format.fl) * Fraction(carrier, 1 << nco.lut_format.fl)
+        out["dac"].append(fit(round_to_int(v * (1 << block.dac_format.fl), rules.rounding), block.dac_format,
+                              rules.overflow)[0])
+        out["f"].append(f_word)
+        out["amp"].append(amp)
+        out["phase"].append(err)
+        phase = (phase + ftw) % (1 << P)
+    return out

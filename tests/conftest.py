@@ -130,30 +130,38 @@ def failing_writes(k: int | None, exc: type[BaseException]):
 # pytest-xdist hands out whole files, by default the files with the most tests first, which puts the
 # long single-test files (the mutation proofs, ~20-40 s each) last, on one worker while the other
 # idles. Longest first instead (LPT scheduling; the tail is then a few short files): seconds of each
-# file >= 5 s, measured on a fresh clone (Verilator models built) on a 2-core machine; every other
+# file >= 5 s, measured in a cold `make test` of a fresh clone on a 2-core machine; every other
 # file after them in collection order. A wrong or stale number costs wall time, never a test.
 FILE_SECONDS = {
-    "hdl/test_hdl_golden.py": 90,
-    "test_wheel.py": 80,
-    "hdl/test_hdl_corners.py": 71,
-    "hdl/test_hdl_long_blocks.py": 64,
-    "hdl/test_hdl_random.py": 39,
+    "hdl/test_hdl_corners.py": 87,
+    "hdl/test_hdl_random.py": 82,
+    "hdl/test_hdl_golden.py": 73,
+    "test_wheel.py": 60,
+    "hdl/test_formal.py": 59,
+    "hdl/test_hdl_long_blocks.py": 48,
+    "hdl/test_rtl_command.py": 46,
+    "test_sweep.py": 36,
     "test_extend.py": 36,
-    "test_budget.py": 31,
+    "test_diagnose_independent.py": 35,
     "hdl/test_hdl_chain_stages.py": 29,
-    "hdl/test_rtl_command.py": 25,
-    "hdl/test_mutation_serial.py": 22,
-    "test_diagnose_independent.py": 20,
-    "test_sweep.py": 18,
-    "test_diagnose_hidden.py": 17,
+    "test_diagnose_hidden.py": 25,
+    "hdl/test_mutation_serial.py": 24,
+    "hdl/test_hdl_long_chains.py": 20,
+    "test_budget_floor.py": 18,
+    "hdl/test_hdl_lint.py": 18,
+    "test_fixed_properties.py": 17,
     "hdl/test_mutation.py": 17,
-    "test_extend_user_design.py": 14,
-    "hdl/test_hdl_long_chains.py": 13,
-    "hdl/test_hdl_lint.py": 11,
-    "test_fixed_properties.py": 8,
-    "test_config_errors.py": 7,
-    "test_outputs.py": 7,
-    "test_fixed_mutation.py": 6,
+    "test_budget.py": 17,
+    "test_fixed_mutation.py": 15,
+    "test_outputs.py": 11,
+    "hdl/test_cocotb_driver.py": 8,
+    "test_config_errors.py": 8,
+    "test_extend_any_chain.py": 8,
+    "test_log_reader.py": 6,
+    "test_extend_user_design.py": 6,
+    "test_repro_repeatability.py": 6,
+    "test_config_writer.py": 6,
+    "test_hw_report.py": 5,
 }
 TESTS = Path(__file__).resolve().parent
 

@@ -172,3 +172,26 @@ def test_lag(rounding, overflow):
     b = d.blocks["lag"]
     st = b.stimulus(np.random.default_rng(11), 300)
     assert b.run(**st).outputs["te"].tolist() == oracle.lag(b, st["temp"])
+
+
+NARROW_NCO = {"drive.phase_bits": 16, "drive.lut_bits": 8, "drive.interp_bits": 8, "drive.lut_format": "s12.11"}
+
+
+@pytest.mark.parametrize("rounding,overflow,update,narrow", [(r, o, u, n) for (r, o), u, n in
+                                                             zip(RULES, (8, 1, 3, 8), (False, True, False, True))])
+def test_drive(rounding, overflow, update, narrow):
+    """The drive loop against its oracle: corner codes and a saturating pick-off (mixers and DAC
+    at their limits, the PIs at theirs), then a pick-off in lock stepping 0.5 Hz (the PLL tracking),
+    with the control update every 1, 3 or 8 samples; two with a narrow NCO, where one LSB of the
+    carrier's advance reaches the table."""
+    d = design_with(**{"drive.rounding": rounding, "drive.overflow": overflow, "drive.lpf.rounding": rounding,
+                       "drive.lpf.overflow": overflow, "drive.update_every": update, **(NARROW_NCO if narrow else {})})
+    b = d.blocks["drive"]
+    corners = b.stimulus(np.random.default_rng(5), 64)["x"][:300]
+    locked = b.nominal_stimulus(np.random.default_rng(6), 4096)["x"][2000:2300]
+    x = np.concatenate([corners, locked])
+    got = b.run(x=x)
+    want = oracle.drive(b, x)
+    for port in ("dac", "f", "amp", "phase"):
+        assert got.outputs[port].tolist() == want[port], port
+    assert len(set(want["f"])) > 3, "the frequency word must move"

@@ -40,6 +40,10 @@ def test_bench_reports_ratios_and_agreement(tmp_path: Path, capsys):
     assert res["biquad"]["samples_per_s"] > 0
     assert set(res["chains"]) == set(build().chains)   # every chain of the config is timed
     assert all(c["samples_per_s"] > 0 for c in res["chains"].values())
+    # every drive loop of the config closed on its resonator, and the resonator alone
+    assert set(res["drive"]) == {n for n, b in build().blocks.items() if type(b).__name__ == "Drive"} != set()
+    assert all(r[k] > 0 for r in res["drive"].values() for k in ("fixed_samples_per_s", "float_samples_per_s",
+                                                                   "resonator_samples_per_s"))
 
 
 def test_bench_rejects_small_sample_counts(capsys):

@@ -89,7 +89,7 @@ def test_committed_report_is_current_for_the_rtl_and_default_config():
     from fxdsp.hdl.report_cli import variants
 
     # a row per instance, and one per resource-shared variant of a block (e.g. the serial iir)
-    assert {r["name"] for r in report["rows"]} == set(design.instances) | set(variants(design))
+    assert {r["name"] for r in report["rows"]} == set(design.hardware) | set(variants(design))
     # and each row's own hash is that of what it synthesises now (what a regeneration reuses)
     from fxdsp.hdl.report_cli import expected_row_hashes
 

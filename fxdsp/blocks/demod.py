@@ -107,30 +107,36 @@ def _mix_kernel(x, phase0, ftw, trim, phase_mask, addr_shift, lut_bits, interp_b
     return i_out, q_out, phase
 
 
+@njit(cache=True, inline="always")
+def cordic_one(x, y, atans, half_pi, iterations):
+    """CORDIC vectoring of one (x, y): pre-rotate into the right half plane, then shift-and-add
+    (arithmetic right shifts: floor). Returns (K * magnitude, angle) as stored integers."""
+    z = np.int64(0)
+    if x < 0:
+        if y >= 0:
+            x, y, z = y, -x, half_pi
+        else:
+            x, y, z = -y, x, -half_pi
+    for j in range(iterations):
+        dx = y >> j
+        dy = x >> j
+        if y >= 0:
+            x, y, z = x + dx, y - dy, z + atans[j]
+        else:
+            x, y, z = x - dx, y + dy, z - atans[j]
+    return x, z
+
+
 @njit(cache=True)
 def _cordic_kernel(i_in, q_in, atans, half_pi, iterations):
-    """CORDIC vectoring: pre-rotate into the right half plane, then shift-and-add (arithmetic right
-    shifts: floor). Returns (K * magnitude, angle) as stored integers."""
+    """:func:`cordic_one` over arrays."""
     n = i_in.shape[0]
     xs = np.empty(n, dtype=np.int64)
     zs = np.empty(n, dtype=np.int64)
     for k in range(n):
-        x, y, z = i_in[k], q_in[k], np.int64(0)
-        if x < 0:
-            if y >= 0:
-                x, y, z = y, -x, half_pi
-            else:
-                x, y, z = -y, x, -half_pi
-        for j in range(iterations):
-            dx = y >> j
-            dy = x >> j
-            if y >= 0:
-                x, y, z = x + dx, y - dy, z + atans[j]
-            else:
-                x, y, z = x - dx, y + dy, z - atans[j]
-        xs[k] = x
-        zs[k] = z
+        xs[k], zs[k] = cordic_one(i_in[k], q_in[k], atans, half_pi, iterations)
     return xs, zs
+
 
 INV_K_FORMAT = Format(True, 18, 17)
 

@@ -47,6 +47,18 @@ DESIGNS = ("butter", "cheby1", "bessel")
 BTYPES = ("lowpass", "highpass")
 
 
+@njit(cache=True, inline="always")
+def df1_step(v, x1, x2, y1, y2, e1, e2, b0, b1, b2, a1, a2, c1, c2, shift_b, shift_a, out_shift, rounding, lo, hi,
+             overflow):
+    """One sample of one DF-I section: (output, overflowed, rounding error e fed back next sample;
+    0 after an overflow). The section loops below and the drive loop's per-sample low-pass call it."""
+    acc = ((b0 * v + b1 * x1 + b2 * x2) << shift_b) - ((a1 * y1 + a2 * y2) << shift_a) + c1 * e1 + c2 * e2
+    r = shift_right_round(acc, out_shift, rounding)
+    out, o = fit(r, lo, hi, overflow)
+    e = 0 if o else acc - (r << out_shift)
+    return out, o, e
+
+
 @njit(cache=True)
 def _df1_section(x, b0, b1, b2, a1, a2, c1, c2, shift_b, shift_a, out_shift, rounding, lo, hi, overflow, state):
     """One DF-I section over a whole stream, its state in registers; returns (y, overflows).
@@ -60,10 +72,8 @@ def _df1_section(x, b0, b1, b2, a1, a2, c1, c2, shift_b, shift_a, out_shift, rou
     count = 0
     for i in range(n):
         v = x[i]
-        acc = ((b0 * v + b1 * x1 + b2 * x2) << shift_b) - ((a1 * y1 + a2 * y2) << shift_a) + c1 * e1 + c2 * e2
-        r = shift_right_round(acc, out_shift, rounding)
-        out, o = fit(r, lo, hi, overflow)
-        e = 0 if o else acc - (r << out_shift)
+        out, o, e = df1_step(v, x1, x2, y1, y2, e1, e2, b0, b1, b2, a1, a2, c1, c2, shift_b, shift_a, out_shift,
+                             rounding, lo, hi, overflow)
         count += o
         x2 = x1
         x1 = v
@@ -74,6 +84,25 @@ def _df1_section(x, b0, b1, b2, a1, a2, c1, c2, shift_b, shift_a, out_shift, rou
         y[i] = out
     state[0], state[1], state[2], state[3], state[4], state[5] = x1, x2, y1, y2, e1, e2
     return y, count
+
+
+@njit(cache=True, inline="always")
+def df1_cascade_step(v, b, a, c, shift_b, shift_a, out_shift, rounding, lo, hi, overflow, state, counts):
+    """One sample through the whole cascade, each section's state in its row of ``state`` (the
+    same words as :func:`_df1_cascade` over a stream: a section sees its predecessor's outputs)."""
+    for s in range(b.shape[0]):
+        st = state[s]
+        out, o, e = df1_step(v, st[0], st[1], st[2], st[3], st[4], st[5], b[s, 0], b[s, 1], b[s, 2], a[s, 0],
+                             a[s, 1], c[s, 0], c[s, 1], shift_b, shift_a, out_shift, rounding, lo, hi, overflow)
+        counts[s] += o
+        st[1] = st[0]
+        st[0] = v
+        st[3] = st[2]
+        st[2] = out
+        st[5] = st[4]
+        st[4] = e
+        v = out
+    return v
 
 
 @njit(cache=True)
@@ -228,10 +257,12 @@ class Iir(Block):
                 raise ValueError(f"{name}.num_format: {self.num_format} cannot hold the DC-exact middle tap")
 
     @classmethod
-    def from_config(cls, sec: Section, fs_hz: float, data_format: Format, name: str = "iir") -> "Iir":
-        """``data_format`` is the format of the wire the filter sits on (the caller derives it)."""
+    def from_config(cls, sec: Section, fs_hz: float, data_format: Format, name: str = "iir",
+                    default_order: int = 2) -> "Iir":
+        """``data_format`` is the format of the wire the filter sits on (the caller derives it);
+        ``default_order`` the order when the table states none (the owner's choice)."""
         design = sec.choice("design", DESIGNS, "butter")
-        order = sec.integer("order", 2, low=1, high=12)
+        order = sec.integer("order", default_order, low=1, high=12)
         btype = sec.choice("btype", BTYPES, "lowpass")
         cutoff = sec.number("cutoff_hz", low=0, low_open=True)
         ripple = sec.number("ripple_db", 0.5, low=0, low_open=True)

@@ -115,6 +115,12 @@ def _freq2temp(sec, wired, ctx):
     return _own_format(Freq2Temp.from_config(sec, sec.format("temp_format")), sec, "freq_format", "f", wired, ctx)
 
 
+def _drive(sec, wired, ctx):
+    from .drive import Drive
+
+    return _own_format(Drive.from_config(sec, ctx.fs_hz, sec.format("in_format")), sec, "in_format", "x", wired, ctx)
+
+
 def _lag(sec, wired, ctx):
     from .lag import Lag
 
@@ -133,6 +139,8 @@ KINDS: dict[str, Kind] = {k.name: k for k in (
     Kind("bias_subtract", ("x", "bias"), ("y",), _bias_subtract, {"y": "out_format"}),
     Kind("iir", ("x",), ("y",), _iir, {"y": "data_format"}, timed=True),
     Kind("freq2temp", ("f",), ("temp",), _freq2temp, {"temp": "temp_format"}),
+    Kind("drive", ("x",), ("dac", "f", "amp", "phase"), _drive,
+         {"dac": "dac_format", "f": "freq_format", "amp": "data_format", "phase": "angle_format"}, timed=True),
 )}
 
 

@@ -127,6 +127,35 @@ def biquad_fxpmath(iir, x: np.ndarray) -> np.ndarray:
     return np.array([int(y.val) for y in v], dtype=np.int64)
 
 
+def _drive_loops(design, samples: int, repeat: int) -> dict:
+    """Every drive loop of the config closed on the mode its table was designed for: samples per
+    second of the bit-exact and the float loop, and of the resonator with its ADC alone."""
+    from ..blocks.drive import Drive
+    from ..sim.driveloop import closed_loop
+    from ..sim.resonator import DriveResonator, _open_drive
+
+    out = {}
+    for name, drive in design.blocks.items():
+        if not isinstance(drive, Drive):
+            continue
+        res = DriveResonator.matching(drive)
+        seconds = samples / drive.fs_hz
+        row = {"fs_hz": drive.fs_hz, "samples": samples}
+        for kind, fixed in (("fixed", True), ("float", False)):
+            closed_loop(drive, res, 25.0, 0.01, fixed=fixed)   # compile
+            row[f"{kind}_samples_per_s"] = samples / _best(
+                lambda: closed_loop(drive, res, 25.0, seconds, fixed=fixed, record_every=960), max(1, repeat // 2))
+        coef = res.coefficients([25.0], drive.fs_hz)
+        dac, noise = np.zeros(samples, dtype=np.int64), np.zeros(samples)
+        fi = drive.in_format
+        go = lambda n: _open_drive(dac[:n], 1.0, coef, samples, np.zeros(3), noise[:n], 2.0**fi.fl,  # noqa: E731
+                                   fi.min_int, fi.max_int)
+        go(10)
+        row["resonator_samples_per_s"] = samples / _best(lambda: go(samples), repeat)
+        out[name] = row
+    return out
+
+
 def run(args) -> int:
     if args.samples < 200_000:
         raise ValueError(f"--samples: the benchmark needs >= 200000 samples, got {args.samples}")
@@ -160,7 +189,7 @@ def run(args) -> int:
     results = {"machine": platform.machine(), "python": platform.python_version(), "samples": args.samples,
                "biquad": {"block": iir.name, "sections": int(iir.b.shape[0]), "rules": str(iir.rules),
                           "samples_per_s": args.samples / t_biquad},
-               "chains": chains}
+               "chains": chains, "drive": _drive_loops(design, args.samples, args.repeat)}
 
     for name, fn, n in (("apytypes", biquad_apytypes, args.prefix_apytypes),
                         ("fxpmath", biquad_fxpmath, args.prefix_fxpmath)):
@@ -179,6 +208,12 @@ def run(args) -> int:
           f"target >= 150")
     for name, c in chains.items():
         print(f"  {name + ':':47s}{c['samples_per_s'] / 1e6:8.1f} MS/s   target >= 20")
+    for name, c in results["drive"].items():
+        label = f"{name} closed on its resonator (fixed / float):"
+        print(f"  {label:47s}{c['fixed_samples_per_s'] / 1e6:8.1f} / {c['float_samples_per_s'] / 1e6:.1f} MS/s   "
+              f"(one hour at {c['fs_hz'] / 1e3:g} kS/s: {3600 * c['fs_hz'] / c['fixed_samples_per_s']:.0f} s)")
+        print(f"  {'  its resonator and pick-off ADC alone:':47s}{c['resonator_samples_per_s'] / 1e6:8.1f} MS/s   "
+              f"target >= 10")
     for name in ("apytypes", "fxpmath"):
         r = results[name]
         print(f"  same biquad in {name:8s}: {r['samples_per_s'] / 1e3:8.2f} kS/s on a {r['prefix_samples']}-sample "

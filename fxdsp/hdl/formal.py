@@ -309,7 +309,7 @@ MAC_TIMING_WIDTHS = ((16, 16), (32, 23), (44, 17))
 
 def miter_duts(design) -> list[str]:
     """The block instances whose two variants a miter compares (:data:`MITER_BLOCKS`)."""
-    return [n for n, inst in design.instances.items()
+    return [n for n, inst in design.hardware.items()
             if not inst.members and inst.rtl.serial and inst.module in MITER_BLOCKS]
 
 # The miter's multiplier: fx_mac_serial's interface and timing (in_ready when idle or as the last
@@ -652,4 +652,4 @@ def failed_assertions(log: str) -> str:
 
 def serial_duts(design) -> list[str]:
     """The instances with a serial variant (blocks and chain tops), in the design's order."""
-    return [n for n, inst in design.instances.items() if inst.rtl.serial]
+    return [n for n, inst in design.hardware.items() if inst.rtl.serial]

@@ -95,8 +95,9 @@ def run(args) -> int:
         if not only:
             raise InputError("--only: no block or chain named")
         for n in only:
-            if n not in design.instances:
-                raise InputError(f"--only: {n!r} is not a block or chain of {where} ({', '.join(design.instances)})")
+            if n not in design.hardware:
+                raise InputError(f"--only: {n!r} is not a block or chain with RTL of {where} "
+                                 f"({', '.join(design.hardware)})")
             if n not in duts:
                 raise InputError(f"--only: {n!r} has no {'miter' if args.miter else 'serial variant'} to prove "
                                  f"(those with one: {', '.join(duts) or 'none'})")

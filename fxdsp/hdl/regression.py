@@ -83,12 +83,14 @@ class DutResult:
 
 def duts(design, only=None) -> list[Dut]:
     """Every DUT of the design (``only``: those instances), each default variant then its serial one.
-    InputError naming an unknown instance, with the nearest."""
-    names = list(design.all)
+    InputError naming an unknown instance, with the nearest; an instance without RTL is not a DUT."""
+    names = list(design.hardware)
     if only:
         import difflib
 
         for n in only:
+            if n in design.all and n not in design.hardware:
+                raise InputError(f"--only: {n!r} has no RTL yet; the instances with RTL: {', '.join(names)}")
             if n not in design.all:
                 near = difflib.get_close_matches(n, names, n=1)
                 raise InputError(f"--only: no block or chain {n!r} in this config"

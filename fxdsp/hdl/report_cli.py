@@ -52,7 +52,7 @@ def variants(design) -> dict[str, tuple[str, dict[str, str]]]:
     (instance, the variant's own parameters), one per instance whose RTL has one (its interface,
     ``design.instances[name].rtl``). A variant has valid/ready (in_ready) whatever the instance table says."""
     return {f"{n} (ARCH=1)": (n, {k: str(v) for k, v in i.rtl.variant().items()})
-            for n, i in design.instances.items() if i.rtl.variant() is not None}
+            for n, i in design.hardware.items() if i.rtl.variant() is not None}
 
 
 # the issue's targets per chain (half the device for paper 002, a quarter for paper 001), read
@@ -352,7 +352,7 @@ def expected_row_hashes(design, freq: float) -> dict[str, str]:
     """Row name -> :func:`row_hash` of every row a full report of ``design`` holds, as of now."""
     files = generate(design)
     return {row: _digest(design, files, plan, freq, seeds_of(row))
-            for row, plan in planned_rows(design, list(design.instances)).items()}
+            for row, plan in planned_rows(design, list(design.hardware)).items()}
 
 
 def run(args) -> int:
@@ -369,10 +369,10 @@ def run(args) -> int:
     previous = load_hw_report(Path(args.out).with_suffix(".json"))
     current = reusable_rows(previous, tools, args.freq, not args.no_xc7)  # rows still valid as they are
     reuse = {} if args.fresh else current
-    targets = args.only or list(design.instances)
-    unknown = [t for t in targets if t not in design.instances]
+    targets = args.only or list(design.hardware)
+    unknown = [t for t in targets if t not in design.hardware]
     if unknown:
-        raise ValueError(f"--only: {unknown[0]!r} is not an instance of the design ({', '.join(design.instances)})")
+        raise ValueError(f"--only: {unknown[0]!r} is not an instance of the design with RTL ({', '.join(design.hardware)})")
     rows = []
     with tempfile.TemporaryDirectory(prefix="fxdsp_hw_") as tmp:
         work = Path(tmp)
@@ -381,7 +381,7 @@ def run(args) -> int:
             (work / rel).write_text(text)
         digest = source_hash(design, files)  # what is synthesised: the RTL and these files, as read now
         chosen = planned_rows(design, targets)
-        for row_name, plan in planned_rows(design, list(design.instances)).items():
+        for row_name, plan in planned_rows(design, list(design.hardware)).items():
             name, module, params, extra = plan
             tag = re.sub(r"\W+", "_", row_name).strip("_")
             t0 = time.perf_counter()

@@ -15,6 +15,7 @@ import json
 import math
 from pathlib import Path
 
+from fxdsp.errors import InputError
 from fxdsp.mechanisms import CAUSES
 from fxdsp.outputs import IN, OUT_FILE, staged
 from fxdsp.sim.generate import DEFAULT_TIME_STEP_S, OPTIONAL_COLUMNS, SCENARIOS, generate_log
@@ -44,6 +45,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rtd-element", choices=("ideal", "pt_bridge"), default="ideal",
                         help="thermometer: the contract's ideal linear one, or a Pt element (Callendar-Van Dusen) "
                              "in paper 002's bridge read with the linear law")
+    parser.add_argument("--drive-loop", metavar="TABLE",
+                        help="read freq_hz through the drive loop [TABLE] (drive, drive001 or one of --config), "
+                             "bit-exact, closed on the simulated resonance at 96 kS/s: about 70 s per simulated hour")
+    parser.add_argument("--config", metavar="CONFIG.toml",
+                        help="the config whose drive loop --drive-loop names (default: the built-in one)")
     parser.add_argument("--out", required=True, metavar="LOG.csv", help="output canonical CSV")
 
 
@@ -95,7 +101,27 @@ def _noise(specs: list[str]):
     return out
 
 
-PATHS = {"--model": IN, "--out": OUT_FILE}
+PATHS = {"--model": IN, "--config": IN, "--out": OUT_FILE}
+
+
+def _drive_loop(args):
+    """The drive loop --drive-loop names (None without it); --config alone is bad input."""
+    if args.drive_loop is None:
+        if args.config is not None:
+            raise InputError("--config: only read for --drive-loop, which is not given")
+        return None
+    from fxdsp.blocks.drive import Drive
+    from fxdsp.chains import build
+
+    design = build(args.config) if args.config else build()
+    name = args.drive_loop.replace(".", "_")
+    loops = [n for n, b in design.blocks.items() if isinstance(b, Drive)]
+    if name not in loops:
+        raise InputError(f"--drive-loop: {args.drive_loop!r} is not a drive loop of "
+                         f"{args.config or 'the built-in config'}; its drive loops: {', '.join(loops) or 'none'}")
+    if "freq_hz" not in [c.strip() for c in args.columns.split(",")]:
+        raise InputError("--drive-loop: the log has no freq_hz column to read through it (--columns)")
+    return design.blocks[name]
 
 
 def run(args) -> int:
@@ -107,16 +133,20 @@ def run(args) -> int:
         raise ValueError(f"--seed: {args.seed!r} is not an integer") from None
     effects = parse_effects(args.effect)
     thermal = ThermalChain(rtd_node=args.rtd_node) if args.rtd_node else None
+    drive = _drive_loop(args)
     log = generate_log(args.scenario, effects=effects, seed=seed, columns=args.columns, rtd_element=args.rtd_element,
                        time_step_s=_number("--time-step", args.time_step),
                        duration_scale=_number("--duration-scale", args.duration_scale),
-                       noise=_noise(args.noise), model=args.model, thermal=thermal)
+                       noise=_noise(args.noise), model=args.model, thermal=thermal, drive_loop=drive,
+                       progress=drive is not None)
     comments = {"generator": "fxdsp simulate", "scenario": args.scenario, "seed": seed,
                 "effects": json.dumps(effects, sort_keys=True, allow_nan=False)}
     if args.model:
         comments["model"] = Path(args.model).name   # no folder in a written file
     if args.rtd_node:
         comments["thermal"] = f"air->package->die, RTD on {args.rtd_node}"
+    if drive is not None:
+        comments["freq_hz"] = f"through the drive loop [{drive.name}], bit-exact, closed on the resonance"
     with staged() as stage:  # an interrupted run leaves the previous log whole
         write_log(stage.path(args.out), log, header_comments=comments)
     return 0

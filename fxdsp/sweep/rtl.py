@@ -66,7 +66,7 @@ def instance_names(config_data: dict) -> list[str]:
     from ..chains import build
     from ..config import Config
 
-    return list(build(Config(copy.deepcopy(config_data), source="<sweep rtl>")).instances)
+    return list(build(Config(copy.deepcopy(config_data), source="<sweep rtl>")).hardware)
 
 
 def settings(config_data: dict, shards: int, blocks, rtl_dir: Path) -> dict:

@@ -46,7 +46,7 @@ def _serial() -> dict[str, dict]:
     instance of each module among the blocks (the module is the same; piecewise_k0 adds the cubic)."""
     d = build()
     out, modules = {}, set()
-    for name, inst in d.instances.items():
+    for name, inst in d.hardware.items():
         variant = inst.rtl.variant()
         if variant is not None and (inst.members or inst.module not in modules or name == "piecewise_k0"):
             out[name] = variant

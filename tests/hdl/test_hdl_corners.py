@@ -37,7 +37,7 @@ DESIGNS = {
         "demod": {"rounding": "half_even", "overflow": "wrap", "lpf": {"overflow": "wrap"}},
     },
 }
-BLOCKS = sorted(design_of().instances)   # every instance of the design: its blocks and chains
+BLOCKS = sorted(design_of().hardware)   # every instance of the design with RTL: its blocks and chains
 EXTRA = {"chain_paper002": {"DIV_UNROLL": 14}, "sf_divide": {"UNROLL": 2}}
 _designs: dict = {}
 

@@ -14,7 +14,7 @@ from hdl_util import SERIAL, design_of, icarus_samples, icarus_window, run_cocot
 from fxdsp.hdl.stimuli import random_stimulus  # fxdsp rtl and the sweep's RTL shards draw the same way
 from fxdsp.sweep.rtl import unroll_params
 
-BLOCKS = sorted(design_of().instances)   # every instance of the design: its blocks and chains
+BLOCKS = sorted(design_of().hardware)   # every instance of the design with RTL: its blocks and chains
 
 PARAM_SETS = {
     # every rounding floor, every overflow wrap, default word lengths

@@ -1,0 +1,593 @@
+"""The drive loop (paper 002's figure 4): a PLL and an amplitude controller that keep the drive mode
+oscillating at its resonance with a set amplitude. Its frequency word is paper 001's thermometer and
+its NCO the demodulator's reference.
+
+Per sample n, on the drive ADC's code ``x``:
+
+* **Phase detector**: the demodulator's NCO (``demod.Nco``: accumulator, quarter-wave table,
+  first-order interpolation) read at the accumulator ``phase`` gives (cos, -sin); the demodulator's
+  mixers ``i = 2 x cos``, ``q = -2 x sin`` (read one fraction bit coarser, rounded by ``rounding``,
+  fitted by ``overflow`` into ``data_format``), one ``iir`` low-pass per channel (``[drive.lpf]``,
+  each sample, the iir's own section arithmetic).
+* **Every ``update_every`` samples** the control update: the demodulator's CORDIC turns the filtered
+  (I, Q) into amplitude and angle;
+  - PLL: phase error ``e = angle - phase_setpoint`` wrapped into (-pi, pi]; ``df = R(kp_f e +
+    integ_f) >> pi_shift_f`` with ``integ_f += ki_f e``; the frequency word ``ftw = ftw_center + df``;
+  - amplitude: ``ea = amp_setpoint - amp``; ``g = R(kp_a ea + integ_a) >> pi_shift_a`` with
+    ``integ_a += ki_a ea``.
+  The PLL holds while the amplitude is below ``pll_min_amp`` (at rest the angle is the noise's).
+  Integrators and outputs are limited (anti-windup, always saturating whatever ``overflow`` says,
+  each limit counted): ``df`` and ``integ_f`` to +- ``lock_range_hz``, ``g`` and ``integ_a`` to
+  0..``gain_max``. ``R`` is ``rounding``.
+* **Drive**: the carrier is the NCO's -sin read ``advance_samples`` ahead (``phase + (ftw * adv)
+  >> advance_bits``: the DAC's latency and hold, 1.5 samples in the simulated front end, would
+  otherwise add ``2 pi f 1.5 / fs`` of lag that the PLL would turn into a frequency offset of
+  ``lag / (2 pi tau)`` moving with Q); ``dac = R(g * carrier)`` fitted by ``overflow`` into
+  ``dac_format``.
+* ``phase += ftw`` (mod ``2**phase_bits``).
+
+Why the signs: with the drive ``cos(phi + pi/2)`` the displacement at resonance lags it by 90 deg,
+``x = A cos(phi)``, so I = A and Q = 0 (angle 0). Driven above resonance it lags more, the angle
+goes negative, and ``df = +kp e`` lowers the frequency: the gains are positive.
+
+Loop design (``design_gains``): with the detector's angle against the NCO frequency the resonator
+is a lag ``-2 pi tau / (1 + s tau)`` rad/Hz (tau = 2Q/w), and the amplitude against the gain is
+``G / (1 + s tau)``. Each PI places both closed-loop poles at its natural frequency
+(``pll_bandwidth_hz``, ``agc_bandwidth_hz``) with ``damping``; a Q away from the design's ``tau_s``
+moves them a little, not the loop's type.
+
+The float reference runs the same structure in float64: the exact NCO phase and sin/cos, the
+unquantised low-pass design and gains, atan2 and hypot, no rounding and no limits but the same
+anti-windup clamps.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..config import Section
+from ..fixed import Format, OverflowLog, Rules, product_format, quantize
+from ..fixed.kernels import convert, shift_right_round
+from .base import Block, corner_codes
+from .datapath import Datapath, OvfField, Rom, const, info, nested
+from .demod import INV_K_FORMAT, Nco, _nco_wave, cordic_gain, cordic_one
+from .iir import Iir, IirDatapath, df1_cascade_step
+
+# int64 parameter vector of the kernels (indices)
+(P_ADDR_SHIFT, P_LUT_BITS, P_INTERP_BITS, P_TWO_PI, P_CORR_SHIFT, P_PHASE_MASK, P_MIX_SHIFT, P_RND, P_OVF,
+ P_DLO, P_DHI, P_LPF_SB, P_LPF_SA, P_LPF_OS, P_ITER, P_HALF_PI, P_INV_K, P_AMP_SHIFT, P_UPDATE, P_SET, P_PI,
+ P_TWO_PI_ANGLE, P_KP_F, P_KI_F, P_SH_F, P_RANGE, P_CENTER, P_AMP_SET, P_KP_A, P_KI_A, P_SH_A, P_GMAX, P_ADV,
+ P_ADV_BITS, P_DAC_SHIFT, P_DAC_LO, P_DAC_HI, P_FS_MANT, P_HZ_SHIFT, P_FLO, P_FHI, P_MIN_AMP, P_COUNT) = range(43)
+# int64 state vector: accumulator, frequency word, integrators, gain, update counter, the last
+# filtered I and Q, amplitude and phase error
+S_PHASE, S_FTW, S_INTEG_F, S_INTEG_A, S_GAIN, S_COUNT, S_I, S_Q, S_AMP, S_ERR, S_F, S_LEN = range(12)
+# overflow counters, in the order of the datapath's ovf fields after the low-pass sections
+# counters: the format overflows (the datapath's ovf fields after the low-pass sections), then the
+# control limits (not overflows: the PIs' designed clamps; each output's counter follows its integrator's)
+C_MIX_I, C_MIX_Q, C_AMP, C_DAC, C_F, C_PLL_INTEG, C_PLL_LIMIT, C_AGC_INTEG, C_AGC_LIMIT, C_LEN = range(10)
+LIMITS = ("pll_integ", "pll_limit", "agc_integ", "agc_limit")
+# the low-pass's order when [drive.lpf] states none: the mixers' 2 f ripple must fall below the
+# amplitude loop's 100 ppm with the cut-off far enough above the PLL (4 at 200 Hz: 6e-9 at 16 kHz)
+LPF_ORDER = 4
+
+
+@njit(cache=True, inline="always")
+def _clamp(v, lo, hi):
+    if v > hi:
+        return hi, 1
+    if v < lo:
+        return lo, 1
+    return v, 0
+
+
+@njit(cache=True, inline="always")
+def _pi_update(e, st, k, kp, ki, shift, lo, hi, rnd, counts, c):
+    """A PI controller's output ``R((kp e + integ) >> shift)`` limited to lo..hi, with its
+    integrator ``st[k] += ki e`` (in output LSBs x 2**shift) held while the output is limited
+    in the direction the error pushes (conditional integration: no wind-up, so no overshoot after
+    a long saturation such as the start-up) and kept within the limits. counts[c]: integrator
+    at a limit, counts[c + 1]: output at a limit."""
+    integ = st[k] + ki * e
+    out = shift_right_round(kp * e + integ, shift, rnd)
+    if (out > hi and e > 0) or (out < lo and e < 0):
+        integ = st[k]
+        out = shift_right_round(kp * e + integ, shift, rnd)
+    integ, o = _clamp(integ, lo << shift, hi << shift)
+    counts[c] += o
+    st[k] = integ
+    out, o = _clamp(out, lo, hi)
+    counts[c + 1] += o
+    return out
+
+
+@njit(cache=True)
+def _drive_step(x, st, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts):
+    """One sample of the loop on ADC code ``x``: returns the DAC word; updates ``st`` (S_*),
+    ``lpf_st`` (2 channels x sections x 6) and the overflow counts (module docstring)."""
+    rnd, ovf = p[P_RND], p[P_OVF]
+    ph = st[S_PHASE]
+    c, m = _nco_wave(ph, p[P_ADDR_SHIFT], p[P_LUT_BITS], p[P_INTERP_BITS], qsin, p[P_TWO_PI], p[P_CORR_SHIFT], rnd)
+    i_mix, o = convert(x * c, p[P_MIX_SHIFT], rnd, p[P_DLO], p[P_DHI], ovf)
+    counts[C_MIX_I] += o
+    q_mix, o = convert(x * m, p[P_MIX_SHIFT], rnd, p[P_DLO], p[P_DHI], ovf)
+    counts[C_MIX_Q] += o
+    i_lp = df1_cascade_step(i_mix, lb, la, lc, p[P_LPF_SB], p[P_LPF_SA], p[P_LPF_OS], rnd, p[P_DLO], p[P_DHI], ovf,
+                            lpf_st[0], lcounts[0])
+    q_lp = df1_cascade_step(q_mix, lb, la, lc, p[P_LPF_SB], p[P_LPF_SA], p[P_LPF_OS], rnd, p[P_DLO], p[P_DHI], ovf,
+                            lpf_st[1], lcounts[1])
+    st[S_I] = i_lp
+    st[S_Q] = q_lp
+    st[S_COUNT] += 1
+    if st[S_COUNT] >= p[P_UPDATE]:
+        st[S_COUNT] = 0
+        xk, z = cordic_one(i_lp, q_lp, atans, p[P_HALF_PI], p[P_ITER])
+        amp, o = convert(xk * p[P_INV_K], p[P_AMP_SHIFT], rnd, p[P_DLO], p[P_DHI], ovf)
+        counts[C_AMP] += o
+        # PLL: the angle against its set point, wrapped into (-pi, pi]; held (frequency and
+        # integrator) while the amplitude is below pll_min_amp, where the angle is the noise's
+        e = z - p[P_SET]
+        while e > p[P_PI]:
+            e -= p[P_TWO_PI_ANGLE]
+        while e <= -p[P_PI]:
+            e += p[P_TWO_PI_ANGLE]
+        if amp >= p[P_MIN_AMP]:
+            rng = p[P_RANGE]
+            df = _pi_update(e, st, S_INTEG_F, p[P_KP_F], p[P_KI_F], p[P_SH_F], -rng, rng, rnd, counts, C_PLL_INTEG)
+            st[S_FTW] = p[P_CENTER] + df
+            # the frequency in Hz: ftw * fs / 2**phase_bits, fs = FS_MANT * 2**k exactly
+            f, o = convert(st[S_FTW] * p[P_FS_MANT], p[P_HZ_SHIFT], rnd, p[P_FLO], p[P_FHI], ovf)
+            counts[C_F] += o
+            st[S_F] = f
+        # amplitude controller
+        ea = p[P_AMP_SET] - amp
+        st[S_GAIN] = _pi_update(ea, st, S_INTEG_A, p[P_KP_A], p[P_KI_A], p[P_SH_A], 0, p[P_GMAX], rnd, counts,
+                                C_AGC_INTEG)
+        st[S_AMP] = amp
+        st[S_ERR] = e
+    ftw = st[S_FTW]
+    cph = (ph + ((ftw * p[P_ADV]) >> p[P_ADV_BITS])) & p[P_PHASE_MASK]
+    c, m = _nco_wave(cph, p[P_ADDR_SHIFT], p[P_LUT_BITS], p[P_INTERP_BITS], qsin, p[P_TWO_PI], p[P_CORR_SHIFT], rnd)
+    dac, o = convert(st[S_GAIN] * m, p[P_DAC_SHIFT], rnd, p[P_DAC_LO], p[P_DAC_HI], ovf)
+    counts[C_DAC] += o
+    st[S_PHASE] = (ph + ftw) & p[P_PHASE_MASK]
+    return dac
+
+
+@njit(cache=True)
+def _drive_open(x, st, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts):
+    """The loop on given ADC codes (open loop): dac, f (Hz), amp and phase error per sample."""
+    n = x.shape[0]
+    dac = np.empty(n, dtype=np.int64)
+    f = np.empty(n, dtype=np.int64)
+    amp = np.empty(n, dtype=np.int64)
+    err = np.empty(n, dtype=np.int64)
+    for k in range(n):
+        dac[k] = _drive_step(x[k], st, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts)
+        f[k] = st[S_F]
+        amp[k] = st[S_AMP]
+        err[k] = st[S_ERR]
+    return dac, f, amp, err
+
+
+# ---- float reference ---------------------------------------------------------------------------
+# float parameter vector and state
+(F_FS, F_CENTER, F_KP_F, F_KI_F, F_RANGE, F_SET, F_AMP_SET, F_KP_A, F_KI_A, F_GMAX, F_ADV, F_UPDATE, F_MIN_AMP,
+ F_LEN) = range(14)
+FS_PHASE, FS_F, FS_INTEG_F, FS_INTEG_A, FS_GAIN, FS_COUNT, FS_AMP, FS_ERR, FS_LEN = range(9)
+
+
+@njit(cache=True, inline="always")
+def _pi_update_float(e, st, k, kp, ki, lo, hi):
+    """:func:`_pi_update` in float, without rounding."""
+    integ = st[k] + ki * e
+    out = kp * e + integ
+    if (out > hi and e > 0) or (out < lo and e < 0):
+        integ = st[k]
+        out = kp * e + integ
+    st[k] = min(max(integ, lo), hi)
+    return min(max(out, lo), hi)
+
+
+@njit(cache=True)
+def _drive_step_float(x, st, lpf_st, p, sos):
+    """The float loop on a real ADC value x (full-scale units): returns the real DAC value.
+    ``st`` (FS_*), ``lpf_st`` (2 x sections x 4: x1, x2, y1, y2, transposed-free DF-I)."""
+    ph = st[FS_PHASE]   # turns, in [0, 1)
+    w = 2.0 * np.pi * ph
+    v = np.empty(2)
+    v[0] = 2.0 * x * np.cos(w)
+    v[1] = -2.0 * x * np.sin(w)
+    out = np.empty(2)
+    for ch in range(2):
+        y = v[ch]
+        for s in range(sos.shape[0]):
+            r = lpf_st[ch, s]
+            acc = sos[s, 0] * y + sos[s, 1] * r[0] + sos[s, 2] * r[1] - sos[s, 4] * r[2] - sos[s, 5] * r[3]
+            r[1] = r[0]
+            r[0] = y
+            r[3] = r[2]
+            r[2] = acc
+            y = acc
+        out[ch] = y
+    st[FS_COUNT] += 1.0
+    if st[FS_COUNT] >= p[F_UPDATE]:
+        st[FS_COUNT] = 0.0
+        amp = np.hypot(out[0], out[1])
+        e = np.arctan2(out[1], out[0]) - p[F_SET]
+        while e > np.pi:
+            e -= 2 * np.pi
+        while e <= -np.pi:
+            e += 2 * np.pi
+        if amp >= p[F_MIN_AMP]:
+            rng = p[F_RANGE]
+            st[FS_F] = p[F_CENTER] + _pi_update_float(e, st, FS_INTEG_F, p[F_KP_F], p[F_KI_F], -rng, rng)
+        ea = p[F_AMP_SET] - amp
+        st[FS_GAIN] = _pi_update_float(ea, st, FS_INTEG_A, p[F_KP_A], p[F_KI_A], 0.0, p[F_GMAX])
+        st[FS_AMP] = amp
+        st[FS_ERR] = e
+    f = st[FS_F]
+    dac = st[FS_GAIN] * -np.sin(2.0 * np.pi * (ph + f / p[F_FS] * p[F_ADV]))
+    ph += f / p[F_FS]
+    st[FS_PHASE] = ph - np.floor(ph)
+    return dac
+
+
+@njit(cache=True)
+def _drive_open_float(x, st, lpf_st, p, sos):
+    n = x.shape[0]
+    dac = np.empty(n)
+    f = np.empty(n)
+    amp = np.empty(n)
+    err = np.empty(n)
+    for k in range(n):
+        dac[k] = _drive_step_float(x[k], st, lpf_st, p, sos)
+        f[k] = st[FS_F]
+        amp[k] = st[FS_AMP]
+        err[k] = st[FS_ERR]
+    return dac, f, amp, err
+
+
+def design_gains(pll_hz: float, agc_hz: float, damping: float, tau_s: float, resonator_gain: float,
+                 update_s: float) -> dict[str, float]:
+    """The PI gains in physical units (module docstring): kp_f Hz/rad, ki_f Hz/rad per update,
+    kp_a per FS of amplitude, ki_a per FS per update. Each loop is a PI on a first-order lag
+    ``G / (1 + s tau)``; its closed-loop poles solve ``tau s^2 + (1 + G kp) s + G ki = 0``, placed at
+    the natural frequency ``2 pi f`` with ``damping``: ``kp = (2 damping w tau - 1) / G``, ``ki = w^2
+    tau / G``. (A PI whose zero cancels the pole instead leaves the pole in the response to the
+    start-up's initial state: a tail with the resonator's own time constant.)"""
+    out = {}
+    for loop, f, g in (("f", pll_hz, 2 * np.pi * tau_s), ("a", agc_hz, resonator_gain)):
+        w = 2 * np.pi * f
+        if 2 * damping * w * tau_s <= 1:
+            raise ValueError(f"drive: the {'pll' if loop == 'f' else 'agc'} bandwidth {f} Hz is below the "
+                             f"resonator's own 1 / (2 pi tau) = {1 / (2 * np.pi * tau_s):.3g} Hz at damping {damping}")
+        out[f"kp_{loop}"] = (2 * damping * w * tau_s - 1) / g
+        out[f"ki_{loop}"] = w * w * tau_s / g * update_s
+    return out
+
+
+def _pi_words(kp: float, ki: float, coef_bits: int) -> tuple[int, int, int]:
+    """(kp word, ki word, shift): both gains in output LSBs per input LSB times 2**shift, the shift
+    chosen so that the smaller word keeps ``coef_bits`` significant bits."""
+    small = min(kp, ki)
+    shift = max(0, coef_bits - 1 - int(np.floor(np.log2(small))) - 1)
+    fmt = Format(True, 63, shift)
+    words = quantize([kp, ki], fmt, Rules("half_up", "saturate"))
+    return int(words[0]), int(words[1]), shift
+
+
+@dataclass(frozen=True, eq=False)
+class DriveDatapath(Datapath):
+    """The drive loop's arithmetic (fields in the order of its future RTL module's parameters)."""
+
+    MODULE = "drive"
+    RTL = None   # no RTL yet: the HDL commands leave the drive loop out (design.hardware)
+
+    in_w: int
+    data_w: int
+    phase_bits: int
+    lut_bits: int
+    lut_w: int
+    interp_bits: int
+    two_pi: int = const()
+    two_pi_w: int
+    corr_shift: int
+    mix_shift: int           # exact x * nco product, read as 2 x nco, -> data_format
+    rules: Rules
+    lpf: IirDatapath = nested("LPF_")   # both channels' low-pass (one design)
+    iterations: int
+    angle_w: int
+    half_pi: int = const()
+    inv_k: int = const()
+    amp_shift: int           # CORDIC x * 1/K -> data_format
+    update_every: int        # samples per control update
+    phase_set: int = const()     # the PLL's set point on angle_format
+    pi_word: int = const()       # pi on angle_format (the error's wrap)
+    ftw_center: int = const()    # f_hz as a tuning word
+    lock_range: int = const()    # +- ftw LSBs
+    kp_f: int = const()          # ftw LSBs per angle LSB, x 2**pi_shift_f
+    ki_f: int = const()
+    pi_shift_f: int
+    amp_set: int = const()       # on data_format
+    kp_a: int = const()          # gain LSBs per data LSB, x 2**pi_shift_a
+    ki_a: int = const()
+    pi_shift_a: int
+    gain_w: int
+    gain_max: int = const()
+    advance: int                 # carrier advance in samples x 2**advance_bits
+    advance_bits: int
+    dac_w: int
+    dac_shift: int               # gain x carrier product -> dac_format
+    fs_mant: int                 # fs = FS_MANT x 2**k exactly: f = ftw x FS_MANT >> HZ_SHIFT (Hz, freq_format)
+    hz_shift: int
+    freq_w: int
+    min_amp: int = const()       # the PLL holds below this amplitude (data_format)
+    qsin: Rom
+    atan: Rom
+    data_format: Format = info()
+    dac_format: Format = info()
+    freq_format: Format = info()
+    ovf: tuple = info()
+
+
+def _mantissa(fs_hz: float) -> tuple[int, int]:
+    """(odd m, k) with fs = m * 2**k exactly, for a sample rate that is a binary fraction."""
+    for j in range(0, 33):
+        scaled = fs_hz * 2.0**j
+        if scaled == int(scaled):
+            m, k = int(scaled), -j
+            while m and m % 2 == 0:
+                m //= 2
+                k += 1
+            return m, k
+    raise ValueError(f"system.fs_hz: {fs_hz} is not a multiple of 2**-32 Hz: the frequency word cannot be "
+                     f"converted to Hz exactly")
+
+
+class Drive(Block):
+    """The drive loop: ``x`` (drive ADC) -> ``dac`` (drive DAC word), ``f`` (the NCO's frequency
+    word in Hz), ``amp`` (measured amplitude) and ``phase`` (the PLL's phase error);
+    the last three held between control updates. ``closed_loop`` runs it on a resonator."""
+
+    name = "drive"
+
+    def __init__(self, fs_hz: float, f_hz: float, lock_range_hz: float, nco: Nco, in_format: Format,
+                 data_format: Format, angle_format: Format, dac_format: Format, gain_format: Format,
+                 freq_format: Format, lpf: Iir,
+                 cordic_iterations: int, update_every: int, advance_samples: float, advance_bits: int,
+                 phase_setpoint_rad: float, amp_setpoint: float, gain_max: float, pll_bandwidth_hz: float,
+                 agc_bandwidth_hz: float, damping: float, tau_s: float, resonator_gain: float, coef_bits: int,
+                 rules: Rules, pll_min_amp: float, name: str = "drive"):
+        self.name = name
+        if not 0 < lock_range_hz < min(f_hz, fs_hz / 2 - f_hz):
+            raise ValueError(f"{name}.lock_range_hz: must be within (0, {min(f_hz, fs_hz / 2 - f_hz)}), got "
+                             f"{lock_range_hz}")
+        if not 0 < amp_setpoint < data_format.max_value:
+            raise ValueError(f"{name}.amp_setpoint: must be within (0, {data_format.max_value}), got {amp_setpoint}")
+        if not 0 <= pll_min_amp < amp_setpoint:
+            raise ValueError(f"{name}.pll_min_amp: must be within [0, amp_setpoint = {amp_setpoint}), got {pll_min_amp}")
+        if not 0 < gain_max <= gain_format.max_value:
+            raise ValueError(f"{name}.gain_max: must be within (0, {gain_format.max_value}] ({gain_format}), "
+                             f"got {gain_max}")
+        if lpf.data_format != data_format:
+            raise ValueError(f"{name}.lpf.data_format: must equal {name}.data_format {data_format}")
+        self.fs_hz, self.f_hz, self.lock_range_hz = fs_hz, f_hz, lock_range_hz
+        self.nco, self.lpf, self.rules = nco, lpf, rules
+        self.in_format, self.data_format, self.angle_format = in_format, data_format, angle_format
+        self.dac_format, self.gain_format = dac_format, gain_format
+        self.update_every, self.iterations, self.pll_min_amp = update_every, cordic_iterations, pll_min_amp
+        self.advance_samples, self.phase_setpoint_rad = advance_samples, phase_setpoint_rad
+        self.amp_setpoint, self.gain_max = amp_setpoint, gain_max
+        self.tau_s, self.resonator_gain = tau_s, resonator_gain
+        self.gains = design_gains(pll_bandwidth_hz, agc_bandwidth_hz, damping, tau_s, resonator_gain,
+                                  update_every / fs_hz)
+        self.bandwidths = (pll_bandwidth_hz, agc_bandwidth_hz)
+        exact = Rules("half_up", "saturate")
+        mix = product_format(in_format, nco.nco_format)
+        mix = mix.with_fl(mix.fl - 1)
+        work = Format(True, data_format.wl + 2, data_format.fl)
+        amp_format = product_format(work, INV_K_FORMAT)
+        inv_k = int(quantize([1.0 / cordic_gain(cordic_iterations)], INV_K_FORMAT, exact)[0])
+        ftw_hz = fs_hz / 2.0**nco.phase_bits
+        angle_lsb = 2.0**-angle_format.fl
+        kp_f, ki_f, sh_f = _pi_words(self.gains["kp_f"] * angle_lsb / ftw_hz, self.gains["ki_f"] * angle_lsb / ftw_hz,
+                                     coef_bits)
+        scale_a = 2.0**-data_format.fl / 2.0**-gain_format.fl
+        kp_a, ki_a, sh_a = _pi_words(self.gains["kp_a"] * scale_a, self.gains["ki_a"] * scale_a, coef_bits)
+        q = lambda v, fmt: int(quantize([v], fmt, exact)[0])  # noqa: E731
+        lock = q(lock_range_hz / fs_hz, nco.phase_format)
+        # 63-bit proofs: the PI sums and the carrier advance
+        e_max = 2 * q(np.pi, angle_format) + 1
+        for what, bound in (("pll", kp_f * e_max + (lock << sh_f) + ki_f * e_max),
+                            ("agc", kp_a * (1 << data_format.wl) + (q(gain_max, gain_format) << sh_a)
+                             + ki_a * (1 << data_format.wl)),
+                            ("advance", (nco.ftw + lock) * int(round(abs(advance_samples) * 2**advance_bits) + 1))):
+            if bound >= 2**62:
+                raise ValueError(f"{name}: the {what} arithmetic needs more than 63 bits; lower coef_bits")
+        gain_prod = product_format(gain_format, nco.nco_format)
+        fs_mant, fs_exp = _mantissa(fs_hz)
+        if fs_mant.bit_length() + nco.phase_bits > 62:
+            raise ValueError(f"system.fs_hz: {fs_hz} = {fs_mant} x 2**{fs_exp}: the frequency word times {fs_mant} "
+                             f"needs more than 62 bits at phase_bits {nco.phase_bits}")
+        hz_shift = nco.phase_bits - fs_exp - freq_format.fl
+        top = (nco.ftw + lock) * fs_mant
+        if (top >> max(hz_shift, 0)) << max(-hz_shift, 0) > freq_format.max_int:
+            raise ValueError(f"{name}.freq_format: {freq_format} cannot hold f_hz + lock_range_hz = "
+                             f"{f_hz + lock_range_hz} Hz")
+        lpf_dp = lpf.datapath
+        lpf_ovf = lambda ch: tuple(OvfField(f"lpf_{ch}.{f.counter}", f.width) for f in lpf_dp.ovf)  # noqa: E731
+        self.datapath = DriveDatapath(
+            in_w=in_format.wl, data_w=data_format.wl, phase_bits=nco.phase_bits, lut_bits=nco.lut_bits,
+            lut_w=nco.lut_format.wl, interp_bits=nco.interp_bits, two_pi=nco.two_pi, two_pi_w=16,
+            corr_shift=nco.corr_shift, mix_shift=mix.fl - data_format.fl, rules=rules, lpf=lpf_dp,
+            iterations=cordic_iterations, angle_w=angle_format.wl, half_pi=q(np.pi / 2, angle_format),
+            inv_k=inv_k, amp_shift=amp_format.fl - data_format.fl, update_every=update_every,
+            phase_set=q(phase_setpoint_rad, angle_format), pi_word=q(np.pi, angle_format), ftw_center=nco.ftw,
+            lock_range=lock, kp_f=kp_f, ki_f=ki_f, pi_shift_f=sh_f, amp_set=q(amp_setpoint, data_format),
+            kp_a=kp_a, ki_a=ki_a, pi_shift_a=sh_a, gain_w=gain_format.wl, gain_max=q(gain_max, gain_format),
+            advance=int(quantize([advance_samples], Format(True, 16, advance_bits), exact)[0]),
+            advance_bits=advance_bits, dac_w=dac_format.wl, dac_shift=gain_prod.fl - dac_format.fl,
+            fs_mant=fs_mant, hz_shift=hz_shift, freq_w=freq_format.wl, min_amp=q(pll_min_amp, data_format),
+            qsin=Rom(nco.qsin, nco.lut_format.wl),
+            atan=Rom(quantize(np.arctan(2.0 ** -np.arange(cordic_iterations)), angle_format, exact), angle_format.wl),
+            data_format=data_format, dac_format=dac_format, freq_format=freq_format,
+            ovf=(OvfField("mix_i", 1), OvfField("mix_q", 1), *lpf_ovf("i"), *lpf_ovf("q"), OvfField("amp", 1),
+                 OvfField("dac", 1), OvfField("f", 1)))
+        dp = self.datapath
+        prm = np.zeros(P_COUNT, dtype=np.int64)
+        for idx, v in ((P_ADDR_SHIFT, nco.addr_shift), (P_LUT_BITS, dp.lut_bits), (P_INTERP_BITS, dp.interp_bits),
+                       (P_TWO_PI, dp.two_pi), (P_CORR_SHIFT, dp.corr_shift), (P_PHASE_MASK, nco.phase_mask),
+                       (P_MIX_SHIFT, dp.mix_shift), (P_RND, rules.rounding_code), (P_OVF, rules.overflow_code),
+                       (P_DLO, data_format.min_int), (P_DHI, data_format.max_int), (P_LPF_SB, lpf_dp.shift_b),
+                       (P_LPF_SA, lpf_dp.shift_a), (P_LPF_OS, lpf_dp.out_shift), (P_ITER, dp.iterations),
+                       (P_HALF_PI, dp.half_pi), (P_INV_K, dp.inv_k), (P_AMP_SHIFT, dp.amp_shift),
+                       (P_UPDATE, dp.update_every), (P_SET, dp.phase_set), (P_PI, dp.pi_word),
+                       (P_TWO_PI_ANGLE, 2 * dp.pi_word), (P_KP_F, kp_f), (P_KI_F, ki_f), (P_SH_F, sh_f),
+                       (P_RANGE, lock), (P_CENTER, dp.ftw_center), (P_AMP_SET, dp.amp_set), (P_KP_A, kp_a),
+                       (P_KI_A, ki_a), (P_SH_A, sh_a), (P_GMAX, dp.gain_max), (P_ADV, dp.advance),
+                       (P_ADV_BITS, advance_bits), (P_DAC_SHIFT, dp.dac_shift), (P_DAC_LO, dac_format.min_int),
+                       (P_DAC_HI, dac_format.max_int), (P_FS_MANT, fs_mant), (P_HZ_SHIFT, hz_shift),
+                       (P_FLO, freq_format.min_int), (P_FHI, freq_format.max_int), (P_MIN_AMP, dp.min_amp)):
+            prm[idx] = v
+        prm.setflags(write=False)
+        self._prm = prm
+        fp = np.zeros(F_LEN)
+        fp[F_FS], fp[F_CENTER], fp[F_RANGE] = fs_hz, f_hz, lock_range_hz
+        fp[F_KP_F], fp[F_KI_F], fp[F_KP_A], fp[F_KI_A] = (self.gains[k] for k in ("kp_f", "ki_f", "kp_a", "ki_a"))
+        fp[F_SET], fp[F_AMP_SET], fp[F_GMAX] = phase_setpoint_rad, amp_setpoint, gain_max
+        fp[F_ADV], fp[F_UPDATE], fp[F_MIN_AMP] = advance_samples, update_every, pll_min_amp
+        self._fprm = fp
+        self.freq_format = freq_format
+        self.inputs = {"x": in_format}
+        self.outputs = {"dac": dac_format, "f": freq_format, "amp": data_format, "phase": angle_format}
+        self.reset()
+
+    @classmethod
+    def from_config(cls, sec: Section, fs_hz: float, in_format: Format) -> "Drive":
+        f_hz = sec.number("f_hz", low=0, low_open=True)
+        nco = Nco(fs_hz, f_hz, sec.integer("phase_bits", low=4, high=48), sec.integer("lut_bits", low=4, high=20),
+                  sec.format("lut_format"), 0.0, sec.integer("interp_bits", low=0, high=24), sec.rules())
+        data_format = sec.format("data_format")
+        lpf_sec = sec.sub("lpf")
+        lpf = Iir.from_config(lpf_sec, fs_hz, lpf_sec.wired_format("data_format", data_format,
+                                                                   sec.field("data_format"), True),
+                              name=f"{sec.path}.lpf", default_order=LPF_ORDER)
+        return cls(fs_hz, f_hz, sec.number("lock_range_hz", low=0, low_open=True), nco, in_format, data_format,
+                   sec.format("angle_format"), sec.format("dac_format"), sec.format("gain_format"),
+                   sec.format("freq_format"), lpf,
+                   sec.integer("cordic_iterations", low=4, high=40), sec.integer("update_every", low=1, high=4096),
+                   sec.number("advance_samples", low=-8, high=8), sec.integer("advance_bits", low=0, high=8),
+                   sec.number("phase_setpoint_rad", 0.0, low=-np.pi, high=np.pi),
+                   sec.number("amp_setpoint", low=0, low_open=True), sec.number("gain_max", low=0, low_open=True),
+                   sec.number("pll_bandwidth_hz", low=0, low_open=True),
+                   sec.number("agc_bandwidth_hz", low=0, low_open=True),
+                   sec.number("damping", 1.0, low=0.3, high=3.0), sec.number("tau_s", low=0, low_open=True),
+                   sec.number("resonator_gain", low=0, low_open=True), sec.integer("coef_bits", 18, low=8, high=40),
+                   sec.rules(), sec.number("pll_min_amp", low=0), name=sec.path)
+
+    # ---- state (scipy's zi / zf) ----------------------------------------------------------------
+    def reset(self) -> None:
+        self.state = np.zeros(S_LEN, dtype=np.int64)
+        self.state[S_PHASE] = 0
+        self.state[S_FTW] = self.datapath.ftw_center
+        self.state[S_F] = self._hz_word(self.datapath.ftw_center)
+        self.lpf_state = np.zeros((2, self.datapath.lpf.sections, 6), dtype=np.int64)
+        # samples at which a PI's integrator or output sat at its limit (start-up, loss of lock):
+        # the control law's designed clamps, not format overflows
+        self.limits = dict.fromkeys(LIMITS, 0)
+
+    def _hz_word(self, ftw: int) -> int:
+        """A frequency word in Hz on freq_format, as the kernel converts it."""
+        dp = self.datapath
+        return int(convert(np.int64(ftw * dp.fs_mant), dp.hz_shift, self.rules.rounding_code,
+                           self.freq_format.min_int, self.freq_format.max_int, self.rules.overflow_code)[0])
+
+    def get_state(self) -> dict:
+        """The loop's registers, the low-pass states and the limit events so far."""
+        return {"loop": self.state.copy(), "lpf": self.lpf_state.copy(), "limits": dict(self.limits)}
+
+    def set_state(self, state) -> None:
+        if not isinstance(state, dict) or set(state) != {"loop", "lpf", "limits"}:
+            raise ValueError(f"{self.name}: state: expected a previous result's state {{'loop', 'lpf', 'limits'}}")
+        loop, lpf = np.asarray(state["loop"]), np.asarray(state["lpf"])
+        if loop.shape != self.state.shape or lpf.shape != self.lpf_state.shape:
+            raise ValueError(f"{self.name}: state: expected loop {self.state.shape} and lpf {self.lpf_state.shape}, "
+                             f"got {loop.shape} and {lpf.shape}")
+        self.state = loop.astype(np.int64).copy()
+        self.lpf_state = lpf.astype(np.int64).copy()
+        self.limits = {k: int(state["limits"][k]) for k in LIMITS}
+
+    def float_state(self) -> tuple[np.ndarray, np.ndarray]:
+        st = np.zeros(FS_LEN)
+        st[FS_F] = self.f_hz
+        return st, np.zeros((2, self.datapath.lpf.sections, 4))
+
+    # ---- bit-exact ------------------------------------------------------------------------------
+    def _counts(self):
+        return np.zeros(C_LEN, dtype=np.int64), np.zeros((2, self.datapath.lpf.sections), dtype=np.int64)
+
+    def _log(self, log: OverflowLog, counts, lcounts) -> None:
+        """Format overflows into ``log``; the PIs' limit events added to ``self.limits``."""
+        names = [f.counter for f in self.datapath.ovf]
+        values = [counts[C_MIX_I], counts[C_MIX_Q], *lcounts[0], *lcounts[1], *counts[C_AMP:C_PLL_INTEG]]
+        for name, v in zip(names, values, strict=True):
+            log.add(f"{self.name}.{name}", int(v))
+        for name, v in zip(LIMITS, counts[C_PLL_INTEG:], strict=True):
+            self.limits[name] += int(v)
+
+    def kernel_args(self):
+        dp = self.datapath
+        return (self._prm, dp.qsin.words, dp.atan.words, dp.lpf.b, dp.lpf.a, dp.lpf.c)
+
+    def stream(self, log: OverflowLog, x: np.ndarray) -> dict[str, np.ndarray]:
+        counts, lcounts = self._counts()
+        prm, qsin, atans, lb, la, lc = self.kernel_args()
+        dac, f, amp, err = _drive_open(np.asarray(x, dtype=np.int64), self.state, self.lpf_state, prm, qsin, atans,
+                                       lb, la, lc, counts, lcounts)
+        self._log(log, counts, lcounts)
+        return {"dac": dac, "f": f, "amp": amp, "phase": err}
+
+    # ---- float reference ------------------------------------------------------------------------
+    def reference(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        """The float loop on real ADC values from the reset state (pure)."""
+        st, lpf_st = self.float_state()
+        dac, f, amp, err = _drive_open_float(np.asarray(x, dtype=float), st, lpf_st, self._fprm, self.lpf.sos)
+        return {"dac": dac, "f": f, "amp": amp, "phase": err}
+
+    def frequency_hz(self, ftw) -> np.ndarray:
+        """Frequency words in Hz: ftw * fs / 2**phase_bits."""
+        return np.asarray(ftw, dtype=float) * (self.fs_hz / 2.0**self.nco.phase_bits)
+
+    # ---- stimulus: open-loop ADC codes ----------------------------------------------------------
+    def nominal_stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
+        """A pick-off at the set amplitude in lock with the reset NCO (I = A, Q = 0), whose frequency
+        steps 0.5 Hz up halfway: the PLL tracks it (a start far off frequency compares two
+        acquisitions, whose paths part on the first different rounding), plus noise."""
+        n = max(n, 4096)
+        f = np.where(np.arange(n) < n // 2, self.f_hz, self.f_hz + 0.5)
+        phase = 2 * np.pi * np.concatenate([[0.0], np.cumsum(f[:-1])]) / self.fs_hz
+        x = self.amp_setpoint * np.cos(phase)
+        x = x + rng.normal(0, 1e-4, n)
+        return {"x": quantize(x, self.in_format, Rules("half_up", "saturate"))}
+
+    def stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
+        fi = self.in_format
+        t = np.arange(2048) / self.fs_hz
+        full = 1.05 * fi.max_value * np.cos(2 * np.pi * self.f_hz * t)   # clipped: saturating pick-off
+        parts = [np.tile(corner_codes(fi), 16), quantize(full, fi, Rules("half_up", "saturate")),
+                 np.full(512, fi.min_int, np.int64), self.nominal_stimulus(rng, n)["x"]]
+        return {"x": np.concatenate(parts)}
+
+    def parameters(self) -> dict:
+        dp = self.datapath
+        return {"fs_hz": self.fs_hz, "f_hz": self.f_hz, "lock_range_hz": self.lock_range_hz,
+                "ftw_center": dp.ftw_center, "phase_bits": dp.phase_bits, "in_format": str(self.in_format),
+                "data_format": str(self.data_format), "angle_format": str(self.angle_format),
+                "dac_format": str(self.dac_format), "gain_format": str(self.gain_format),
+                "update_every": dp.update_every, "advance": dp.advance, "advance_bits": dp.advance_bits,
+                "kp_f": dp.kp_f, "ki_f": dp.ki_f, "pi_shift_f": dp.pi_shift_f, "kp_a": dp.kp_a, "ki_a": dp.ki_a,
+                "pi_shift_a": dp.pi_shift_a, "gains": self.gains, "rounding": self.rules.rounding,
+                "overflow": self.rules.overflow, "lpf": self.lpf.parameters()}
