@@ -131,37 +131,41 @@ def failing_writes(k: int | None, exc: type[BaseException]):
 # long single-test files (the mutation proofs, ~20-40 s each) last, on one worker while the other
 # idles. Longest first instead (LPT scheduling; the tail is then a few short files): seconds of each
 # file >= 5 s, measured in a cold `make test` of a fresh clone on a 2-core machine; every other
-# file after them in collection order. A wrong or stale number costs wall time, never a test.
+# file after them in collection order. The wheel's file goes first: its commands compile their numba
+# kernels in the installed package, not in the checkout, so while it runs the other worker compiles
+# the checkout's alone (two workers starting on two HDL files compiled the same kernels twice, at
+# once, before either had written numba's cache). A wrong or stale number costs wall time, never a test.
 FILE_SECONDS = {
-    "hdl/test_hdl_corners.py": 87,
-    "hdl/test_hdl_random.py": 82,
-    "hdl/test_hdl_golden.py": 73,
-    "test_wheel.py": 60,
-    "hdl/test_formal.py": 59,
-    "hdl/test_hdl_long_blocks.py": 48,
-    "hdl/test_rtl_command.py": 46,
-    "test_sweep.py": 36,
-    "test_extend.py": 36,
-    "test_diagnose_independent.py": 35,
-    "hdl/test_hdl_chain_stages.py": 29,
-    "test_diagnose_hidden.py": 25,
-    "hdl/test_mutation_serial.py": 24,
-    "hdl/test_hdl_long_chains.py": 20,
+    "test_wheel.py": 200,   # first, on its own worker (see above); measured 70
+    "hdl/test_hdl_corners.py": 97,
+    "hdl/test_hdl_random.py": 91,
+    "hdl/test_hdl_golden.py": 61,
+    "hdl/test_rtl_command.py": 59,
+    "hdl/test_formal.py": 51,
+    "hdl/test_hdl_long_blocks.py": 39,
+    "test_sweep.py": 38,
+    "test_extend.py": 37,
+    "test_diagnose_independent.py": 34,
+    "hdl/test_hdl_chain_stages.py": 30,
+    "test_diagnose_hidden.py": 23,
+    "hdl/test_mutation_serial.py": 23,
+    "hdl/test_hdl_lint.py": 22,
+    "hdl/test_hdl_long_chains.py": 19,
     "test_budget_floor.py": 18,
-    "hdl/test_hdl_lint.py": 18,
-    "test_fixed_properties.py": 17,
-    "hdl/test_mutation.py": 17,
-    "test_budget.py": 17,
-    "test_fixed_mutation.py": 15,
-    "test_outputs.py": 11,
-    "hdl/test_cocotb_driver.py": 8,
-    "test_config_errors.py": 8,
+    "test_budget.py": 16,
+    "test_fixed_properties.py": 16,
+    "test_drive.py": 15,
+    "hdl/test_mutation.py": 14,
+    "test_fixed_mutation.py": 13,
+    "test_outputs.py": 12,
+    "test_config_errors.py": 9,
     "test_extend_any_chain.py": 8,
-    "test_log_reader.py": 6,
+    "hdl/test_cocotb_driver.py": 7,
+    "test_repro_repeatability.py": 7,
     "test_extend_user_design.py": 6,
-    "test_repro_repeatability.py": 6,
-    "test_config_writer.py": 6,
-    "test_hw_report.py": 5,
+    "test_log_reader.py": 6,
+    "test_cli_commands.py": 6,
+    "test_nco.py": 5,
 }
 TESTS = Path(__file__).resolve().parent
 
