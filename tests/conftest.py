@@ -131,18 +131,17 @@ def failing_writes(k: int | None, exc: type[BaseException]):
 # long single-test files (the mutation proofs, ~20-40 s each) last, on one worker while the other
 # idles. Longest first instead (LPT scheduling; the tail is then a few short files): seconds of each
 # file >= 5 s, measured in a cold `make test` of a fresh clone on a 2-core machine; every other
-# file after them in collection order. The wheel's file goes first: its commands compile their numba
-# kernels in the installed package, not in the checkout, so while it runs the other worker compiles
-# the checkout's alone (two workers starting on two HDL files compiled the same kernels twice, at
-# once, before either had written numba's cache). A wrong or stale number costs wall time, never a test.
+# file after them in collection order. The wheel's file comes after the big HDL files: by then
+# the run has compiled the numba kernels its installed package loads (test_wheel._seed_numba_cache).
+# A wrong or stale number costs wall time, never a test.
 FILE_SECONDS = {
-    "test_wheel.py": 200,   # first, on its own worker (see above); measured 70
     "hdl/test_hdl_corners.py": 97,
     "hdl/test_hdl_random.py": 91,
     "hdl/test_hdl_golden.py": 61,
     "hdl/test_rtl_command.py": 59,
     "hdl/test_formal.py": 51,
     "hdl/test_hdl_long_blocks.py": 39,
+    "test_wheel.py": 38,
     "test_sweep.py": 38,
     "test_extend.py": 37,
     "test_diagnose_independent.py": 34,

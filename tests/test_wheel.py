@@ -32,6 +32,28 @@ def _run(cmd, cwd, env, timeout=600) -> subprocess.CompletedProcess:
     return proc
 
 
+def _seed_numba_cache(checkout: Path, installed: Path) -> None:
+    """The checkout's compiled numba kernels (what this run's other tests have compiled so far)
+    beside the installed package's identical sources, each source given the checkout copy's
+    modification time: numba keys a cached kernel on its source file's mtime and size, so the
+    installed package's commands load them instead of compiling every kernel again (~20 s of this
+    file). Anything not compiled yet, or any source that differs, is compiled as a user's first run
+    would; the commands' results cannot depend on it."""
+    for cache in checkout.rglob("__pycache__"):
+        kernels = [f for f in cache.iterdir() if f.suffix in (".nbi", ".nbc")]
+        folder = installed / cache.parent.relative_to(checkout)
+        if not kernels or not folder.is_dir():
+            continue
+        (folder / "__pycache__").mkdir(exist_ok=True)
+        for f in kernels:
+            shutil.copyfile(f, folder / "__pycache__" / f.name)
+        for source in folder.glob("*.py"):
+            mine = cache.parent / source.name
+            if mine.is_file() and mine.read_bytes() == source.read_bytes():
+                st = mine.stat()
+                os.utime(source, ns=(st.st_atime_ns, st.st_mtime_ns))
+
+
 @pytest.fixture(scope="module")
 def installed(tmp_path_factory):
     """(venv bin folder, environment, a work folder outside the checkout) with the wheel installed."""
@@ -54,6 +76,7 @@ def installed(tmp_path_factory):
     (purelib / "_fxdsp_test_dependencies.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
     _run([sys.executable, "-m", "pip", "--python", str(py), "install", "-q", "--no-deps", "--no-index", str(wheel)],
          cwd=tmp, env=dict(os.environ))
+    _seed_numba_cache(ROOT / "fxdsp", Path(purelib) / "fxdsp")
     work = tmp / "work"
     work.mkdir()
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
