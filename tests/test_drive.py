@@ -78,6 +78,7 @@ def test_a_pi_with_the_wrong_sign_loses_lock(design):
     drive, res = design.blocks["drive"], LOOPS["drive"]
     prm = drive._prm.copy()
     prm[P_KP_F], prm[P_KI_F] = -prm[P_KP_F], -prm[P_KI_F]
+    prm.setflags(write=False)   # as the block's own (a writable array is another numba type: a new compile)
     good = drive._prm
     try:
         drive._prm = prm
