@@ -41,17 +41,23 @@ VERILATOR_MODELS = SIM_BUILD / "verilator"
 
 # The instances whose serial variants the tests run beside the default RTL (one piecewise instance
 # of each shape is enough: the module is the same), with the parameters selecting the variant.
-def _serial() -> dict[str, dict]:
-    """Every instance with a serial variant, its selecting parameters (from its RTL interface), but one
-    instance of each module among the blocks (the module is the same; piecewise_k0 adds the cubic)."""
-    d = build()
-    out, modules = {}, set()
+def one_per_module(d) -> list[str]:
+    """Every chain top and one instance of each block module (the module is the same RTL; piecewise_k0
+    adds the cubic), in the design's order: where a test checks the module's protocol rather than an
+    instance's parameters (those: the golden vectors and the random parameter sets, every instance)."""
+    out, modules = [], set()
     for name, inst in d.hardware.items():
-        variant = inst.rtl.variant()
-        if variant is not None and (inst.members or inst.module not in modules or name == "piecewise_k0"):
-            out[name] = variant
+        if inst.members or inst.module not in modules or name == "piecewise_k0":
+            out.append(name)
             modules.add(inst.module)
     return out
+
+
+def _serial() -> dict[str, dict]:
+    """Every instance with a serial variant among :func:`one_per_module`'s, with its selecting
+    parameters (from its RTL interface)."""
+    d = build()
+    return {n: d.hardware[n].rtl.variant() for n in one_per_module(d) if d.hardware[n].rtl.variant() is not None}
 
 
 SERIAL = _serial()

@@ -1,4 +1,5 @@
-"""(c) Corner cases through every block and both tops, as streams on the same DUT: reset in
+"""(c) Corner cases through one instance of each block module and every top, as streams on the same DUT (the
+other instances' formats and corner codes: the golden vectors and random parameter sets): reset in
 mid-stream with samples in flight, then the corner list with gapped valid (on Verilator also back to
 back before it; on Icarus back-to-back valid is the golden vectors' stream). Two designs with narrowed formats force saturation / wrap and rounding ties:
 full scale, minimum negative, rounding ties, saturation, SF at and near zero, temperatures
@@ -13,7 +14,7 @@ import numpy as np
 import pytest
 
 from fxdsp.hdl.stimuli import corners
-from hdl_util import SERIAL, SIMULATORS, design_of, icarus_samples, icarus_window, run_cocotb, segment
+from hdl_util import SERIAL, SIMULATORS, design_of, icarus_samples, icarus_window, one_per_module, run_cocotb, segment
 
 _NARROW = {
     "rtd": {"temp_format": "s14.7"},                        # +-64 C: the LUT range saturates
@@ -37,7 +38,9 @@ DESIGNS = {
         "demod": {"rounding": "half_even", "overflow": "wrap", "lpf": {"overflow": "wrap"}},
     },
 }
-BLOCKS = sorted(design_of().hardware)   # every instance of the design with RTL: its blocks and chains
+# the chain tops and one instance per block module: resets anywhere and gaps test a module's protocol
+# (every instance's own formats: golden vectors with their corner codes, the random parameter sets)
+BLOCKS = sorted(one_per_module(design_of()))
 EXTRA = {"chain_paper002": {"DIV_UNROLL": 14}, "sf_divide": {"UNROLL": 2}}
 _designs: dict = {}
 
