@@ -37,8 +37,10 @@ demo: $(STAMP)
 
 # PYTHONDONTWRITEBYTECODE emptied: with it set (as in some CI images) no .pyc is ever written, so every
 # process of the run (two workers, each simulator's cocotb, each CLI and Dask subprocess) compiled
-# fxdsp and the tests from source again, and pytest rewrote every test module on each collection
-test: $(STAMP) hdl-tools
+# fxdsp and the tests from source again, and pytest rewrote every test module on each collection.
+# The Python install (pip, one core) and the system tools (apt-get on a fresh machine) side by side.
+test:
+	@$(MAKE) --no-print-directory -j2 $(STAMP) hdl-tools
 	PYTHONDONTWRITEBYTECODE= $(VENV)/bin/python -m pytest -q -n 2 --dist loadfile
 
 bench: $(STAMP)
