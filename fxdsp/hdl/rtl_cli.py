@@ -49,7 +49,7 @@ def run(args) -> int:
     from ..errors import InputError
     from ..outputs import json_text, staged, write_tree
     from .params import design_files
-    from .regression import markdown, regression
+    from .regression import duts, markdown, regression
 
     only = [n.strip() for n in args.only.split(",") if n.strip()] if args.only is not None else None
     if only is not None and not only:
@@ -59,6 +59,7 @@ def run(args) -> int:
     if args.rtl is not None and not sorted(Path(args.rtl).glob("*.v")):
         raise InputError(f"--rtl: no Verilog sources (*.v) in {args.rtl}")
     design = build(args.config)
+    duts(design, only)   # an unknown name, or one without RTL, is bad input before any work
     models = None
     if args.sim == "verilator":
         models = Path(args.cache) if args.cache else _cache_default()
