@@ -15,9 +15,9 @@ import pytest
 
 from fxdsp.blocks.drive import P_KI_F, P_KP_F
 from fxdsp.sim.driveloop import closed_loop
-from fxdsp.sim.resonator import PAPER001_DRIVE, PAPER002_DRIVE, _open_drive
+from fxdsp.sim.resonator import PAPER002_DRIVE, PRESETS, _open_drive
 
-LOOPS = {"drive": PAPER002_DRIVE, "drive001": PAPER001_DRIVE}
+LOOPS = PRESETS   # the built-in tables and the modes they were designed for
 
 
 def locked_from(run, drive, phase_rad=1e-3, amp_ppm=100.0) -> float | None:

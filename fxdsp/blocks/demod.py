@@ -244,6 +244,40 @@ def cordic_gain(iterations: int) -> float:
     return float(np.prod(np.sqrt(1.0 + 2.0 ** (-2.0 * np.arange(iterations)))))
 
 
+def mixer_format(in_format: Format, nco: Nco) -> Format:
+    """The exact product x * nco, read one fraction bit coarser: 2 x nco (I and Q are amplitudes)."""
+    fmt = product_format(in_format, nco.nco_format)
+    return fmt.with_fl(fmt.fl - 1)
+
+
+@dataclass(frozen=True, eq=False)
+class CordicWords:
+    """The vectoring CORDIC's words for one data and angle format (the demodulator's and the drive
+    loop's: one description)."""
+
+    work_format: Format   # x, y: data_format and two guard bits
+    amp_format: Format    # work x 1/K
+    half_pi: int          # pre-rotation angle on angle_format
+    inv_k: int            # 1/K on INV_K_FORMAT
+    atan: Rom             # arctan(2**-j) on angle_format
+
+
+def cordic_words(name: str, data_format: Format, angle_format: Format, iterations: int) -> CordicWords:
+    """The words of ``iterations`` steps, each constant quantised half_up; ValueError naming
+    ``name``'s field for an iteration count or an angle format the CORDIC cannot use."""
+    if not 4 <= iterations <= 40:
+        raise ValueError(f"{name}.cordic_iterations: must be 4..40, got {iterations}")
+    if angle_format.int_bits < 2:
+        raise ValueError(f"{name}.angle_format: {angle_format} cannot hold +-pi radians")
+    exact = Rules("half_up", "saturate")
+    work = Format(True, data_format.wl + 2, data_format.fl)
+    return CordicWords(
+        work_format=work, amp_format=product_format(work, INV_K_FORMAT),
+        half_pi=int(quantize([np.pi / 2], angle_format, exact)[0]),
+        inv_k=int(quantize([1.0 / cordic_gain(iterations)], INV_K_FORMAT, exact)[0]),
+        atan=Rom(quantize(np.arctan(2.0 ** -np.arange(iterations)), angle_format, exact), angle_format.wl))
+
+
 @dataclass(frozen=True, eq=False)
 class DemodDatapath(Datapath):
     """Fields in the order of the ``demod`` RTL module's parameters."""
@@ -325,10 +359,7 @@ class Demod(Block):
                  angle_format: Format, cordic_iterations: int, rules: Rules):
         if lpf_i.data_format != data_format:
             raise ValueError(f"demod.lpf.data_format: must equal demod.data_format {data_format}")
-        if not 4 <= cordic_iterations <= 40:
-            raise ValueError(f"demod.cordic_iterations: must be 4..40, got {cordic_iterations}")
-        if angle_format.int_bits < 2:
-            raise ValueError(f"demod.angle_format: {angle_format} cannot hold +-pi radians")
+        cordic = cordic_words("demod", data_format, angle_format, cordic_iterations)
         if nco.rules.rounding != rules.rounding:
             # the bit-exact mixer rounds the NCO correction by ``rules`` (its datapath), the NCO's own
             # ``wave`` (budget, tests) by ``nco.rules``: they must be one rounding
@@ -339,12 +370,9 @@ class Demod(Block):
         self.lpf_i, self.lpf_q = lpf_i, lpf_q
         self.rules = rules
         self.iterations = cordic_iterations
-        self.mix_format = product_format(in_format, nco.nco_format)
-        self.mix_format = self.mix_format.with_fl(self.mix_format.fl - 1)  # read as 2 * x * lut
-        self.work_format = Format(True, data_format.wl + 2, data_format.fl)
-        exact = Rules("half_up", "saturate")
-        self.inv_k = int(quantize([1.0 / cordic_gain(cordic_iterations)], INV_K_FORMAT, exact)[0])
-        amp_format = product_format(self.work_format, INV_K_FORMAT)
+        self.mix_format = mixer_format(in_format, nco)
+        self.work_format = cordic.work_format
+        self.inv_k = cordic.inv_k
         lpf = lpf_i.datapath
         lpf_ovf = lambda ch: tuple(OvfField(f"lpf_{ch}.{f.counter}", f.width) for f in lpf.ovf)  # noqa: E731
         self.datapath = DemodDatapath(
@@ -353,12 +381,10 @@ class Demod(Block):
             corr_shift=nco.corr_shift, nco_w=nco.nco_format.wl, ftw=nco.ftw, phase0=nco.phase0,
             phase_trim=nco.trim, mix_shift=self.mix_format.fl - data_format.fl,
             rules=rules, lpf=lpf, iterations=cordic_iterations, angle_w=angle_format.wl,
-            half_pi=int(quantize([np.pi / 2], angle_format, exact)[0]), inv_k=self.inv_k, inv_k_w=INV_K_FORMAT.wl,
-            amp_shift=amp_format.fl - data_format.fl, qsin=Rom(nco.qsin, nco.lut_format.wl),
-            atan=Rom(quantize(np.arctan(2.0 ** -np.arange(cordic_iterations)), angle_format, exact),
-                     angle_format.wl),
+            half_pi=cordic.half_pi, inv_k=cordic.inv_k, inv_k_w=INV_K_FORMAT.wl,
+            amp_shift=cordic.amp_format.fl - data_format.fl, qsin=Rom(nco.qsin, nco.lut_format.wl), atan=cordic.atan,
             addr_shift=nco.addr_shift, phase_mask=nco.phase_mask, data_format=data_format,
-            work_format=self.work_format, amp_format=amp_format,
+            work_format=cordic.work_format, amp_format=cordic.amp_format,
             ovf=(OvfField("mix_i", 1), OvfField("mix_q", 1), *lpf_ovf("i"), *lpf_ovf("q"), OvfField("amp", 1)))
         self.inputs = {"x": in_format}
         self.outputs = {"i": data_format, "q": data_format, "amp": data_format, "phase": angle_format}

@@ -53,7 +53,7 @@ from ..fixed import Format, OverflowLog, Rules, product_format, quantize
 from ..fixed.kernels import convert, shift_right_round
 from .base import Block, corner_codes
 from .datapath import Datapath, OvfField, Rom, const, info, nested
-from .demod import INV_K_FORMAT, Nco, _nco_wave, cordic_gain, cordic_one
+from .demod import TWO_PI_FORMAT, Nco, _nco_wave, cordic_one, cordic_words, mixer_format
 from .iir import Iir, IirDatapath, df1_cascade_step
 
 # int64 parameter vector of the kernels (indices)
@@ -61,10 +61,9 @@ from .iir import Iir, IirDatapath, df1_cascade_step
  P_DLO, P_DHI, P_LPF_SB, P_LPF_SA, P_LPF_OS, P_ITER, P_HALF_PI, P_INV_K, P_AMP_SHIFT, P_UPDATE, P_SET, P_PI,
  P_TWO_PI_ANGLE, P_KP_F, P_KI_F, P_SH_F, P_RANGE, P_CENTER, P_AMP_SET, P_KP_A, P_KI_A, P_SH_A, P_GMAX, P_ADV,
  P_ADV_BITS, P_DAC_SHIFT, P_DAC_LO, P_DAC_HI, P_FS_MANT, P_HZ_SHIFT, P_FLO, P_FHI, P_MIN_AMP, P_COUNT) = range(43)
-# int64 state vector: accumulator, frequency word, integrators, gain, update counter, the last
-# filtered I and Q, amplitude and phase error
-S_PHASE, S_FTW, S_INTEG_F, S_INTEG_A, S_GAIN, S_COUNT, S_I, S_Q, S_AMP, S_ERR, S_F, S_LEN = range(12)
-# overflow counters, in the order of the datapath's ovf fields after the low-pass sections
+# int64 state vector: accumulator, frequency word, integrators, gain, update counter, amplitude, phase
+# error and the frequency word in Hz (the low-pass states are their own array)
+S_PHASE, S_FTW, S_INTEG_F, S_INTEG_A, S_GAIN, S_COUNT, S_AMP, S_ERR, S_F, S_LEN = range(10)
 # counters: the format overflows (the datapath's ovf fields after the low-pass sections), then the
 # control limits (not overflows: the PIs' designed clamps; each output's counter follows its integrator's)
 C_MIX_I, C_MIX_Q, C_AMP, C_DAC, C_F, C_PLL_INTEG, C_PLL_LIMIT, C_AGC_INTEG, C_AGC_LIMIT, C_LEN = range(10)
@@ -118,8 +117,6 @@ def _drive_step(x, st, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts):
                             lpf_st[0], lcounts[0])
     q_lp = df1_cascade_step(q_mix, lb, la, lc, p[P_LPF_SB], p[P_LPF_SA], p[P_LPF_OS], rnd, p[P_DLO], p[P_DHI], ovf,
                             lpf_st[1], lcounts[1])
-    st[S_I] = i_lp
-    st[S_Q] = q_lp
     st[S_COUNT] += 1
     if st[S_COUNT] >= p[P_UPDATE]:
         st[S_COUNT] = 0
@@ -384,13 +381,9 @@ class Drive(Block):
         self.tau_s, self.resonator_gain = tau_s, resonator_gain
         self.gains = design_gains(pll_bandwidth_hz, agc_bandwidth_hz, damping, tau_s, resonator_gain,
                                   update_every / fs_hz)
-        self.bandwidths = (pll_bandwidth_hz, agc_bandwidth_hz)
         exact = Rules("half_up", "saturate")
-        mix = product_format(in_format, nco.nco_format)
-        mix = mix.with_fl(mix.fl - 1)
-        work = Format(True, data_format.wl + 2, data_format.fl)
-        amp_format = product_format(work, INV_K_FORMAT)
-        inv_k = int(quantize([1.0 / cordic_gain(cordic_iterations)], INV_K_FORMAT, exact)[0])
+        mix = mixer_format(in_format, nco)
+        cordic = cordic_words(name, data_format, angle_format, cordic_iterations)
         ftw_hz = fs_hz / 2.0**nco.phase_bits
         angle_lsb = 2.0**-angle_format.fl
         kp_f, ki_f, sh_f = _pi_words(self.gains["kp_f"] * angle_lsb / ftw_hz, self.gains["ki_f"] * angle_lsb / ftw_hz,
@@ -399,12 +392,13 @@ class Drive(Block):
         kp_a, ki_a, sh_a = _pi_words(self.gains["kp_a"] * scale_a, self.gains["ki_a"] * scale_a, coef_bits)
         q = lambda v, fmt: int(quantize([v], fmt, exact)[0])  # noqa: E731
         lock = q(lock_range_hz / fs_hz, nco.phase_format)
+        advance = q(advance_samples, Format(True, 16, advance_bits))
         # 63-bit proofs: the PI sums and the carrier advance
         e_max = 2 * q(np.pi, angle_format) + 1
         for what, bound in (("pll", kp_f * e_max + (lock << sh_f) + ki_f * e_max),
                             ("agc", kp_a * (1 << data_format.wl) + (q(gain_max, gain_format) << sh_a)
                              + ki_a * (1 << data_format.wl)),
-                            ("advance", (nco.ftw + lock) * int(round(abs(advance_samples) * 2**advance_bits) + 1))):
+                            ("advance", (nco.ftw + lock) * abs(advance))):
             if bound >= 2**62:
                 raise ValueError(f"{name}: the {what} arithmetic needs more than 63 bits; lower coef_bits")
         gain_prod = product_format(gain_format, nco.nco_format)
@@ -421,18 +415,16 @@ class Drive(Block):
         lpf_ovf = lambda ch: tuple(OvfField(f"lpf_{ch}.{f.counter}", f.width) for f in lpf_dp.ovf)  # noqa: E731
         self.datapath = DriveDatapath(
             in_w=in_format.wl, data_w=data_format.wl, phase_bits=nco.phase_bits, lut_bits=nco.lut_bits,
-            lut_w=nco.lut_format.wl, interp_bits=nco.interp_bits, two_pi=nco.two_pi, two_pi_w=16,
+            lut_w=nco.lut_format.wl, interp_bits=nco.interp_bits, two_pi=nco.two_pi, two_pi_w=TWO_PI_FORMAT.wl,
             corr_shift=nco.corr_shift, mix_shift=mix.fl - data_format.fl, rules=rules, lpf=lpf_dp,
-            iterations=cordic_iterations, angle_w=angle_format.wl, half_pi=q(np.pi / 2, angle_format),
-            inv_k=inv_k, amp_shift=amp_format.fl - data_format.fl, update_every=update_every,
+            iterations=cordic_iterations, angle_w=angle_format.wl, half_pi=cordic.half_pi,
+            inv_k=cordic.inv_k, amp_shift=cordic.amp_format.fl - data_format.fl, update_every=update_every,
             phase_set=q(phase_setpoint_rad, angle_format), pi_word=q(np.pi, angle_format), ftw_center=nco.ftw,
             lock_range=lock, kp_f=kp_f, ki_f=ki_f, pi_shift_f=sh_f, amp_set=q(amp_setpoint, data_format),
             kp_a=kp_a, ki_a=ki_a, pi_shift_a=sh_a, gain_w=gain_format.wl, gain_max=q(gain_max, gain_format),
-            advance=int(quantize([advance_samples], Format(True, 16, advance_bits), exact)[0]),
-            advance_bits=advance_bits, dac_w=dac_format.wl, dac_shift=gain_prod.fl - dac_format.fl,
+            advance=advance, advance_bits=advance_bits, dac_w=dac_format.wl, dac_shift=gain_prod.fl - dac_format.fl,
             fs_mant=fs_mant, hz_shift=hz_shift, freq_w=freq_format.wl, min_amp=q(pll_min_amp, data_format),
-            qsin=Rom(nco.qsin, nco.lut_format.wl),
-            atan=Rom(quantize(np.arctan(2.0 ** -np.arange(cordic_iterations)), angle_format, exact), angle_format.wl),
+            qsin=Rom(nco.qsin, nco.lut_format.wl), atan=cordic.atan,
             data_format=data_format, dac_format=dac_format, freq_format=freq_format,
             ovf=(OvfField("mix_i", 1), OvfField("mix_q", 1), *lpf_ovf("i"), *lpf_ovf("q"), OvfField("amp", 1),
                  OvfField("dac", 1), OvfField("f", 1)))

@@ -128,17 +128,17 @@ def biquad_fxpmath(iir, x: np.ndarray) -> np.ndarray:
 
 
 def _drive_loops(design, samples: int, repeat: int) -> dict:
-    """Every drive loop of the config closed on the mode its table was designed for: samples per
-    second of the bit-exact and the float loop, and of the resonator with its ADC alone."""
+    """Every drive loop of the config closed on its mode (:func:`fxdsp.sim.resonator.resonator_for`):
+    samples per second of the bit-exact and the float loop, and of the resonator with its ADC alone."""
     from ..blocks.drive import Drive
     from ..sim.driveloop import closed_loop
-    from ..sim.resonator import DriveResonator, _open_drive
+    from ..sim.resonator import _open_drive, resonator_for
 
     out = {}
     for name, drive in design.blocks.items():
         if not isinstance(drive, Drive):
             continue
-        res = DriveResonator.matching(drive)
+        res = resonator_for(drive)   # the mode `fxdsp simulate --drive-loop` closes it on
         seconds = samples / drive.fs_hz
         row = {"fs_hz": drive.fs_hz, "samples": samples}
         for kind, fixed in (("fixed", True), ("float", False)):

@@ -18,7 +18,7 @@ from pathlib import Path
 from fxdsp.errors import InputError
 from fxdsp.mechanisms import CAUSES
 from fxdsp.outputs import IN, OUT_FILE, staged
-from fxdsp.sim.generate import DEFAULT_TIME_STEP_S, OPTIONAL_COLUMNS, SCENARIOS, generate_log
+from fxdsp.sim.generate import DEFAULT_TIME_STEP_S, OPTIONAL_COLUMNS, SCENARIOS, generate_log, parse_columns
 from fxdsp.sim.logio import write_log
 from fxdsp.sim.thermal import NODES, ThermalChain
 
@@ -119,7 +119,7 @@ def _drive_loop(args):
     if name not in loops:
         raise InputError(f"--drive-loop: {args.drive_loop!r} is not a drive loop of "
                          f"{args.config or 'the built-in config'}; its drive loops: {', '.join(loops) or 'none'}")
-    if "freq_hz" not in [c.strip() for c in args.columns.split(",")]:
+    if "freq_hz" not in parse_columns(args.columns):
         raise InputError("--drive-loop: the log has no freq_hz column to read through it (--columns)")
     return design.blocks[name]
 

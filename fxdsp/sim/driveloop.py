@@ -25,6 +25,12 @@ from ..fixed import OverflowLog
 from .resonator import DriveResonator, adc_code, resonator_step
 
 CHUNK = 1 << 20
+STEP_S = 0.01   # the temperature (and resonance) profile's step
+
+
+def samples_per_step(fs_hz: float) -> int:
+    """Samples of one profile step at ``fs_hz``."""
+    return max(1, round(fs_hz * STEP_S))
 
 
 @njit(cache=True)
@@ -86,18 +92,20 @@ def closed_loop(drive: Drive, resonator: DriveResonator, temp_c, seconds: float,
                 progress: bool = False, freq_hz=None) -> ClosedLoopRun:
     """Run the loop closed on ``resonator`` for ``seconds`` from power-on (resonator at rest, loop
     reset). ``temp_c``: one temperature or a profile, one value per ``samples_per_temp`` samples
-    (default fs / 100: 10 ms steps); ``freq_hz``: a resonance profile on the same steps replacing
+    (default :data:`STEP_S`); ``freq_hz``: a resonance profile on the same steps replacing
     the resonator's f(T) (a log's simulated resonance, its effects included). ``fixed``: the
     bit-exact loop, else the float reference."""
     fs = drive.fs_hz
     n = int(round(seconds * fs))
-    per_step = int(samples_per_temp or max(1, round(fs / 100)))
+    per_step = int(samples_per_temp or samples_per_step(fs))
     rec = int(record_every or drive.update_every)
     if rec < 1 or n < rec:
         raise ValueError(f"record_every: {rec} must be within 1..{n} samples")
     temps = np.atleast_1d(np.asarray(temp_c, dtype=float))
     freqs = None if freq_hz is None else np.atleast_1d(np.asarray(freq_hz, dtype=float))
     if freqs is not None and freqs.shape != temps.shape:
+        if temps.size != 1:
+            raise ValueError(f"temp_c: {temps.size} steps, freq_hz {freqs.size}: one value, or one per step of both")
         temps = np.broadcast_to(temps, freqs.shape)
     for what, arr in (("temp_c", temps), ("freq_hz", freqs)):
         if arr is not None and not np.all(np.isfinite(arr)):
@@ -163,7 +171,7 @@ def loop_frequency(drive: Drive, resonator: DriveResonator, t_s, freq_hz, temp_c
                                                                                         atol=1e-9 * max(1.0, dt)):
         raise ValueError(f"t_s: the rows must be a whole number of drive-loop samples apart (fs = "
                          f"{drive.fs_hz:g} Hz), evenly; got a step of {dt:g} s")
-    per_step = max(1, round(drive.fs_hz / 100))
+    per_step = samples_per_step(drive.fs_hz)
     # whole records from the start: the warm-up is a whole number of rows before the first one
     lead = int(np.ceil((warmup_s + dt) / dt))
     n_rec = lead + t.size - 1

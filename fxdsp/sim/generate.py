@@ -45,7 +45,8 @@ QUAD_SWING_PER_SF = 0.5
 _STREAMS = ("programme", "quad", "output", "temp_c", "ref_temp_c", "freq_hz", "quad_noise", "repeatability")
 
 
-def _parse_columns(columns) -> tuple[str, ...]:
+def parse_columns(columns) -> tuple[str, ...]:
+    """The optional columns asked for (a list or "a,b"), each once, in order; ValueError naming an unknown one."""
     if isinstance(columns, str):
         columns = [c.strip() for c in columns.split(",") if c.strip()]
     out = []
@@ -155,7 +156,7 @@ def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: 
         raise ValueError(f"scenario: unknown name {scenario!r}; expected one of {', '.join(SCENARIOS)}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed: must be a non-negative integer, got {seed!r}")
-    wanted = _parse_columns(columns)
+    wanted = parse_columns(columns)
     replay = as_model(model)
     baseline: Baseline = scenario_baseline(scenario)
     if replay:  # the fields the replay model gives replace the scenario's
@@ -221,7 +222,9 @@ def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: 
         "freq_hz": lambda: freq + noise_mod.white(streams["freq_hz"], n, levels["freq_hz"]),
         "quad": lambda: quad + noise_mod.white(streams["quad_noise"], n, levels["quad"]),
     }
-    if drive_loop is not None and "freq_hz" in wanted:
+    if drive_loop is not None:
+        if "freq_hz" not in wanted:   # the loop would run for nothing and the caller not know it
+            raise InputError(f"drive_loop [{drive_loop.name}]: columns has no freq_hz to read through it")
         optional["freq_hz"] = lambda: _through_loop(drive_loop, t, freq, nodes["die"], streams["freq_hz"], progress)
     for name in wanted:
         log[name] = optional[name]()
