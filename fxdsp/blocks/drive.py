@@ -248,7 +248,7 @@ def _drive_open_float(x, st, lpf_st, p, sos):
 
 
 def design_gains(pll_hz: float, agc_hz: float, damping: float, tau_s: float, resonator_gain: float,
-                 update_s: float) -> dict[str, float]:
+                 update_s: float, name: str = "drive") -> dict[str, float]:
     """The PI gains in physical units (module docstring): kp_f Hz/rad, ki_f Hz/rad per update,
     kp_a per FS of amplitude, ki_a per FS per update. Each loop is a PI on a first-order lag
     ``G / (1 + s tau)``; its closed-loop poles solve ``tau s^2 + (1 + G kp) s + G ki = 0``, placed at
@@ -259,8 +259,8 @@ def design_gains(pll_hz: float, agc_hz: float, damping: float, tau_s: float, res
     for loop, f, g in (("f", pll_hz, 2 * np.pi * tau_s), ("a", agc_hz, resonator_gain)):
         w = 2 * np.pi * f
         if 2 * damping * w * tau_s <= 1:
-            raise ValueError(f"drive: the {'pll' if loop == 'f' else 'agc'} bandwidth {f} Hz is below the "
-                             f"resonator's own 1 / (2 pi tau) = {1 / (2 * np.pi * tau_s):.3g} Hz at damping {damping}")
+            raise ValueError(f"{name}.{'pll' if loop == 'f' else 'agc'}_bandwidth_hz: {f} Hz is below what the "
+                             f"mode's own 1 / (2 pi tau_s) = {1 / (2 * np.pi * tau_s):.3g} Hz allows at damping {damping}")
         out[f"kp_{loop}"] = (2 * damping * w * tau_s - 1) / g
         out[f"ki_{loop}"] = w * w * tau_s / g * update_s
     return out
@@ -330,7 +330,7 @@ class DriveDatapath(Datapath):
     ovf: tuple = info()
 
 
-def _mantissa(fs_hz: float) -> tuple[int, int]:
+def _mantissa(fs_hz: float, name: str) -> tuple[int, int]:
     """(odd m, k) with fs = m * 2**k exactly, for a sample rate that is a binary fraction."""
     for j in range(0, 33):
         scaled = fs_hz * 2.0**j
@@ -340,8 +340,8 @@ def _mantissa(fs_hz: float) -> tuple[int, int]:
                 m //= 2
                 k += 1
             return m, k
-    raise ValueError(f"system.fs_hz: {fs_hz} is not a multiple of 2**-32 Hz: the frequency word cannot be "
-                     f"converted to Hz exactly")
+    raise ValueError(f"system.fs_hz: {fs_hz} is not a multiple of 2**-32 Hz: the drive loop [{name}]'s frequency "
+                     f"word cannot be converted to Hz exactly")
 
 
 class Drive(Block):
@@ -380,7 +380,7 @@ class Drive(Block):
         self.amp_setpoint, self.gain_max = amp_setpoint, gain_max
         self.tau_s, self.resonator_gain = tau_s, resonator_gain
         self.gains = design_gains(pll_bandwidth_hz, agc_bandwidth_hz, damping, tau_s, resonator_gain,
-                                  update_every / fs_hz)
+                                  update_every / fs_hz, name)
         exact = Rules("half_up", "saturate")
         mix = mixer_format(in_format, nco)
         cordic = cordic_words(name, data_format, angle_format, cordic_iterations)
@@ -402,10 +402,10 @@ class Drive(Block):
             if bound >= 2**62:
                 raise ValueError(f"{name}: the {what} arithmetic needs more than 63 bits; lower coef_bits")
         gain_prod = product_format(gain_format, nco.nco_format)
-        fs_mant, fs_exp = _mantissa(fs_hz)
+        fs_mant, fs_exp = _mantissa(fs_hz, name)
         if fs_mant.bit_length() + nco.phase_bits > 62:
-            raise ValueError(f"system.fs_hz: {fs_hz} = {fs_mant} x 2**{fs_exp}: the frequency word times {fs_mant} "
-                             f"needs more than 62 bits at phase_bits {nco.phase_bits}")
+            raise ValueError(f"{name}.phase_bits: {nco.phase_bits}: the frequency word times {fs_mant} (system.fs_hz "
+                             f"{fs_hz} = {fs_mant} x 2**{fs_exp}) needs more than 62 bits to give Hz exactly")
         hz_shift = nco.phase_bits - fs_exp - freq_format.fl
         top = (nco.ftw + lock) * fs_mant
         if (top >> max(hz_shift, 0)) << max(-hz_shift, 0) > freq_format.max_int:

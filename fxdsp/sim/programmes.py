@@ -159,6 +159,9 @@ class Sampled:
     segment: np.ndarray  # segment index per sample
 
 
+MAX_ROWS = 10_000_000   # a 10 M-row CSV is about 1 GB
+
+
 def sample(segments: list[Segment], start_c: float, time_step_s: float) -> Sampled:
     """Sample a programme every ``time_step_s`` from 0 to its end (inclusive of the last sample)."""
     if not time_step_s > 0:
@@ -166,6 +169,9 @@ def sample(segments: list[Segment], start_c: float, time_step_s: float) -> Sampl
     ends = np.cumsum([s.duration_s for s in segments])
     total = float(ends[-1])
     n = int(np.floor(total / time_step_s)) + 1
+    if n > MAX_ROWS:   # a memory error (tens of GB) rather than a log, otherwise
+        raise ValueError(f"time_step_s: {time_step_s:g} s gives {n} rows over the programme's {total:g} s; at most "
+                         f"{MAX_ROWS} (a step of {total / (MAX_ROWS - 1):.3g} s or more)")
     t = np.arange(n) * time_step_s
     knots_t = np.concatenate([[0.0], ends])
     knots_c = np.concatenate([[start_c], [s.end_c for s in segments]])
