@@ -25,6 +25,8 @@ from .fixed import Rules, quantize
 from .netlist import Endpoint
 
 NEAREST_SAT = Rules("half_up", "saturate")   # an ADC: nearest code, clipped at full scale
+# the gyro's quadrature in the nominal stimulus (FS): an untrimmed MEMS gyro's 10 deg/s at 200 deg/s
+NOMINAL_QUADRATURE_FS = 0.05
 
 
 class Sensor:
@@ -142,7 +144,7 @@ class GyroRtd(Sensor):
     def held_inputs(self, t_c: np.ndarray, level: np.ndarray, rng: np.random.Generator) -> dict[str, np.ndarray]:
         """Rate ``level`` (FS) with the nominal stimulus' quadrature (0.05 FS) and sense noise
         (1e-3 FS), which dithers the ADCs as in a real sensor."""
-        return self.sensor_inputs(t_c, level, quad_fs=0.05, rng=rng, noise_fs=1e-3)
+        return self.sensor_inputs(t_c, level, quad_fs=NOMINAL_QUADRATURE_FS, rng=rng, noise_fs=1e-3)
 
     def sensor_inputs(self, t_c: np.ndarray, rate_fs: np.ndarray, quad_fs: float = 0.0,
                       rng: np.random.Generator | None = None, noise_fs: float = 0.0) -> dict[str, np.ndarray]:
@@ -156,7 +158,7 @@ class GyroRtd(Sensor):
         t_c = np.linspace(-20.0, 60.0, n)
         steps = np.array([0.0, 0.3, -0.3, 0.1, 0.0, -0.05, 0.2, 0.0])
         rate = np.repeat(steps, -(-n // steps.size))[:n]
-        out = self.sensor_analog(t_c, rate, quad_fs=0.05, rng=rng, noise_fs=1e-3)
+        out = self.sensor_analog(t_c, rate, quad_fs=NOMINAL_QUADRATURE_FS, rng=rng, noise_fs=1e-3)
         out.update(t_c=t_c, rate_fs=rate, codes=self.digitise(out["analog"]))
         return out
 

@@ -284,9 +284,13 @@ def drive(block, xs) -> dict[str, list[int]]:
     center = word(Fraction(block.f_hz) / Fraction(block.fs_hz), P)
     rng_f = word(Fraction(block.lock_range_hz) / Fraction(block.fs_hz), P)
 
-    def hz(ftw: int) -> int:
-        v = Fraction(ftw) * Fraction(block.fs_hz) / (1 << P)
-        return fit(round_to_int(v * (1 << block.freq_format.fl), rules.rounding), block.freq_format, rules.overflow)[0]
+    fl = block.freq_format.fl
+    hz_center = word(Fraction(center) * Fraction(block.fs_hz) / (1 << P), fl)
+    hz_coef = word(Fraction(block.fs_hz) * (1 << fl) / (1 << P), dp.hz_shift)
+
+    def hz(ftw: int) -> int:   # the centre's word plus the deviation's, rounded by the rules
+        dev = round_to_int(Fraction((ftw - center) * hz_coef, 1 << dp.hz_shift), rules.rounding)
+        return fit(hz_center + dev, block.freq_format, rules.overflow)[0]
 
     phase, ftw, integ_f, integ_a, gain, count = 0, center, 0, 0, 0, 0
     f_word, amp, err = hz(center), 0, 0

@@ -233,7 +233,15 @@ def test_budget_json_is_strict_and_byte_identical(tmp_path, capsys):
         (f["chain"], f["port"]) for f in out["floor"]}
     assert "bias instability" in text and "deg/sqrt(h)" in text
     assert "0.664" in text and "worst over the band" in text
+    # every drive loop at the range's ends and room temperature, locked within 4 tau, near its floor
+    assert sorted((lb["table"], lb["scenario"]) for lb in out["drive_loop"]) == sorted(
+        (t, f"{c:g} C") for t in ("drive", "drive001") for c in (-40, 25, 85))
+    for lb in out["drive_loop"]:
+        assert lb["fixed"]["lock_tau"] < 4 and lb["within"], lb
+        assert lb["fixed"]["t_noise_mc"] == pytest.approx(lb["fixed"]["f_noise_hz"] / abs(lb["k_hz_per_c"]) * 1e3)
+    assert "6. drive loops" in text
     md = (rep / "budget.md").read_text()
+    assert "## 6. Drive loops" in md
     assert "allan_chain_paper002.rate.png" in md and (rep / "allan_chain_paper002.rate.png").stat().st_size > 0
     assert "### Floor and margin" in md and (rep / "drive_sweep_chain_paper002.rate.png").exists()
     for a in out["attribution"]:   # every chain output attributed, and plotted

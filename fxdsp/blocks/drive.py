@@ -12,7 +12,10 @@ Per sample n, on the drive ADC's code ``x``:
 * **Every ``update_every`` samples** the control update: the demodulator's CORDIC turns the filtered
   (I, Q) into amplitude and angle;
   - PLL: phase error ``e = angle - phase_setpoint`` wrapped into (-pi, pi]; ``df = R(kp_f e +
-    integ_f) >> pi_shift_f`` with ``integ_f += ki_f e``; the frequency word ``ftw = ftw_center + df``;
+    integ_f) >> pi_shift_f`` with ``integ_f += ki_f e``; the frequency word ``ftw = ftw_center + df``,
+    and in Hz on ``freq_format`` ``f = hz_center + R(df * hz_coef >> hz_shift)`` (``hz_words``: the
+    centre's Hz word and fs / 2**phase_bits as a coefficient, for any sample rate: within 1.25 LSB of
+    ``ftw * fs / 2**phase_bits``, half from each rounding and a quarter from the coefficient's);
   - amplitude: ``ea = amp_setpoint - amp``; ``g = R(kp_a ea + integ_a) >> pi_shift_a`` with
     ``integ_a += ki_a ea``.
   The PLL holds while the amplitude is below ``pll_min_amp`` (at rest the angle is the noise's).
@@ -44,6 +47,7 @@ anti-windup clamps.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from fractions import Fraction
 
 import numpy as np
 from numba import njit
@@ -60,7 +64,8 @@ from .iir import Iir, IirDatapath, df1_cascade_step
 (P_ADDR_SHIFT, P_LUT_BITS, P_INTERP_BITS, P_TWO_PI, P_CORR_SHIFT, P_PHASE_MASK, P_MIX_SHIFT, P_RND, P_OVF,
  P_DLO, P_DHI, P_LPF_SB, P_LPF_SA, P_LPF_OS, P_ITER, P_HALF_PI, P_INV_K, P_AMP_SHIFT, P_UPDATE, P_SET, P_PI,
  P_TWO_PI_ANGLE, P_KP_F, P_KI_F, P_SH_F, P_RANGE, P_CENTER, P_AMP_SET, P_KP_A, P_KI_A, P_SH_A, P_GMAX, P_ADV,
- P_ADV_BITS, P_DAC_SHIFT, P_DAC_LO, P_DAC_HI, P_FS_MANT, P_HZ_SHIFT, P_FLO, P_FHI, P_MIN_AMP, P_COUNT) = range(43)
+ P_ADV_BITS, P_DAC_SHIFT, P_DAC_LO, P_DAC_HI, P_HZ_CENTER, P_HZ_COEF, P_HZ_SHIFT, P_FLO, P_FHI, P_MIN_AMP,
+ P_COUNT) = range(44)
 # int64 state vector: accumulator, frequency word, integrators, gain, update counter, amplitude, phase
 # error and the frequency word in Hz (the low-pass states are their own array)
 S_PHASE, S_FTW, S_INTEG_F, S_INTEG_A, S_GAIN, S_COUNT, S_AMP, S_ERR, S_F, S_LEN = range(10)
@@ -102,12 +107,11 @@ def _pi_update(e, st, k, kp, ki, shift, lo, hi, rnd, counts, c):
     return out
 
 
-@njit(cache=True)
-def _drive_step(x, st, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts):
-    """One sample of the loop on ADC code ``x``: returns the DAC word; updates ``st`` (S_*),
-    ``lpf_st`` (2 channels x sections x 6) and the overflow counts (module docstring)."""
+@njit(cache=True, inline="always")
+def _detect(x, ph, lpf_st, p, qsin, lb, la, lc, counts, lcounts):
+    """The phase detector's per-sample part on ADC code ``x`` with the NCO at ``ph``: mixers and
+    low-pass; returns the filtered (I, Q)."""
     rnd, ovf = p[P_RND], p[P_OVF]
-    ph = st[S_PHASE]
     c, m = _nco_wave(ph, p[P_ADDR_SHIFT], p[P_LUT_BITS], p[P_INTERP_BITS], qsin, p[P_TWO_PI], p[P_CORR_SHIFT], rnd)
     i_mix, o = convert(x * c, p[P_MIX_SHIFT], rnd, p[P_DLO], p[P_DHI], ovf)
     counts[C_MIX_I] += o
@@ -117,27 +121,46 @@ def _drive_step(x, st, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts):
                             lpf_st[0], lcounts[0])
     q_lp = df1_cascade_step(q_mix, lb, la, lc, p[P_LPF_SB], p[P_LPF_SA], p[P_LPF_OS], rnd, p[P_DLO], p[P_DHI], ovf,
                             lpf_st[1], lcounts[1])
+    return i_lp, q_lp
+
+
+@njit(cache=True, inline="always")
+def _polar(i_lp, q_lp, p, atans, counts):
+    """The phase detector's update part: the CORDIC's amplitude and the angle's error against the
+    set point, wrapped into (-pi, pi]."""
+    xk, z = cordic_one(i_lp, q_lp, atans, p[P_HALF_PI], p[P_ITER])
+    amp, o = convert(xk * p[P_INV_K], p[P_AMP_SHIFT], p[P_RND], p[P_DLO], p[P_DHI], p[P_OVF])
+    counts[C_AMP] += o
+    e = z - p[P_SET]
+    while e > p[P_PI]:
+        e -= p[P_TWO_PI_ANGLE]
+    while e <= -p[P_PI]:
+        e += p[P_TWO_PI_ANGLE]
+    return amp, e
+
+
+@njit(cache=True)
+def _drive_step(x, st, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts):
+    """One sample of the loop on ADC code ``x``: returns the DAC word; updates ``st`` (S_*),
+    ``lpf_st`` (2 channels x sections x 6) and the overflow counts (module docstring)."""
+    rnd, ovf = p[P_RND], p[P_OVF]
+    ph = st[S_PHASE]
+    i_lp, q_lp = _detect(x, ph, lpf_st, p, qsin, lb, la, lc, counts, lcounts)
     st[S_COUNT] += 1
     if st[S_COUNT] >= p[P_UPDATE]:
         st[S_COUNT] = 0
-        xk, z = cordic_one(i_lp, q_lp, atans, p[P_HALF_PI], p[P_ITER])
-        amp, o = convert(xk * p[P_INV_K], p[P_AMP_SHIFT], rnd, p[P_DLO], p[P_DHI], ovf)
-        counts[C_AMP] += o
-        # PLL: the angle against its set point, wrapped into (-pi, pi]; held (frequency and
-        # integrator) while the amplitude is below pll_min_amp, where the angle is the noise's
-        e = z - p[P_SET]
-        while e > p[P_PI]:
-            e -= p[P_TWO_PI_ANGLE]
-        while e <= -p[P_PI]:
-            e += p[P_TWO_PI_ANGLE]
+        # PLL: held (frequency and integrator) while the amplitude is below pll_min_amp, where the
+        # angle is the noise's
+        amp, e = _polar(i_lp, q_lp, p, atans, counts)
         if amp >= p[P_MIN_AMP]:
             rng = p[P_RANGE]
             df = _pi_update(e, st, S_INTEG_F, p[P_KP_F], p[P_KI_F], p[P_SH_F], -rng, rng, rnd, counts, C_PLL_INTEG)
             st[S_FTW] = p[P_CENTER] + df
-            # the frequency in Hz: ftw * fs / 2**phase_bits, fs = FS_MANT * 2**k exactly
-            f, o = convert(st[S_FTW] * p[P_FS_MANT], p[P_HZ_SHIFT], rnd, p[P_FLO], p[P_FHI], ovf)
+            # the frequency in Hz: the centre's word plus df x (fs / 2**phase_bits) (module docstring)
+            f, o = convert(df * p[P_HZ_COEF], p[P_HZ_SHIFT], rnd, p[P_FLO] - p[P_HZ_CENTER],
+                           p[P_FHI] - p[P_HZ_CENTER], ovf)
             counts[C_F] += o
-            st[S_F] = f
+            st[S_F] = p[P_HZ_CENTER] + f
         # amplitude controller
         ea = p[P_AMP_SET] - amp
         st[S_GAIN] = _pi_update(ea, st, S_INTEG_A, p[P_KP_A], p[P_KI_A], p[P_SH_A], 0, p[P_GMAX], rnd, counts,
@@ -169,6 +192,23 @@ def _drive_open(x, st, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts):
     return dac, f, amp, err
 
 
+@njit(cache=True)
+def _detector_open(x, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts):
+    """The phase detector alone on ADC codes, its NCO free at the centre word (no PLL): the angle
+    error at every control update (angle_format LSBs)."""
+    m = x.shape[0] // p[P_UPDATE]
+    err = np.empty(m, dtype=np.int64)
+    ph = 0
+    k = 0
+    for n in range(m * p[P_UPDATE]):
+        i_lp, q_lp = _detect(x[n], ph, lpf_st, p, qsin, lb, la, lc, counts, lcounts)
+        if (n + 1) % p[P_UPDATE] == 0:
+            err[k] = _polar(i_lp, q_lp, p, atans, counts)[1]
+            k += 1
+        ph = (ph + p[P_CENTER]) & p[P_PHASE_MASK]
+    return err
+
+
 # ---- float reference ---------------------------------------------------------------------------
 # float parameter vector and state
 (F_FS, F_CENTER, F_KP_F, F_KI_F, F_RANGE, F_SET, F_AMP_SET, F_KP_A, F_KI_A, F_GMAX, F_ADV, F_UPDATE, F_MIN_AMP,
@@ -188,11 +228,10 @@ def _pi_update_float(e, st, k, kp, ki, lo, hi):
     return min(max(out, lo), hi)
 
 
-@njit(cache=True)
-def _drive_step_float(x, st, lpf_st, p, sos):
-    """The float loop on a real ADC value x (full-scale units): returns the real DAC value.
-    ``st`` (FS_*), ``lpf_st`` (2 x sections x 4: x1, x2, y1, y2, transposed-free DF-I)."""
-    ph = st[FS_PHASE]   # turns, in [0, 1)
+@njit(cache=True, inline="always")
+def _detect_float(x, ph, lpf_st, sos):
+    """:func:`_detect` in float: exact sin/cos at ``ph`` (turns), the unquantised low-pass
+    (``lpf_st``: 2 x sections x 4, x1, x2, y1, y2)."""
     w = 2.0 * np.pi * ph
     v = np.empty(2)
     v[0] = 2.0 * x * np.cos(w)
@@ -209,15 +248,30 @@ def _drive_step_float(x, st, lpf_st, p, sos):
             r[2] = acc
             y = acc
         out[ch] = y
+    return out[0], out[1]
+
+
+@njit(cache=True, inline="always")
+def _polar_float(i_lp, q_lp, p):
+    """:func:`_polar` in float: hypot and atan2."""
+    e = np.arctan2(q_lp, i_lp) - p[F_SET]
+    while e > np.pi:
+        e -= 2 * np.pi
+    while e <= -np.pi:
+        e += 2 * np.pi
+    return np.hypot(i_lp, q_lp), e
+
+
+@njit(cache=True)
+def _drive_step_float(x, st, lpf_st, p, sos):
+    """The float loop on a real ADC value x (full-scale units): returns the real DAC value.
+    ``st`` (FS_*), ``lpf_st`` (2 x sections x 4: x1, x2, y1, y2, transposed-free DF-I)."""
+    ph = st[FS_PHASE]   # turns, in [0, 1)
+    i_lp, q_lp = _detect_float(x, ph, lpf_st, sos)
     st[FS_COUNT] += 1.0
     if st[FS_COUNT] >= p[F_UPDATE]:
         st[FS_COUNT] = 0.0
-        amp = np.hypot(out[0], out[1])
-        e = np.arctan2(out[1], out[0]) - p[F_SET]
-        while e > np.pi:
-            e -= 2 * np.pi
-        while e <= -np.pi:
-            e += 2 * np.pi
+        amp, e = _polar_float(i_lp, q_lp, p)
         if amp >= p[F_MIN_AMP]:
             rng = p[F_RANGE]
             st[FS_F] = p[F_CENTER] + _pi_update_float(e, st, FS_INTEG_F, p[F_KP_F], p[F_KI_F], -rng, rng)
@@ -245,6 +299,19 @@ def _drive_open_float(x, st, lpf_st, p, sos):
         amp[k] = st[FS_AMP]
         err[k] = st[FS_ERR]
     return dac, f, amp, err
+
+
+@njit(cache=True)
+def _detector_open_float(x, lpf_st, p, sos, turns_per_sample):
+    """:func:`_detector_open` in float (radians), the NCO at ``turns_per_sample``."""
+    upd = int(p[F_UPDATE])
+    m = x.shape[0] // upd
+    err = np.empty(m)
+    for n in range(m * upd):
+        i_lp, q_lp = _detect_float(x[n], (n * turns_per_sample) % 1.0, lpf_st, sos)
+        if (n + 1) % upd == 0:
+            err[(n + 1) // upd - 1] = _polar_float(i_lp, q_lp, p)[1]
+    return err
 
 
 def design_gains(pll_hz: float, agc_hz: float, damping: float, tau_s: float, resonator_gain: float,
@@ -318,7 +385,8 @@ class DriveDatapath(Datapath):
     advance_bits: int
     dac_w: int
     dac_shift: int               # gain x carrier product -> dac_format
-    fs_mant: int                 # fs = FS_MANT x 2**k exactly: f = ftw x FS_MANT >> HZ_SHIFT (Hz, freq_format)
+    hz_center: int = const()     # f_hz's tuning word in Hz on freq_format
+    hz_coef: int = const()       # fs / 2**phase_bits in freq_format LSBs x 2**hz_shift
     hz_shift: int
     freq_w: int
     min_amp: int = const()       # the PLL holds below this amplitude (data_format)
@@ -330,18 +398,26 @@ class DriveDatapath(Datapath):
     ovf: tuple = info()
 
 
-def _mantissa(fs_hz: float, name: str) -> tuple[int, int]:
-    """(odd m, k) with fs = m * 2**k exactly, for a sample rate that is a binary fraction."""
-    for j in range(0, 33):
-        scaled = fs_hz * 2.0**j
-        if scaled == int(scaled):
-            m, k = int(scaled), -j
-            while m and m % 2 == 0:
-                m //= 2
-                k += 1
-            return m, k
-    raise ValueError(f"system.fs_hz: {fs_hz} is not a multiple of 2**-32 Hz: the drive loop [{name}]'s frequency "
-                     f"word cannot be converted to Hz exactly")
+def hz_words(fs_hz: float, phase_bits: int, ftw_center: int, lock_range: int, freq_format: Format,
+             name: str) -> tuple[int, int, int]:
+    """(hz_center, hz_coef, hz_shift): the frequency word's conversion to Hz on ``freq_format``,
+    ``f = hz_center + R(df * hz_coef >> hz_shift)`` with ``df = ftw - ftw_center``. The centre is
+    exact to half an LSB; the coefficient's shift is the largest whose product with the lock range
+    fits 62 bits, and its rounding may add at most a quarter of an LSB over the lock range (any
+    sample rate: an exact ``ftw * fs`` would need fs to be a short binary fraction)."""
+    exact = Rules("half_up", "saturate")
+    center = Fraction(ftw_center) * Fraction(fs_hz) / (1 << phase_bits)
+    hz_center = int(quantize([float(center)], freq_format, exact)[0])
+    step = Fraction(fs_hz) * (1 << freq_format.fl) / (1 << phase_bits)   # freq LSBs per ftw LSB
+    lock = max(lock_range, 1)
+    shift = 62 - lock.bit_length() - (step.numerator.bit_length() - step.denominator.bit_length()) + 2
+    while shift >= 0 and lock * int(step * (1 << shift) + Fraction(1, 2)) >= 1 << 62:
+        shift -= 1
+    coef = int(step * (1 << shift) + Fraction(1, 2)) if shift >= 0 else 0
+    if shift < 0 or coef == 0 or 2 * lock_range > (1 << shift):
+        raise ValueError(f"{name}.freq_format: {freq_format} with phase_bits {phase_bits}: the frequency word's "
+                         f"conversion to Hz would err by more than a quarter of an LSB over the lock range")
+    return hz_center, coef, shift
 
 
 class Drive(Block):
@@ -402,13 +478,8 @@ class Drive(Block):
             if bound >= 2**62:
                 raise ValueError(f"{name}: the {what} arithmetic needs more than 63 bits; lower coef_bits")
         gain_prod = product_format(gain_format, nco.nco_format)
-        fs_mant, fs_exp = _mantissa(fs_hz, name)
-        if fs_mant.bit_length() + nco.phase_bits > 62:
-            raise ValueError(f"{name}.phase_bits: {nco.phase_bits}: the frequency word times {fs_mant} (system.fs_hz "
-                             f"{fs_hz} = {fs_mant} x 2**{fs_exp}) needs more than 62 bits to give Hz exactly")
-        hz_shift = nco.phase_bits - fs_exp - freq_format.fl
-        top = (nco.ftw + lock) * fs_mant
-        if (top >> max(hz_shift, 0)) << max(-hz_shift, 0) > freq_format.max_int:
+        hz_center, hz_coef, hz_shift = hz_words(fs_hz, nco.phase_bits, nco.ftw, lock, freq_format, name)
+        if hz_center + ((lock * hz_coef) >> hz_shift) + 1 > freq_format.max_int:
             raise ValueError(f"{name}.freq_format: {freq_format} cannot hold f_hz + lock_range_hz = "
                              f"{f_hz + lock_range_hz} Hz")
         lpf_dp = lpf.datapath
@@ -423,7 +494,7 @@ class Drive(Block):
             lock_range=lock, kp_f=kp_f, ki_f=ki_f, pi_shift_f=sh_f, amp_set=q(amp_setpoint, data_format),
             kp_a=kp_a, ki_a=ki_a, pi_shift_a=sh_a, gain_w=gain_format.wl, gain_max=q(gain_max, gain_format),
             advance=advance, advance_bits=advance_bits, dac_w=dac_format.wl, dac_shift=gain_prod.fl - dac_format.fl,
-            fs_mant=fs_mant, hz_shift=hz_shift, freq_w=freq_format.wl, min_amp=q(pll_min_amp, data_format),
+            hz_center=hz_center, hz_coef=hz_coef, hz_shift=hz_shift, freq_w=freq_format.wl, min_amp=q(pll_min_amp, data_format),
             qsin=Rom(nco.qsin, nco.lut_format.wl), atan=cordic.atan,
             data_format=data_format, dac_format=dac_format, freq_format=freq_format,
             ovf=(OvfField("mix_i", 1), OvfField("mix_q", 1), *lpf_ovf("i"), *lpf_ovf("q"), OvfField("amp", 1),
@@ -441,7 +512,8 @@ class Drive(Block):
                        (P_RANGE, lock), (P_CENTER, dp.ftw_center), (P_AMP_SET, dp.amp_set), (P_KP_A, kp_a),
                        (P_KI_A, ki_a), (P_SH_A, sh_a), (P_GMAX, dp.gain_max), (P_ADV, dp.advance),
                        (P_ADV_BITS, advance_bits), (P_DAC_SHIFT, dp.dac_shift), (P_DAC_LO, dac_format.min_int),
-                       (P_DAC_HI, dac_format.max_int), (P_FS_MANT, fs_mant), (P_HZ_SHIFT, hz_shift),
+                       (P_DAC_HI, dac_format.max_int), (P_HZ_CENTER, hz_center), (P_HZ_COEF, hz_coef),
+                       (P_HZ_SHIFT, hz_shift),
                        (P_FLO, freq_format.min_int), (P_FHI, freq_format.max_int), (P_MIN_AMP, dp.min_amp)):
             prm[idx] = v
         prm.setflags(write=False)
@@ -485,17 +557,11 @@ class Drive(Block):
         self.state = np.zeros(S_LEN, dtype=np.int64)
         self.state[S_PHASE] = 0
         self.state[S_FTW] = self.datapath.ftw_center
-        self.state[S_F] = self._hz_word(self.datapath.ftw_center)
+        self.state[S_F] = self.datapath.hz_center
         self.lpf_state = np.zeros((2, self.datapath.lpf.sections, 6), dtype=np.int64)
         # samples at which a PI's integrator or output sat at its limit (start-up, loss of lock):
         # the control law's designed clamps, not format overflows
         self.limits = dict.fromkeys(LIMITS, 0)
-
-    def _hz_word(self, ftw: int) -> int:
-        """A frequency word in Hz on freq_format, as the kernel converts it."""
-        dp = self.datapath
-        return int(convert(np.int64(ftw * dp.fs_mant), dp.hz_shift, self.rules.rounding_code,
-                           self.freq_format.min_int, self.freq_format.max_int, self.rules.overflow_code)[0])
 
     def get_state(self) -> dict:
         """The loop's registers, the low-pass states and the limit events so far."""
@@ -541,6 +607,18 @@ class Drive(Block):
                                        lb, la, lc, counts, lcounts)
         self._log(log, counts, lcounts)
         return {"dac": dac, "f": f, "amp": amp, "phase": err}
+
+    def detector_errors(self, x) -> tuple[np.ndarray, np.ndarray]:
+        """The phase detector alone (mixers, low-pass, CORDIC) on ADC codes ``x``, its NCO free at
+        the centre word (no PLL, no drive): the angle error at each control update, bit-exact and
+        float (the same NCO frequency), in rad. Their mean difference is the detector's bias."""
+        codes = np.asarray(x, dtype=np.int64)
+        counts, lcounts = self._counts()
+        prm, qsin, atans, lb, la, lc = self.kernel_args()
+        fixed = _detector_open(codes, np.zeros_like(self.lpf_state), prm, qsin, atans, lb, la, lc, counts, lcounts)
+        flt = _detector_open_float(codes * 2.0**-self.in_format.fl, self.float_state()[1], self._fprm, self.lpf.sos,
+                                   self.nco.ftw / 2.0**self.nco.phase_bits)
+        return fixed * 2.0**-self.angle_format.fl, flt
 
     # ---- float reference ------------------------------------------------------------------------
     def reference(self, x: np.ndarray) -> dict[str, np.ndarray]:

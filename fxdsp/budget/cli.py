@@ -23,6 +23,7 @@ from . import optimise as opt
 from .attribution import ADDITIVITY_DB, THEORY_DB, Attribution, attribute
 from .floor import (DOMINANT_FACTOR, FLICKER_FACTOR, WITHIN_DB, Allan, DriveSweep, Floor, allan_chain,
                     carrier_chains, demod_f_hz, drive_frequencies, drive_sweep, floor_of)
+from .drive_loop import TEMPS_C, at_temperature, format_budget, ramp
 from .static import static_errors
 from .table import budget_rows, format_rows
 from .units import parse_target
@@ -48,6 +49,20 @@ def downstream_outputs(design, chain_name: str, kind: str) -> list[str]:
     return [p for p, e in net.outputs.items() if e.instance in reached]
 
 
+def drive_loop_budgets(design, with_ramp: bool) -> list:
+    """Every drive loop of the design at TEMPS_C, and over the chamber ramp with ``with_ramp``."""
+    from ..blocks.drive import Drive
+
+    out = []
+    fs_dps = design.rate_full_scale_dps
+    for block in design.blocks.values():
+        if isinstance(block, Drive):
+            out += [at_temperature(block, t, rate_full_scale_dps=fs_dps) for t in TEMPS_C]
+            if with_ramp:
+                out.append(ramp(block, rate_full_scale_dps=fs_dps, progress=True))
+    return out
+
+
 def _scaled(st: dict, scale: float) -> dict:
     return {k: (v * scale if k in ("rms", "max_abs", "mean") else v) for k, v in st.items()}
 
@@ -71,6 +86,9 @@ def configure(parser) -> None:
     parser.add_argument("--margin", type=float, default=0.02, help="optimise to (1 - margin) x target (default 0.02)")
     parser.add_argument("--max-mean", help="with --optimise: also keep |mean| (a bias) of the --target output within "
                                            "this, <value><unit> as --target")
+    parser.add_argument("--drive-ramp", action="store_true",
+                        help="also run every drive loop over the chamber ramp -40 -> 85 C at 1 C/min (about 4 min of "
+                             "simulation per loop; without it the drive loops are budgeted at -40, 25 and 85 C)")
     parser.add_argument("--drive-band", action="store_true",
                         help="with --optimise on a chain with a demodulator: meet the target at every frequency of "
                              "the drive sweep too (the band a -40..85 C silicon resonator covers), not only at the "
@@ -243,6 +261,13 @@ def _run(args, stage) -> int:
     for sw in sweeps:
         print(format_sweep(sw))
     print(f"  ({sum(len(sw.points) for sw in sweeps)} points in {t_sweep:.1f} s)")
+    loops = drive_loop_budgets(design, args.drive_ramp)
+    print("\n6. drive loops (bit-exact and float closed on the simulated mode from power-on; floor = the float loop "
+          "on the same drive ADC codes; margin = 20 log10(fixed / floor) of the frequency noise):")
+    for lb in loops:
+        print(format_budget(lb))
+    if not loops:
+        print("  none: this config has no drive loop")
 
     out = {"config": cfg.name, "seed": design.seed,
            "table": [r.as_dict() for r in rows],
@@ -251,6 +276,7 @@ def _run(args, stage) -> int:
            "attribution": [_attr_dict(a) for a in attrs.values()], "additivity_tolerance_db": ADDITIVITY_DB,
            "theory_limit_db": THEORY_DB, "floor": [f.as_dict() for f in floors],
            "allan": [al.as_dict() for al in allans], "drive_sweep": [sw.as_dict() for sw in sweeps],
+           "drive_loop": [lb.as_dict() for lb in loops],
            "null_means": "an infinite or undefined value (an exact port's SNR, a margin without a floor)"}
     status = 0
     result = None
@@ -271,7 +297,7 @@ def _run(args, stage) -> int:
             freqs = tuple(drive_frequencies(demod_f_hz(cfg, design, target.chain))) if args.drive_band else ()
             result = opt.optimise(cfg, target, args.metric, args.margin, progress=tqdm, cost_model=args.cost,
                                   max_mean=max_mean, frequencies=freqs)
-            print(f"\n6. word-length search ({result.evaluations} evaluations, greedy min+b):")
+            print(f"\n7. word-length search ({result.evaluations} evaluations, greedy min+b):")
             print(opt.format_result(result))
             dc, nc = result.default_cost, result.cost
             synth = opt.synth_estimate(synthesised_cost(), design.instances[target.chain].members,
@@ -293,7 +319,7 @@ def _run(args, stage) -> int:
 
     if args.report:
         _report(stage.dir(args.report), design, cfg, rows, attrs, statics, target, result, args, floors, allans,
-                sweeps)
+                sweeps, loops)
         print(f"\nreport written to {args.report}/budget.md")
     if args.json:  # no wall-clock time in it: the same config and seed give the same bytes
         stage.write_text(args.json, json_text(plain(out), "--json", indent=1))
@@ -310,7 +336,8 @@ def _figures(md: list, out: Path, items, stem: str, plot, text) -> None:
         md.append(f"![{stem.replace('_', ' ')}]({name})\n")
 
 
-def _report(out: Path, design, cfg, rows, attrs, statics, target, result, args, floors, allans, sweeps) -> None:
+def _report(out: Path, design, cfg, rows, attrs, statics, target, result, args, floors, allans, sweeps,
+            loops) -> None:
     from . import report as rp
 
     out.mkdir(parents=True, exist_ok=True)
@@ -355,6 +382,11 @@ def _report(out: Path, design, cfg, rows, attrs, statics, target, result, args, 
     md.append("## 5. Drive-frequency sweep\n\nThe design rebuilt with the demodulator's f_hz at each drive "
               "frequency the temperature range produces; both the carrier and the NCO move.\n")
     _figures(md, out, sweeps, "drive_sweep", rp.plot_drive_sweep, format_sweep)
+    md.append("## 6. Drive loops\n\nThe bit-exact loop and its float reference closed on the simulated mode from "
+              "power-on with the same pick-off noise; the float loop reads the same drive ADC codes, so its errors "
+              "are the floor the ADC allows. Frequency word against the mode's true resonance over 10 ms records "
+              "after lock; rate error = the reference phase error on the nominal quadrature.\n")
+    md.append("```\n" + ("\n".join(format_budget(lb) for lb in loops) or "no drive loop") + "\n```\n")
     chain = target.chain if target else args.chain
     port = target.port if target else (list(design.chains[chain].outputs)[-1] if chain else None)
     if chain and opt.knobs_of(cfg.data, chain):
@@ -363,9 +395,9 @@ def _report(out: Path, design, cfg, rows, attrs, statics, target, result, args, 
         name = f"wordlength_{chain}.{port}.png"
         rp.plot_sweeps(sweeps_wl, unit, target.value if target else None, out / name,
                        f"{chain}.{port}: error vs word length, one knob at a time (others at default)")
-        md.append(f"## 6. Word length\n\n![sweep]({name})\n")
+        md.append(f"## 7. Word length\n\n![sweep]({name})\n")
     else:
-        md.append(f"## 6. Word length\n\n{chain}: no word-length knobs (fxdsp.budget.optimise.KIND_KNOBS).\n")
+        md.append(f"## 7. Word length\n\n{chain}: no word-length knobs (fxdsp.budget.optimise.KIND_KNOBS).\n")
     if result:
         md.append(f"Target {args.target} ({result.target.value:.4g} {result.target.unit}, {result.metric}): error "
                   f"{result.default_error:.4g} -> {result.error:.4g}; total bits {result.default_cost['total_bits']} -> "
