@@ -235,3 +235,23 @@ def test_over_a_chamber_ramp_the_loop_stays_locked_within_3_db_of_its_floor(desi
     assert b.fixed.records >= 0.99 * (hi - lo) * 60 / b.record_s
     assert 20 * np.log10(b.mc(b.fixed.f_noise_hz) / b.mc(b.floor.f_noise_hz)) <= 3.0
     assert b.within
+
+
+@pytest.mark.parametrize("temp_c", [-40.0, 85.0])
+def test_the_paper001_chain_from_the_drive_adc_reads_the_mode_temperature(design, temp_c):
+    """chain_paper001_drive starts at the drive ADC: fed the codes the loop read closed on paper 001's
+    mode, its loop is the closed loop again (its frequency word, through f0 and k, is the closed
+    loop's at every record), its temperature is the mode's within 2 mC, and the bias it subtracts is
+    the paper's polynomial there."""
+    chain, res = design.chains["chain_paper001_drive"], LOOPS["drive001"]
+    drive = design.blocks["drive001"]
+    run = closed_loop(drive, res, temp_c, 6.0, seed=8, record_every=96, keep_codes=True)
+    n = run.adc_codes.size
+    real = chain.real_outputs(chain.run(drive_adc=run.adc_codes, rate_in=np.zeros(n, dtype=np.int64)))
+    f2t = design.blocks["freq2temp"]
+    per_record = real["temp"].reshape(-1, 96).mean(axis=1)
+    assert np.abs(per_record - (run.f_mean_hz - f2t.f0_hz) / f2t.k_hz_per_c).max() < 1e-4
+    settled = slice(n // 2, None)
+    assert abs(real["temp"][settled].mean() - temp_c) < 2e-3
+    bias = 1469.5 - 36.92 * temp_c - 0.25 * temp_c ** 2      # paper 001's S(T), deg/h
+    assert abs(real["rate"][settled].mean() + bias) < 0.05

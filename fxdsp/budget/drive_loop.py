@@ -62,6 +62,7 @@ class LoopFigures:
     lock_s: float | None
     f_bias_hz: float
     f_noise_hz: float
+    f_max_hz: float                # the largest |error| of a record
     amp_ppm: float
     phase_urad: float
     records: int
@@ -104,7 +105,8 @@ class DriveBudget:
             fig = getattr(self, name)
             out[name].update(lock_tau=None if fig.lock_s is None else fig.lock_s / self.tau_s,
                              t_bias_mc=self.mc(fig.f_bias_hz) * np.sign(self.k_hz_per_c),
-                             t_noise_mc=self.mc(fig.f_noise_hz), rate_deg_h=self.rate_deg_h(fig.phase_urad))
+                             t_noise_mc=self.mc(fig.f_noise_hz), t_max_mc=self.mc(fig.f_max_hz),
+                             rate_deg_h=self.rate_deg_h(fig.phase_urad))
         out.update(margin_db=self.margin_db, within=self.within, within_db=WITHIN_DB,
                    quadrature_fs=NOMINAL_QUADRATURE_FS)
         return out
@@ -123,7 +125,7 @@ def figures(run: ClosedLoopRun, drive: Drive, start_s: float | None = None) -> L
     if np.count_nonzero(sel) < 10:
         raise ValueError(f"{drive.name}: fewer than 10 records after {t0:.3g} s; run longer")
     err = run.f_mean_hz[sel] - run.true_f_hz[sel]
-    return LoopFigures(lock, float(np.mean(err)), float(np.std(err)),
+    return LoopFigures(lock, float(np.mean(err)), float(np.std(err)), float(np.max(np.abs(err))),
                        float(np.std(run.amp[sel] / drive.amp_setpoint - 1) * 1e6),
                        float(np.sqrt(np.mean(run.phase_rad[sel] ** 2)) * 1e6), int(np.count_nonzero(sel)))
 
@@ -210,10 +212,10 @@ def format_budget(b: DriveBudget) -> str:
     lines = [f"{b.table} at {b.scenario}: tau = 2Q/w {b.tau_s:.3f} s, k {b.k_hz_per_c * 1e3:+.2f} mHz/C, "
              f"records of {b.record_s * 1e3:g} ms",
              f"  {'':8s} {'lock':>20s} {'f bias Hz':>11s} {'f noise Hz':>11s} {'T bias mC':>10s} {'T noise mC':>10s} "
-             f"{'amp ppm':>8s} {'phase urad':>10s} {'rate deg/h':>10s}"]
+             f"{'T max mC':>9s} {'amp ppm':>8s} {'phase urad':>10s} {'rate deg/h':>10s}"]
     for name, fig in (("fixed", b.fixed), ("floor", b.floor)):
         lines.append(f"  {name:8s} {lock(fig):>20s} {fig.f_bias_hz:+11.3g} {fig.f_noise_hz:11.3g} "
-                     f"{b.mc(fig.f_bias_hz) * np.sign(b.k_hz_per_c):+10.3g} {b.mc(fig.f_noise_hz):10.3g} "
+                     f"{b.mc(fig.f_bias_hz) * np.sign(b.k_hz_per_c):+10.3g} {b.mc(fig.f_noise_hz):10.3g} {b.mc(fig.f_max_hz):9.3g} "
                      f"{fig.amp_ppm:8.3g} {fig.phase_urad:10.3g} {b.rate_deg_h(fig.phase_urad):10.3g}")
     verdict = f"within {WITHIN_DB:g} dB" if b.within else f"NOT within {WITHIN_DB:g} dB"
     p = b.predicted_bias_hz

@@ -384,6 +384,18 @@ def freq2temp_hybrid(block, f: np.ndarray, sw: Switch, prefix: str = "freq2temp"
     return sw.round(f"{prefix}.round", temp, block.temp_format, block.rules)
 
 
+def drive_hybrid(block, x: np.ndarray, sw: Switch, prefix: str = "drive") -> dict[str, np.ndarray]:
+    """The drive loop as one source, ``<prefix>.loop``: on, the bit-exact loop (on the ADC codes of
+    ``x``); off (or injected: a feedback loop has no white-noise model here), its float reference.
+    Its rounding points are not separated: they act inside the feedback, where switching one alone
+    would need the loop's kernel written a second time in float."""
+    x = np.asarray(x, dtype=float)
+    if f"{prefix}.loop" in sw:
+        codes = quantize(x, block.in_format, ADC_RULES)
+        return block.real_outputs(block.run(x=codes))
+    return block.reference(x=x)
+
+
 # --------------------------------------------------------------------------------------------
 # each kind of block: its quantisation sources and its hybrid run, by instance
 # --------------------------------------------------------------------------------------------
@@ -450,6 +462,11 @@ def _sources_freq2temp(iid, b, wanted):
             _rounding(iid, "round", ROUND, "freq2temp", f"{iid}.temp", b.temp_format, b.rules)]
 
 
+def _sources_drive(iid, b, wanted):
+    return [Source(f"{iid}.loop", ROUND, iid, f"{iid}.f", note="the loop's arithmetic, all its rounding points",
+                   kind="drive")]
+
+
 @dataclass(frozen=True)
 class KindHybrid:
     """One kind of block in the hybrid: ``sources(iid, block, wanted)`` lists its quantisation
@@ -473,6 +490,7 @@ HYBRIDS: dict[str, KindHybrid] = {
         "y": subtract_hybrid(b, ins["x"], ins["bias"], f"{iid}.round", sw)}),
     "iir": KindHybrid(_sources_iir, lambda iid, b, ins, sw, w: {"y": iir_hybrid(b, ins["x"], f"{iid}.coef",
                                                                                   f"{iid}.round", sw)}),
+    "drive": KindHybrid(_sources_drive, lambda iid, b, ins, sw, w: drive_hybrid(b, ins["x"], sw, iid)),
     "freq2temp": KindHybrid(_sources_freq2temp, lambda iid, b, ins, sw, w: {"temp": freq2temp_hybrid(b, ins["f"], sw,
                                                                                                    iid)}),
 }

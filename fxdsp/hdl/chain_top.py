@@ -510,5 +510,5 @@ def has_divider(design, name: str) -> bool:
 
 
 def generated_tops(design: Design) -> dict[str, str]:
-    """``<chain>.v`` of every chain of the design."""
-    return {f"{name}.v": chain_top(design, name) for name in design.chains}
+    """``<chain>.v`` of every chain of the design whose members all have RTL (``design.hardware``)."""
+    return {f"{name}.v": chain_top(design, name) for name in design.chains if design.instances[name].hardware}

@@ -90,7 +90,8 @@ def generate(design: Design) -> dict[str, str]:
         files[f"{name}_params.vh"] = header(inst, name)
         files.update(inst.roms)
     for name in design.chains:
-        files.update(sharing.roms(design, name))
+        if design.instances[name].hardware:
+            files.update(sharing.roms(design, name))
     files.update(generated_tops(design))
     return files
 

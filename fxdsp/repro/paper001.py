@@ -26,7 +26,9 @@ from fxdsp.repro.bitexact import Compensator001
 from fxdsp.repro.calconfig import config_from_text, config_text, paper001_tables
 from fxdsp.sim import ThermalChain, generate_log
 from fxdsp.sim.calibration import calibrate_paper001
+from fxdsp.sim.driveloop import loop_frequency
 from fxdsp.sim.model import scenario_baseline
+from fxdsp.sim.resonator import resonator_for
 
 PAPER = {"k_hz_per_c": 0.0536, "f0_hz": 3837.47, "f0_printed_hz": 3837.4, "f_at_m10_hz": 3836.9354,
          "max_residual_hz": 0.01, "linearity": 3.4e-6, "bias_poly": (1469.5, -36.92, -0.25),
@@ -40,8 +42,11 @@ THERMO_TOL_C = 0.2
 
 
 def static_run(seed: int = 3, hours: float = 6.0, dt_s: float = 10.0, wander_c: float = WANDER_C,
-               noise_deg_h: float = STATIC_NOISE_DEG_H, freq_noise_hz: float = STATIC_FREQ_NOISE_HZ) -> dict:
-    """A 6 h static log at 25 C with the chamber's regulation wander (see module docstring)."""
+               noise_deg_h: float = STATIC_NOISE_DEG_H, freq_noise_hz: float = STATIC_FREQ_NOISE_HZ,
+               drive_loop=None, progress: bool = False) -> dict:
+    """A 6 h static log at 25 C with the chamber's regulation wander (see module docstring);
+    ``drive_loop``: ``freq_hz`` read through it (closed on the resonance, its own noise) instead of
+    the resonance plus ``freq_noise_hz``."""
     if not hours > 0:
         raise ValueError(f"hours: must be > 0, got {hours!r}")
     rng = np.random.default_rng(seed)
@@ -52,9 +57,13 @@ def static_run(seed: int = 3, hours: float = 6.0, dt_s: float = 10.0, wander_c: 
     air = 25.0 + wander_c * wave / np.abs(wave).max()
     die = ThermalChain(TAU_PACKAGE_S, TAU_DIE_S).temperatures(t, air)["die"]
     base = scenario_baseline("paper001")
-    return {"time_s": t, "temp_c": air, "ref_temp_c": air,
-            "output": base.bias(die) + noise_deg_h * rng.standard_normal(t.size),
-            "freq_hz": base.freq(die) + freq_noise_hz * rng.standard_normal(t.size), "die_c": die}
+    output = base.bias(die) + noise_deg_h * rng.standard_normal(t.size)
+    if drive_loop is None:
+        freq = base.freq(die) + freq_noise_hz * rng.standard_normal(t.size)
+    else:
+        freq = loop_frequency(drive_loop, resonator_for(drive_loop), t, base.freq(die), die, seed=seed,
+                              progress=progress)
+    return {"time_s": t, "temp_c": air, "ref_temp_c": air, "output": output, "freq_hz": freq, "die_c": die}
 
 
 def random_drift(x, n: int = 1) -> float:
@@ -84,11 +93,17 @@ def check_thermometer(config, ref_temp_c, freq_hz, tol_c: float = THERMO_TOL_C, 
             "ok": bool(abs(err.mean()) <= tol_c)}
 
 
-def reproduce(seed_cal: int = 1, seed_verify: int = 2, duration_scale: float = 1.0) -> dict:
+def reproduce(seed_cal: int = 1, seed_verify: int = 2, duration_scale: float = 1.0, drive_loop=None,
+              progress: bool = False) -> dict:
+    """The reproduction; ``drive_loop`` (a :class:`fxdsp.blocks.drive.Drive`, e.g. the built-in
+    ``drive001``): every log's ``freq_hz`` is read through it, closed on the simulated resonance at
+    its sample rate, as the paper's instrument reads it (about a minute per simulated hour)."""
     chain = ThermalChain(tau_package_s=TAU_PACKAGE_S, tau_die_s=TAU_DIE_S)
-    cal_log = generate_log("paper001", effects={}, seed=seed_cal, thermal=chain, duration_scale=duration_scale)
+    loop = {"drive_loop": drive_loop, "progress": progress}
+    cal_log = generate_log("paper001", effects={}, seed=seed_cal, thermal=chain, duration_scale=duration_scale,
+                           **loop)
     ver_log, truth = generate_log("paper001", effects={}, seed=seed_verify, thermal=chain,
-                                  duration_scale=duration_scale, return_truth=True)
+                                  duration_scale=duration_scale, return_truth=True, **loop)
     cal = calibrate_paper001(cal_log)
     text = config_text(paper001_tables(cal))
     cfg = config_from_text(text)
@@ -102,14 +117,15 @@ def reproduce(seed_cal: int = 1, seed_verify: int = 2, duration_scale: float = 1
     out = comp.compensate(ver_log)
     out_rounded = Compensator001(cfg_rounded).compensate(ver_log)
     logged = np.isin(truth["phase"], ["log"])
-    st = static_run()
+    st = static_run(**loop)
     st_out = comp.compensate(st)
     t = np.linspace(-10, 50, 61)
     fit_dev = np.abs(np.polynomial.polynomial.polyval(t, cal["bias_poly"])
                      - np.polynomial.polynomial.polyval(t, PAPER["bias_poly"])).max()
     return {"paper": PAPER, "cal": cal, "config_text": text,
             "params": {"tau_package_s": TAU_PACKAGE_S, "tau_die_s": TAU_DIE_S, "wander_c": WANDER_C,
-                       "static_noise_deg_h": STATIC_NOISE_DEG_H},
+                       "static_noise_deg_h": STATIC_NOISE_DEG_H,
+                       "drive_loop": None if drive_loop is None else drive_loop.name},
             "fit_vs_paper_max_deg_h": float(fit_dev),
             "thermometer_check": check, "thermometer_check_rounded": check_rounded,
             "data_point_error_c": data_point_error_c(cal["f0_hz"], cal["k_hz_per_c"]),

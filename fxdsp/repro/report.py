@@ -18,7 +18,8 @@ from fxdsp.repro import paper000, paper001, paper002, paper003  # noqa: E402
 PAPERS = ("002", "001", "000", "003")
 
 
-def run_all(papers=PAPERS, n_freqs: int = 41, progress: bool = True) -> dict:
+def run_all(papers=PAPERS, n_freqs: int = 41, progress: bool = True, drive_loop=None) -> dict:
+    """Every paper's reproduction; ``drive_loop``: paper 001's frequency read through it."""
     for p in papers:
         if p not in PAPERS:
             raise ValueError(f"paper: unknown paper {p!r}; expected one of {', '.join(PAPERS)} or all")
@@ -28,7 +29,7 @@ def run_all(papers=PAPERS, n_freqs: int = 41, progress: bool = True) -> dict:
         if p == "002":
             out[p] = paper002.reproduce()
         elif p == "001":
-            out[p] = paper001.reproduce()
+            out[p] = paper001.reproduce(drive_loop=drive_loop, progress=progress)
         elif p == "000":
             out[p] = paper000.reproduce()
             out[p]["records"] = paper000.reproduce_records()

@@ -26,6 +26,7 @@ from .resonator import DriveResonator, adc_code, resonator_step
 
 CHUNK = 1 << 20
 STEP_S = 0.01   # the temperature (and resonance) profile's step
+MAX_KEPT = 50_000_000   # ADC codes a run keeps at most (400 MB)
 
 
 def samples_per_step(fs_hz: float) -> int:
@@ -35,14 +36,14 @@ def samples_per_step(fs_hz: float) -> int:
 
 @njit(cache=True)
 def _closed(n, record_every, fixed, st, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts, fst, flpf, fp, sos, coef,
-            per_step, step0, rst, noise, adc_scale, lo, hi, dac_scale):
+            per_step, step0, rst, noise, adc_scale, lo, hi, dac_scale, codes):
     """n samples of the loop on the resonator: the bit-exact one (``fixed``: its state ``st``,
     ``lpf_st``, parameters ``p`` ...) or the float reference (``fst``, ``flpf``, ``fp``, ``sos``),
     both reading the same ADC. ``rst`` = x, v, held drive, ADC saturations; ``coef`` the resonator's
     steps of this chunk, the first at global step ``step0 // per_step``. Records every
     ``record_every`` samples the frequency word (fixed: the tuning word; float: Hz), amplitude and
     phase error at the record, and the mean of the Hz output over the record's window (fixed: in
-    freq_format LSBs)."""
+    freq_format LSBs). ``codes``: the ADC codes the loop read, kept when it has n entries."""
     m = n // record_every
     rec = np.empty((4, m))
     x, v, u = rst[0], rst[1], rst[2]
@@ -51,6 +52,8 @@ def _closed(n, record_every, fixed, st, lpf_st, p, qsin, atans, lb, la, lc, coun
     for i in range(n):
         code, s = adc_code(x + noise[i], adc_scale, lo, hi)
         rst[3] += s
+        if codes.shape[0] == n:
+            codes[i] = code
         if fixed:
             d = _drive_step(code, st, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts) * dac_scale
             acc += st[S_F]
@@ -85,22 +88,27 @@ class ClosedLoopRun:
     adc_saturations: int
     overflows: OverflowLog
     limits: dict              # samples with a PI at its limit (fxdsp.blocks.drive.LIMITS), fixed loop only
+    adc_codes: np.ndarray | None = None   # every drive ADC code the loop read (keep_codes)
 
 
 def closed_loop(drive: Drive, resonator: DriveResonator, temp_c, seconds: float, seed: int = 1,
                 fixed: bool = True, samples_per_temp: int | None = None, record_every: int | None = None,
-                progress: bool = False, freq_hz=None) -> ClosedLoopRun:
+                progress: bool = False, freq_hz=None, keep_codes: bool = False) -> ClosedLoopRun:
     """Run the loop closed on ``resonator`` for ``seconds`` from power-on (resonator at rest, loop
     reset). ``temp_c``: one temperature or a profile, one value per ``samples_per_temp`` samples
     (default :data:`STEP_S`); ``freq_hz``: a resonance profile on the same steps replacing
     the resonator's f(T) (a log's simulated resonance, its effects included). ``fixed``: the
-    bit-exact loop, else the float reference."""
+    bit-exact loop, else the float reference. ``keep_codes``: also every ADC code the loop read
+    (``adc_codes``; at most ``MAX_KEPT`` samples): fed to the block, or to a chain it heads, open
+    loop, they give the closed loop's words again, bit for bit."""
     fs = drive.fs_hz
     n = int(round(seconds * fs))
     per_step = int(samples_per_temp or samples_per_step(fs))
     rec = int(record_every or drive.update_every)
     if rec < 1 or n < rec:
         raise ValueError(f"record_every: {rec} must be within 1..{n} samples")
+    if keep_codes and n > MAX_KEPT:
+        raise ValueError(f"keep_codes: {n} samples; at most {MAX_KEPT} are kept ({MAX_KEPT / fs:g} s)")
     temps = np.atleast_1d(np.asarray(temp_c, dtype=float))
     freqs = None if freq_hz is None else np.atleast_1d(np.asarray(freq_hz, dtype=float))
     if freqs is not None and freqs.shape != temps.shape:
@@ -121,7 +129,7 @@ def closed_loop(drive: Drive, resonator: DriveResonator, temp_c, seconds: float,
     prm, qsin, atans, lb, la, lc = drive.kernel_args()
     fst, flpf = drive.float_state()
     dac_scale = 2.0**-drive.dac_format.fl
-    parts = []
+    parts, codes = [], []
     # whole records and whole temperature steps per chunk: the grids are the global ones
     chunk = max(rec * per_step, CHUNK // (rec * per_step) * rec * per_step)
     chunks = range(0, n, chunk)
@@ -135,9 +143,11 @@ def closed_loop(drive: Drive, resonator: DriveResonator, temp_c, seconds: float,
         steps = np.minimum(np.arange(start // per_step, (start + m - 1) // per_step + 1), last)
         coef = resonator.coefficients(temps[steps], fs, None if freqs is None else freqs[steps])
         noise = rng.normal(0.0, resonator.noise_fs, m) if resonator.noise_fs else np.zeros(m)
+        kept = np.empty(m if keep_codes else 0, dtype=np.int64)
         parts.append(_closed(m, rec, fixed, st, lpf_st, prm, qsin, atans, lb, la, lc, counts, lcounts, fst, flpf,
                              drive._fprm, drive.lpf.sos, coef, per_step, start, rst, noise, adc_scale, fi.min_int,
-                             fi.max_int, dac_scale))
+                             fi.max_int, dac_scale, kept))
+        codes.append(kept)
     ftw, amp, err, mean = np.concatenate(parts, axis=1)
     if fixed:
         drive._log(log, counts, lcounts)
@@ -152,7 +162,8 @@ def closed_loop(drive: Drive, resonator: DriveResonator, temp_c, seconds: float,
     true_f = resonator.frequency_hz(temps[steps]) if freqs is None else freqs[steps]
     limits = dict(drive.limits) if fixed else {}
     drive.reset()
-    return ClosedLoopRun(idx / fs, f_hz, mean, amp, err, true_f, temps[steps], int(rst[3]), log, limits)
+    return ClosedLoopRun(idx / fs, f_hz, mean, amp, err, true_f, temps[steps], int(rst[3]), log, limits,
+                         np.concatenate(codes) if keep_codes else None)
 
 
 def loop_frequency(drive: Drive, resonator: DriveResonator, t_s, freq_hz, temp_c, seed: int = 1,
