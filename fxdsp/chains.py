@@ -23,7 +23,7 @@ import numpy as np
 from .blocks.base import Block
 from .blocks.datapath import RtlPorts
 from .blocks.kinds import Context, Wired, block_tables, kind_of
-from .config import Config, load_config
+from .config import Config, load_config, one_edit, table_at
 from .errors import InputError
 from .fixed import Format, OverflowLog
 from .netlist import STAGES, Endpoint, Netlist, WiringError, parse, topological
@@ -324,8 +324,7 @@ def _netlists(cfg: Config, tables: list[str]) -> dict[str, Netlist]:
     if sec is None:
         return {}
     def ports(table: str):
-        kind = kind_of(table)
-        return kind.inputs, kind.outputs
+        return kind_of(table).ports(table_at(cfg.data, table))
     out = {}
     for key, value in sec.data.items():
         if not isinstance(value, dict):
@@ -380,6 +379,30 @@ def _wired(table: str, nets: dict[str, Netlist], built: dict[str, Block]) -> dic
     return out
 
 
+def _check_optional(table: str, nets: dict[str, Netlist], cfg: Config) -> None:
+    """A wire or chain input to an optional input its table does not enable (before the table is
+    read): the key that enables it is named, missing, misspelt or set otherwise."""
+    kind = kind_of(table)
+    for net in nets.values():
+        for dst in net.drivers:
+            if dst.instance == table and dst.port in (kind.optional or {}):
+                _enabled(table, dst.port, f"{net.name}: {net.wire_text(dst)!r}", cfg)
+
+
+def _enabled(table: str, port: str, line: str, cfg: Config) -> None:
+    """Optional input ``port`` of ``table``, which ``line`` drives, must be enabled by its key."""
+    key, value = kind_of(table).optional[port]
+    data = table_at(cfg.data, table)
+    if data.get(key) != value:
+        why = f"{line} drives it; {port} is an input when {key} = {value!r}"
+        if key in data:
+            raise InputError(f"{table}.{key}: {data[key]!r}: {why}")
+        typo = next((k for k in data if one_edit(k, key)), None)
+        if typo is not None:
+            raise InputError(f"{table}.{typo}: unknown key (did you mean {key!r}?)")
+        raise InputError(f"{table}.{key}: missing ({why})")
+
+
 def _check_formats(net: Netlist, blocks: dict[str, Block]) -> None:
     """Every wire joins equal formats, and a chain input drives inputs of one format."""
     for dst, src in net.drivers.items():
@@ -417,6 +440,7 @@ def build(config: Config | str | None = None, chains: bool = True) -> Design:
     for table in _build_order(tables, nets):
         rate, rate_field = rates.get(table, (fs, "system.fs_hz"))
         ctx = Context(rate, enforce=chains, in_chain=table in in_chain, fs_field=rate_field)
+        _check_optional(table, nets, cfg)
         block = kind_of(table).make(cfg.section(table), _wired(table, nets, built), ctx)
         block.name = table   # its overflow counters and errors are named after its table
         built[table] = block

@@ -69,12 +69,12 @@ def nearest(name: str, choices) -> str | None:
     changed, added, dropped, or two neighbours swapped: ``0r_ohm`` is ``r0_ohm``, not ``r4_ohm``;
     short names such as ``fs``/``sf`` fall below difflib's cutoff), else difflib's best match."""
     choices = sorted(set(choices))
-    one = [c for c in choices if _one_edit(name, c)]
+    one = [c for c in choices if one_edit(name, c)]
     near = difflib.get_close_matches(name, one or choices, n=1, cutoff=0.0 if one else 0.6)
     return near[0] if near else None
 
 
-def _one_edit(a: str, b: str) -> bool:
+def one_edit(a: str, b: str) -> bool:
     if a == b or abs(len(a) - len(b)) > 1:
         return False
     if len(a) == len(b):

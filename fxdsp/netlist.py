@@ -88,7 +88,9 @@ class Netlist:
         return (self.lines or {}).get(dst, f"{self.drivers[dst]} -> {dst}")
 
 
-PortNames = Callable[[str], tuple[tuple[str, ...], tuple[str, ...]]]   # instance -> (inputs, outputs)
+# instance -> (inputs, outputs) or (inputs, outputs, optional inputs): an optional input may be
+# wired (its table decides whether the block has it) but is not required to be
+PortNames = Callable[[str], tuple[tuple[str, ...], ...]]
 
 
 def _endpoint(text: str, chain: str, field: str, line: str) -> Endpoint:
@@ -105,6 +107,19 @@ def _split(line, chain: str, field: str) -> tuple[str, str]:
     if not a or not b:
         raise WiringError(f"{chain}.{field}: {line!r}: expected one \"<from> -> <to>\"")
     return a, b
+
+
+def chain_inputs_to(data: dict, instance: str, port: str) -> dict[str, str]:
+    """``{"chain.<name>": <chain input>}`` for every chain of parsed config ``data`` whose input
+    drives ``instance.port``: what a change of that port's unit or format must follow (chains that
+    share a block table)."""
+    out = {}
+    for name, table in (data.get("chain") or {}).items():
+        for line in (table.get("inputs") or []) if isinstance(table, dict) else []:
+            src, dst = _split(line, f"chain.{name}", "inputs")
+            if _endpoint(dst, f"chain.{name}", "inputs", line) == Endpoint(instance, port):
+                out[f"chain.{name}"] = src
+    return out
 
 
 def _lines(sec: Section, key: str, required: bool = True) -> list[str]:
@@ -142,6 +157,7 @@ def parse(sec: Section, ports: PortNames, known: tuple[str, ...]) -> Netlist:
         twice = next(i for i in inst if inst.count(i) > 1)
         raise WiringError(f"{sec.field('instances')}: {twice!r} is listed twice")
     port_names = {i: ports(i) for i in inst}
+    optional = {i: tuple(p[2]) if len(p) > 2 else () for i, p in port_names.items()}
 
     def check(ep: Endpoint, side: int, field: str, line: str) -> Endpoint:
         if ep.instance not in port_names:
@@ -149,6 +165,8 @@ def parse(sec: Section, ports: PortNames, known: tuple[str, ...]) -> Netlist:
             raise WiringError(f"{chain}.{field}: {line!r}: {ep.instance!r} is not an instance of the chain "
                               f"({sec.field('instances')})" + (f"; did you mean {near!r}?" if near else ""))
         names = port_names[ep.instance][side]
+        if side == 0:   # an optional input may be wired too
+            names = names + optional[ep.instance]
         if ep.port not in names:
             kind = "input" if side == 0 else "output"
             near = nearest(ep.port, names)

@@ -2,9 +2,9 @@
 
 A port's *quantity* is what its real value (stored integer x LSB) measures: ``C``, ``Hz``, ``Hz/g``,
 ``g``, ``1`` (a ratio), ``FS`` (a fraction of the rate full scale ``[system].rate_full_scale_dps``),
-``deg/h``, ``rad``, or ``sensor`` (the unit of a measured log's ``output``, which the log does not
+``deg/h``, ``rad``, ``turn`` (an NCO's accumulator word), or ``sensor`` (the unit of a measured log's ``output``, which the log does not
 state: ../shared/spec/measured-data.md). Engineers read errors in a display unit: ``g`` in mg, a ratio in ppm, ``FS`` in
-deg/h, ``rad`` in mrad (:func:`display`).
+deg/h, ``rad`` in mrad, ``turn`` in urad (:func:`display`).
 
 Where a quantity comes from, each stated in one place:
 
@@ -21,17 +21,18 @@ an error naming the chain and both wires, like a format mismatch.
 
 from __future__ import annotations
 
+import math
 from typing import Callable
 
 from .errors import InputError
 
-QUANTITIES = ("C", "Hz", "Hz/g", "g", "1", "FS", "deg/h", "rad", "sensor")
+QUANTITIES = ("C", "Hz", "Hz/g", "g", "1", "FS", "deg/h", "rad", "turn", "sensor")
 
 # kind -> port -> quantity, whatever the wiring (physical by construction)
 INTRINSIC: dict[str, dict[str, str]] = {
     "rtd": {"temp": "C"}, "freq2temp": {"f": "Hz", "temp": "C"}, "lag": {"temp": "C", "te": "C"},
-    "piecewise": {"temp": "C"}, "demod": {"phase": "rad"}, "drive": {"x": "1", "dac": "1", "amp": "1", "f": "Hz",
-                                                                   "phase": "rad"},
+    "piecewise": {"temp": "C"}, "demod": {"phase": "rad", "ref": "turn"},
+    "drive": {"x": "1", "dac": "1", "amp": "1", "f": "Hz", "phase": "rad", "nco": "turn"},
 }
 
 Units = dict[str, "str | None"]
@@ -73,7 +74,7 @@ def quantity(value, field: str) -> str:
 def display(q: str | None, rate_full_scale_dps: float) -> tuple[str, float]:
     """(display unit, real-value-to-display factor) of a quantity; ("", 1.0) when none is known."""
     return {None: ("", 1.0), "g": ("mg", 1e3), "1": ("ppm", 1e6), "FS": ("deg/h", rate_full_scale_dps * 3600.0),
-            "rad": ("mrad", 1e3), "sensor": ("sensor unit", 1.0)}.get(q, (q, 1.0))
+            "rad": ("mrad", 1e3), "turn": ("urad", 2e6 * math.pi), "sensor": ("sensor unit", 1.0)}.get(q, (q, 1.0))
 
 
 def instance_units(kind: str, known: Units, declared: Units, where: Callable[[str], str] = str) -> Units:

@@ -294,8 +294,9 @@ def drive(block, xs) -> dict[str, list[int]]:
 
     phase, ftw, integ_f, integ_a, gain, count = 0, center, 0, 0, 0, 0
     f_word, amp, err = hz(center), 0, 0
-    out = {"dac": [], "f": [], "amp": [], "phase": []}
+    out = {"dac": [], "f": [], "amp": [], "phase": [], "nco": []}
     for x in xs:
+        out["nco"].append(phase)
         cos_w, msin_w = nco_wave(nco, phase, table)
         ch = []
         for wave, filt in zip((cos_w, msin_w), lpf):

@@ -174,7 +174,9 @@ def test_lag(rounding, overflow):
     assert b.run(**st).outputs["te"].tolist() == oracle.lag(b, st["temp"])
 
 
-NARROW_NCO = {"drive.phase_bits": 16, "drive.lut_bits": 8, "drive.interp_bits": 8, "drive.lut_format": "s12.11"}
+NARROW_NCO = {"drive.phase_bits": 16, "drive.lut_bits": 8, "drive.interp_bits": 8, "drive.lut_format": "s12.11",
+              # the demodulator on the loop's NCO takes its width: its table and interpolation must fit it
+              "demod002.lut_bits": 8, "demod002.interp_bits": 8}
 
 
 @pytest.mark.parametrize("rounding,overflow,update,narrow", [(r, o, u, n) for (r, o), u, n in
@@ -192,6 +194,6 @@ def test_drive(rounding, overflow, update, narrow):
     x = np.concatenate([corners, locked])
     got = b.run(x=x)
     want = oracle.drive(b, x)
-    for port in ("dac", "f", "amp", "phase"):
+    for port in ("dac", "f", "amp", "phase", "nco"):
         assert got.outputs[port].tolist() == want[port], port
     assert len(set(want["f"])) > 3, "the frequency word must move"

@@ -238,20 +238,82 @@ def test_over_a_chamber_ramp_the_loop_stays_locked_within_3_db_of_its_floor(desi
 
 
 @pytest.mark.parametrize("temp_c", [-40.0, 85.0])
-def test_the_paper001_chain_from_the_drive_adc_reads_the_mode_temperature(design, temp_c):
-    """chain_paper001_drive starts at the drive ADC: fed the codes the loop read closed on paper 001's
-    mode, its loop is the closed loop again (its frequency word, through f0 and k, is the closed
-    loop's at every record), its temperature is the mode's within 2 mC, and the bias it subtracts is
-    the paper's polynomial there."""
-    chain, res = design.chains["chain_paper001_drive"], LOOPS["drive001"]
-    drive = design.blocks["drive001"]
-    run = closed_loop(drive, res, temp_c, 6.0, seed=8, record_every=96, keep_codes=True)
-    n = run.adc_codes.size
-    real = chain.real_outputs(chain.run(drive_adc=run.adc_codes, rate_in=np.zeros(n, dtype=np.int64)))
-    f2t = design.blocks["freq2temp"]
-    per_record = real["temp"].reshape(-1, 96).mean(axis=1)
-    assert np.abs(per_record - (run.f_mean_hz - f2t.f0_hz) / f2t.k_hz_per_c).max() < 1e-4
-    settled = slice(n // 2, None)
+def test_the_paper001_chain_reads_the_mode_temperature_from_the_loop(design, temp_c):
+    """Paper 001 from the drive ADC: the codes the loop read closed on paper 001's mode, through the
+    drive loop block (its frequency word is the closed loop's mean at every record: the same loop,
+    bit for bit) into chain_paper001's frequency input (the loop's Hz word is its format): the
+    temperature it reads through f0 and k is the mode's within 2 mC, and the bias it subtracts from
+    a zero rate is paper 001's polynomial there."""
+    drive, chain = design.blocks["drive001"], design.chains["chain_paper001"]
+    run = closed_loop(drive, LOOPS["drive001"], temp_c, 6.0, seed=8, record_every=96, keep_codes=True)
+    f = drive.run(x=run.adc_codes).outputs["f"]
+    assert drive.outputs["f"] == chain.inputs["f"]
+    assert np.array_equal((f * drive.outputs["f"].lsb).reshape(-1, 96).mean(axis=1), run.f_mean_hz)
+    real = chain.real_outputs(chain.run(f=f, rate_in=np.zeros(f.size, dtype=np.int64)))
+    settled = slice(f.size // 2, None)
     assert abs(real["temp"][settled].mean() - temp_c) < 2e-3
     bias = 1469.5 - 36.92 * temp_c - 0.25 * temp_c ** 2      # paper 001's S(T), deg/h
     assert abs(real["rate"][settled].mean() + bias) < 0.05
+
+
+def test_a_demodulator_on_an_input_reference_is_its_own_nco_bit_for_bit(design):
+    """reference = "input" fed the words of its own accumulator is today's demodulator (the open-loop
+    option and its vectors), bit for bit, outputs and overflow counts; its float reference reads the
+    reference in turns."""
+    import copy
+
+    from fxdsp.blocks.demod import Demod
+    from fxdsp.config import Section
+
+    own = design.blocks["demod"]
+    table = copy.deepcopy(design.config.data["demod"])
+    table["reference"] = "input"   # (the paper 002 chain would then leave its ref open: the block alone)
+    ext = Demod.from_config(Section(table, "demod"), design.fs_hz, own.in_format)
+    st = own.stimulus(np.random.default_rng(21), 4096)
+    words = own.nco.accumulator(st["x"].size)
+    a, b = own.run(**st), ext.run(x=st["x"], ref=words)
+    for port in own.outputs:
+        assert a.outputs[port].tolist() == b.outputs[port].tolist(), port
+    assert a.overflows == b.overflows
+    x = st["x"] * own.in_format.lsb
+    ra, rb = own.reference(x=x), ext.reference(x=x, ref=words / 2.0**own.nco.phase_bits)
+    # the float NCO runs at the exact f_hz, the words at the quantised one: 2e-11 rad apart here
+    assert np.allclose(ra["i"], rb["i"], atol=1e-9)
+    with pytest.raises(ValueError, match="ref"):
+        own.run(x=st["x"], ref=words)
+
+
+def test_the_paper002_demodulator_on_the_loop_nco_follows_the_resonance(design):
+    """chain_paper002_drive at 85 C, 15 Hz below the NCO's centre, fed the codes the loop read closed
+    on paper 002's mode and a sense pick-off in phase with the drive (the pick-off itself): on the
+    loop's NCO it demodulates to the amplitude in phase and nothing in quadrature; the same
+    demodulator on its own NCO at the centre sees the pick-off beat at the offset."""
+    import copy
+
+    from fxdsp.blocks.demod import Demod
+    from fxdsp.config import Section
+
+    chain, drive = design.chains["chain_paper002_drive"], design.blocks["drive"]
+    run = closed_loop(drive, LOOPS["drive"], 85.0, 4.0, seed=9, record_every=96, keep_codes=True)
+    codes = run.adc_codes
+    out = chain.real_outputs(chain.run(drive_adc=codes, vsa=codes))
+    settled = slice(codes.size // 2, None)
+    assert abs(out["rate_i"][settled].mean() / drive.amp_setpoint - 1) < 1e-3
+    assert np.abs(out["quad"][settled]).max() < 1e-3 * drive.amp_setpoint
+    table = copy.deepcopy(design.config.data["demod002"])
+    table.update(reference="nco", phase_bits=drive.nco.phase_bits)   # its own accumulator, the loop's width
+    own = Demod.from_config(Section(table, "demod002"), design.fs_hz, drive.in_format)
+    beat = own.real_outputs(own.run(x=codes))["i"][settled]
+    assert beat.std() > 0.2 * drive.amp_setpoint
+
+
+def test_the_locked_reference_has_no_open_loop_drift(design):
+    """A minute of lock on paper 002's mode: the Allan deviation of the reference's error (each loop's
+    NCO against its own mode's motion, fixed minus float) falls at the longest tau, where an open-loop
+    NCO's rounding drift would make it rise; that drift is at most half a tuning-word LSB."""
+    from fxdsp.budget.drive_loop import reference_allan
+
+    drive = design.blocks["drive"]
+    a = reference_allan(drive, seconds=60.0, seed=2)
+    assert a.taus[-1] >= 10.0 and a.no_drift, (a.taus, a.adev_locked)
+    assert a.open_drift_rad_per_h <= np.pi * drive.fs_hz / 2.0**drive.nco.phase_bits * 3600 * (1 + 1e-9)

@@ -204,7 +204,10 @@ def test_every_chain_gets_a_generated_top_and_shares_engines_by_wiring_and_forma
         return {p.name for p in hh.rtl_sources(None, design, tmp_path) if p.name.startswith("chain_")}
 
     d = build()
-    assert tops(d) == {f"{c}.v" for c in d.chains} == {"chain_paper000.v", "chain_paper001.v", "chain_paper002.v"}
+    # a chain with a drive loop has no top until the loop has RTL
+    assert tops(d) == {f"{c}.v" for c in d.chains if d.instances[c].hardware} == {
+        "chain_paper000.v", "chain_paper001.v", "chain_paper002.v"}
+    assert {c for c in d.chains if not d.instances[c].hardware} == {"chain_paper002_drive"}
     shares = engine_sharing(d, "chain_paper002")
     assert {g: (s.kind, s.host) for g, s in shares.items()} == {"piecewise.bias": ("set", "piecewise.sf"),
                                                               "iir": ("aux", "demod")}
@@ -271,7 +274,10 @@ def _port_renames():
     """(chain, edited table, the new name): each shipped chain's first input and first output renamed
     to reserved words of both languages, to the top's own ports and registers, and to the names the
     generated top gives its members (README: ``go_<member>``; ``u_<member>`` its instances)."""
+    tops = {n.removeprefix("chain_") for n, i in build().instances.items() if i.members and i.hardware}
     for name, net in sorted(DATA["chain"].items()):
+        if name not in tops:   # no generated top (a member without RTL): nothing to refuse
+            continue
         member = net["instances"][-1].replace(".", "_")
         for field in ("inputs", "outputs"):
             line = net[field][0]

@@ -86,15 +86,19 @@ def _nco_waves(phases, addr_shift, lut_bits, interp_bits, qsin, two_pi, corr_shi
 
 @njit(cache=True)
 def _mix_kernel(x, phase0, ftw, trim, phase_mask, addr_shift, lut_bits, interp_bits, qsin, two_pi, corr_shift,
-                shift, rounding, lo, hi, overflow, counts):
+                shift, rounding, lo, hi, overflow, counts, ref):
     """NCO + both mixers. phase = (phase0 + n ftw) mod 2**phase_bits accumulated sample by sample
-    (masking after each add keeps it within 49 bits), the table read at (phase + trim) mod
-    2**phase_bits (both < 2**48: the sum fits 49 bits); counts += (I fits, Q fits)."""
+    (masking after each add keeps it within 49 bits), or the external reference ``ref[n]`` when
+    ``ref`` has a word per sample; the table read at (phase + trim) mod 2**phase_bits (both
+    < 2**48: the sum fits 49 bits); counts += (I fits, Q fits)."""
     n = x.shape[0]
     i_out = np.empty(n, dtype=np.int64)
     q_out = np.empty(n, dtype=np.int64)
+    external = ref.shape[0] == n
     phase = phase0
     for k in range(n):
+        if external:
+            phase = ref[k]
         c, m = _nco_wave((phase + trim) & phase_mask, addr_shift, lut_bits, interp_bits, qsin, two_pi, corr_shift,
                          rounding)
         v, o = convert(x[k] * c, shift, rounding, lo, hi, overflow)
@@ -151,18 +155,18 @@ class Nco:
 
     def __init__(self, fs_hz: float, f_hz: float, phase_bits: int, lut_bits: int, lut_format: Format,
                  phase_offset_turns: float = 0.0, interp_bits: int = 0, rules: Rules = Rules("half_up", "saturate"),
-                 phase_trim_rad: float = 0.0):
+                 phase_trim_rad: float = 0.0, name: str = "demod"):
         if not 0 < f_hz < fs_hz / 2:
-            raise ValueError(f"demod.f_hz: must be within (0, fs/2 = {fs_hz / 2}), got {f_hz}")
+            raise ValueError(f"{name}.f_hz: must be within (0, fs/2 = {fs_hz / 2}), got {f_hz}")
         if not 4 <= lut_bits <= phase_bits <= 48:
-            raise ValueError(f"demod.lut_bits/phase_bits: need 4 <= lut_bits <= phase_bits <= 48, "
+            raise ValueError(f"{name}.lut_bits/phase_bits: need 4 <= lut_bits <= phase_bits <= 48, "
                              f"got {lut_bits}, {phase_bits}")
         if not 0 <= interp_bits <= phase_bits - lut_bits:
-            raise ValueError(f"demod.interp_bits: must be within 0..phase_bits - lut_bits = "
+            raise ValueError(f"{name}.interp_bits: must be within 0..phase_bits - lut_bits = "
                              f"{phase_bits - lut_bits}, got {interp_bits}")
         # the correction product qsin x delta_code x two_pi must fit 63 bits
         if lut_format.wl + interp_bits + TWO_PI_FORMAT.wl - 1 > 63:
-            raise ValueError(f"demod.interp_bits: {interp_bits} with lut_format {lut_format} makes the "
+            raise ValueError(f"{name}.interp_bits: {interp_bits} with lut_format {lut_format} makes the "
                              f"interpolation product {lut_format.wl + interp_bits + TWO_PI_FORMAT.wl - 1} bits; "
                              f"more than 63")
         self.fs_hz, self.f_hz = fs_hz, f_hz
@@ -173,7 +177,7 @@ class Nco:
         self.phase0 = int(quantize([phase_offset_turns % 1.0], self.phase_format, Rules("half_up", "wrap"))[0])
         self.phase_offset_turns = phase_offset_turns
         if not abs(phase_trim_rad) <= np.pi:
-            raise ValueError(f"demod.phase_trim_rad: must be within [-pi, pi], got {phase_trim_rad}")
+            raise ValueError(f"{name}.phase_trim_rad: must be within [-pi, pi], got {phase_trim_rad}")
         # the trim word: turns * 2**phase_bits, nearest (half_up), modulo one turn
         self.phase_trim_rad = phase_trim_rad
         turns = (phase_trim_rad / (2 * np.pi)) % 1.0
@@ -208,6 +212,12 @@ class Nco:
         """The exact phase (radians) the NCO's cos / -sin represent: the drive phase plus the
         unquantised trim."""
         return self.drive_phase(count, start) + self.phase_trim_rad
+
+    def accumulator(self, count: int) -> np.ndarray:
+        """The accumulator's words for the first ``count`` samples after reset (no trim): what a
+        demodulator with an external reference is fed to run as its own NCO would."""
+        n = np.arange(count, dtype=np.uint64)
+        return ((np.uint64(self.phase0) + n * np.uint64(self.ftw)) & np.uint64(self.phase_mask)).astype(np.int64)
 
     def phases(self, count: int) -> np.ndarray:
         """The words the table is read at for the first ``count`` samples after reset: the
@@ -349,6 +359,16 @@ class DemodDatapath(Datapath):
     ovf: tuple = info()
 
 
+class DemodRefDatapath(DemodDatapath):
+    """A demodulator whose reference is an input (``reference = "input"``: the drive loop's NCO):
+    the same arithmetic without its accumulator; no RTL yet (demod.v has its own NCO)."""
+
+    RTL = None
+
+
+REFERENCES = ("nco", "input")   # the demodulator's own accumulator, or the accumulator words of an input
+
+
 class Demod(Block):
     """Synchronous demodulator: NCO, two mixers, two ``Iir`` low-passes and a CORDIC; ``x`` ->
     ``i``, ``q``, ``amp``, ``phase`` (module docstring)."""
@@ -356,7 +376,7 @@ class Demod(Block):
     name = "demod"
 
     def __init__(self, nco: Nco, in_format: Format, data_format: Format, lpf_i: Iir, lpf_q: Iir,
-                 angle_format: Format, cordic_iterations: int, rules: Rules):
+                 angle_format: Format, cordic_iterations: int, rules: Rules, reference: str = "nco"):
         if lpf_i.data_format != data_format:
             raise ValueError(f"demod.lpf.data_format: must equal demod.data_format {data_format}")
         cordic = cordic_words("demod", data_format, angle_format, cordic_iterations)
@@ -365,7 +385,9 @@ class Demod(Block):
             # ``wave`` (budget, tests) by ``nco.rules``: they must be one rounding
             raise ValueError(f"demod.rounding: the NCO rounds its correction by {nco.rules.rounding!r}, "
                              f"the demodulator by {rules.rounding!r}; they must be the same")
-        self.nco = nco
+        if reference not in REFERENCES:
+            raise ValueError(f"demod.reference: one of {', '.join(REFERENCES)}, got {reference!r}")
+        self.nco, self.reference_source = nco, reference
         self.in_format, self.data_format, self.angle_format = in_format, data_format, angle_format
         self.lpf_i, self.lpf_q = lpf_i, lpf_q
         self.rules = rules
@@ -375,7 +397,7 @@ class Demod(Block):
         self.inv_k = cordic.inv_k
         lpf = lpf_i.datapath
         lpf_ovf = lambda ch: tuple(OvfField(f"lpf_{ch}.{f.counter}", f.width) for f in lpf.ovf)  # noqa: E731
-        self.datapath = DemodDatapath(
+        self.datapath = (DemodRefDatapath if reference == "input" else DemodDatapath)(
             in_w=in_format.wl, data_w=data_format.wl, phase_bits=nco.phase_bits, lut_bits=nco.lut_bits,
             lut_w=nco.lut_format.wl, interp_bits=nco.interp_bits, two_pi=nco.two_pi, two_pi_w=TWO_PI_FORMAT.wl,
             corr_shift=nco.corr_shift, nco_w=nco.nco_format.wl, ftw=nco.ftw, phase0=nco.phase0,
@@ -386,15 +408,20 @@ class Demod(Block):
             addr_shift=nco.addr_shift, phase_mask=nco.phase_mask, data_format=data_format,
             work_format=cordic.work_format, amp_format=cordic.amp_format,
             ovf=(OvfField("mix_i", 1), OvfField("mix_q", 1), *lpf_ovf("i"), *lpf_ovf("q"), OvfField("amp", 1)))
-        self.inputs = {"x": in_format}
+        # ref: the accumulator words of the reference (turns), read in place of the demodulator's own
+        self.inputs = {"x": in_format, **({"ref": nco.phase_format} if reference == "input" else {})}
         self.outputs = {"i": data_format, "q": data_format, "amp": data_format, "phase": angle_format}
 
     @classmethod
-    def from_config(cls, sec: Section, fs_hz: float, in_format: Format, connect: bool = True) -> "Demod":
-        nco = Nco(fs_hz, sec.number("f_hz", low=0, low_open=True), sec.integer("phase_bits", low=4, high=48),
+    def from_config(cls, sec: Section, fs_hz: float, in_format: Format, connect: bool = True,
+                    phase_bits: int | None = None) -> "Demod":
+        """``phase_bits``: the width of the reference a chain wires to ``ref`` (a drive loop's
+        accumulator), else the table's own."""
+        nco = Nco(fs_hz, sec.number("f_hz", low=0, low_open=True),
+                  phase_bits or sec.integer("phase_bits", low=4, high=48),
                   sec.integer("lut_bits", low=4, high=20), sec.format("lut_format"),
                   sec.number("phase_offset_turns", 0.0), sec.integer("interp_bits", low=0, high=24), sec.rules(),
-                  sec.number("phase_trim_rad", 0.0, low=-np.pi, high=np.pi))
+                  sec.number("phase_trim_rad", 0.0, low=-np.pi, high=np.pi), sec.path)
         data_format = sec.format("data_format")
         lpf_sec = sec.sub("lpf")
         lpf_format = lpf_sec.wired_format("data_format", data_format, sec.field("data_format"), connect)
@@ -402,7 +429,8 @@ class Demod(Block):
         lpf_q = Iir(lpf_i.sos, lpf_i.data_format, lpf_i.num_format, lpf_i.den_format, lpf_i.rules,
                     name=f"{sec.path}.lpf_q", dc_exact=lpf_i.dc_exact, error_feedback=lpf_i.error_feedback)
         return cls(nco, in_format, data_format, lpf_i, lpf_q, sec.format("angle_format"),
-                   sec.integer("cordic_iterations", low=4, high=40), sec.rules())
+                   sec.integer("cordic_iterations", low=4, high=40), sec.rules(),
+                   sec.choice("reference", REFERENCES, "nco"))
 
     def reset(self) -> None:
         self.nco.reset()
@@ -420,33 +448,43 @@ class Demod(Block):
         self.lpf_i.set_state(state["lpf_i"])
         self.lpf_q.set_state(state["lpf_q"])
 
-    def mix(self, log: OverflowLog, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _ref(self, x, ref) -> np.ndarray:
+        """The reference words of a run: the input's (reference = "input"), else none."""
+        if self.reference_source == "nco":
+            if ref is not None:
+                raise ValueError(f"{self.name}: ref: this demodulator runs its own NCO (reference = \"nco\")")
+            return np.empty(0, dtype=np.int64)
+        if ref is None or np.shape(ref) != np.shape(x):
+            raise ValueError(f"{self.name}: ref: one reference word per sample of x expected")
+        return np.asarray(ref, dtype=np.int64)
+
+    def mix(self, log: OverflowLog, x: np.ndarray, ref=None) -> tuple[np.ndarray, np.ndarray]:
         dp, counts = self.datapath, np.zeros(2, dtype=np.int64)
         i, q, self.nco.phase = _mix_kernel(x, self.nco.phase, dp.ftw, dp.phase_trim, dp.phase_mask, dp.addr_shift,
                                            dp.lut_bits, dp.interp_bits, dp.qsin.words, dp.two_pi, dp.corr_shift,
                                            dp.mix_shift, dp.rules.rounding_code,
                                            dp.data_format.min_int, dp.data_format.max_int, dp.rules.overflow_code,
-                                           counts)
+                                           counts, self._ref(x, ref))
         log.add(f"{self.name}.{dp.ovf[0].counter}", int(counts[0]))
         log.add(f"{self.name}.{dp.ovf[1].counter}", int(counts[1]))
         return i, q
 
-    def iq(self, log: OverflowLog, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def iq(self, log: OverflowLog, x: np.ndarray, ref=None) -> tuple[np.ndarray, np.ndarray]:
         """Mixers and low-pass filters: the rate (I) and quadrature (Q) channels."""
-        i, q = self.mix(log, x)
+        i, q = self.mix(log, x, ref)
         return self.lpf_i.stream(log, x=i)["y"], self.lpf_q.stream(log, x=q)["y"]
 
-    def stream(self, log: OverflowLog, x: np.ndarray) -> dict[str, np.ndarray]:
-        i, q = self.iq(log, x)
+    def stream(self, log: OverflowLog, x: np.ndarray, ref=None) -> dict[str, np.ndarray]:
+        i, q = self.iq(log, x, ref)
         amp, phase = self.polar(log, i, q)
         return {"i": i, "q": q, "amp": amp, "phase": phase}
 
-    def stream_outputs(self, log: OverflowLog, wanted: set[str], x: np.ndarray) -> dict[str, np.ndarray]:
+    def stream_outputs(self, log: OverflowLog, wanted: set[str], x: np.ndarray, ref=None) -> dict[str, np.ndarray]:
         """Without amp or phase wanted, the CORDIC does not run (nor count)."""
         if wanted <= {"i", "q"}:
-            i, q = self.iq(log, x)
+            i, q = self.iq(log, x, ref)
             return {"i": i, "q": q}
-        return self.stream(log, x=x)
+        return self.stream(log, x=x, ref=ref)
 
     def polar(self, log: OverflowLog, i: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         dp = self.datapath
@@ -454,11 +492,18 @@ class Demod(Block):
         amp = resize(xk * dp.inv_k, dp.amp_format, dp.data_format, dp.rules, log, f"{self.name}.{dp.ovf[-1].counter}")
         return amp, z
 
-    def reference(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        """Pure: sample k has the NCO phase of the k-th sample after reset, on every call."""
+    def reference(self, x: np.ndarray, ref=None) -> dict[str, np.ndarray]:
+        """Pure: sample k has the NCO phase of the k-th sample after reset, on every call; with an
+        external reference, the phase ``ref`` (real, in turns) plus the unquantised trim."""
         import scipy.signal as sps
 
-        ph = self.nco.reference_phase(len(x), 0)
+        if self.reference_source == "input":   # real values: the reference's phase in turns
+            if ref is None or np.shape(ref) != np.shape(x):
+                raise ValueError(f"{self.name}: ref: one reference phase per sample of x expected")
+            ph = 2 * np.pi * np.asarray(ref, dtype=float) + self.nco.phase_trim_rad
+        else:
+            self._ref(x, ref)
+            ph = self.nco.reference_phase(len(x), 0)
         i = sps.sosfilt(self.lpf_i.sos, 2 * x * np.cos(ph))
         q = sps.sosfilt(self.lpf_q.sos, -2 * x * np.sin(ph))
         return {"i": i, "q": q, "amp": np.hypot(i, q), "phase": np.arctan2(q, i)}
@@ -474,14 +519,20 @@ class Demod(Block):
         phase = np.repeat(np.array([0.3, 2.0, -2.5, -0.8]), -(-n // 4))[:n]
         amp = 0.5 * self.in_format.max_value
         x = self.carrier(amp, phase, n) + rng.normal(0, 0.01 * amp, n)
-        return {"x": quantize(x, self.in_format, Rules("half_up", "saturate"))}
+        return {"x": quantize(x, self.in_format, Rules("half_up", "saturate")), **self._own_ref(n)}
+
+    def _own_ref(self, n: int) -> dict[str, np.ndarray]:
+        """An external reference's stimulus: the words its own accumulator would give (so the vectors
+        equal those of a demodulator running its NCO)."""
+        return {"ref": self.nco.accumulator(n)} if self.reference_source == "input" else {}
 
     def stimulus(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
         fi = self.in_format
         full = self.carrier(1.0, 0.0, 512) * fi.max_value * 1.05  # clipped: saturating carrier
         parts = [np.tile(corner_codes(fi), 16), quantize(full, fi, Rules("half_up", "saturate")),
                  np.full(512, fi.min_int, np.int64), self.nominal_stimulus(rng, n)["x"]]
-        return {"x": np.concatenate(parts)}
+        x = np.concatenate(parts)
+        return {"x": x, **self._own_ref(x.size)}
 
     def parameters(self) -> dict:
         return {"fs_hz": self.nco.fs_hz, "f_hz": self.nco.f_hz, "ftw": self.nco.ftw, "phase0": self.nco.phase0,
@@ -493,4 +544,5 @@ class Demod(Block):
                 "lpf": self.lpf_i.parameters(),
                 # only when set: a config without the trim records what it always did
                 **({"phase_trim_rad": self.nco.phase_trim_rad, "phase_trim": self.nco.trim}
-                   if self.nco.phase_trim_rad else {})}
+                   if self.nco.phase_trim_rad else {}),
+                **({"reference": self.reference_source} if self.reference_source != "nco" else {})}

@@ -178,18 +178,21 @@ def _drive_step(x, st, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts):
 
 @njit(cache=True)
 def _drive_open(x, st, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts):
-    """The loop on given ADC codes (open loop): dac, f (Hz), amp and phase error per sample."""
+    """The loop on given ADC codes (open loop): dac, f (Hz), amp, phase error and the NCO's
+    accumulator word (the one its mixers read at that sample) per sample."""
     n = x.shape[0]
     dac = np.empty(n, dtype=np.int64)
     f = np.empty(n, dtype=np.int64)
     amp = np.empty(n, dtype=np.int64)
     err = np.empty(n, dtype=np.int64)
+    nco = np.empty(n, dtype=np.int64)
     for k in range(n):
+        nco[k] = st[S_PHASE]
         dac[k] = _drive_step(x[k], st, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts)
         f[k] = st[S_F]
         amp[k] = st[S_AMP]
         err[k] = st[S_ERR]
-    return dac, f, amp, err
+    return dac, f, amp, err, nco
 
 
 @njit(cache=True)
@@ -293,12 +296,14 @@ def _drive_open_float(x, st, lpf_st, p, sos):
     f = np.empty(n)
     amp = np.empty(n)
     err = np.empty(n)
+    nco = np.empty(n)
     for k in range(n):
+        nco[k] = st[FS_PHASE]
         dac[k] = _drive_step_float(x[k], st, lpf_st, p, sos)
         f[k] = st[FS_F]
         amp[k] = st[FS_AMP]
         err[k] = st[FS_ERR]
-    return dac, f, amp, err
+    return dac, f, amp, err, nco
 
 
 @njit(cache=True)
@@ -422,8 +427,9 @@ def hz_words(fs_hz: float, phase_bits: int, ftw_center: int, lock_range: int, fr
 
 class Drive(Block):
     """The drive loop: ``x`` (drive ADC) -> ``dac`` (drive DAC word), ``f`` (the NCO's frequency
-    word in Hz), ``amp`` (measured amplitude) and ``phase`` (the PLL's phase error);
-    the last three held between control updates. ``closed_loop`` runs it on a resonator."""
+    word in Hz), ``amp`` (measured amplitude) and ``phase`` (the PLL's phase error), these three
+    held between control updates, and ``nco`` (the accumulator word its mixers read, turns: a
+    demodulator's reference). ``closed_loop`` runs it on a resonator."""
 
     name = "drive"
 
@@ -526,14 +532,16 @@ class Drive(Block):
         self._fprm = fp
         self.freq_format = freq_format
         self.inputs = {"x": in_format}
-        self.outputs = {"dac": dac_format, "f": freq_format, "amp": data_format, "phase": angle_format}
+        # nco: the accumulator word the mixers read (turns): the demodulator's reference in a chain
+        self.outputs = {"dac": dac_format, "f": freq_format, "amp": data_format, "phase": angle_format,
+                        "nco": nco.phase_format}
         self.reset()
 
     @classmethod
     def from_config(cls, sec: Section, fs_hz: float, in_format: Format) -> "Drive":
         f_hz = sec.number("f_hz", low=0, low_open=True)
         nco = Nco(fs_hz, f_hz, sec.integer("phase_bits", low=4, high=48), sec.integer("lut_bits", low=4, high=20),
-                  sec.format("lut_format"), 0.0, sec.integer("interp_bits", low=0, high=24), sec.rules())
+                  sec.format("lut_format"), 0.0, sec.integer("interp_bits", low=0, high=24), sec.rules(), 0.0, sec.path)
         data_format = sec.format("data_format")
         lpf_sec = sec.sub("lpf")
         lpf = Iir.from_config(lpf_sec, fs_hz, lpf_sec.wired_format("data_format", data_format,
@@ -603,10 +611,10 @@ class Drive(Block):
     def stream(self, log: OverflowLog, x: np.ndarray) -> dict[str, np.ndarray]:
         counts, lcounts = self._counts()
         prm, qsin, atans, lb, la, lc = self.kernel_args()
-        dac, f, amp, err = _drive_open(np.asarray(x, dtype=np.int64), self.state, self.lpf_state, prm, qsin, atans,
-                                       lb, la, lc, counts, lcounts)
+        dac, f, amp, err, nco = _drive_open(np.asarray(x, dtype=np.int64), self.state, self.lpf_state, prm, qsin,
+                                            atans, lb, la, lc, counts, lcounts)
         self._log(log, counts, lcounts)
-        return {"dac": dac, "f": f, "amp": amp, "phase": err}
+        return {"dac": dac, "f": f, "amp": amp, "phase": err, "nco": nco}
 
     def detector_errors(self, x) -> tuple[np.ndarray, np.ndarray]:
         """The phase detector alone (mixers, low-pass, CORDIC) on ADC codes ``x``, its NCO free at
@@ -624,8 +632,8 @@ class Drive(Block):
     def reference(self, x: np.ndarray) -> dict[str, np.ndarray]:
         """The float loop on real ADC values from the reset state (pure)."""
         st, lpf_st = self.float_state()
-        dac, f, amp, err = _drive_open_float(np.asarray(x, dtype=float), st, lpf_st, self._fprm, self.lpf.sos)
-        return {"dac": dac, "f": f, "amp": amp, "phase": err}
+        dac, f, amp, err, nco = _drive_open_float(np.asarray(x, dtype=float), st, lpf_st, self._fprm, self.lpf.sos)
+        return {"dac": dac, "f": f, "amp": amp, "phase": err, "nco": nco}
 
     def frequency_hz(self, ftw) -> np.ndarray:
         """Frequency words in Hz: ftw * fs / 2**phase_bits."""

@@ -82,8 +82,9 @@ class Freq2Temp(Block):
         self.outputs = {"temp": temp_format}
 
     @classmethod
-    def from_config(cls, sec: Section, temp_format: Format) -> "Freq2Temp":
-        return cls(sec.format("freq_format"), temp_format, sec.format("kinv_format"),
+    def from_config(cls, sec: Section, temp_format: Format, freq_format: Format | None = None) -> "Freq2Temp":
+        """``freq_format``: the format a chain wires to ``f`` (a drive loop's), else the table's own."""
+        return cls(freq_format or sec.format("freq_format"), temp_format, sec.format("kinv_format"),
                    sec.number("f0_hz"), sec.number("k_hz_per_c"), sec.rules(),
                    sec.number("t_min_c", -40.0), sec.number("t_max_c", 85.0))
 

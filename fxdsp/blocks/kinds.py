@@ -60,6 +60,15 @@ class Kind:
     output_keys: dict[str, str]   # output port -> the table key its format comes from (errors name it)
     family: bool = False     # the instances are the sub-tables ([piecewise.sf])
     timed: bool = False      # its table is read at the sample rate (a filter design, an NCO, a lag's update rate)
+    optional: dict[str, tuple[str, str]] = None   # input a table may add -> the (key, value) that adds it
+
+    def ports(self, table: dict) -> tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]]:
+        """(inputs, outputs, optional inputs) of an instance whose table holds ``table``: its
+        inputs are the kind's and the optional ones its table enables (each must be wired); the
+        others may be wired (building the chain then names the key to set)."""
+        enabled = tuple(p for p, (key, value) in (self.optional or {}).items()
+                        if isinstance(table, dict) and table.get(key) == value)
+        return self.inputs + enabled, self.outputs, tuple(p for p in self.optional or {} if p not in enabled)
 
 
 def _own_format(block, sec: Section, key: str, port: str, wired: dict[str, Wired], ctx: Context):
@@ -93,7 +102,16 @@ def _sf_divide(sec, wired, ctx):
 def _demod(sec, wired, ctx):
     from .demod import Demod
 
-    return Demod.from_config(sec, ctx.fs_hz, port_format(sec, "in_format", "x", wired, ctx), ctx.enforce)
+    # a wired reference brings its accumulator's width (phase_bits, derived; a stated one must agree)
+    ref = wired.get("ref") if sec._get("reference", "nco") == "input" else None
+    bits = None
+    if ref is not None:
+        bits = ref.format.wl
+        if sec.has("phase_bits") and ctx.enforce and sec.integer("phase_bits") != bits:
+            raise InputError(f"{sec.field('phase_bits')}: {sec.integer('phase_bits')} must equal the width of "
+                             f"{ref.source} ({ref.format}: {bits} bits) to connect the chain")
+    return Demod.from_config(sec, ctx.fs_hz, port_format(sec, "in_format", "x", wired, ctx), ctx.enforce, bits)
+
 
 
 def _bias_subtract(sec, wired, ctx):
@@ -112,7 +130,7 @@ def _iir(sec, wired, ctx):
 def _freq2temp(sec, wired, ctx):
     from .freq2temp import Freq2Temp
 
-    return _own_format(Freq2Temp.from_config(sec, sec.format("temp_format")), sec, "freq_format", "f", wired, ctx)
+    return Freq2Temp.from_config(sec, sec.format("temp_format"), port_format(sec, "freq_format", "f", wired, ctx))
 
 
 def _drive(sec, wired, ctx):
@@ -135,12 +153,14 @@ KINDS: dict[str, Kind] = {k.name: k for k in (
     Kind("piecewise", ("temp",), ("y",), _piecewise, {"y": "out_format"}, family=True),
     Kind("sf_divide", ("x", "sf"), ("y",), _sf_divide, {"y": "out_format"}),
     Kind("demod", ("x",), ("i", "q", "amp", "phase"), _demod,
-         {"i": "data_format", "q": "data_format", "amp": "data_format", "phase": "angle_format"}, timed=True),
+         {"i": "data_format", "q": "data_format", "amp": "data_format", "phase": "angle_format"}, timed=True,
+         optional={"ref": ("reference", "input")}),
     Kind("bias_subtract", ("x", "bias"), ("y",), _bias_subtract, {"y": "out_format"}),
     Kind("iir", ("x",), ("y",), _iir, {"y": "data_format"}, timed=True),
     Kind("freq2temp", ("f",), ("temp",), _freq2temp, {"temp": "temp_format"}),
-    Kind("drive", ("x",), ("dac", "f", "amp", "phase"), _drive,
-         {"dac": "dac_format", "f": "freq_format", "amp": "data_format", "phase": "angle_format"}, timed=True),
+    Kind("drive", ("x",), ("dac", "f", "amp", "phase", "nco"), _drive,
+         {"dac": "dac_format", "f": "freq_format", "amp": "data_format", "phase": "angle_format",
+          "nco": "phase_bits"}, timed=True),
 )}
 
 

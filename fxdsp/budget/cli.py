@@ -23,7 +23,8 @@ from . import optimise as opt
 from .attribution import ADDITIVITY_DB, THEORY_DB, Attribution, attribute
 from .floor import (DOMINANT_FACTOR, FLICKER_FACTOR, WITHIN_DB, Allan, DriveSweep, Floor, allan_chain,
                     carrier_chains, demod_f_hz, drive_frequencies, drive_sweep, floor_of)
-from .drive_loop import TEMPS_C, at_temperature, format_budget, ramp
+from .drive_loop import TEMPS_C, at_temperature, format_allan as format_reference_allan, format_budget, ramp, \
+    reference_allan
 from .static import static_errors
 from .table import budget_rows, format_rows
 from .units import parse_target
@@ -63,6 +64,14 @@ def drive_loop_budgets(design, with_ramp: bool) -> list:
     return out
 
 
+def drive_reference_allans(design) -> list:
+    """Every drive loop's NCO as a demodulator reference over an hour of lock (reference_allan)."""
+    from ..blocks.drive import Drive
+
+    return [reference_allan(b, rate_full_scale_dps=design.rate_full_scale_dps, progress=True)
+            for b in design.blocks.values() if isinstance(b, Drive)]
+
+
 def _scaled(st: dict, scale: float) -> dict:
     return {k: (v * scale if k in ("rms", "max_abs", "mean") else v) for k, v in st.items()}
 
@@ -89,6 +98,10 @@ def configure(parser) -> None:
     parser.add_argument("--drive-ramp", action="store_true",
                         help="also run every drive loop over the chamber ramp -40 -> 85 C at 1 C/min (about 4 min of "
                              "simulation per loop; without it the drive loops are budgeted at -40, 25 and 85 C)")
+    parser.add_argument("--drive-allan", action="store_true",
+                        help="also run every drive loop locked for an hour and give the Allan deviation of its NCO's "
+                             "error as a demodulator reference, fixed minus float, against the open-loop NCO's drift "
+                             "(about 2 min of simulation per loop)")
     parser.add_argument("--drive-band", action="store_true",
                         help="with --optimise on a chain with a demodulator: meet the target at every frequency of "
                              "the drive sweep too (the band a -40..85 C silicon resonator covers), not only at the "
@@ -268,6 +281,9 @@ def _run(args, stage) -> int:
         print(format_budget(lb))
     if not loops:
         print("  none: this config has no drive loop")
+    references = drive_reference_allans(design) if args.drive_allan else []
+    for ra in references:
+        print(format_reference_allan(ra))
 
     out = {"config": cfg.name, "seed": design.seed,
            "table": [r.as_dict() for r in rows],
@@ -277,6 +293,7 @@ def _run(args, stage) -> int:
            "theory_limit_db": THEORY_DB, "floor": [f.as_dict() for f in floors],
            "allan": [al.as_dict() for al in allans], "drive_sweep": [sw.as_dict() for sw in sweeps],
            "drive_loop": [lb.as_dict() for lb in loops],
+           "drive_reference_allan": [ra.as_dict() for ra in references],
            "null_means": "an infinite or undefined value (an exact port's SNR, a margin without a floor)"}
     status = 0
     result = None
@@ -319,7 +336,7 @@ def _run(args, stage) -> int:
 
     if args.report:
         _report(stage.dir(args.report), design, cfg, rows, attrs, statics, target, result, args, floors, allans,
-                sweeps, loops)
+                sweeps, loops, references)
         print(f"\nreport written to {args.report}/budget.md")
     if args.json:  # no wall-clock time in it: the same config and seed give the same bytes
         stage.write_text(args.json, json_text(plain(out), "--json", indent=1))
@@ -337,7 +354,7 @@ def _figures(md: list, out: Path, items, stem: str, plot, text) -> None:
 
 
 def _report(out: Path, design, cfg, rows, attrs, statics, target, result, args, floors, allans, sweeps,
-            loops) -> None:
+            loops, references) -> None:
     from . import report as rp
 
     out.mkdir(parents=True, exist_ok=True)
@@ -387,6 +404,11 @@ def _report(out: Path, design, cfg, rows, attrs, statics, target, result, args, 
               "are the floor the ADC allows. Frequency word against the mode's true resonance over 10 ms records "
               "after lock; rate error = the reference phase error on the nominal quadrature.\n")
     md.append("```\n" + ("\n".join(format_budget(lb) for lb in loops) or "no drive loop") + "\n```\n")
+    for ra in references:
+        name = f"reference_allan_{ra.table}.png"
+        rp.plot_reference_allan(ra, out / name)
+        md.append("```\n" + format_reference_allan(ra) + "\n```\n")
+        md.append(f"![reference Allan deviation]({name})\n")
     chain = target.chain if target else args.chain
     port = target.port if target else (list(design.chains[chain].outputs)[-1] if chain else None)
     if chain and opt.knobs_of(cfg.data, chain):

@@ -223,3 +223,76 @@ def format_budget(b: DriveBudget) -> str:
                  f"predicts {p['total']:+.3g} Hz (detector {p['detector']:+.2g}, PI word {p['pi_word']:+.2g}, Hz word "
                  f"{p['hz_word']:+.2g}); rate error at {NOMINAL_QUADRATURE_FS:g} FS quadrature")
     return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class ReferenceAllan:
+    """The demodulator reference's error, bit-exact minus float, as the rate error it causes on the
+    nominal quadrature: locked to the drive loop (each loop's NCO against its own mode's motion)
+    against open loop (the same table's centre word against the exact centre frequency)."""
+
+    table: str
+    temp_c: float
+    seconds: float
+    record_s: float
+    taus: np.ndarray
+    adev_locked: np.ndarray       # deg/h
+    adev_open: np.ndarray         # deg/h: a phase ramp, adev = slope tau / sqrt(2)
+    open_drift_rad_per_h: float
+
+    @property
+    def tail_slope(self) -> float:
+        """The log-log slope of the locked curve over its last octave (<= 0: flat or falling)."""
+        return float(np.log(self.adev_locked[-1] / self.adev_locked[-2]) / np.log(self.taus[-1] / self.taus[-2]))
+
+    @property
+    def no_drift(self) -> bool:
+        """No open-loop drift: the locked curve is flat or falling at the longest tau (a slope
+        below +1/4; a drift rises at +1)."""
+        return self.tail_slope < 0.25
+
+    def as_dict(self) -> dict:
+        return {"table": self.table, "temp_c": self.temp_c, "seconds": self.seconds, "record_s": self.record_s,
+                "unit": "deg/h", "quadrature_fs": NOMINAL_QUADRATURE_FS,
+                "curve": [{"tau_s": float(t), "locked": float(a), "open": float(o)}
+                          for t, a, o in zip(self.taus, self.adev_locked, self.adev_open)],
+                "open_drift_rad_per_h": self.open_drift_rad_per_h, "tail_slope": self.tail_slope,
+                "no_drift": self.no_drift}
+
+
+def reference_allan(drive: Drive, seconds: float = 3600.0, temp_c: float = 25.0,
+                    resonator: DriveResonator | None = None, seed: int = 1, rate_full_scale_dps: float = 200.0,
+                    progress: bool = False) -> ReferenceAllan:
+    """Allan deviation of the reference's fixed-minus-float error over ``seconds`` of lock (both
+    loops closed on the same mode with the same pick-off noise, from power-on; the first 10 tau
+    left out), in deg/h of rate on the nominal quadrature, against the open-loop NCO's drift."""
+    import allantools
+
+    from .floor import octave_taus
+
+    res = resonator or resonator_for(drive)
+    settle = 10 * float(res.tau_s(temp_c))
+    rec = samples_per_step(drive.fs_hz)
+    runs = [closed_loop(drive, res, temp_c, seconds + settle, seed=seed, fixed=fixed, record_every=rec,
+                        progress=progress) for fixed in (True, False)]
+    keep = runs[0].t_s > settle
+    to_rate = NOMINAL_QUADRATURE_FS * rate_full_scale_dps * 3600.0   # deg/h per rad of reference error
+    diff = (runs[0].ref_phase_rad[keep] - runs[1].ref_phase_rad[keep]) * to_rate
+    fs = drive.fs_hz / rec
+    taus = octave_taus(diff.size, fs)
+    taus, adev, _, _ = allantools.oadev(diff, rate=fs, data_type="freq", taus=taus)
+    drift = 2 * np.pi * (drive.nco.ftw * drive.fs_hz / 2.0**drive.nco.phase_bits - drive.f_hz)   # rad/s
+    return ReferenceAllan(drive.name, temp_c, seconds, rec / drive.fs_hz, np.asarray(taus), np.asarray(adev),
+                          abs(drift) * to_rate * np.asarray(taus) / math.sqrt(2), abs(drift) * 3600.0)
+
+
+def format_allan(a: ReferenceAllan) -> str:
+    lines = [f"{a.table}: the demodulator reference, fixed minus float, as rate error on {NOMINAL_QUADRATURE_FS:g} FS "
+             f"quadrature, {a.seconds:g} s at {a.temp_c:g} C (records of {a.record_s * 1e3:g} ms; allantools.oadev):",
+             f"  {'tau s':>9s} {'locked deg/h':>13s} {'open loop':>11s}"]
+    for t, lk, op in zip(a.taus, a.adev_locked, a.adev_open):
+        lines.append(f"  {t:9.3g} {lk:13.3g} {op:11.3g}")
+    lines.append(f"  locked: slope {a.tail_slope:+.2f} over the last octave -> "
+                 f"{'no drift (flat or falling)' if a.no_drift else 'RISING: a drift'}; open loop drifts "
+                 f"{a.open_drift_rad_per_h:.3g} rad/h (the centre word's rounding)")
+    return "\n".join(lines)

@@ -318,31 +318,39 @@ def divide_hybrid(block, x: np.ndarray, sf: np.ndarray, sw: Switch, name: str = 
     return v
 
 
-def nco_hybrid(block, n: int, sw: Switch, prefix: str = "demod") -> tuple[np.ndarray, np.ndarray]:
+def nco_hybrid(block, n: int, sw: Switch, prefix: str = "demod", ref=None) -> tuple[np.ndarray, np.ndarray]:
     """(cos, -sin) of the NCO phase; sources <prefix>.nco_phase (tuning word, bin address and
     interpolation offset: the phase the NCO evaluates, with an exact table and an exact first-order
-    correction) and <prefix>.nco_amp (table values and correction quantised)."""
+    correction) and <prefix>.nco_amp (table values and correction quantised). ``ref``: an external
+    reference in turns (a drive loop's NCO) in place of the accumulator: on its word grid when
+    nco_phase is on, exact when off."""
     nco = block.nco
-    phases = nco.phases(n)
+    if ref is not None:
+        turns = np.asarray(ref, dtype=float)
+        words = np.floor(turns * 2.0**nco.phase_bits + 0.5).astype(np.int64)
+        phases = (words + nco.trim) & nco.phase_mask
+    else:
+        phases = nco.phases(n)
     if f"{prefix}.nco_phase" in sw:
         if f"{prefix}.nco_amp" in sw:
             c, m = nco.wave(phases)
             return c.astype(float) * nco.nco_format.lsb, m.astype(float) * nco.nco_format.lsb
         centre, delta = nco.bin_phase(phases)
         return np.cos(centre) - np.sin(centre) * delta, -np.sin(centre) - np.cos(centre) * delta
-    angle = nco.reference_phase(n, 0)
+    angle = nco.reference_phase(n, 0) if ref is None else 2 * np.pi * turns + nco.phase_trim_rad
     if f"{prefix}.nco_amp" in sw:
         lsb = nco.lut_format.lsb
         return nco.lut_quantize(np.cos(angle)).astype(float) * lsb, nco.lut_quantize(-np.sin(angle)).astype(float) * lsb
     return np.cos(angle), -np.sin(angle)
 
 
-def demod_hybrid(block, x: np.ndarray, sw: Switch, prefix: str = "demod", wanted=("i",)) -> dict[str, np.ndarray]:
+def demod_hybrid(block, x: np.ndarray, sw: Switch, prefix: str = "demod", wanted=("i",),
+                 ref=None) -> dict[str, np.ndarray]:
     """Mixers 2 x cos (I) and -2 x sin (Q), rounding <prefix>.mix_round, low-pass <prefix>.lpf_*
     (both channels share the filter's coefficients and rounding); amp and phase through
     <prefix>.cordic (the CORDIC on the channels' stored words, or hypot / atan2 when off). Returns
     ``mix`` (the I mixer) and the wanted outputs."""
-    cos, msin = nco_hybrid(block, len(x), sw, prefix)
+    cos, msin = nco_hybrid(block, len(x), sw, prefix, ref)
     x = np.asarray(x, dtype=float)
     out = {}
     for port, lpf, wave in (("i", block.lpf_i, cos), ("q", block.lpf_q, msin)):
@@ -485,7 +493,8 @@ HYBRIDS: dict[str, KindHybrid] = {
                             lambda iid, b, ins, sw, w: {"y": piecewise_hybrid(b, ins["temp"], iid, sw)}),
     "sf_divide": KindHybrid(_sources_divide,
                             lambda iid, b, ins, sw, w: {"y": divide_hybrid(b, ins["x"], ins["sf"], sw, f"{iid}.trunc")}),
-    "demod": KindHybrid(_sources_demod, lambda iid, b, ins, sw, w: demod_hybrid(b, ins["x"], sw, iid, w)),
+    "demod": KindHybrid(_sources_demod, lambda iid, b, ins, sw, w: demod_hybrid(b, ins["x"], sw, iid, w,
+                                                                               ins.get("ref"))),
     "bias_subtract": KindHybrid(_sources_subtract, lambda iid, b, ins, sw, w: {
         "y": subtract_hybrid(b, ins["x"], ins["bias"], f"{iid}.round", sw)}),
     "iir": KindHybrid(_sources_iir, lambda iid, b, ins, sw, w: {"y": iir_hybrid(b, ins["x"], f"{iid}.coef",

@@ -85,7 +85,9 @@ def _knobs_divide(t: str, table: dict) -> list[Knob]:
 
 def _knobs_demod(t: str, table: dict) -> list[Knob]:
     n = _sections(table.get("lpf", {}).get("order", 2))   # two channels of n biquads: 3 n and 2 n coefficients each
-    return [Knob(f"{t}.phase_bits", ((t, "phase_bits"),), "int", 8, 48),
+    # referenced to an input, the accumulator is the reference's (a drive loop's), not a knob of its own
+    own = [Knob(f"{t}.phase_bits", ((t, "phase_bits"),), "int", 8, 48)] if table.get("reference", "nco") == "nco" else []
+    return [*own,
             Knob(f"{t}.lut_bits", ((t, "lut_bits"),), "int", 6, 16, instances=("index", t)),
             Knob(f"{t}.interp_bits", ((t, "interp_bits"),), "int", 0, 20),
             Knob(f"{t}.lut_format", ((t, "lut_format"),), instances=("nco_lut", t)),

@@ -86,9 +86,15 @@ def plot_allan(allan, path: Path) -> None:
     if allan.adev_1s > 0:
         how = "measured" if allan.measured_1s else "extrapolated"
         ax.loglog([1.0], [allan.adev_1s], "ks", label=f"tau 1 s ({how}): ARW {allan.arw:.3g} deg/sqrt(h)")
+    _save_allan(fig, ax, allan.unit, f"{allan.chain}.{allan.port}: fixed minus float error, {allan.temp_c:g} C, "
+                f"input {allan.level:g}", path)
+
+
+def _save_allan(fig, ax, unit: str, title: str, path: Path) -> None:
+    """An Allan deviation plot's axes, legend and grid, written to ``path``."""
     ax.set_xlabel("tau (s)")
-    ax.set_ylabel(f"Allan deviation ({allan.unit})")
-    ax.set_title(f"{allan.chain}.{allan.port}: fixed minus float error, {allan.temp_c:g} C, input {allan.level:g}")
+    ax.set_ylabel(f"Allan deviation ({unit})")
+    ax.set_title(title)
     ax.legend(fontsize=7)
     ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
@@ -116,3 +122,13 @@ def plot_drive_sweep(sweep, path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def plot_reference_allan(ra, path: Path) -> None:
+    """The reference's Allan deviation locked to the drive loop against the open-loop NCO's drift."""
+    fig, ax = plt.subplots(figsize=(8, 5.5))
+    ax.loglog(ra.taus, ra.adev_locked, "o-", ms=3, lw=1.0, label="locked to the drive loop (fixed - float)")
+    ax.loglog(ra.taus, ra.adev_open, "--", lw=1.0, label=f"open loop: the centre word's drift "
+              f"{ra.open_drift_rad_per_h:.3g} rad/h")
+    _save_allan(fig, ax, "deg/h", f"{ra.table}: demodulator reference error as rate on the nominal quadrature, "
+                f"{ra.seconds:g} s", path)

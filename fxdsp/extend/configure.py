@@ -41,7 +41,7 @@ from fxdsp.extend.design import Design, Fitting
 from fxdsp.extend.plan import parameter
 from fxdsp.errors import InputError
 from fxdsp.fixed import Format
-from fxdsp.netlist import with_stage
+from fxdsp.netlist import chain_inputs_to, with_stage
 from fxdsp.repro.calconfig import FS_MV, acc_width, config_from_text, config_text, fit_format, \
     paper001_coefficients, paper002_coefficients, piecewise_table, set_table_keys
 from fxdsp.repro.calibrate import calibrate002
@@ -183,10 +183,11 @@ def gyro_freq_config(columns: dict, remedies, design, roles) -> tuple[str, dict,
     return text, cal, fit.changes
 
 
-def thermometer_tables(temp_c, te_c, output, rate_hz: float, temp_format: str) -> dict:
+def thermometer_tables(temp_c, te_c, output, rate_hz: float, temp_format: str, data: dict) -> dict:
     """The thermometer chain's tables without a user design: bias(T) = cubic least squares of
     ``output`` on ``te_c`` (the temperature the engine sees), centred at the mean temperature;
-    formats from the data."""
+    formats from the data; ``data`` the base config's, whose chains feeding the subtraction follow
+    its unit."""
     te = np.asarray(te_c, float)
     y = np.asarray(output, float)
     t0 = float(np.round(np.mean(te), 1))
@@ -200,8 +201,11 @@ def thermometer_tables(temp_c, te_c, output, rate_hz: float, temp_format: str) -
     word = fit_format([np.abs(y).max()], THERMO_OUT_WL, 1, True, "bias_subtract001.in")
     bias["out_format"] = word    # subtracted word for word from the output: the same format
     bias["unit"] = "sensor"      # the log's output unit, not paper 001's deg/h (fxdsp.units)
-    # paper 001's chain reads the same engines: its rate input is now in the log's unit too
-    return {"freq2temp": {"temp_format": temp_format}, "chain.paper001": {"input_units": {"rate_in": "sensor"}},
+    # every chain whose input feeds the same subtraction (paper 001's, with or without its drive
+    # loop): that input is now in the log's unit too
+    feeds = chain_inputs_to(data, "bias_subtract001", "x")
+    units = {chain: {"input_units": {name: "sensor"}} for chain, name in feeds.items()}
+    return {"freq2temp": {"temp_format": temp_format}, **units,
             "piecewise.bias001": bias, "bias_subtract001": {"in_format": word, "out_format": word},
             "_fit": {"t0_c": t0, "coefficients": [float(c) for c in coef], "coef_wl": THERMO_COEF_WL}}
 
@@ -246,7 +250,7 @@ def thermometer_config(te_c, output, remedies, design, roles, log_rate_hz: float
     if design.given or not roles.written:
         tables = user_thermometer_tables(fit, roles, te_c, output)
     else:
-        tables = thermometer_tables(te_c, te_c, output, log_rate_hz, temp_format)
+        tables = thermometer_tables(te_c, te_c, output, log_rate_hz, temp_format, design.data)
         for table, keys in tables.items():
             if table.startswith("_"):
                 continue

@@ -20,7 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..blocks.drive import _drive_step, _drive_step_float, Drive, FS_AMP, FS_ERR, FS_F, S_AMP, S_ERR, S_F, S_FTW
+from ..blocks.drive import (_drive_step, _drive_step_float, Drive, FS_AMP, FS_ERR, FS_F, FS_PHASE, S_AMP, S_ERR, S_F,
+                            S_FTW, S_PHASE)
 from ..fixed import OverflowLog
 from .resonator import DriveResonator, adc_code, resonator_step
 
@@ -36,16 +37,18 @@ def samples_per_step(fs_hz: float) -> int:
 
 @njit(cache=True)
 def _closed(n, record_every, fixed, st, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts, fst, flpf, fp, sos, coef,
-            per_step, step0, rst, noise, adc_scale, lo, hi, dac_scale, codes):
+            per_step, step0, rst, noise, adc_scale, lo, hi, dac_scale, codes, omega, turn):
     """n samples of the loop on the resonator: the bit-exact one (``fixed``: its state ``st``,
     ``lpf_st``, parameters ``p`` ...) or the float reference (``fst``, ``flpf``, ``fp``, ``sos``),
     both reading the same ADC. ``rst`` = x, v, held drive, ADC saturations; ``coef`` the resonator's
     steps of this chunk, the first at global step ``step0 // per_step``. Records every
     ``record_every`` samples the frequency word (fixed: the tuning word; float: Hz), amplitude and
     phase error at the record, and the mean of the Hz output over the record's window (fixed: in
-    freq_format LSBs). ``codes``: the ADC codes the loop read, kept when it has n entries."""
+    freq_format LSBs). ``codes``: the ADC codes the loop read, kept when it has n entries. The
+    reference's phase error at each record: the NCO's phase (fixed: accumulator x ``turn``, the
+    turns per LSB) against the mode's, atan2(-v / w, x) with ``omega`` = w per step, wrapped."""
     m = n // record_every
-    rec = np.empty((4, m))
+    rec = np.empty((5, m))
     x, v, u = rst[0], rst[1], rst[2]
     base = step0 // per_step
     acc = 0.0
@@ -60,15 +63,20 @@ def _closed(n, record_every, fixed, st, lpf_st, p, qsin, atans, lb, la, lc, coun
         else:
             d = _drive_step_float(code / adc_scale, fst, flpf, fp, sos)
             acc += fst[FS_F]
-        x, v = resonator_step(x, v, u, coef, min((step0 + i) // per_step - base, coef.shape[0] - 1))
+        j = min((step0 + i) // per_step - base, coef.shape[0] - 1)
+        x, v = resonator_step(x, v, u, coef, j)
         u = d
         if (i + 1) % record_every == 0:
             k = (i + 1) // record_every - 1
             if fixed:   # the tuning word (< 2**53: exact in float64)
                 rec[0, k], rec[1, k], rec[2, k] = st[S_FTW], st[S_AMP], st[S_ERR]
+                nco = st[S_PHASE] * turn
             else:
                 rec[0, k], rec[1, k], rec[2, k] = fst[FS_F], fst[FS_AMP], fst[FS_ERR]
+                nco = fst[FS_PHASE]
             rec[3, k] = acc / record_every
+            e = 2 * np.pi * nco - np.arctan2(-v / omega[j], x)
+            rec[4, k] = e - 2 * np.pi * np.floor(e / (2 * np.pi) + 0.5)
             acc = 0.0
     rst[0], rst[1], rst[2] = x, v, u
     return rec
@@ -88,6 +96,7 @@ class ClosedLoopRun:
     adc_saturations: int
     overflows: OverflowLog
     limits: dict              # samples with a PI at its limit (fxdsp.blocks.drive.LIMITS), fixed loop only
+    ref_phase_rad: np.ndarray  # the NCO's phase against the mode's motion (a demodulator's reference error)
     adc_codes: np.ndarray | None = None   # every drive ADC code the loop read (keep_codes)
 
 
@@ -144,11 +153,13 @@ def closed_loop(drive: Drive, resonator: DriveResonator, temp_c, seconds: float,
         coef = resonator.coefficients(temps[steps], fs, None if freqs is None else freqs[steps])
         noise = rng.normal(0.0, resonator.noise_fs, m) if resonator.noise_fs else np.zeros(m)
         kept = np.empty(m if keep_codes else 0, dtype=np.int64)
+        omega = 2 * np.pi * (resonator.frequency_hz(temps[steps]) if freqs is None else freqs[steps])
         parts.append(_closed(m, rec, fixed, st, lpf_st, prm, qsin, atans, lb, la, lc, counts, lcounts, fst, flpf,
                              drive._fprm, drive.lpf.sos, coef, per_step, start, rst, noise, adc_scale, fi.min_int,
-                             fi.max_int, dac_scale, kept))
+                             fi.max_int, dac_scale, kept, np.asarray(omega, dtype=float),
+                             2.0**-drive.nco.phase_bits))
         codes.append(kept)
-    ftw, amp, err, mean = np.concatenate(parts, axis=1)
+    ftw, amp, err, mean, ref_err = np.concatenate(parts, axis=1)
     if fixed:
         drive._log(log, counts, lcounts)
         f_hz = drive.frequency_hz(ftw.astype(np.int64))
@@ -163,7 +174,7 @@ def closed_loop(drive: Drive, resonator: DriveResonator, temp_c, seconds: float,
     limits = dict(drive.limits) if fixed else {}
     drive.reset()
     return ClosedLoopRun(idx / fs, f_hz, mean, amp, err, true_f, temps[steps], int(rst[3]), log, limits,
-                         np.concatenate(codes) if keep_codes else None)
+                         ref_err, np.concatenate(codes) if keep_codes else None)
 
 
 def loop_frequency(drive: Drive, resonator: DriveResonator, t_s, freq_hz, temp_c, seed: int = 1,
