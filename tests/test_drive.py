@@ -111,7 +111,7 @@ def _short_programme(monkeypatch):
     from fxdsp.sim.programmes import Segment
 
     monkeypatch.setattr(generate, "programme",
-                        lambda scenario, scale, rng: ([Segment(20.0, 25.0), Segment(40.0, 29.0, phase="ramp")], 25.0))
+                        lambda scenario, scale, rng: ([Segment(20.0, 25.0), Segment(40.0, 29.0, phase="ramp")], 25.0, 5.0))
 
 
 def test_simulate_reads_freq_hz_through_the_loop(monkeypatch, tmp_path):
@@ -317,3 +317,54 @@ def test_the_locked_reference_has_no_open_loop_drift(design):
     a = reference_allan(drive, seconds=60.0, seed=2)
     assert a.taus[-1] >= 10.0 and a.no_drift, (a.taus, a.adev_locked)
     assert a.open_drift_rad_per_h <= np.pi * drive.fs_hz / 2.0**drive.nco.phase_bits * 3600 * (1 + 1e-9)
+
+
+def test_repro_drive_loop_without_paper_001_is_one_line():
+    """--drive-loop reads paper 001's frequency: asked of another paper, one line and exit 2, before
+    any reproduction runs."""
+    from conftest import run_cli
+
+    rc, err = run_cli(["repro", "--paper", "003", "--drive-loop"])
+    assert rc == 2 and len(err.strip().splitlines()) == 1 and "--drive-loop" in err and "001" in err, err
+
+
+def test_a_wire_to_a_reference_the_demodulator_does_not_take_names_the_key():
+    """A chain wiring the drive loop's NCO to a demodulator that runs its own (reference missing,
+    misspelt or "nco") is bad input naming the table's key, before the table is read."""
+    import copy
+
+    from conftest import default_data
+    from fxdsp.chains import build
+    from fxdsp.config import Config
+    from fxdsp.errors import InputError
+
+    wire = "'drive.nco -> demod002.ref' drives it"
+    for edit, want, then in (({"reference": "nco"}, "demod002.reference: 'nco'", wire),
+                             ({"reference": None}, "demod002.reference: missing", wire),
+                             ({"reference": None, "referenc": "input"}, "demod002.referenc: unknown key",
+                              "did you mean 'reference'")):
+        data = copy.deepcopy(default_data())
+        data["demod002"].update(edit)
+        data["demod002"] = {k: v for k, v in data["demod002"].items() if v is not None}
+        with pytest.raises(InputError) as info:
+            build(Config(data, source="<test>"))
+        msg = str(info.value)
+        assert msg.startswith(want) and then in msg, msg
+
+
+def test_the_power_on_scenario_logs_the_acquisition(design):
+    """`simulate --scenario power_on --drive-loop drive001`: the loop is switched on at the first
+    row, so freq_hz starts at the NCO's centre (paper 001's 25 C resonance) and settles on the
+    resonance the mode has at 50 C within a few of its time constants."""
+    from fxdsp.sim import generate_log
+
+    drive = design.blocks["drive001"]
+    log, truth = generate_log("power_on", effects={}, seed=2, columns=("freq_hz",), time_step_s=0.01,
+                              drive_loop=drive, return_truth=True, duration_scale=0.25)
+    f, want = log["freq_hz"], truth["freq_hz"]
+    assert abs(want[0] - drive.f_hz) > 1.0                       # the mode is far from the centre ...
+    assert abs(f[0] - drive.f_hz) < abs(want[0] - f[0])         # ... and the loop starts nearer the centre
+    near = np.abs(f - want) < 1e-3
+    settled = np.flatnonzero(~near)[-1] + 1                       # from here on within 1 mHz
+    tau = float(LOOPS["drive001"].tau_s(50.0))
+    assert settled * 0.01 < 6 * tau and settled < f.size - 100, (settled, tau)

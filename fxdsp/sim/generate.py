@@ -93,8 +93,9 @@ def _rtd_readout(t_c: np.ndarray, element: str) -> np.ndarray:
     return assumed.temperature_from_fraction(real.adc_fraction(real.resistance(t_c)))
 
 
-def _through_loop(drive, t, freq, die_c, stream, progress: bool) -> np.ndarray:
-    """The freq_hz column read through ``drive`` closed on the simulated resonance."""
+def _through_loop(drive, t, freq, die_c, stream, progress: bool, warmup_s: float) -> np.ndarray:
+    """The freq_hz column read through ``drive`` closed on the simulated resonance, the loop
+    switched on ``warmup_s`` before the first row's interval."""
     from fxdsp.sim.driveloop import loop_frequency
     from fxdsp.sim.resonator import resonator_for
 
@@ -103,7 +104,7 @@ def _through_loop(drive, t, freq, die_c, stream, progress: bool) -> np.ndarray:
         raise InputError(f"drive loop [{drive.name}]: the simulated resonance spans {lo:.4f} .. {hi:.4f} Hz, outside "
                          f"its f_hz +- lock_range_hz = {drive.f_hz:g} +- {drive.lock_range_hz:g} Hz")
     return loop_frequency(drive, resonator_for(drive), t, freq, die_c, seed=int(stream.integers(2**62)),
-                          progress=progress)
+                          warmup_s=warmup_s, progress=progress)
 
 
 def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: int = 0,
@@ -166,7 +167,7 @@ def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: 
     streams = dict(zip(_STREAMS, (np.random.default_rng(s)
                                   for s in np.random.SeedSequence(int(seed)).spawn(len(_STREAMS)))))
 
-    segments, start_c = programme(scenario, float(duration_scale), streams["programme"])
+    segments, start_c, loop_warmup_s = programme(scenario, float(duration_scale), streams["programme"])
     run = sample(segments, start_c, float(time_step_s))
     t, n = run.time_s, run.time_s.size
 
@@ -225,7 +226,8 @@ def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: 
     if drive_loop is not None:
         if "freq_hz" not in wanted:   # the loop would run for nothing and the caller not know it
             raise InputError(f"drive_loop [{drive_loop.name}]: columns has no freq_hz to read through it")
-        optional["freq_hz"] = lambda: _through_loop(drive_loop, t, freq, nodes["die"], streams["freq_hz"], progress)
+        optional["freq_hz"] = lambda: _through_loop(drive_loop, t, freq, nodes["die"], streams["freq_hz"], progress,
+                                                    loop_warmup_s)
     for name in wanted:
         log[name] = optional[name]()
     if not return_truth:

@@ -119,7 +119,7 @@ def _paper000() -> Baseline:
 
 
 _BASELINES = {"paper002": _paper002, "paper001": _paper001, "paper000": _paper000,
-              "ramp": _paper002, "random": _paper002}
+              "ramp": _paper002, "random": _paper002, "power_on": _paper001}
 
 
 def scenario_baseline(scenario: str) -> Baseline:

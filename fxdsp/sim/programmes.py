@@ -20,7 +20,12 @@ Chosen numbers (and why):
   then the four-position tumble 0/90/180/270 deg for 10 min each; the whole sequence is run twice;
 * ramp: dwell at 25 C, heat to 60 C, dwell, cool to -20 C, dwell, heat back to 25 C, dwell;
 * random: 6..10 segments drawn from the seed: fast steps (3 C/min), slow ramps (0.1..1 C/min) and
-  dwells (0.5..3 h) between -30 and 70 C, some dwells followed by a rate-table sequence.
+  dwells (0.5..3 h) between -30 and 70 C, some dwells followed by a rate-table sequence;
+* power_on: one minute at 50 C (the top of paper 001's chamber range, its resonance 1.3 Hz above
+  the 25 C one) from the instrument's power-on: with ``--drive-loop`` the loop is switched on at the
+  first row (``loop_warmup_s`` 0; every other scenario's loop has run ``LOOP_WARMUP_S`` before its
+  log starts), so the log shows the acquisition (paper 001's resonator; a time step of 10 ms shows
+  it row by row).
 
 ``duration_scale`` scales the holds (dwells, logs, rate steps, tumble positions) but not the chamber
 ramp rates, so a shortened test still ramps at physical speed.
@@ -37,6 +42,7 @@ CHAMBER_RAMP_C_PER_MIN = 1.0
 FAST_STEP_C_PER_MIN = 3.0
 RATE_TABLE_DPS = (10.0, -10.0, 50.0, -50.0, 100.0, -100.0, 200.0, -200.0)
 RATE_STEP_S = 120.0
+LOOP_WARMUP_S = 5.0   # a drive loop runs this long before a log starts (a settled instrument), unless power_on
 
 
 @dataclass(frozen=True)
@@ -56,6 +62,7 @@ class _Builder:
         self.start_c = start_c
         self.temp_c = start_c
         self.scale = scale
+        self.loop_warmup_s = LOOP_WARMUP_S
 
     def ramp(self, to_c: float, c_per_min: float = CHAMBER_RAMP_C_PER_MIN) -> None:
         if to_c == self.temp_c:
@@ -122,6 +129,13 @@ def ramp(scale: float, rng: np.random.Generator | None = None) -> _Builder:
     return b
 
 
+def power_on(scale: float, rng: np.random.Generator | None = None) -> _Builder:
+    b = _Builder(50.0, scale)
+    b.loop_warmup_s = 0.0
+    b.hold(60.0, "dwell")
+    return b
+
+
 def random_programme(scale: float, rng: np.random.Generator) -> _Builder:
     b = _Builder(float(rng.uniform(15.0, 30.0)), scale)
     b.hold(float(rng.uniform(600.0, 3600.0)), "dwell")
@@ -143,6 +157,7 @@ PROGRAMMES = {
     "paper000": paper000,
     "ramp": ramp,
     "random": random_programme,
+    "power_on": power_on,
 }
 
 
@@ -185,11 +200,12 @@ def sample(segments: list[Segment], start_c: float, time_step_s: float) -> Sampl
     return Sampled(t, air, rate, angle, setpoint, phase, index)
 
 
-def programme(name: str, scale: float, rng: np.random.Generator) -> tuple[list[Segment], float]:
-    """Segments of a named scenario and the chamber temperature at power-on."""
+def programme(name: str, scale: float, rng: np.random.Generator) -> tuple[list[Segment], float, float]:
+    """Segments of a named scenario, the chamber temperature at power-on and how long a drive loop
+    runs before the log starts."""
     if name not in PROGRAMMES:
         raise ValueError(f"scenario: unknown name {name!r}; expected one of {', '.join(PROGRAMMES)}")
     if not scale > 0:
         raise ValueError(f"duration_scale: must be > 0, got {scale}")
     built = PROGRAMMES[name](scale, rng)
-    return built.segments, built.start_c
+    return built.segments, built.start_c, built.loop_warmup_s
