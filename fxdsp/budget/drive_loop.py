@@ -12,7 +12,8 @@ Figures, measured after lock (``lock_time``: the phase error below 1 mrad and th
 * acquisition: the lock time from power-on, also in the mode's own time constant tau = 2Q/w;
 * the frequency word (averaged over ``RECORD_S`` records, a counter's gate) against the resonance
   the mode really has: bias and noise in Hz, and in mC through the mode's k = df/dT;
-* amplitude stability in ppm of the set point; the PLL's phase error in urad rms, and the rate error
+* amplitude stability in ppm of the set point; the reference's phase error (the NCO against the
+  mode's own motion, rms in urad; the detector's measured phase error beside it), and the rate error
   it causes as the demodulator's reference: phase x quadrature (``NOMINAL_QUADRATURE_FS`` of the rate
   full scale) in deg/h;
 * the bias the rounding rules predict (``predicted_bias``): the phase detector's own bias (its
@@ -64,7 +65,8 @@ class LoopFigures:
     f_noise_hz: float
     f_max_hz: float                # the largest |error| of a record
     amp_ppm: float
-    phase_urad: float
+    phase_urad: float              # the reference's phase error: the NCO against the mode's motion, rms
+    detector_urad: float           # the phase error the loop measures (its detector's noise included), rms
     records: int
 
 
@@ -125,9 +127,10 @@ def figures(run: ClosedLoopRun, drive: Drive, start_s: float | None = None) -> L
     if np.count_nonzero(sel) < 10:
         raise ValueError(f"{drive.name}: fewer than 10 records after {t0:.3g} s; run longer")
     err = run.f_mean_hz[sel] - run.true_f_hz[sel]
+    rms = lambda x: float(np.sqrt(np.mean(x[sel] ** 2)) * 1e6)   # noqa: E731
     return LoopFigures(lock, float(np.mean(err)), float(np.std(err)), float(np.max(np.abs(err))),
-                       float(np.std(run.amp[sel] / drive.amp_setpoint - 1) * 1e6),
-                       float(np.sqrt(np.mean(run.phase_rad[sel] ** 2)) * 1e6), int(np.count_nonzero(sel)))
+                       float(np.std(run.amp[sel] / drive.amp_setpoint - 1) * 1e6), rms(run.ref_phase_rad),
+                       rms(run.phase_rad), int(np.count_nonzero(sel)))
 
 
 def detector_bias_rad(drive: Drive, resonator: DriveResonator, seconds: float = 4.0, seed: int = 1) -> float:
@@ -212,11 +215,12 @@ def format_budget(b: DriveBudget) -> str:
     lines = [f"{b.table} at {b.scenario}: tau = 2Q/w {b.tau_s:.3f} s, k {b.k_hz_per_c * 1e3:+.2f} mHz/C, "
              f"records of {b.record_s * 1e3:g} ms",
              f"  {'':8s} {'lock':>20s} {'f bias Hz':>11s} {'f noise Hz':>11s} {'T bias mC':>10s} {'T noise mC':>10s} "
-             f"{'T max mC':>9s} {'amp ppm':>8s} {'phase urad':>10s} {'rate deg/h':>10s}"]
+             f"{'T max mC':>9s} {'amp ppm':>8s} {'ref urad':>9s} {'rate deg/h':>10s} {'det urad':>9s}"]
     for name, fig in (("fixed", b.fixed), ("floor", b.floor)):
         lines.append(f"  {name:8s} {lock(fig):>20s} {fig.f_bias_hz:+11.3g} {fig.f_noise_hz:11.3g} "
                      f"{b.mc(fig.f_bias_hz) * np.sign(b.k_hz_per_c):+10.3g} {b.mc(fig.f_noise_hz):10.3g} {b.mc(fig.f_max_hz):9.3g} "
-                     f"{fig.amp_ppm:8.3g} {fig.phase_urad:10.3g} {b.rate_deg_h(fig.phase_urad):10.3g}")
+                     f"{fig.amp_ppm:8.3g} {fig.phase_urad:9.3g} {b.rate_deg_h(fig.phase_urad):10.3g} "
+                     f"{fig.detector_urad:9.3g}")
     verdict = f"within {WITHIN_DB:g} dB" if b.within else f"NOT within {WITHIN_DB:g} dB"
     p = b.predicted_bias_hz
     lines.append(f"  margin {b.margin_db:+.2f} dB over the floor (frequency noise) -> {verdict}; bias the rounding "
