@@ -153,7 +153,7 @@ FILE_SECONDS = {
     "test_budget_floor.py": 18,
     "test_budget.py": 16,
     "test_fixed_properties.py": 16,
-    "test_drive.py": 24,
+    "test_drive.py": 30,
     "hdl/test_mutation.py": 14,
     "test_fixed_mutation.py": 13,
     "test_outputs.py": 12,
