@@ -202,6 +202,14 @@ class Design:
         their tests work on."""
         return {n: i for n, i in self.instances.items() if i.hardware}
 
+    def with_rtl(self) -> dict[str, Instance]:
+        """``hardware`` for an HDL command; a design without any instance with RTL is bad input (the
+        command would write, prove or verify nothing and say it succeeded)."""
+        if not self.hardware:
+            raise InputError(f"{self.config.name}: no block or chain has RTL (none yet for "
+                             f"{', '.join(self.instances) or 'its tables'}); nothing to generate, prove or verify")
+        return self.hardware
+
     def chain(self, name: str, purpose: str) -> Chain:
         """The chain ``name``; a config that does not declare it is bad input naming what needs it."""
         if name not in self.chains:

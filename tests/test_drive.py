@@ -229,7 +229,7 @@ def test_over_a_chamber_ramp_the_loop_stays_locked_within_3_db_of_its_floor(desi
     from fxdsp.budget.drive_loop import ramp
 
     drive = design.blocks[table]
-    b = ramp(drive, lo, hi, 1.0, resonator=LOOPS[table], seed=6)
+    b = ramp(drive, design.rate_full_scale_dps, lo, hi, 1.0, resonator=LOOPS[table], seed=6)
     hold = max(3.0, 6 * float(LOOPS[table].tau_s(lo)))
     assert b.fixed.lock_s is not None and b.fixed.lock_s < hold
     assert b.fixed.records >= 0.99 * (hi - lo) * 60 / b.record_s
@@ -314,7 +314,7 @@ def test_the_locked_reference_has_no_open_loop_drift(design):
     from fxdsp.budget.drive_loop import reference_allan
 
     drive = design.blocks["drive"]
-    a = reference_allan(drive, seconds=60.0, seed=2)
+    a = reference_allan(drive, design.rate_full_scale_dps, seconds=60.0, seed=2)
     assert a.taus[-1] >= 10.0 and a.no_drift, (a.taus, a.adev_locked)
     assert a.open_drift_rad_per_h <= np.pi * drive.fs_hz / 2.0**drive.nco.phase_bits * 3600 * (1 + 1e-9)
 
@@ -368,3 +368,53 @@ def test_the_power_on_scenario_logs_the_acquisition(design):
     settled = np.flatnonzero(~near)[-1] + 1                       # from here on within 1 mHz
     tau = float(LOOPS["drive001"].tau_s(50.0))
     assert settled * 0.01 < 6 * tau and settled < f.size - 100, (settled, tau)
+
+
+def _loop_only_config(tmp_path, **demod002) -> str:
+    """A user's config of a drive loop and a demodulator on its NCO, nothing else (no RTL anywhere)."""
+    from conftest import default_data
+    from fxdsp.config import dumps
+
+    data = {k: v for k, v in default_data().items() if k in ("system", "stimulus", "drive", "demod002")}
+    data["demod002"].update(demod002)
+    data["chain"] = {"mine": dict(default_data()["chain"]["paper002_drive"])}
+    path = tmp_path / "loop.toml"
+    path.write_text(dumps(data), encoding="utf-8")
+    return str(path)
+
+
+@pytest.mark.parametrize("command", ["hdl-gen", "rtl", "formal"])
+def test_an_hdl_command_on_a_design_without_rtl_is_bad_input(tmp_path, command):
+    """Nothing to generate, prove or verify is one line and exit 2, not "0 of 0 DUTs" and exit 0."""
+    from conftest import run_cli
+
+    rc, err = run_cli([command, "--config", _loop_only_config(tmp_path), "--out", str(tmp_path / "out")])
+    assert rc == 2 and len(err.strip().splitlines()) == 1 and "no block or chain has RTL" in err, err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_reference_wired_from_a_word_that_is_not_a_phase_is_refused(tmp_path):
+    """demod.ref takes an accumulator's phase word (turns): wired from the loop's Hz word it is bad
+    input naming the port and the wire, not a 32-bit 'phase' read from a frequency."""
+    from fxdsp.chains import build
+    from fxdsp.errors import InputError
+
+    path = _loop_only_config(tmp_path)
+    text = open(path).read().replace("drive.nco -> demod002.ref", "drive.f -> demod002.ref")
+    open(path, "w").write(text)
+    with pytest.raises(InputError, match=r"demod002\.ref: drive\.freq_format .*'drive\.f -> demod002\.ref'"):
+        build(path)
+
+
+def test_the_budget_of_a_loop_whose_mode_is_not_a_thermometer(design):
+    """A user's loop on the mode its table was designed for (no temperature law, k = 0): its budget
+    has no mC figures (None, '-' in the text) instead of a division by zero; the rest is measured."""
+    from fxdsp.budget.drive_loop import at_temperature, format_budget
+    from fxdsp.sim.resonator import DriveResonator
+
+    drive = design.blocks["drive"]
+    b = at_temperature(drive, 25.0, design.rate_full_scale_dps, resonator=DriveResonator.matching(drive),
+                       measure_s=2.0)
+    assert b.k_hz_per_c == 0 and b.mc(1e-3) is None and b.as_dict()["fixed"]["t_noise_mc"] is None
+    assert b.fixed.lock_s is not None and b.fixed.f_noise_hz > 0 and b.within
+    assert " - " in format_budget(b)

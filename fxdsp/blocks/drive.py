@@ -255,14 +255,19 @@ def _detect_float(x, ph, lpf_st, sos):
 
 
 @njit(cache=True, inline="always")
-def _polar_float(i_lp, q_lp, p):
-    """:func:`_polar` in float: hypot and atan2."""
-    e = np.arctan2(q_lp, i_lp) - p[F_SET]
+def wrap_rad(e):
+    """An angle wrapped into (-pi, pi], as :func:`_polar` wraps its words."""
     while e > np.pi:
         e -= 2 * np.pi
     while e <= -np.pi:
         e += 2 * np.pi
-    return np.hypot(i_lp, q_lp), e
+    return e
+
+
+@njit(cache=True, inline="always")
+def _polar_float(i_lp, q_lp, p):
+    """:func:`_polar` in float: hypot and atan2."""
+    return np.hypot(i_lp, q_lp), wrap_rad(np.arctan2(q_lp, i_lp) - p[F_SET])
 
 
 @njit(cache=True)

@@ -102,10 +102,14 @@ def _sf_divide(sec, wired, ctx):
 def _demod(sec, wired, ctx):
     from .demod import Demod
 
-    # a wired reference brings its accumulator's width (phase_bits, derived; a stated one must agree)
-    ref = wired.get("ref") if sec._get("reference", "nco") == "input" else None
+    # a wired reference (enabled: chains._check_optional) brings its accumulator's width (phase_bits,
+    # derived; a stated one must agree)
+    ref = wired.get("ref")
     bits = None
     if ref is not None:
+        if ref.format.signed or ref.format.fl != ref.format.wl:
+            raise InputError(f"{sec.path}.ref: {ref.source} is {ref.format}; a reference is an accumulator's phase "
+                             f"word in turns (u<bits>.<bits>, such as a drive loop's nco)")
         bits = ref.format.wl
         if sec.has("phase_bits") and ctx.enforce and sec.integer("phase_bits") != bits:
             raise InputError(f"{sec.field('phase_bits')}: {sec.integer('phase_bits')} must equal the width of "

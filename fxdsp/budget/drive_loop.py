@@ -32,9 +32,10 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..blocks.drive import Drive
-from ..sensors import NOMINAL_QUADRATURE_FS
+from ..fixed import quantize
+from ..sensors import NEAREST_SAT, NOMINAL_QUADRATURE_FS
 from ..sim.driveloop import STEP_S, ClosedLoopRun, closed_loop, samples_per_step
-from ..sim.resonator import DriveResonator, adc_codes, resonator_for
+from ..sim.resonator import DriveResonator, resonator_for
 from .attribution import expected_mean_q
 
 WITHIN_DB = 3.0
@@ -86,16 +87,22 @@ class DriveBudget:
     rate_full_scale_dps: float
 
     @property
-    def margin_db(self) -> float:
+    def margin_db(self) -> float | None:
+        """None when either noise is exactly 0 (a noiseless mode: no floor to compare with)."""
+        if self.fixed.f_noise_hz <= 0 or self.floor.f_noise_hz <= 0:
+            return None
         return 20.0 * math.log10(self.fixed.f_noise_hz / self.floor.f_noise_hz)
 
     @property
     def within(self) -> bool:
-        return self.margin_db <= WITHIN_DB
+        return self.margin_db is not None and self.margin_db <= WITHIN_DB
 
-    def mc(self, hz: float) -> float:
-        """A frequency error in mC through the mode's k."""
-        return hz / abs(self.k_hz_per_c) * 1e3
+    def mc(self, hz: float, signed: bool = False) -> float | None:
+        """A frequency error in mC through the mode's k (``signed``: a bias, as the temperature it
+        reads); None for a mode whose frequency does not move with temperature (not a thermometer)."""
+        if self.k_hz_per_c == 0:
+            return None
+        return hz / (self.k_hz_per_c if signed else abs(self.k_hz_per_c)) * 1e3
 
     def rate_deg_h(self, phase_urad: float) -> float:
         """The rate error a reference phase error causes on the nominal quadrature, deg/h."""
@@ -106,7 +113,7 @@ class DriveBudget:
         for name in ("fixed", "floor"):
             fig = getattr(self, name)
             out[name].update(lock_tau=None if fig.lock_s is None else fig.lock_s / self.tau_s,
-                             t_bias_mc=self.mc(fig.f_bias_hz) * np.sign(self.k_hz_per_c),
+                             t_bias_mc=self.mc(fig.f_bias_hz, signed=True),
                              t_noise_mc=self.mc(fig.f_noise_hz), t_max_mc=self.mc(fig.f_max_hz),
                              rate_deg_h=self.rate_deg_h(fig.phase_urad))
         out.update(margin_db=self.margin_db, within=self.within, within_db=WITHIN_DB,
@@ -138,13 +145,10 @@ def detector_bias_rad(drive: Drive, resonator: DriveResonator, seconds: float = 
     phase with its NCO at the set amplitude with the mode's pick-off noise (the ADC's dither), after
     the low-pass has settled (the first quarter left out)."""
     n = int(seconds * drive.fs_hz)
-    P = drive.nco.phase_bits
-    phase = ((drive.nco.ftw * np.arange(n, dtype=np.int64)) & ((1 << P) - 1)) / 2.0**P
-    x = drive.amp_setpoint * np.cos(2 * np.pi * phase)
+    turns = drive.nco.accumulator(n) / 2.0**drive.nco.phase_bits
+    x = drive.amp_setpoint * np.cos(2 * np.pi * turns)
     x = x + np.random.default_rng([seed, 33]).normal(0.0, resonator.noise_fs, n)
-    fi = drive.in_format
-    codes = adc_codes(x, 2.0**fi.fl, fi.min_int, fi.max_int)[0]
-    fixed, flt = drive.detector_errors(codes)
+    fixed, flt = drive.detector_errors(quantize(x, drive.in_format, NEAREST_SAT))
     keep = slice(fixed.size // 4, None)
     return float(np.mean(fixed[keep] - flt[keep]))
 
@@ -154,13 +158,14 @@ def predicted_bias(drive: Drive, resonator: DriveResonator, temp_c: float, detec
     dp, rnd = drive.datapath, drive.rules.rounding
     ftw_hz = drive.fs_hz / 2.0**drive.nco.phase_bits
     df = (float(resonator.frequency_hz(temp_c)) - drive.f_hz) / ftw_hz   # the locked df, in ftw LSBs
-    exact_center = dp.ftw_center * ftw_hz
+    rounding = expected_mean_q(rnd, np.array([df]))                      # a rounding's mean, in its LSBs
+    lsb = 2.0**-drive.freq_format.fl                                     # of the Hz word
     terms = {
         "detector": detector_rad / (2 * np.pi * float(resonator.tau_s(temp_c))),
-        "pi_word": expected_mean_q(rnd, np.array([df])) * ftw_hz,
-        "hz_word": (expected_mean_q(rnd, np.array([df])) + dp.hz_center - exact_center * 2.0**drive.freq_format.fl
-                    + df * (dp.hz_coef * 2.0**-dp.hz_shift - ftw_hz * 2.0**drive.freq_format.fl))
-        * 2.0**-drive.freq_format.fl,
+        "pi_word": rounding * ftw_hz,
+        # the rounding, the centre word's own error and the coefficient's over df
+        "hz_word": (rounding + dp.hz_center - dp.ftw_center * ftw_hz / lsb
+                    + df * (dp.hz_coef * 2.0**-dp.hz_shift - ftw_hz / lsb)) * lsb,
     }
     terms["total"] = float(sum(terms.values()))
     return {k: float(v) for k, v in terms.items()}
@@ -180,8 +185,8 @@ def _budget(drive: Drive, resonator: DriveResonator, scenario: str, temps, secon
                        rate_full_scale_dps)
 
 
-def at_temperature(drive: Drive, temp_c: float, resonator: DriveResonator | None = None, seed: int = 1,
-                   rate_full_scale_dps: float = 200.0, measure_s: float = MEASURE_S) -> DriveBudget:
+def at_temperature(drive: Drive, temp_c: float, rate_full_scale_dps: float, resonator: DriveResonator | None = None,
+                   seed: int = 1, measure_s: float = MEASURE_S) -> DriveBudget:
     """The budget at a constant temperature: from power-on, measured over ``measure_s`` after a
     lock that takes up to 4 tau."""
     res = resonator or resonator_for(drive)
@@ -189,8 +194,8 @@ def at_temperature(drive: Drive, temp_c: float, resonator: DriveResonator | None
     return _budget(drive, res, f"{temp_c:g} C", temp_c, seconds, None, seed, rate_full_scale_dps, False)
 
 
-def ramp(drive: Drive, lo_c: float = RAMP[0], hi_c: float = RAMP[1], c_per_min: float = RAMP[2],
-         resonator: DriveResonator | None = None, seed: int = 1, rate_full_scale_dps: float = 200.0,
+def ramp(drive: Drive, rate_full_scale_dps: float, lo_c: float = RAMP[0], hi_c: float = RAMP[1],
+         c_per_min: float = RAMP[2], resonator: DriveResonator | None = None, seed: int = 1,
          progress: bool = False) -> DriveBudget:
     """The budget over a chamber ramp: power-on at ``lo_c``, held for 6 tau to lock, then ramped to
     ``hi_c`` at ``c_per_min``; measured over the ramp (its records must all be locked)."""
@@ -216,14 +221,18 @@ def format_budget(b: DriveBudget) -> str:
              f"records of {b.record_s * 1e3:g} ms",
              f"  {'':8s} {'lock':>20s} {'f bias Hz':>11s} {'f noise Hz':>11s} {'T bias mC':>10s} {'T noise mC':>10s} "
              f"{'T max mC':>9s} {'amp ppm':>8s} {'ref urad':>9s} {'rate deg/h':>10s} {'det urad':>9s}"]
+    def num(v, spec: str) -> str:   # a figure, or "-" where there is none (no k, no noise)
+        return format(v, spec) if v is not None else format("-", ">" + spec.strip("+").split(".")[0])
+
     for name, fig in (("fixed", b.fixed), ("floor", b.floor)):
         lines.append(f"  {name:8s} {lock(fig):>20s} {fig.f_bias_hz:+11.3g} {fig.f_noise_hz:11.3g} "
-                     f"{b.mc(fig.f_bias_hz) * np.sign(b.k_hz_per_c):+10.3g} {b.mc(fig.f_noise_hz):10.3g} {b.mc(fig.f_max_hz):9.3g} "
-                     f"{fig.amp_ppm:8.3g} {fig.phase_urad:9.3g} {b.rate_deg_h(fig.phase_urad):10.3g} "
-                     f"{fig.detector_urad:9.3g}")
+                     f"{num(b.mc(fig.f_bias_hz, signed=True), '+10.3g')} {num(b.mc(fig.f_noise_hz), '10.3g')} "
+                     f"{num(b.mc(fig.f_max_hz), '9.3g')} {fig.amp_ppm:8.3g} {fig.phase_urad:9.3g} "
+                     f"{b.rate_deg_h(fig.phase_urad):10.3g} {fig.detector_urad:9.3g}")
     verdict = f"within {WITHIN_DB:g} dB" if b.within else f"NOT within {WITHIN_DB:g} dB"
     p = b.predicted_bias_hz
-    lines.append(f"  margin {b.margin_db:+.2f} dB over the floor (frequency noise) -> {verdict}; bias the rounding "
+    margin = "no" if b.margin_db is None else f"{b.margin_db:+.2f} dB"
+    lines.append(f"  margin {margin} over the floor (frequency noise) -> {verdict}; bias the rounding "
                  f"predicts {p['total']:+.3g} Hz (detector {p['detector']:+.2g}, PI word {p['pi_word']:+.2g}, Hz word "
                  f"{p['hz_word']:+.2g}); rate error at {NOMINAL_QUADRATURE_FS:g} FS quadrature")
     return "\n".join(lines)
@@ -264,9 +273,8 @@ class ReferenceAllan:
                 "no_drift": self.no_drift}
 
 
-def reference_allan(drive: Drive, seconds: float = 3600.0, temp_c: float = 25.0,
-                    resonator: DriveResonator | None = None, seed: int = 1, rate_full_scale_dps: float = 200.0,
-                    progress: bool = False) -> ReferenceAllan:
+def reference_allan(drive: Drive, rate_full_scale_dps: float, seconds: float = 3600.0, temp_c: float = 25.0,
+                    resonator: DriveResonator | None = None, seed: int = 1, progress: bool = False) -> ReferenceAllan:
     """Allan deviation of the reference's fixed-minus-float error over ``seconds`` of lock (both
     loops closed on the same mode with the same pick-off noise, from power-on; the first 10 tau
     left out), in deg/h of rate on the nominal quadrature, against the open-loop NCO's drift."""

@@ -327,8 +327,7 @@ def nco_hybrid(block, n: int, sw: Switch, prefix: str = "demod", ref=None) -> tu
     nco = block.nco
     if ref is not None:
         turns = np.asarray(ref, dtype=float)
-        words = np.floor(turns * 2.0**nco.phase_bits + 0.5).astype(np.int64)
-        phases = (words + nco.trim) & nco.phase_mask
+        phases = (quantize(turns, nco.phase_format, Rules("half_up", "wrap")) + nco.trim) & nco.phase_mask
     else:
         phases = nco.phases(n)
     if f"{prefix}.nco_phase" in sw:

@@ -84,6 +84,7 @@ def run(args) -> int:
         raise InputError(f"--rtl: no Verilog sources (*.v) in {args.rtl}")
     config = args.config or (formal.MITER_CONFIG if args.miter else None)
     design = build(config)
+    design.with_rtl()
     duts = formal.miter_duts(design) if args.miter else formal.serial_duts(design)
     where = (f"--config {args.config}" if args.config else
              f"the miters' config {config}" if args.miter else "the built-in config")

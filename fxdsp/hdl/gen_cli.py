@@ -26,5 +26,7 @@ def configure(parser) -> None:
 
 
 def run(args) -> int:
-    files = generate(build(args.config))
+    design = build(args.config)
+    design.with_rtl()
+    files = generate(design)
     return sync_generated(files, Path(args.out), args.check, "hdl-gen", patterns=("*.vh", "*.hex"))

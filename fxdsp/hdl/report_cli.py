@@ -365,6 +365,7 @@ def run(args) -> int:
             print(f"fxdsp hw-report: {tool} not found (apt-get install yosys nextpnr-ice40)", file=sys.stderr)
             return 2
     design = build(args.config)
+    design.with_rtl()
     tools = tool_versions()
     previous = load_hw_report(Path(args.out).with_suffix(".json"))
     current = reusable_rows(previous, tools, args.freq, not args.no_xc7)  # rows still valid as they are

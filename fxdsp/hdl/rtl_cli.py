@@ -59,6 +59,7 @@ def run(args) -> int:
     if args.rtl is not None and not sorted(Path(args.rtl).glob("*.v")):
         raise InputError(f"--rtl: no Verilog sources (*.v) in {args.rtl}")
     design = build(args.config)
+    design.with_rtl()
     duts(design, only)   # an unknown name, or one without RTL, is bad input before any work
     models = None
     if args.sim == "verilator":

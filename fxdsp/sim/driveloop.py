@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit
 
 from ..blocks.drive import (_drive_step, _drive_step_float, Drive, FS_AMP, FS_ERR, FS_F, FS_PHASE, S_AMP, S_ERR, S_F,
-                            S_FTW, S_PHASE)
+                            S_FTW, S_PHASE, wrap_rad)
 from ..fixed import OverflowLog
 from .resonator import DriveResonator, adc_code, resonator_step
 
@@ -75,8 +75,7 @@ def _closed(n, record_every, fixed, st, lpf_st, p, qsin, atans, lb, la, lc, coun
                 rec[0, k], rec[1, k], rec[2, k] = fst[FS_F], fst[FS_AMP], fst[FS_ERR]
                 nco = fst[FS_PHASE]
             rec[3, k] = acc / record_every
-            e = 2 * np.pi * nco - np.arctan2(-v / omega[j], x)
-            rec[4, k] = e - 2 * np.pi * np.floor(e / (2 * np.pi) + 0.5)
+            rec[4, k] = wrap_rad(2 * np.pi * nco - np.arctan2(-v / omega[j], x))
             acc = 0.0
     rst[0], rst[1], rst[2] = x, v, u
     return rec

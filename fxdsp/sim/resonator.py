@@ -127,17 +127,6 @@ def adc_code(p, scale, lo, hi):
 
 
 @njit(cache=True)
-def adc_codes(p, scale, lo, hi):
-    """:func:`adc_code` over an array of pick-off values: (codes, saturations)."""
-    codes = np.empty(p.shape[0], dtype=np.int64)
-    sat = 0
-    for i in range(p.shape[0]):
-        codes[i], s = adc_code(p[i], scale, lo, hi)
-        sat += s
-    return codes, sat
-
-
-@njit(cache=True)
 def _open_drive(dac, dac_scale, coef, per_step, state, noise, adc_scale, lo, hi):
     """The resonator driven by a given DAC word sequence (open loop): the ADC codes and saturations.
     ``state`` = (x, v, previous DAC value) is read and written back."""
