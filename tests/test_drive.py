@@ -21,7 +21,10 @@ from fxdsp.sim.resonator import PAPER002_DRIVE, PRESETS, _open_drive
 LOOPS = PRESETS   # the built-in tables and the modes they were designed for
 
 
-@pytest.mark.parametrize("temp_c", [-40.0, 25.0, 85.0])
+GRID_C = [float(t) for t in range(-40, 86, 5)]   # the issue's -40..85 C, every 5 C (a run is ~0.06 s)
+
+
+@pytest.mark.parametrize("temp_c", GRID_C)
 @pytest.mark.parametrize("table", sorted(LOOPS))
 def test_the_loop_locks_from_power_on_at_the_resonance(design, table, temp_c):
     drive, res = design.blocks[table], LOOPS[table]
@@ -39,7 +42,8 @@ def test_the_loop_locks_from_power_on_at_the_resonance(design, table, temp_c):
     # which is off by up to 15 Hz): a lag left uncompensated would bias it by lag / (2 pi tau)
     bias = np.mean(run.f_hz[after] - run.true_f_hz[after])
     assert abs(bias) < 1e-3, f"{table} at {temp_c} C: frequency {bias * 1e3:.3f} mHz off the resonance"
-    assert abs(run.true_f_hz[0] - drive.f_hz) > 0.5 or temp_c == 25.0
+    # away from 25 C the NCO has to travel to the resonance (>= 0.5 Hz at 10 C off: the test is not a no-op)
+    assert abs(run.true_f_hz[0] - drive.f_hz) > 0.5 or abs(temp_c - 25.0) <= 10.0
 
 
 @pytest.mark.parametrize("table", sorted(LOOPS))
