@@ -179,15 +179,17 @@ NARROW_NCO = {"drive.phase_bits": 16, "drive.lut_bits": 8, "drive.interp_bits": 
               "demod002.lut_bits": 8, "demod002.interp_bits": 8}
 
 
-@pytest.mark.parametrize("rounding,overflow,update,narrow", [(r, o, u, n) for (r, o), u, n in
-                                                             zip(RULES, (8, 1, 3, 8), (False, True, False, True))])
-def test_drive(rounding, overflow, update, narrow):
+@pytest.mark.parametrize("rounding,overflow,lpf_rules,update,narrow", [
+    (r, o, lr, u, n) for (r, o), lr, u, n in zip(RULES, RULES[1:] + RULES[:1], (8, 1, 3, 8), (False, True, False, True))])
+def test_drive(rounding, overflow, lpf_rules, update, narrow):
     """The drive loop against its oracle: corner codes and a saturating pick-off (mixers and DAC
     at their limits, the PIs at theirs), then a pick-off in lock stepping 0.5 Hz (the PLL tracking),
     with the control update every 1, 3 or 8 samples; two with a narrow NCO, where one LSB of the
-    carrier's advance reaches the table."""
-    d = design_with(**{"drive.rounding": rounding, "drive.overflow": overflow, "drive.lpf.rounding": rounding,
-                       "drive.lpf.overflow": overflow, "drive.update_every": update, **(NARROW_NCO if narrow else {})})
+    carrier's advance reaches the table. The low-pass has rules of its own (its table's, as its RTL's
+    LPF_ parameters), different from the loop's."""
+    d = design_with(**{"drive.rounding": rounding, "drive.overflow": overflow, "drive.lpf.rounding": lpf_rules[0],
+                       "drive.lpf.overflow": lpf_rules[1], "drive.update_every": update,
+                       **(NARROW_NCO if narrow else {})})
     b = d.blocks["drive"]
     corners = b.stimulus(np.random.default_rng(5), 64)["x"][:300]
     locked = b.nominal_stimulus(np.random.default_rng(6), 4096)["x"][2000:2300]

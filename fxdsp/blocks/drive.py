@@ -56,8 +56,8 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, product_format, quantize
 from ..fixed.kernels import convert, shift_right_round
 from .base import Block, corner_codes
-from .datapath import Datapath, OvfField, Rom, const, info, nested
-from .demod import TWO_PI_FORMAT, Nco, _nco_wave, cordic_one, cordic_words, mixer_format
+from .datapath import Datapath, OvfField, Rom, RtlPorts, const, info, nested
+from .demod import INV_K_FORMAT, TWO_PI_FORMAT, Nco, _nco_wave, cordic_one, cordic_words, mixer_format
 from .iir import Iir, IirDatapath, df1_cascade_step
 
 # int64 parameter vector of the kernels (indices)
@@ -65,7 +65,7 @@ from .iir import Iir, IirDatapath, df1_cascade_step
  P_DLO, P_DHI, P_LPF_SB, P_LPF_SA, P_LPF_OS, P_ITER, P_HALF_PI, P_INV_K, P_AMP_SHIFT, P_UPDATE, P_SET, P_PI,
  P_TWO_PI_ANGLE, P_KP_F, P_KI_F, P_SH_F, P_RANGE, P_CENTER, P_AMP_SET, P_KP_A, P_KI_A, P_SH_A, P_GMAX, P_ADV,
  P_ADV_BITS, P_DAC_SHIFT, P_DAC_LO, P_DAC_HI, P_HZ_CENTER, P_HZ_COEF, P_HZ_SHIFT, P_FLO, P_FHI, P_MIN_AMP,
- P_COUNT) = range(44)
+ P_LPF_RND, P_LPF_OVF, P_COUNT) = range(46)
 # int64 state vector: accumulator, frequency word, integrators, gain, update counter, amplitude, phase
 # error and the frequency word in Hz (the low-pass states are their own array)
 S_PHASE, S_FTW, S_INTEG_F, S_INTEG_A, S_GAIN, S_COUNT, S_AMP, S_ERR, S_F, S_LEN = range(10)
@@ -117,9 +117,11 @@ def _detect(x, ph, lpf_st, p, qsin, lb, la, lc, counts, lcounts):
     counts[C_MIX_I] += o
     q_mix, o = convert(x * m, p[P_MIX_SHIFT], rnd, p[P_DLO], p[P_DHI], ovf)
     counts[C_MIX_Q] += o
-    i_lp = df1_cascade_step(i_mix, lb, la, lc, p[P_LPF_SB], p[P_LPF_SA], p[P_LPF_OS], rnd, p[P_DLO], p[P_DHI], ovf,
+    # the low-pass by its own rules (its table's rounding and overflow, as its RTL's LPF_ parameters)
+    lrnd, lovf = p[P_LPF_RND], p[P_LPF_OVF]
+    i_lp = df1_cascade_step(i_mix, lb, la, lc, p[P_LPF_SB], p[P_LPF_SA], p[P_LPF_OS], lrnd, p[P_DLO], p[P_DHI], lovf,
                             lpf_st[0], lcounts[0])
-    q_lp = df1_cascade_step(q_mix, lb, la, lc, p[P_LPF_SB], p[P_LPF_SA], p[P_LPF_OS], rnd, p[P_DLO], p[P_DHI], ovf,
+    q_lp = df1_cascade_step(q_mix, lb, la, lc, p[P_LPF_SB], p[P_LPF_SA], p[P_LPF_OS], lrnd, p[P_DLO], p[P_DHI], lovf,
                             lpf_st[1], lcounts[1])
     return i_lp, q_lp
 
@@ -358,7 +360,8 @@ class DriveDatapath(Datapath):
     """The drive loop's arithmetic (fields in the order of its future RTL module's parameters)."""
 
     MODULE = "drive"
-    RTL = None   # no RTL yet: the HDL commands leave the drive loop out (design.hardware)
+    RTL = RtlPorts(signed=("x", "dac", "f", "amp", "phase"))   # hdl/rtl/drive.v: one sample per cycle (no serial variant yet)
+    LATENCY = 2
 
     in_w: int
     data_w: int
@@ -369,6 +372,7 @@ class DriveDatapath(Datapath):
     two_pi: int = const()
     two_pi_w: int
     corr_shift: int
+    nco_w: int               # the NCO's cos / -sin: lut_w + 1 (the interpolated value cannot overflow it)
     mix_shift: int           # exact x * nco product, read as 2 x nco, -> data_format
     rules: Rules
     lpf: IirDatapath = nested("LPF_")   # both channels' low-pass (one design)
@@ -376,6 +380,7 @@ class DriveDatapath(Datapath):
     angle_w: int
     half_pi: int = const()
     inv_k: int = const()
+    inv_k_w: int
     amp_shift: int           # CORDIC x * 1/K -> data_format
     update_every: int        # samples per control update
     phase_set: int = const()     # the PLL's set point on angle_format
@@ -391,7 +396,7 @@ class DriveDatapath(Datapath):
     pi_shift_a: int
     gain_w: int
     gain_max: int = const()
-    advance: int                 # carrier advance in samples x 2**advance_bits
+    advance: int = const()       # carrier advance in samples x 2**advance_bits (signed)
     advance_bits: int
     dac_w: int
     dac_shift: int               # gain x carrier product -> dac_format
@@ -498,9 +503,9 @@ class Drive(Block):
         self.datapath = DriveDatapath(
             in_w=in_format.wl, data_w=data_format.wl, phase_bits=nco.phase_bits, lut_bits=nco.lut_bits,
             lut_w=nco.lut_format.wl, interp_bits=nco.interp_bits, two_pi=nco.two_pi, two_pi_w=TWO_PI_FORMAT.wl,
-            corr_shift=nco.corr_shift, mix_shift=mix.fl - data_format.fl, rules=rules, lpf=lpf_dp,
+            corr_shift=nco.corr_shift, nco_w=nco.nco_format.wl, mix_shift=mix.fl - data_format.fl, rules=rules, lpf=lpf_dp,
             iterations=cordic_iterations, angle_w=angle_format.wl, half_pi=cordic.half_pi,
-            inv_k=cordic.inv_k, amp_shift=cordic.amp_format.fl - data_format.fl, update_every=update_every,
+            inv_k=cordic.inv_k, inv_k_w=INV_K_FORMAT.wl, amp_shift=cordic.amp_format.fl - data_format.fl, update_every=update_every,
             phase_set=q(phase_setpoint_rad, angle_format), pi_word=q(np.pi, angle_format), ftw_center=nco.ftw,
             lock_range=lock, kp_f=kp_f, ki_f=ki_f, pi_shift_f=sh_f, amp_set=q(amp_setpoint, data_format),
             kp_a=kp_a, ki_a=ki_a, pi_shift_a=sh_a, gain_w=gain_format.wl, gain_max=q(gain_max, gain_format),
@@ -525,7 +530,8 @@ class Drive(Block):
                        (P_ADV_BITS, advance_bits), (P_DAC_SHIFT, dp.dac_shift), (P_DAC_LO, dac_format.min_int),
                        (P_DAC_HI, dac_format.max_int), (P_HZ_CENTER, hz_center), (P_HZ_COEF, hz_coef),
                        (P_HZ_SHIFT, hz_shift),
-                       (P_FLO, freq_format.min_int), (P_FHI, freq_format.max_int), (P_MIN_AMP, dp.min_amp)):
+                       (P_FLO, freq_format.min_int), (P_FHI, freq_format.max_int), (P_MIN_AMP, dp.min_amp),
+                       (P_LPF_RND, lpf_dp.rules.rounding_code), (P_LPF_OVF, lpf_dp.rules.overflow_code)):
             prm[idx] = v
         prm.setflags(write=False)
         self._prm = prm

@@ -45,6 +45,8 @@ TOWARD_ZERO = {"bias_subtract": {"out_format": "s23.21", "rounding": "toward_zer
 # a drive frequency off any simple ratio of fs, with a phase offset: the NCO visits every bin and
 # sub-bin offset (at the default f/fs = 1/12 the golden vectors see only 12 phases)
 NCO_GENERIC = {"demod": {"f_hz": 7993.1234, "phase_offset_turns": 0.3}}
+# the drive DAC one bit short of the gain's range: it saturates whenever the carrier passes half scale
+DAC_HALF = {"drive": {"dac_format": "s16.16"}}
 
 
 @dataclass
@@ -117,20 +119,49 @@ MUTATIONS = [
              ((None, "iir", False, SERIAL["iir"]),)),
     Mutation("nco_free_running", "nco.v", "else if (step) phase <= phase + FTW_C;", "else phase <= phase + FTW_C;",
              "NCO phase advances without in_valid", ((None, "demod", True),)),
-    Mutation("nco_no_interpolation", "nco.v", "assign cos_o  = c_sum[NCO_W-1:0];", "assign cos_o  = cb;",
+    Mutation("nco_no_interpolation", "nco_wave.v", "assign cos_o  = c_sum[NCO_W-1:0];", "assign cos_o  = cb;",
              "NCO cos without its first-order correction: the old phase-truncating table",
              ((None, "demod", False),)),
-    Mutation("nco_quadrant_sign", "nco.v", "wire signed [NCO_W-1:0] mb = quad[1] ? ma : -ma;",
+    Mutation("nco_quadrant_sign", "nco_wave.v", "wire signed [NCO_W-1:0] mb = quad[1] ? ma : -ma;",
              "wire signed [NCO_W-1:0] mb = quad[1] ? -ma : ma;", "NCO -sin with the quadrant sign inverted",
              ((None, "demod", False),)),
     Mutation("nco_offset_not_centred", "nco_phase.v", "wire [INTERP_BITS:0] odd = {r, 1'b1};",
              "wire [INTERP_BITS:0] odd = {r, 1'b0};", "NCO sub-bin offset truncated instead of centred (a bias)",
              ((None, "demod", False), (NCO_GENERIC, "demod", False))),
-    Mutation("nco_correction_floor", "nco.v", ".ROUNDING(ROUNDING), .OUT_W(CW)) u_rm",
+    Mutation("nco_correction_floor", "nco_wave.v", ".ROUNDING(ROUNDING), .OUT_W(CW)) u_rm",
              ".ROUNDING(0), .OUT_W(CW)) u_rm", "NCO -sin correction rounded by floor, not the configured rule",
              ((None, "demod", False),)),
-    Mutation("cordic_logical_shift", "demod.v", "tx = cx - (cy >>> j);", "tx = cx - (cy >> j);",
+    Mutation("cordic_logical_shift", "cordic_vector.v", "tx = cx - (cy >>> j);", "tx = cx - (cy >> j);",
              "CORDIC arithmetic shift -> logical", ((None, "demod", False),)),
+    # ---- the drive loop (one sample per clock): its loop filter, phase detector, control and drive ----
+    Mutation("drive_pll_rounding_floor", "drive.v", ".ROUNDING(ROUNDING)) u_pll", ".ROUNDING(0)) u_pll",
+             "drive: the PLL's loop filter rounds by floor, not the configured rule (a frequency bias)",
+             ((None, "drive", False),)),
+    Mutation("drive_pi_winds_up", "drive_pi.v", "wire hold = ((o1w > hi_w) && e_pos) || ((o1w < lo_w) && e_neg);",
+             "wire hold = 1'b0;", "drive: the PIs integrate while their output is limited (wind-up)",
+             ((None, "drive", False),)),
+    Mutation("drive_detector_stale_phase", "drive.v", "wire [PHASE_BITS-1:0] ph_in = pend ? ph_upd : ph_next;",
+             "wire [PHASE_BITS-1:0] ph_in = ph_next;",
+             "drive: the phase detector reads the phase before the last sample's update when samples come back to "
+             "back", ((None, "drive", False),)),
+    Mutation("drive_detector_q_sign", "drive.v", "wire signed [MW-1:0] pq_ = $signed(x) * $signed(msin_w);",
+             "wire signed [MW-1:0] pq_ = -($signed(x) * $signed(msin_w));",
+             "drive: the phase detector's Q mixer inverted (the angle's sign: the PLL pushes away)",
+             ((None, "drive001", False),)),
+    Mutation("drive_carrier_not_advanced", "drive.v", "wire [PHASE_BITS-1:0] ph_car = ph_q + adv[PHASE_BITS-1:0];",
+             "wire [PHASE_BITS-1:0] ph_car = ph_q;", "drive: the DAC carrier read without its advance",
+             ((None, "drive", False),)),
+    Mutation("drive_update_early", "drive.v", "wire upd = pend && (cnt == LAST);", "wire upd = pend && (cnt == 0);",
+             "drive: the control update on the first sample of each group, not the last", ((None, "drive", False),)),
+    Mutation("drive_dac_stale_gain", "drive.v", "wire signed [GW-1:0] gw = gain_u[GW-1:0];",
+             "wire signed [GW-1:0] gw = {1'b0, gain};", "drive: the DAC reads the gain before this sample's update",
+             ((None, "drive", False),)),
+    Mutation("drive_hz_floor", "drive.v", ".ROUNDING(ROUNDING), .OUT_W(HR)) u_hz", ".ROUNDING(0), .OUT_W(HR)) u_hz",
+             "drive: the frequency word in Hz rounded by floor", ((None, "drive", False),)),
+    Mutation("drive_pll_not_held", "drive.v", "wire pll_upd = upd && pll_on;", "wire pll_upd = upd;",
+             "drive: the PLL runs below the minimum amplitude (on the noise's angle)", ((None, "drive", False),)),
+    Mutation("drive_dac_flag_lost", "drive.v", "ovf <= {pll_upd & ovf_f, ovf_dac,", "ovf <= {pll_upd & ovf_f, 1'b0,",
+             "drive: the DAC's overflow not flagged", ((DAC_HALF, "drive", False),)),
     Mutation("divider_strict_compare", "sf_divide.v", "qb_v = ~t_v[DW+1];", "qb_v = ~t_v[DW+1] & (t_v[DW:0] != 0);",
              "division step takes r >= d as r > d (an exact step's quotient bit lost)", ((None, "sf_divide", False),)),
     Mutation("divider_always_subtracts", "sf_divide.v", "({2'b00, dmag} ^ {(DW+2){~r_v[DW]}}) + {{(DW+1){1'b0}}, ~r_v[DW]}",

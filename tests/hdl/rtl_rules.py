@@ -39,12 +39,17 @@ SHARED_ROUNDING = ("fx_round", "fx_convert", "fx_convert_reg")
 
 # (module, rule, construct as normalised text) -> (count, reason)
 ALLOWED: dict[tuple[str, str, str], tuple[int, str]] = {
-    # ARCH = 0 (unrolled): twice each; ARCH = 1 (one shifter for x and y): sh_in once
-    ("demod", "right-shift", "cy>>>j"): (2, "CORDIC micro-rotation: floor shift by definition (blocks.demod.cordic_vector)"),
-    ("demod", "right-shift", "cx>>>j"): (2, "CORDIC micro-rotation: floor shift by definition (blocks.demod.cordic_vector)"),
+    # the unrolled CORDIC (demod and drive at ARCH = 0): twice each; the serial demod (ARCH = 1, one
+    # shifter for x and y): sh_in once
+    ("cordic_vector", "right-shift", "cy>>>j"): (
+        2, "CORDIC micro-rotation: floor shift by definition (blocks.demod.cordic_vector)"),
+    ("cordic_vector", "right-shift", "cx>>>j"): (
+        2, "CORDIC micro-rotation: floor shift by definition (blocks.demod.cordic_vector)"),
     ("demod", "right-shift", "sh_in>>>j"): (
         1, "CORDIC micro-rotation of x, then y, on one shifter: floor shift by definition (blocks.demod.cordic_vector)"),
-    ("demod", "select", "atan_flat[ANGLE_W*j+:ANGLE_W]"): (1, "field of the flat arctan table, not a value"),
+    ("cordic_vector", "select", "atan_flat[ANGLE_W*j+:ANGLE_W]"): (1, "field of the flat arctan table, not a value"),
+    ("drive", "right-shift", "adv_p>>>ADVANCE_BITS"): (
+        1, "the carrier's advance, a phase offset: floor by definition (blocks.drive: (ftw * adv) >> advance_bits)"),
     # the NCO phase word's fields, read by nco.v and the serial demod (ARCH = 1) through nco_phase
     ("nco_phase", "select", "phase[PHASE_BITS-1-:2]"): (1, "quadrant = top two phase bits (model: Nco bin, a >> (L - 2))"),
     ("nco_phase", "select", "phase[PHASE_BITS-3-:QBITS]"): (

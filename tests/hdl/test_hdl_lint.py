@@ -205,7 +205,7 @@ INJECTIONS = {
     "hard_wired_mode": ("lag.v", [(".SHIFT(ALPHA_S), .ROUNDING(ROUNDING)", ".SHIFT(ALPHA_S), .ROUNDING(0)")],
                         "rounding mode must come from"),
     "default_mode": ("iir.v", [(".SHIFT(OUT_SHIFT), .ROUNDING(ROUNDING), ", ".SHIFT(OUT_SHIFT), ")], "at its default"),
-    "cordic_shift_changed": ("demod.v", [("tx = cx + (cy >>> j);", "tx = cx + (cy >>> (j + 1));")], "cy>>>(j+1)"),
+    "cordic_shift_changed": ("cordic_vector.v", [("tx = cx + (cy >>> j);", "tx = cx + (cy >>> (j + 1));")], "cy>>>(j+1)"),
 }
 
 

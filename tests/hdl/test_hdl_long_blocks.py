@@ -8,7 +8,7 @@ from fxdsp.hdl.schedule import chain_schedule, member_cycles
 from hdl_util import SERIAL
 from long_common import N_LONG, default_design, long_stream, on_simulators
 
-BLOCKS = ["rtd", "iir", "piecewise_sf", "piecewise_k1", "bias_subtract", "freq2temp", "lag"]
+BLOCKS = ["rtd", "iir", "piecewise_sf", "piecewise_k1", "bias_subtract", "freq2temp", "lag", "drive"]
 # the file-driven harness on Icarus too, on one block (every block streams on Verilator: a second
 # simulator over the same 100k samples of each would repeat it for ~15 s)
 ICARUS_TOO = ["freq2temp"]

@@ -160,7 +160,6 @@ module demod #(
     localparam integer WW = DATA_W + 3;        // CORDIC work: DATA_W + 2 guard bits, + 1 spare
     localparam integer AW = ANGLE_W + 2;       // angle accumulator, never overflows the port
     localparam integer PW = WW + INV_K_W;
-    genvar k;
 
     generate
         if (ARCH != 0 && ARCH != 1) begin : g_bad_arch
@@ -232,45 +231,10 @@ module demod #(
                  .mac_out_valid(1'b0), .mac_p({(MAC_A_W+MAC_B_W){1'b0}}));
 
             // ---- CORDIC vectoring (combinational on the filter outputs) ----
-            reg [ANGLE_W-1:0] atan [0:ITERATIONS-1];
-            initial $readmemh(ATAN_FILE, atan);
-            localparam [ANGLE_W-1:0] HALF_PI_C = HALF_PI[ANGLE_W-1:0];
-            wire signed [AW-1:0] hpi = {{2{HALF_PI_C[ANGLE_W-1]}}, HALF_PI_C};
-
-            wire signed [WW-1:0] xi = {{(WW-DATA_W){li[DATA_W-1]}}, li};
-            wire signed [WW-1:0] yi = {{(WW-DATA_W){lq[DATA_W-1]}}, lq};
-            wire signed [WW-1:0] x0 = ~xi[WW-1] ? xi : (~yi[WW-1] ? yi : -yi);
-            wire signed [WW-1:0] y0 = ~xi[WW-1] ? yi : (~yi[WW-1] ? -xi : xi);
-            wire signed [AW-1:0] z0 = ~xi[WW-1] ? {AW{1'b0}} : (~yi[WW-1] ? hpi : -hpi);
-            // the arctan table as one flat vector (a procedural loop then reads it without an array)
-            wire [ANGLE_W*ITERATIONS-1:0] atan_flat;
-            for (k = 0; k < ITERATIONS; k = k + 1) begin : g_atan
-                assign atan_flat[ANGLE_W*k +: ANGLE_W] = atan[k];
-            end
-
-            // the ITERATIONS shift-and-add steps, unrolled by the loop (one evaluation per new I/Q)
-            reg signed [WW-1:0]  cx, cy, tx;
-            reg signed [AW-1:0]  cz, at;
-            reg [ANGLE_W-1:0]    atv;
-            integer j;
-            always @* begin
-                cx = x0; cy = y0; cz = z0;
-                tx = {WW{1'b0}}; at = {AW{1'b0}}; atv = {ANGLE_W{1'b0}};
-                for (j = 0; j < ITERATIONS; j = j + 1) begin
-                    atv = atan_flat[ANGLE_W*j +: ANGLE_W];
-                    at  = {{2{atv[ANGLE_W-1]}}, atv};
-                    if (!cy[WW-1]) begin
-                        tx = cx + (cy >>> j);
-                        cy = cy - (cx >>> j);
-                        cz = cz + at;
-                    end else begin
-                        tx = cx - (cy >>> j);
-                        cy = cy + (cx >>> j);
-                        cz = cz - at;
-                    end
-                    cx = tx;
-                end
-            end
+            wire signed [WW-1:0] cx;
+            wire signed [AW-1:0] cz;
+            cordic_vector #(.DATA_W(DATA_W), .ITERATIONS(ITERATIONS), .ANGLE_W(ANGLE_W), .HALF_PI(HALF_PI),
+                            .ATAN_FILE(ATAN_FILE)) u_cordic (.x(li), .y(lq), .xk(cx), .z(cz));
 
             localparam [INV_K_W-1:0] INV_K_C = INV_K[INV_K_W-1:0];
             wire signed [INV_K_W-1:0] invk = INV_K_C;

@@ -3,16 +3,9 @@
 // (PHASE0 + n FTW) plus the phase trim, which rotates the reference by PHASE_TRIM / 2**PHASE_BITS
 // turns without touching the frequency. Adding a constant commutes with the accumulation modulo
 // 2**PHASE_BITS, so the trim is folded into the reset value (a constant: no adder; PHASE_TRIM = 0
-// is the untrimmed NCO). The phase word's fields come from nco_phase (the serial demod reads its own
-// phase through the same module). The top LUT_BITS phase bits are the bin: the
-// quadrant (2 bits) and the index k of a quarter-wave sine table (QSIN_FILE: 2**(LUT_BITS-2) words
-// of LUT_W bits, sin at the bin centres, quantised half_up / saturate by the generator). cos and -sin
-// of the bin centre are +-qsin[k], +-qsin[~k] by quadrant (cb, mb). First-order interpolation
-// removes the phase-truncation error: the next INTERP_BITS phase bits r give the sub-bin centre
-// delta = 2 r + 1 - 2**INTERP_BITS, d = delta * TWO_PI (2 pi, TWO_PI_W bits), and
-//   cos_o  = cb + R(mb * d),   msin_o = mb + R(-cb * d),   R = >> CORR_SHIFT rounded by ROUNDING
-// (d cos = -sin d phase, d(-sin) = -cos d phase). The outputs are NCO_W = LUT_W + 1 bits, which
-// the model proves they never exceed: no fit point. INTERP_BITS = 0: the plain truncating table.
+// is the untrimmed NCO). cos and -sin of the phase come from nco_wave (quarter-wave table and
+// first-order interpolation, the correction rounded by ROUNDING: 0 floor, 1 half_up, 2 half_even,
+// 3 toward_zero; NCO_W = LUT_W + 1 bits, no overflow: no wrap / saturate and no fit point).
 // cos_o / msin_o show the current phase (combinational); the phase advances by FTW on each `step`;
 // rst returns it to PHASE0 + PHASE_TRIM. FTW, PHASE0, PHASE_TRIM, TWO_PI: 64-bit constants. Latency:
 // combinational read.
@@ -39,20 +32,10 @@ module nco #(
     output wire [NCO_W-1:0] cos_o,
     output wire [NCO_W-1:0] msin_o
 );
-    localparam integer QBITS = LUT_BITS - 2;
     localparam [PHASE_BITS-1:0] FTW_C    = FTW[PHASE_BITS-1:0];
     localparam [PHASE_BITS-1:0] PHASE0_C = PHASE0[PHASE_BITS-1:0];
     localparam [PHASE_BITS-1:0] TRIM_C   = PHASE_TRIM[PHASE_BITS-1:0];
     localparam [PHASE_BITS-1:0] START_C  = PHASE0_C + TRIM_C;   // modulo 2**PHASE_BITS
-    localparam [TWO_PI_W-1:0]   TWO_PI_C = TWO_PI[TWO_PI_W-1:0];
-    localparam integer DLW = INTERP_BITS + 2;           // delta: odd, |delta| < 2**INTERP_BITS
-    localparam integer DW  = DLW + TWO_PI_W + 1;        // d = delta * TWO_PI (TWO_PI > 0)
-    localparam integer PW  = NCO_W + DW;                // correction product
-    localparam integer CW  = PW - CORR_SHIFT + 1;       // rounded correction
-    localparam integer SW  = ((CW > NCO_W) ? CW : NCO_W) + 1;
-
-    reg [LUT_W-1:0] qsin [0:(1<<QBITS)-1];
-    initial $readmemh(QSIN_FILE, qsin);
 
     reg [PHASE_BITS-1:0] phase;
     always @(posedge clk) begin
@@ -60,39 +43,10 @@ module nco #(
         else if (step) phase <= phase + FTW_C;
     end
 
-    // ---- bin centre: quadrant symmetry of the quarter table ----
-    wire [1:0]       quad;
-    wire [QBITS-1:0] k;
-    wire signed [DLW-1:0] delta;          // the sub-bin centre (nco_phase), for the correction below
-    nco_phase #(.PHASE_BITS(PHASE_BITS), .LUT_BITS(LUT_BITS), .INTERP_BITS(INTERP_BITS)) u_fields (
-        .phase(phase), .quad(quad), .k(k), .delta(delta));
-    wire [LUT_W-1:0] s_k  = qsin[k];
-    wire [LUT_W-1:0] s_r  = qsin[~k];
-    wire signed [NCO_W-1:0] sk = {s_k[LUT_W-1], s_k};
-    wire signed [NCO_W-1:0] sr = {s_r[LUT_W-1], s_r};
-    // cb: |sr| in even quadrants, |sk| in odd ones, negative in quadrants 1, 2;
-    // mb: |sk| in even quadrants, |sr| in odd ones, negative in quadrants 0, 1
-    wire signed [NCO_W-1:0] ca = quad[0] ? sk : sr;
-    wire signed [NCO_W-1:0] ma = quad[0] ? sr : sk;
-    wire signed [NCO_W-1:0] cb = (quad[1] ^ quad[0]) ? -ca : ca;
-    wire signed [NCO_W-1:0] mb = quad[1] ? ma : -ma;
-
-    // ---- first-order correction from the sub-bin offset ----
-    wire signed [TWO_PI_W:0] twopi = {1'b0, TWO_PI_C};
-    wire signed [DW-1:0] d  = delta * twopi;
-    wire signed [PW-1:0] pc = mb * d;
-    wire signed [NCO_W-1:0] ncb = -cb;                 // cb >= -max: fits
-    wire signed [PW-1:0] pm = ncb * d;
-    wire signed [CW-1:0] rc, rm;
-    fx_round #(.IN_W(PW), .SHIFT(CORR_SHIFT), .ROUNDING(ROUNDING), .OUT_W(CW)) u_rc (.x(pc), .cin(1'b0), .y(rc));
-    fx_round #(.IN_W(PW), .SHIFT(CORR_SHIFT), .ROUNDING(ROUNDING), .OUT_W(CW)) u_rm (.x(pm), .cin(1'b0), .y(rm));
-
-    /* verilator lint_off UNUSEDSIGNAL */  // the top bit of the sums: the model proves it is a sign copy
-    wire signed [SW-1:0] c_sum = {{(SW-NCO_W){cb[NCO_W-1]}}, cb} + {{(SW-CW){rc[CW-1]}}, rc};
-    wire signed [SW-1:0] m_sum = {{(SW-NCO_W){mb[NCO_W-1]}}, mb} + {{(SW-CW){rm[CW-1]}}, rm};
-    /* verilator lint_on UNUSEDSIGNAL */
-    assign cos_o  = c_sum[NCO_W-1:0];
-    assign msin_o = m_sum[NCO_W-1:0];
+    // the table, its interpolation and rounding: one description, shared with the drive loop
+    nco_wave #(.PHASE_BITS(PHASE_BITS), .LUT_BITS(LUT_BITS), .LUT_W(LUT_W), .INTERP_BITS(INTERP_BITS),
+               .TWO_PI(TWO_PI), .TWO_PI_W(TWO_PI_W), .CORR_SHIFT(CORR_SHIFT), .NCO_W(NCO_W), .ROUNDING(ROUNDING),
+               .QSIN_FILE(QSIN_FILE)) u_wave (.phase(phase), .cos_o(cos_o), .msin_o(msin_o));
 endmodule
 
 `default_nettype wire
