@@ -390,9 +390,15 @@ def _loop_only_config(tmp_path, **demod002) -> str:
 @pytest.mark.parametrize("command", ["hdl-gen", "rtl", "formal"])
 def test_an_hdl_command_on_a_design_without_rtl_is_bad_input(tmp_path, command):
     """Nothing to generate, prove or verify is one line and exit 2, not "0 of 0 DUTs" and exit 0."""
-    from conftest import run_cli
+    from conftest import default_data, run_cli
+    from fxdsp.config import dumps
 
-    rc, err = run_cli([command, "--config", _loop_only_config(tmp_path), "--out", str(tmp_path / "out")])
+    # a demodulator on an input reference (the drive loop's NCO), alone: it has no RTL yet
+    data = {k: v for k, v in default_data().items() if k in ("system", "stimulus", "demod002")}
+    data["demod002"]["phase_bits"] = 48   # no wire to take it from
+    path = tmp_path / "ref_demod.toml"
+    path.write_text(dumps(data), encoding="utf-8")
+    rc, err = run_cli([command, "--config", str(path), "--out", str(tmp_path / "out")])
     assert rc == 2 and len(err.strip().splitlines()) == 1 and "no block or chain has RTL" in err, err
     assert not (tmp_path / "out").exists()
 
