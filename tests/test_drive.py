@@ -14,8 +14,7 @@ import numpy as np
 import pytest
 
 from fxdsp.blocks.drive import P_KI_F, P_KP_F, S_AMP, S_FTW, S_INTEG_F
-from fxdsp.budget.drive_loop import lock_time
-from fxdsp.sim.driveloop import closed_loop
+from fxdsp.sim.driveloop import closed_loop, lock_time
 from fxdsp.sim.resonator import PAPER002_DRIVE, PRESETS, _open_drive
 
 LOOPS = PRESETS   # the built-in tables and the modes they were designed for

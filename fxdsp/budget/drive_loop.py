@@ -34,7 +34,7 @@ import numpy as np
 from ..blocks.drive import Drive
 from ..fixed import quantize
 from ..sensors import NEAREST_SAT, NOMINAL_QUADRATURE_FS
-from ..sim.driveloop import STEP_S, ClosedLoopRun, closed_loop, samples_per_step
+from ..sim.driveloop import STEP_S, ClosedLoopRun, closed_loop, lock_time, samples_per_step
 from ..sim.resonator import DriveResonator, resonator_for
 from .attribution import expected_mean_q
 
@@ -43,18 +43,6 @@ TEMPS_C = (-40.0, 25.0, 85.0)   # the range's ends and room temperature
 RECORD_S = STEP_S               # records on the resonance's own steps: the truth is constant over each
 MEASURE_S = 5.0                 # measured after lock: 500 records, ~100 loop time constants
 RAMP = (-40.0, 85.0, 1.0)       # the chamber ramp of the acceptance: from, to (C), C/min
-
-
-def lock_time(run: ClosedLoopRun, drive: Drive, phase_rad: float = 1e-3, amp_ppm: float = 100.0) -> float | None:
-    """The time after which the loop stays locked: |phase error| < ``phase_rad`` and the amplitude
-    within ``amp_ppm`` of the set point at every record to the end (None: never)."""
-    ok = (np.abs(run.phase_rad) < phase_rad) & (np.abs(run.amp / drive.amp_setpoint - 1) < amp_ppm * 1e-6)
-    bad = np.flatnonzero(~ok)
-    if bad.size == 0:
-        return float(run.t_s[0])
-    if bad[-1] == ok.size - 1:
-        return None
-    return float(run.t_s[bad[-1] + 1])
 
 
 @dataclass(frozen=True)

@@ -177,18 +177,29 @@ def run_cocotb(design, name: str, segments: list[dict], d: Path, models: Path | 
     Verilator models are cached under ``models`` (required for Verilator). Returns the driver's
     summary: cycles, seconds, errors (empty: bit for bit), mismatches (the first wrong word per
     segment and port), plus ``build_seconds``. BuildFailed when the DUT does not build."""
+    d = Path(d)
+    _, ins, outs, ready = ports_of(design, name, extra_params)
+    block = design.all[name]
+    spec = {"segments": segments, "inputs": ins, "outputs": outs, "ready": ready, "gap": gap, "seed": int(seed),
+            "widths": {p: block.inputs[p].wl for p in ins}, "abort_cycles": schedule_cycles(design, name, extra_params),
+            "ovf_ignore": ovf_ignore(design, name)}
+    return run_cocotb_test(design, name, DRIVER, spec, d, models, extra_params, sim, rtl)
+
+
+def run_cocotb_test(design, name: str, driver: str, spec: dict, d: Path, models: Path | None = None,
+                    extra_params: dict | None = None, sim: str = "icarus", rtl: Path | None = None) -> dict:
+    """Build the DUT of ``name`` (as :func:`run_cocotb`) and run the cocotb test module ``driver`` on
+    it with ``spec`` (written to ``spec.json``, path in ``FXDSP_SPEC``; its ``summary`` key is set to
+    the file the test writes). Returns that summary plus ``build_seconds``."""
     require_simulator(sim)
     if sim == "verilator" and models is None:
         raise ValueError("models: Verilator needs a folder for its model cache")
     from cocotb_tools.runner import get_runner
 
     d = Path(d)
-    module, ins, outs, ready = ports_of(design, name, extra_params)
+    module = design.instances[name].module
     generate_into(design, d)
-    block = design.all[name]
-    spec = {"segments": segments, "inputs": ins, "outputs": outs, "ready": ready, "gap": gap, "seed": int(seed),
-            "widths": {p: block.inputs[p].wl for p in ins}, "abort_cycles": schedule_cycles(design, name, extra_params),
-            "ovf_ignore": ovf_ignore(design, name), "summary": str(d / "summary.json")}
+    spec = dict(spec, summary=str(d / "summary.json"))
     (d / "spec.json").write_text(json.dumps(spec))
     params = dut_parameters(design, name, extra_params)
     sources = rtl_sources(rtl, design, d)
@@ -222,7 +233,7 @@ def run_cocotb(design, name: str, segments: list[dict], d: Path, models: Path | 
     # costs ~7 s of start-up per run; the driver reports its own mismatches)
     env = {"FXDSP_SPEC": str(d / "spec.json"), "COCOTB_REWRITE_ASSERTION_FILES": ""}
     try:  # cocotb_tools' runner exits (SystemExit) when a test fails: the driver's summary says why
-        runner.test(test_module=DRIVER, hdl_toplevel=module, hdl_toplevel_lang="verilog", build_dir=model,
+        runner.test(test_module=driver, hdl_toplevel=module, hdl_toplevel_lang="verilog", build_dir=model,
                     test_dir=d, extra_env=env, log_file=d / "sim.log")
     except (RuntimeError, SystemExit):
         pass

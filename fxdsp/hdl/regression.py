@@ -8,7 +8,11 @@ flags against the model's count:
 * ``golden``: the design's golden vectors (the very files written beside the report);
 * ``random``: the block's random stimulus, corners first, with idle input cycles (gapped valid);
 * ``corners``: its corner stream three times: a reset with samples in flight, back to back, gapped;
-* ``long``: a long stream through the file-driven harness (the simulator at its own speed).
+* ``long``: a long stream through the file-driven harness (the simulator at its own speed);
+* ``closed_loop`` (drive loops only): the RTL closed on the simulated resonator from power-on
+  (:mod:`fxdsp.hdl.cosim`), every word against the model's closed loop: on Verilator through the
+  acquisition (the model's lock time) and one second of lock, on Icarus (~100 times slower) its first
+  :data:`ICARUS_LOOP_S` seconds.
 
 The first three are Python-driven (cocotb); a serial variant on Icarus runs a window of each
 (:data:`fxdsp.hdl.stimuli.ICARUS_SERIAL_SAMPLES`), on Verilator the whole. Every module runs at
@@ -30,12 +34,16 @@ from pathlib import Path
 
 import numpy as np
 
+from ..blocks.drive import Drive
 from ..errors import InputError
 from ..fixed.hexfile import word_value
 from . import harness as hh
 from . import stimuli
 
-STREAMS = ("golden", "random", "corners", "long")
+STREAMS = ("golden", "random", "corners", "long", "closed_loop")
+LOOP_STREAM = "closed_loop"
+ICARUS_LOOP_S = 0.05   # the closed loop's run on Icarus: the PLL's first 40 ms
+LOCKED_S = 1.0         # ... on Verilator: the acquisition and this much of lock
 # samples of the long stream per simulator and variant (the serial one takes 12-350 cycles a sample)
 LONG_SAMPLES = {("verilator", False): 100_000, ("verilator", True): 100_000,
                 ("icarus", False): 20_000, ("icarus", True): 2_000}
@@ -163,6 +171,54 @@ def _long(design, dut: Dut, inputs: dict, d: Path, models, sim: str, rtl) -> tup
     return {"samples": n, "cycles": cycles, "ok": not errors, "errors": errors[:5]}, mismatch
 
 
+def _open_stream(design, dut: Dut, stream: str, files: dict, sim: str, seed: int, long_n: int | None, d: Path,
+                 models, rtl) -> tuple[dict, dict | None, dict, bool]:
+    """One of the streams fed from stored inputs: (record, first mismatch or None, the inputs of the
+    segment that failed first, whether it was gapped)."""
+    segments, stored, gap = _stream(design, dut, stream, files, sim, seed, long_n)
+    if segments is None:
+        record, mismatch = _long(design, dut, stored[0], d, models, sim, rtl)
+        return record, mismatch, stored[0], False
+    summary = hh.run_cocotb(design, dut.name, segments, d, models, gap=gap, seed=seed, extra_params=dut.extra,
+                            sim=sim, rtl=rtl)
+    record = {"samples": sum(len(next(iter(s.values()))) for s in stored), "cycles": summary["cycles"],
+              "ok": not summary["errors"], "errors": summary["errors"][:5]}
+    mismatch = min(summary["mismatches"], key=lambda m: (m["segment"], m["sample"]), default=None)
+    at = mismatch["segment"] if mismatch else -1
+    return record, mismatch, stored[at], bool(segments[at].get("gap", gap))
+
+
+def _closed_loop(design, dut: Dut, d: Path, models, sim: str, rtl, seed: int) -> tuple[dict, dict | None, dict]:
+    """The closed-loop co-simulation of a drive loop: (stream record, first mismatch or None, the
+    ADC codes up to a little after it: the RTL fed them open loop gives the same words, so the
+    waveform's re-run shows the mismatch). On Verilator the model's acquisition time plus
+    :data:`LOCKED_S`; on Icarus :data:`ICARUS_LOOP_S`."""
+    from .cosim import acquisition_s, run_loop_cosim
+
+    block = design.all[dut.name]
+    lock = None
+    if sim == "verilator":
+        lock = acquisition_s(block, seed=seed)
+        if lock is None:
+            return ({"samples": 0, "cycles": None, "ok": False,
+                     "errors": ["the model's loop never locks on its mode: nothing to co-simulate"]}, None, {})
+        seconds = lock + LOCKED_S
+    else:
+        seconds = ICARUS_LOOP_S
+    s = run_loop_cosim(design, dut.name, d, models, seconds=seconds, seed=seed, sim=sim, rtl=rtl)
+    record = {"samples": s["samples"], "cycles": s["cycles"], "ok": not s["errors"], "errors": s["errors"][:5],
+              "seconds_simulated": round(s["expected_samples"] / block.fs_hz, 4),
+              "lock_s": None if lock is None else round(lock, 4),
+              "samples_per_s": None if s["samples_per_s"] is None else round(s["samples_per_s"])}
+    m = s["mismatch"]
+    if m is None:
+        return record, None, {}
+    mismatch = {"segment": 0, "sample": m["sample"], "port": m["port"], "got": m["got"], "expected": m["expected"],
+                "count": len(m["ports"]), "of": len(block.outputs)}
+    codes = np.load(d / "expected.npz")["codes"][: m["sample"] + WAVE_AFTER]
+    return record, mismatch, {"x": codes}
+
+
 def run_dut(design, dut: Dut, files: dict, sim: str, work: Path, models: Path | None, out: Path, seed: int = 1,
             waves: bool = False, rtl: Path | None = None, long_n: int | None = None, streams=STREAMS,
             progress=None) -> DutResult:
@@ -174,22 +230,20 @@ def run_dut(design, dut: Dut, files: dict, sim: str, work: Path, models: Path | 
         if progress is not None:
             progress.set_postfix_str(stream)
         d = Path(work) / f"{dut.slug}_{stream}"
+        if stream == LOOP_STREAM and not isinstance(block, Drive):
+            if progress is not None:
+                progress.update(1)
+            continue   # not a loop: nothing to close
         shutil.rmtree(d, ignore_errors=True)
         d.mkdir(parents=True)
         stream_seed = zlib.crc32(f"{seed}:{dut.slug}:{stream}".encode()) & 0x7FFFFFFF
-        segments, stored, gap = _stream(design, dut, stream, files, sim, stream_seed, long_n)
         try:
-            if segments is None:
-                record, mismatch = _long(design, dut, stored[0], d, models, sim, rtl)
-                failing_inputs, failing_gap = stored[0], False
+            if stream == LOOP_STREAM:
+                record, mismatch, failing_inputs = _closed_loop(design, dut, d, models, sim, rtl, stream_seed)
+                failing_gap = False
             else:
-                summary = hh.run_cocotb(design, dut.name, segments, d, models, gap=gap, seed=stream_seed,
-                                        extra_params=dut.extra, sim=sim, rtl=rtl)
-                record = {"samples": sum(len(next(iter(s.values()))) for s in stored), "cycles": summary["cycles"],
-                          "ok": not summary["errors"], "errors": summary["errors"][:5]}
-                mismatch = min(summary["mismatches"], key=lambda m: (m["segment"], m["sample"]), default=None)
-                at = mismatch["segment"] if mismatch else -1
-                failing_inputs, failing_gap = stored[at], bool(segments[at].get("gap", gap))
+                record, mismatch, failing_inputs, failing_gap = _open_stream(design, dut, stream, files, sim,
+                                                                              stream_seed, long_n, d, models, rtl)
         except hh.BuildFailed as e:
             res.streams[stream] = {"samples": 0, "cycles": None, "ok": False,
                                    "errors": [f"build failed: {e.reason}"]}
@@ -203,7 +257,7 @@ def run_dut(design, dut: Dut, files: dict, sim: str, work: Path, models: Path | 
                         "got_value": word_value(mismatch["got"], fmt.wl, fmt.signed),
                         "expected_value": word_value(mismatch["expected"], fmt.wl, fmt.signed)}
             res.first_mismatch = res.first_mismatch or mismatch
-        if not record["ok"] or (waves and stream == "golden"):
+        if (not record["ok"] and failing_inputs) or (waves and stream == "golden"):
             # around the first mismatch; a pass (--waves) or a failure without a wrong word: the start
             window = (max(0, mismatch["sample"] - WAVE_BEFORE), mismatch["sample"] + WAVE_AFTER) if mismatch \
                 else (0, WAVE_GOLDEN)
@@ -278,7 +332,8 @@ def markdown(report: dict) -> str:
          "|---|---|--:|--:|" + "---|" * len(report["streams"]) + "---|"]
     for r in report["duts"]:
         cps = "-" if r["cycles_per_sample"] is None else f"{r['cycles_per_sample']:g}"
-        cells = ["pass" if r["streams"].get(s, {}).get("ok") else "**FAIL**" for s in report["streams"]]
+        cells = ["-" if s not in r["streams"] else "pass" if r["streams"][s]["ok"] else "**FAIL**"
+                 for s in report["streams"]]
         L.append(f"| {r['dut']} | {r['module']} | {r['samples']} | {cps} | " + " | ".join(cells)
                  + f" | {'pass' if r['passed'] else '**FAIL**'} |")
     failing = [r for r in report["duts"] if not r["passed"]]
@@ -286,7 +341,11 @@ def markdown(report: dict) -> str:
         L += ["", "## First mismatches", ""]
         for r in failing:
             m = r["first_mismatch"]
-            if m:
+            if m and m["stream"] == LOOP_STREAM:
+                L.append(f"- **{r['dut']}**, closed loop on its mode: sample {m['sample']}, port `{m['port']}`: got "
+                         f"{m['got_value']} (0x{m['got']:x}), expected {m['expected_value']} (0x{m['expected']:x}); "
+                         f"{m['count']} of {m['of']} ports wrong there (the run stops at the first wrong sample)")
+            elif m:
                 L.append(f"- **{r['dut']}**, {m['stream']} stream, segment {m['segment']}: sample {m['sample']}, port "
                          f"`{m['port']}`: got {m['got_value']} (0x{m['got']:x}), expected {m['expected_value']} "
                          f"(0x{m['expected']:x}); {m['count']} of {m['of']} words wrong")

@@ -99,6 +99,97 @@ class ClosedLoopRun:
     adc_codes: np.ndarray | None = None   # every drive ADC code the loop read (keep_codes)
 
 
+@dataclass
+class Chunk:
+    """One compiled run's share of a closed loop: samples start .. start + m, the resonator's
+    coefficients of the temperature steps they span (the first at global step start // per_step),
+    their pick-off noise and the resonance (rad/s) per step."""
+
+    start: int
+    m: int
+    coef: np.ndarray
+    noise: np.ndarray
+    omega: np.ndarray
+
+
+def _profile(temp_c, freq_hz):
+    """(temperatures, resonances or None) per profile step, checked."""
+    temps = np.atleast_1d(np.asarray(temp_c, dtype=float))
+    freqs = None if freq_hz is None else np.atleast_1d(np.asarray(freq_hz, dtype=float))
+    if freqs is not None and freqs.shape != temps.shape:
+        if temps.size != 1:
+            raise ValueError(f"temp_c: {temps.size} steps, freq_hz {freqs.size}: one value, or one per step of both")
+        temps = np.broadcast_to(temps, freqs.shape)
+    for what, arr in (("temp_c", temps), ("freq_hz", freqs)):
+        if arr is not None and not np.all(np.isfinite(arr)):
+            raise ValueError(f"{what}: not finite")
+    return temps, freqs
+
+
+def _chunks(drive: Drive, resonator: DriveResonator, temps, freqs, n: int, per_step: int, rec: int, seed: int,
+            progress: bool = False):
+    """The chunks of an n-sample run in order: whole records and whole temperature steps each (the
+    grids are the global ones), the noise of each drawn from one generator in order. One plan for
+    the compiled loop and for a loop stepped from outside (:class:`ModeTwin`)."""
+    fs = drive.fs_hz
+    rng = np.random.default_rng(seed)
+    chunk = max(rec * per_step, CHUNK // (rec * per_step) * rec * per_step)
+    starts = range(0, n, chunk)
+    if progress:
+        from tqdm import tqdm
+
+        starts = tqdm(starts, unit="chunk", desc="closed loop")
+    last = temps.size - 1
+    for start in starts:
+        m = min(chunk, n - start)
+        steps = np.minimum(np.arange(start // per_step, (start + m - 1) // per_step + 1), last)
+        coef = resonator.coefficients(temps[steps], fs, None if freqs is None else freqs[steps])
+        noise = rng.normal(0.0, resonator.noise_fs, m) if resonator.noise_fs else np.zeros(m)
+        omega = 2 * np.pi * (resonator.frequency_hz(temps[steps]) if freqs is None else freqs[steps])
+        yield Chunk(start, m, coef, noise, np.asarray(omega, dtype=float))
+
+
+class ModeTwin:
+    """The resonator and pick-off ADC of :func:`closed_loop`, one sample at a time, for a loop that
+    runs outside Python (the RTL in a co-simulation): the same coefficients, noise and arithmetic
+    (the compiled ``adc_code`` and ``resonator_step``), so a loop that gives the model's DAC words
+    reads the model's ADC codes. Per sample: :meth:`code`, then :meth:`drive` with the DAC word."""
+
+    def __init__(self, drive: Drive, resonator: DriveResonator, temp_c, seconds: float, seed: int = 1,
+                 samples_per_temp: int | None = None):
+        fs = drive.fs_hz
+        self.n = int(round(seconds * fs))
+        self.per_step = int(samples_per_temp or samples_per_step(fs))
+        temps, freqs = _profile(temp_c, None)
+        rec = drive.update_every
+        self._chunks = list(_chunks(drive, resonator, temps, freqs, self.n, self.per_step, rec, seed))
+        fi = drive.in_format
+        self._adc = (float(2**fi.fl), fi.min_int, fi.max_int)
+        self._dac_scale = 2.0**-drive.dac_format.fl
+        self.i, self._c, self._k = 0, 0, 0   # the sample, its chunk and index in it
+        self.x = self.v = self.u = 0.0
+        self.saturations = 0
+
+    def code(self) -> int:
+        """The ADC code of the current sample."""
+        c = self._chunks[self._c]
+        code, sat = adc_code(self.x + c.noise[self._k], *self._adc)
+        self.saturations += int(sat)
+        return int(code)
+
+    def drive(self, dac_word: int) -> None:
+        """The loop's DAC word for the current sample: the mode moves one sample under the previous
+        one's (the DAC holds it), this one is held next."""
+        c = self._chunks[self._c]
+        j = min((c.start + self._k) // self.per_step - c.start // self.per_step, c.coef.shape[0] - 1)
+        self.x, self.v = resonator_step(self.x, self.v, self.u, c.coef, j)
+        self.u = int(dac_word) * self._dac_scale
+        self.i += 1
+        self._k += 1
+        if self._k == c.m and self._c + 1 < len(self._chunks):
+            self._c, self._k = self._c + 1, 0
+
+
 def closed_loop(drive: Drive, resonator: DriveResonator, temp_c, seconds: float, seed: int = 1,
                 fixed: bool = True, samples_per_temp: int | None = None, record_every: int | None = None,
                 progress: bool = False, freq_hz=None, keep_codes: bool = False) -> ClosedLoopRun:
@@ -117,18 +208,9 @@ def closed_loop(drive: Drive, resonator: DriveResonator, temp_c, seconds: float,
         raise ValueError(f"record_every: {rec} must be within 1..{n} samples")
     if keep_codes and n > MAX_KEPT:
         raise ValueError(f"keep_codes: {n} samples; at most {MAX_KEPT} are kept ({MAX_KEPT / fs:g} s)")
-    temps = np.atleast_1d(np.asarray(temp_c, dtype=float))
-    freqs = None if freq_hz is None else np.atleast_1d(np.asarray(freq_hz, dtype=float))
-    if freqs is not None and freqs.shape != temps.shape:
-        if temps.size != 1:
-            raise ValueError(f"temp_c: {temps.size} steps, freq_hz {freqs.size}: one value, or one per step of both")
-        temps = np.broadcast_to(temps, freqs.shape)
-    for what, arr in (("temp_c", temps), ("freq_hz", freqs)):
-        if arr is not None and not np.all(np.isfinite(arr)):
-            raise ValueError(f"{what}: not finite")
+    temps, freqs = _profile(temp_c, freq_hz)
     fi = drive.in_format
     adc_scale = float(2**fi.fl)
-    rng = np.random.default_rng(seed)
     rst = np.zeros(4)
     log = OverflowLog()
     drive.reset()
@@ -138,26 +220,13 @@ def closed_loop(drive: Drive, resonator: DriveResonator, temp_c, seconds: float,
     fst, flpf = drive.float_state()
     dac_scale = 2.0**-drive.dac_format.fl
     parts, codes = [], []
-    # whole records and whole temperature steps per chunk: the grids are the global ones
-    chunk = max(rec * per_step, CHUNK // (rec * per_step) * rec * per_step)
-    chunks = range(0, n, chunk)
-    if progress:
-        from tqdm import tqdm
-
-        chunks = tqdm(chunks, unit="chunk", desc="closed loop")
-    last = temps.size - 1
-    for start in chunks:
-        m = min(chunk, n - start)
-        steps = np.minimum(np.arange(start // per_step, (start + m - 1) // per_step + 1), last)
-        coef = resonator.coefficients(temps[steps], fs, None if freqs is None else freqs[steps])
-        noise = rng.normal(0.0, resonator.noise_fs, m) if resonator.noise_fs else np.zeros(m)
-        kept = np.empty(m if keep_codes else 0, dtype=np.int64)
-        omega = 2 * np.pi * (resonator.frequency_hz(temps[steps]) if freqs is None else freqs[steps])
-        parts.append(_closed(m, rec, fixed, st, lpf_st, prm, qsin, atans, lb, la, lc, counts, lcounts, fst, flpf,
-                             drive._fprm, drive.lpf.sos, coef, per_step, start, rst, noise, adc_scale, fi.min_int,
-                             fi.max_int, dac_scale, kept, np.asarray(omega, dtype=float),
-                             2.0**-drive.nco.phase_bits))
+    for c in _chunks(drive, resonator, temps, freqs, n, per_step, rec, seed, progress):
+        kept = np.empty(c.m if keep_codes else 0, dtype=np.int64)
+        parts.append(_closed(c.m, rec, fixed, st, lpf_st, prm, qsin, atans, lb, la, lc, counts, lcounts, fst, flpf,
+                             drive._fprm, drive.lpf.sos, c.coef, per_step, c.start, rst, c.noise, adc_scale, fi.min_int,
+                             fi.max_int, dac_scale, kept, c.omega, 2.0**-drive.nco.phase_bits))
         codes.append(kept)
+    last = temps.size - 1
     ftw, amp, err, mean, ref_err = np.concatenate(parts, axis=1)
     if fixed:
         drive._log(log, counts, lcounts)
@@ -174,6 +243,18 @@ def closed_loop(drive: Drive, resonator: DriveResonator, temp_c, seconds: float,
     drive.reset()
     return ClosedLoopRun(idx / fs, f_hz, mean, amp, err, true_f, temps[steps], int(rst[3]), log, limits,
                          ref_err, np.concatenate(codes) if keep_codes else None)
+
+
+def lock_time(run: ClosedLoopRun, drive: Drive, phase_rad: float = 1e-3, amp_ppm: float = 100.0) -> float | None:
+    """The time after which the loop stays locked: |phase error| < ``phase_rad`` and the amplitude
+    within ``amp_ppm`` of the set point at every record to the end (None: never)."""
+    ok = (np.abs(run.phase_rad) < phase_rad) & (np.abs(run.amp / drive.amp_setpoint - 1) < amp_ppm * 1e-6)
+    bad = np.flatnonzero(~ok)
+    if bad.size == 0:
+        return float(run.t_s[0])
+    if bad[-1] == ok.size - 1:
+        return None
+    return float(run.t_s[bad[-1] + 1])
 
 
 def loop_frequency(drive: Drive, resonator: DriveResonator, t_s, freq_hz, temp_c, seed: int = 1,
