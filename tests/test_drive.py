@@ -427,3 +427,31 @@ def test_the_budget_of_a_loop_whose_mode_is_not_a_thermometer(design):
     assert b.k_hz_per_c == 0 and b.mc(1e-3) is None and b.as_dict()["fixed"]["t_noise_mc"] is None
     assert b.fixed.lock_s is not None and b.fixed.f_noise_hz > 0 and b.within
     assert " - " in format_budget(b)
+
+
+def test_the_mode_twin_stepped_by_the_models_loop_reads_the_closed_loops_codes(design):
+    """The co-simulation's resonator (fxdsp.sim.driveloop.ModeTwin), stepped one sample at a time by
+    the bit-exact loop's own step, reads every ADC code closed_loop read (the same coefficients,
+    noise and arithmetic, across temperature-step boundaries); one DAC word off (by 2000 LSB: one
+    sample's impulse moves the mode by ~500 ADC LSB) and the codes part."""
+    from fxdsp.blocks.drive import _drive_step
+    from fxdsp.sim.driveloop import ModeTwin
+
+    drive, res = design.blocks["drive001"], LOOPS["drive001"]
+    run = closed_loop(drive, res, [-10.0, 40.0, 85.0], 0.03, seed=4, samples_per_temp=1000, keep_codes=True)
+
+    def twin_codes(bump_at: int | None) -> np.ndarray:
+        twin = ModeTwin(drive, res, [-10.0, 40.0, 85.0], 0.03, seed=4, samples_per_temp=1000)
+        drive.reset()
+        counts, lcounts = drive._counts()
+        args = drive.kernel_args()
+        codes = np.empty(twin.n, dtype=np.int64)
+        for i in range(twin.n):
+            codes[i] = twin.code()
+            dac = _drive_step(codes[i], drive.state, drive.lpf_state, *args, counts, lcounts)
+            twin.drive(dac + 2000 * (i == bump_at))
+        drive.reset()
+        return codes
+
+    assert np.array_equal(twin_codes(None), run.adc_codes)
+    assert not np.array_equal(twin_codes(1500), run.adc_codes)

@@ -77,7 +77,9 @@ MODEL_OPT = ("OPT_FAST=-O1",)
 # enough for Verilator's split build (VM_PARALLEL_BUILDS = 1) precompiles its own header, one per
 # file, and is left to it.
 PCH_HEADERS = {"cocotb": ("verilated.h", "verilated_dpi.h", "verilated_vpi.h"),
-               "harness": ("verilated.h", "verilated_timing.h")}
+               "harness": ("verilated.h", "verilated_timing.h"),
+               # a waveform's model (fxdsp rtl's re-run around a mismatch) also writes the VCD
+               "harness-trace": ("verilated.h", "verilated_timing.h", "verilated_vcd_c.h")}
 PCH = "vl_pch.h"   # (in the run-time directory with pch.mk, the make fragment that includes it)
 
 

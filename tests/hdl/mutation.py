@@ -383,10 +383,13 @@ MUTATIONS = [
 ]
 
 
-# the one-sample-per-clock demodulator simulates ~1.7k cycles/s on Icarus (its CORDIC and two wide
-# low-passes): its mutants (NCO, CORDIC: thousands of wrong words in its 5.3k golden samples) run on
-# a window of 1200, the other per-clock modules on their whole golden sets
-PER_CLOCK_WINDOW = {"demod": 1200}
+# the one-sample-per-clock demodulator and drive loop simulate ~1-1.7k cycles/s on Icarus (their
+# CORDIC and wide low-passes): their mutants run on a window of the golden set. The demodulator's
+# (NCO, CORDIC: thousands of wrong words in its 5.3k golden samples) on 1200; the drive loop's on
+# 3000, whose second half (the locked pick-off) outlasts the PLL's recovery from the corners at its
+# lock-range limit (at 1200 the loop filter's rounding never reached the output); the other
+# per-clock modules on their whole golden sets
+PER_CLOCK_WINDOW = {"demod": 1200, "drive": 3000}
 # serial variants are checked on the window of their stream that Icarus runs everywhere in the suite
 # (fxdsp.hdl.stimuli.icarus_samples: at most 200 samples and 20k cycles, from the first change of
 # input, then the stream's end); the whole golden streams would take ~0.6-2.7 M cycles per mutant

@@ -40,3 +40,46 @@ def test_a_loop_mutant_leaves_the_models_trajectory(key, tmp_path):
     s = run_loop_cosim(design_of(), "drive", build_dir(f"cosim_mut_{key}"), VERILATOR_MODELS, temp_c=TEMP_C,
                        seconds=SHORT_S, rtl=rtl)
     assert s["mismatch"] is not None, f"{key}: not caught in {s['samples']} samples"
+
+
+@pytest.mark.hdl
+def test_a_users_loop_closes_on_the_mode_its_table_was_designed_for(tmp_path):
+    """A drive table the project never saw (another name, resonance, lock range and bandwidth): the
+    co-simulation closes it on the mode it was designed for (fxdsp.sim.resonator.resonator_for)."""
+    require_simulator("verilator")
+    from fxdsp.chains import build
+    from fxdsp.config import Config
+    from hdl_util import default_data
+
+    data = {k: v for k, v in default_data().items() if k in ("system", "stimulus")}
+    mine = dict(default_data()["drive"], f_hz=5123.4, lock_range_hz=8.0, pll_bandwidth_hz=15.0)
+    mine["lpf"] = dict(default_data()["drive"]["lpf"])
+    data["drive7"] = mine
+    design = build(Config(data, source="pickoff.toml"))
+    assert loop_instances(design) == ["drive7"]
+    d = build_dir("cosim_user")
+    s = run_loop_cosim(design, "drive7", d, VERILATOR_MODELS, seconds=SHORT_S)
+    assert s["errors"] == [] and s["samples"] == s["expected_samples"] and s["codes_match"]
+    assert len(np.unique(np.load(d / "expected.npz")["f"])) > 10
+
+
+@pytest.mark.hdl
+def test_fxdsp_rtl_names_a_loop_that_leaves_the_models_trajectory(tmp_path, capsys):
+    """`fxdsp rtl`'s closed_loop stream fails on the loop-filter mutant, with the sample, the port and
+    a waveform of the RTL fed the model's ADC codes up to there (open loop, the same words)."""
+    import json
+
+    from fxdsp.cli import main
+
+    require_simulator("verilator")
+    m = next(m for m in MUTATIONS if m.key == "drive_pll_rounding_floor")
+    rtl = mutated_rtl(tmp_path / "rtl", m.file, [(m.old, m.new)])
+    out = tmp_path / "out"
+    assert main(["rtl", "--only", "drive", "--sim", "verilator", "--rtl", str(rtl), "--long", "200",
+                 "--out", str(out)]) == 1
+    row = json.loads((out / "report.json").read_text())["duts"][0]
+    loop = row["streams"]["closed_loop"]
+    assert not loop["ok"] and loop["samples"] < 2000 and "port" in loop["errors"][0]
+    waves = [w for w in row["waves"] if w["stream"] == "closed_loop"]
+    assert waves and (out / waves[0]["file"]).stat().st_size > 1000
+    assert "closed_loop stream: sample" in (out / "report.md").read_text()
