@@ -144,8 +144,8 @@ MUTATIONS = [
              "wire [PHASE_BITS-1:0] ph_in = ph_next;",
              "drive: the phase detector reads the phase before the last sample's update when samples come back to "
              "back", ((None, "drive", False),)),
-    Mutation("drive_detector_q_sign", "drive.v", "wire signed [MW-1:0] pq_ = $signed(x) * $signed(msin_w);",
-             "wire signed [MW-1:0] pq_ = -($signed(x) * $signed(msin_w));",
+    Mutation("drive_detector_q_sign", "mix_lpf.v", "wire signed [MW-1:0] pq_ = $signed(x) * $signed(msin_i);",
+             "wire signed [MW-1:0] pq_ = -($signed(x) * $signed(msin_i));",
              "drive: the phase detector's Q mixer inverted (the angle's sign: the PLL pushes away)",
              ((None, "drive001", False),)),
     Mutation("drive_carrier_not_advanced", "drive.v", "wire [PHASE_BITS-1:0] ph_car = ph_q + adv[PHASE_BITS-1:0];",

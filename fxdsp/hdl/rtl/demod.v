@@ -14,9 +14,9 @@
 // rounded by ROUNDING and has no fit (the model proves NCO_W bits hold it).
 // PHASE_TRIM: the NCO reference's rotation (nco.v), 0 = none. Both architectures give the same
 // i, q, amp, phase, ovf for every input.
-// ARCH = 0: one sample per cycle, everything combinational (nco, 4 + 2 x 7 multipliers, the CORDIC
-//   unrolled). Interface: in_valid / out_valid (in_ready tied high); the NCO and filter states
-//   advance only on in_valid, rst returns them to reset. Latency: 2 cycles (i, q delayed to align
+// ARCH = 0: one sample per cycle, everything combinational (nco, mix_lpf: 4 + 2 x 7 multipliers,
+//   cordic_vector: the CORDIC unrolled). Interface: in_valid / out_valid (in_ready tied high); the
+//   NCO and filter states advance only on in_valid, rst returns them to reset. Latency: 2 cycles (i, q delayed to align
 //   with amp, phase).
 // ARCH = 1: serial (issue 12). The quarter-wave table is read through ONE registered read port
 //   (tq <= qsin[addr]: block RAM), qsin[k] and qsin[~k] in consecutive cycles (cb's word first:
@@ -200,35 +200,16 @@ module demod #(
                   .PHASE0(PHASE0), .PHASE_TRIM(PHASE_TRIM), .ROUNDING(ROUNDING), .QSIN_FILE(QSIN_FILE)) u_nco
                 (.clk(clk), .rst(rst), .step(in_valid), .cos_o(cos_w), .msin_o(msin_w));
 
-            wire signed [MW-1:0] pi_ = $signed(x) * $signed(cos_w);
-            wire signed [MW-1:0] pq_ = $signed(x) * $signed(msin_w);
-            wire [DATA_W-1:0] mi, mq;
-            wire ovf_mi, ovf_mq;
-            fx_convert #(.IN_W(MW), .SHIFT(MIX_SHIFT), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
-                         .OVERFLOW(OVERFLOW)) u_mix_i (.x(pi_), .cin(1'b0), .y(mi), .ovf(ovf_mi));
-            fx_convert #(.IN_W(MW), .SHIFT(MIX_SHIFT), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
-                         .OVERFLOW(OVERFLOW)) u_mix_q (.x(pq_), .cin(1'b0), .y(mq), .ovf(ovf_mq));
-            reg [1:0] ovf_mix_d;
-            always @(posedge clk) if (in_valid) ovf_mix_d <= {ovf_mq, ovf_mi};
-
-            // ---- low-pass filters ----
             wire [DATA_W-1:0] li, lq;
-            wire [LPF_SECTIONS-1:0] ovf_li, ovf_lq;
-            wire lv, lv_q;
-            iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .ACOEF_W(LPF_ACOEF_W), .SHIFT_B(LPF_SHIFT_B),
-                  .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
-                  .OVERFLOW(LPF_OVERFLOW), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W), .COEF_FILE(LPF_COEF_FILE),
-                  .ACOEF_FILE(LPF_ACOEF_FILE)) u_lpf_i
-                (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mi), .out_valid(lv), .y(li), .ovf(ovf_li),
-                 .mac_in_valid(), .mac_in_ready(1'b0), .mac_a(), .mac_b(), .mac_na(), .mac_nb(),
-                 .mac_out_valid(1'b0), .mac_p({(MAC_A_W+MAC_B_W){1'b0}}));
-            iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .ACOEF_W(LPF_ACOEF_W), .SHIFT_B(LPF_SHIFT_B),
-                  .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
-                  .OVERFLOW(LPF_OVERFLOW), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W), .COEF_FILE(LPF_COEF_FILE),
-                  .ACOEF_FILE(LPF_ACOEF_FILE)) u_lpf_q
-                (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mq), .out_valid(lv_q), .y(lq), .ovf(ovf_lq),
-                 .mac_in_valid(), .mac_in_ready(1'b0), .mac_a(), .mac_b(), .mac_na(), .mac_nb(),
-                 .mac_out_valid(1'b0), .mac_p({(MAC_A_W+MAC_B_W){1'b0}}));
+            wire [2*LPF_SECTIONS+1:0] ovf_ml;      // {lpf_q, lpf_i, mix_q, mix_i}
+            wire lv;
+            mix_lpf #(.IN_W(IN_W), .NCO_W(NCO_W), .DATA_W(DATA_W), .MIX_SHIFT(MIX_SHIFT), .ROUNDING(ROUNDING),
+                      .OVERFLOW(OVERFLOW), .LPF_SECTIONS(LPF_SECTIONS), .LPF_COEF_W(LPF_COEF_W),
+                      .LPF_ACOEF_W(LPF_ACOEF_W), .LPF_SHIFT_B(LPF_SHIFT_B), .LPF_SHIFT_A(LPF_SHIFT_A),
+                      .LPF_OUT_SHIFT(LPF_OUT_SHIFT), .LPF_ACC_W(LPF_ACC_W), .LPF_ROUNDING(LPF_ROUNDING),
+                      .LPF_OVERFLOW(LPF_OVERFLOW), .LPF_COEF_FILE(LPF_COEF_FILE), .LPF_ACOEF_FILE(LPF_ACOEF_FILE)) u_det
+                (.clk(clk), .rst(rst), .in_valid(in_valid), .x(x), .cos_i(cos_w), .msin_i(msin_w), .out_valid(lv),
+                 .li(li), .lq(lq), .ovf(ovf_ml));
 
             // ---- CORDIC vectoring (combinational on the filter outputs) ----
             wire signed [WW-1:0] cx;
@@ -261,13 +242,10 @@ module demod #(
                         q <= lq;
                         amp <= amp_c;
                         phase <= zfin[ANGLE_W-1:0];
-                        ovf <= {ovf_amp, ovf_lq, ovf_li, ovf_mix_d};
+                        ovf <= {ovf_amp, ovf_ml};
                     end
                 end
             end
-            /* verilator lint_off UNUSEDSIGNAL */
-            wire unused_ok = lv_q;
-            /* verilator lint_on UNUSEDSIGNAL */
         end else begin : g_ser
             // ---- serial: one table read port, one shared multiplier, one two-channel iir ----
             localparam integer QBITS = LUT_BITS - 2;

@@ -2,7 +2,7 @@
 // controller keeping the drive mode at its resonance with a set amplitude. Per sample x (drive ADC):
 //   phase detector: cos, -sin of the NCO phase (nco_wave), mixers i = fit(R(x cos >> MIX_SHIFT)),
 //     q = fit(R(x msin >> MIX_SHIFT)) into DATA_W bits (the factor 2 is in MIX_SHIFT), one iir
-//     low-pass per channel (LPF_*, its own LPF_ROUNDING / LPF_OVERFLOW);
+//     low-pass per channel (LPF_*, its own LPF_ROUNDING / LPF_OVERFLOW): mix_lpf;
 //   every UPDATE_EVERY samples: CORDIC vectoring (cordic_vector), amp = fit(R(x_K INV_K >>
 //     AMP_SHIFT)), the phase error e = angle - PHASE_SET wrapped once into (-PI_WORD, PI_WORD] (the
 //     angle is within +-3.4 rad and PHASE_SET within +-pi, so one wrap suffices); while amp >= MIN_AMP
@@ -96,7 +96,6 @@ module drive #(
     output reg  [PHASE_BITS-1:0]     nco,
     output reg  [2*LPF_SECTIONS+4:0] ovf
 );
-    localparam integer MW = IN_W + NCO_W;          // mixer product
     localparam integer WW = DATA_W + 3;            // CORDIC work
     localparam integer AW = ANGLE_W + 2;           // CORDIC angle
     localparam integer EW = AW + 1;                // the phase error before its wrap
@@ -133,7 +132,6 @@ module drive #(
     reg  [DATA_W-1:0]     amp_q;
     reg  [ANGLE_W-1:0]    err_q;
     reg  [FREQ_W-1:0]     f_q;
-    reg  [1:0]            ovf_mix_d;      // the mixers' flags of the sample in the low-pass
 
     // ---- phase detector: NCO, mixers, low-pass ----
     wire pend;                            // the low-pass outputs of the last sample: its update now
@@ -143,33 +141,15 @@ module drive #(
     nco_wave #(.PHASE_BITS(PHASE_BITS), .LUT_BITS(LUT_BITS), .LUT_W(LUT_W), .INTERP_BITS(INTERP_BITS),
                .TWO_PI(TWO_PI), .TWO_PI_W(TWO_PI_W), .CORR_SHIFT(CORR_SHIFT), .NCO_W(NCO_W), .ROUNDING(ROUNDING),
                .QSIN_FILE(QSIN_FILE)) u_wave (.phase(ph_in), .cos_o(cos_w), .msin_o(msin_w));
-    wire signed [MW-1:0] pi_ = $signed(x) * $signed(cos_w);
-    wire signed [MW-1:0] pq_ = $signed(x) * $signed(msin_w);
-    wire [DATA_W-1:0] mi, mq;
-    wire ovf_mi, ovf_mq;
-    fx_convert #(.IN_W(MW), .SHIFT(MIX_SHIFT), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
-                 .OVERFLOW(OVERFLOW)) u_mix_i (.x(pi_), .cin(1'b0), .y(mi), .ovf(ovf_mi));
-    fx_convert #(.IN_W(MW), .SHIFT(MIX_SHIFT), .ROUNDING(ROUNDING), .OUT_W(DATA_W), .OUT_SIGNED(1),
-                 .OVERFLOW(OVERFLOW)) u_mix_q (.x(pq_), .cin(1'b0), .y(mq), .ovf(ovf_mq));
-    always @(posedge clk) if (in_valid) ovf_mix_d <= {ovf_mq, ovf_mi};
-
     wire [DATA_W-1:0] li, lq;
-    wire [LPF_SECTIONS-1:0] ovf_li, ovf_lq;
-    /* verilator lint_off UNUSEDSIGNAL */
-    wire lv_q;                            // the same cycle as pend
-    /* verilator lint_on UNUSEDSIGNAL */
-    iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .ACOEF_W(LPF_ACOEF_W), .SHIFT_B(LPF_SHIFT_B),
-          .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
-          .OVERFLOW(LPF_OVERFLOW), .MAC_A_W(16), .MAC_B_W(16), .COEF_FILE(LPF_COEF_FILE), .ACOEF_FILE(LPF_ACOEF_FILE)) u_lpf_i
-        (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mi), .out_valid(pend), .y(li), .ovf(ovf_li),
-         .mac_in_valid(), .mac_in_ready(1'b0), .mac_a(), .mac_b(), .mac_na(), .mac_nb(),
-         .mac_out_valid(1'b0), .mac_p(32'd0));
-    iir #(.DATA_W(DATA_W), .SECTIONS(LPF_SECTIONS), .COEF_W(LPF_COEF_W), .ACOEF_W(LPF_ACOEF_W), .SHIFT_B(LPF_SHIFT_B),
-          .SHIFT_A(LPF_SHIFT_A), .OUT_SHIFT(LPF_OUT_SHIFT), .ACC_W(LPF_ACC_W), .ROUNDING(LPF_ROUNDING),
-          .OVERFLOW(LPF_OVERFLOW), .MAC_A_W(16), .MAC_B_W(16), .COEF_FILE(LPF_COEF_FILE), .ACOEF_FILE(LPF_ACOEF_FILE)) u_lpf_q
-        (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(), .x(mq), .out_valid(lv_q), .y(lq), .ovf(ovf_lq),
-         .mac_in_valid(), .mac_in_ready(1'b0), .mac_a(), .mac_b(), .mac_na(), .mac_nb(),
-         .mac_out_valid(1'b0), .mac_p(32'd0));
+    wire [2*LPF_SECTIONS+1:0] ovf_ml;     // {lpf_q, lpf_i, mix_q, mix_i} of the sample in pend
+    mix_lpf #(.IN_W(IN_W), .NCO_W(NCO_W), .DATA_W(DATA_W), .MIX_SHIFT(MIX_SHIFT), .ROUNDING(ROUNDING),
+              .OVERFLOW(OVERFLOW), .LPF_SECTIONS(LPF_SECTIONS), .LPF_COEF_W(LPF_COEF_W), .LPF_ACOEF_W(LPF_ACOEF_W),
+              .LPF_SHIFT_B(LPF_SHIFT_B), .LPF_SHIFT_A(LPF_SHIFT_A), .LPF_OUT_SHIFT(LPF_OUT_SHIFT),
+              .LPF_ACC_W(LPF_ACC_W), .LPF_ROUNDING(LPF_ROUNDING), .LPF_OVERFLOW(LPF_OVERFLOW),
+              .LPF_COEF_FILE(LPF_COEF_FILE), .LPF_ACOEF_FILE(LPF_ACOEF_FILE)) u_det
+        (.clk(clk), .rst(rst), .in_valid(in_valid), .x(x), .cos_i(cos_w), .msin_i(msin_w), .out_valid(pend),
+         .li(li), .lq(lq), .ovf(ovf_ml));
 
     // ---- the control update (every UPDATE_EVERY samples) ----
     wire upd = pend && (cnt == LAST);
@@ -281,7 +261,7 @@ module drive #(
                 f <= pll_upd ? f_c : f_q;
                 amp <= upd ? amp_c : amp_q;
                 phase <= upd ? e_w[ANGLE_W-1:0] : err_q;
-                ovf <= {pll_upd & ovf_f, ovf_dac, upd & ovf_amp, ovf_lq, ovf_li, ovf_mix_d};
+                ovf <= {pll_upd & ovf_f, ovf_dac, upd & ovf_amp, ovf_ml};
             end
             if (in_valid) ph_q <= ph_in;
         end
