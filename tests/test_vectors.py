@@ -45,6 +45,29 @@ def test_check_command_exit_codes(tmp_path: Path, capsys):
     assert "chain_paper002/rate.hex" in err and f"line {k + 1}" in err
 
 
+def test_check_compares_contents_not_the_configs_name(tmp_path: Path, capsys):
+    """The committed sets (vectors, generated headers), checked against the built-in config written
+    elsewhere and reformatted (parsed and dumped again: no comments, another layout), match: the
+    manifest's config name is a name, not content. One value changed and the check fails, naming the
+    first file it changes."""
+    import tomllib
+
+    from fxdsp.config import default_config_text, dumps
+
+    data = tomllib.loads(default_config_text())
+    moved = tmp_path / "elsewhere" / "mine.toml"
+    moved.parent.mkdir()
+    moved.write_text(dumps(data), encoding="utf-8")
+    assert moved.read_text() != default_config_text()
+    assert main(["vectors", "--config", str(moved), "--out", str(VECTORS), "--check"]) == 0
+    assert main(["hdl-gen", "--config", str(moved), "--out", str(ROOT / "hdl" / "gen"), "--check"]) == 0
+    data["bias_subtract"]["rounding"] = "floor" if data["bias_subtract"].get("rounding") != "floor" else "half_up"
+    moved.write_text(dumps(data), encoding="utf-8")
+    capsys.readouterr()
+    assert main(["vectors", "--config", str(moved), "--out", str(VECTORS), "--check"]) == 1
+    assert "differs: bias_subtract/y.hex" in capsys.readouterr().err
+
+
 def test_check_reports_missing_and_unexpected_files(tmp_path: Path, files):
     copy = tmp_path / "v"
     shutil.copytree(VECTORS, copy)
