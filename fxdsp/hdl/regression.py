@@ -336,6 +336,14 @@ def markdown(report: dict) -> str:
                  for s in report["streams"]]
         L.append(f"| {r['dut']} | {r['module']} | {r['samples']} | {cps} | " + " | ".join(cells)
                  + f" | {'pass' if r['passed'] else '**FAIL**'} |")
+    loops = [(r["dut"], r["streams"][LOOP_STREAM]) for r in report["duts"] if LOOP_STREAM in r["streams"]]
+    if loops:
+        L += ["", "Closed loops on their modes (every output word of every sample against the model's closed loop):", ""]
+        for dut, v in loops:
+            lock = f", the model locks at {v['lock_s']:g} s" if v.get("lock_s") is not None else ""
+            speed = f", {v['samples_per_s']} samples/s" if v.get("samples_per_s") else ""
+            L.append(f"- {dut}: {v['samples']} samples of {v.get('seconds_simulated', 0):g} s from power-on "
+                     f"{'bit for bit' if v['ok'] else 'until the first wrong word'}{lock}{speed}")
     failing = [r for r in report["duts"] if not r["passed"]]
     if failing:
         L += ["", "## First mismatches", ""]
