@@ -139,6 +139,7 @@ FILE_SECONDS = {
     "hdl/test_hdl_random.py": 91,
     "hdl/test_hdl_golden.py": 61,
     "hdl/test_rtl_command.py": 59,
+    "hdl/test_hdl_loop.py": 40,
     "hdl/test_formal.py": 51,
     "hdl/test_hdl_long_blocks.py": 39,
     "test_wheel.py": 38,

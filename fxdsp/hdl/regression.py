@@ -338,7 +338,8 @@ def markdown(report: dict) -> str:
                  + f" | {'pass' if r['passed'] else '**FAIL**'} |")
     loops = [(r["dut"], r["streams"][LOOP_STREAM]) for r in report["duts"] if LOOP_STREAM in r["streams"]]
     if loops:
-        L += ["", "Closed loops on their modes (every output word of every sample against the model's closed loop):", ""]
+        L += ["", "Closed loops on their modes (every output word of every sample against the model's closed "
+              "loop):", ""]
         for dut, v in loops:
             lock = f", the model locks at {v['lock_s']:g} s" if v.get("lock_s") is not None else ""
             speed = f", {v['samples_per_s']} samples/s" if v.get("samples_per_s") else ""

@@ -488,13 +488,26 @@ module iir #(
                 if (upd)   ram_e[{slot, ~ph_s}] <= e_c;
             end
 
+            // a channel's output slice loads in the S_UPD of its last section: the enable registered in
+            // S_FIT (ch and sec hold from there to S_UPD), so each slice's clock enable is a flip-flop, not
+            // a decode of the state (that decode's fan-out to the 3 x 24 enables was paper 002's slowest
+            // placed path, 37 MHz: 6.9 ns of logic, 20 ns of routing)
+            reg [CHANNELS-1:0] y_ld;
             integer i;
+            always @(posedge clk) begin
+                for (i = 0; i < CHANNELS; i = i + 1)
+                    y_ld[i] <= !rst && (st == S_FIT) && ch_done && (CHANNELS == 1 || ch_n == i);
+                if (rst) y <= {(CHANNELS*DATA_W){1'b0}};
+                else
+                    for (i = 0; i < CHANNELS; i = i + 1)   // the channel's output (constant slices)
+                        if (y_ld[i]) y[i*DATA_W +: DATA_W] <= out_q;
+            end
             always @(posedge clk) begin
                 if (rst) begin
                     st <= S_IDLE; sec <= {SEC_W{1'b0}}; ch <= {CH_W{1'b0}}; k <= K_B0; rk <= K_B0;
                     lo_go <= 1'b0; hi_go <= 1'b0; sum_lo <= {LO_W{1'b0}}; sum_hi <= {HI_W{1'b0}};
                     ra <= {RA_W{1'b0}}; rom_ok <= 1'b0; ovf_w <= {SLOTS{1'b0}};
-                    out_valid <= 1'b0; y <= {(CHANNELS*DATA_W){1'b0}}; ovf <= {SLOTS{1'b0}};
+                    out_valid <= 1'b0; ovf <= {SLOTS{1'b0}};
                     ph <= {SLOTS{1'b0}}; vld0 <= {SLOTS{1'b0}}; vld1 <= {SLOTS{1'b0}};
                 end else begin
                     out_valid <= 1'b0;
@@ -537,8 +550,6 @@ module iir #(
                             else      vld1[slot] <= 1'b1;
                             v <= out_q;
                             ovf_w[slot] <= ovf_q;
-                            for (i = 0; i < CHANNELS; i = i + 1)   // the channel's output (constant slices)
-                                if (ch_done && (CHANNELS == 1 || ch_n == i)) y[i*DATA_W +: DATA_W] <= out_q;
                             if (all_done) begin
                                 st <= S_IDLE; out_valid <= 1'b1; ovf <= ovf_n;
                             end else if (ch_done) begin   // the next channel, from its section 0
