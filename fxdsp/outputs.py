@@ -31,9 +31,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import InputError
 from .interrupts import interrupts_held
 
 IN, IN_DIR, OUT_FILE, OUT_DIR = "in", "in-dir", "out-file", "out-dir"
+_WHAT = {IN: "file to read", IN_DIR: "folder to read", OUT_FILE: "file to write", OUT_DIR: "folder to write into"}
 DIRECT_ENV = "FXDSP_UNSAFE_DIRECT_WRITES"
 
 
@@ -79,8 +81,14 @@ def check_paths(args, paths) -> None:
         value = getattr(args, option.lstrip("-").replace("-", "_"), None)
         if value is None or value == "-":
             continue
-        path = Path(value)
         raw = str(value)
+        # "" and "  " are no paths (pathlib reads "" as ".": the command would write into the
+        # current folder); a NUL no file system accepts
+        if not raw.strip():
+            raise InputError(f"{option}: an empty path ({raw!r}); name a {_WHAT[kind]}")
+        if "\0" in raw:
+            raise InputError(f"{option}: {raw!r} holds a NUL character, which no path can")
+        path = Path(value)
         # pathlib reads "f.txt/." as "f.txt": a name that ends like a folder is not a file
         if kind in (IN, OUT_FILE) and (raw.endswith(("/", "/.", "/..")) or raw in (".", "..")):
             raise ValueError(f"{option}: {raw} names a folder, expected a file")

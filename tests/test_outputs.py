@@ -302,3 +302,99 @@ def test_a_vector_set_removes_only_what_its_manifest_listed(tmp_path, capsys):
     assert main(["vectors", "--out", str(out)]) == 0
     assert not (out / "gone" / "x.hex").exists() and (out / "stray.hex").exists()
     capsys.readouterr()
+
+
+# ---- every path option of every command, from the parsers: an empty or blank value --------------
+def _leaves(argv: list[str], parser):
+    """(command words, parser) of every runnable command below ``parser`` (``sweep rtl`` ...)."""
+    import argparse
+
+    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not subs:
+        yield argv, parser
+        return
+    for word, sp in subs[0].choices.items():
+        yield from _leaves(argv + [word], sp)
+
+
+def _paths_of(module, sp, flags: bool) -> dict:
+    """The command's PATHS (a function of its arguments: called with the parser's defaults, or with
+    every boolean flag set: --check turns an output into an input)."""
+    import argparse
+
+    paths = getattr(module, "PATHS", {})
+    if not callable(paths):
+        return paths
+    return paths(argparse.Namespace(**{a.dest: (True if flags and isinstance(a, argparse._StoreTrueAction)
+                                                 else a.default) for a in sp._actions}))
+
+
+def _path_options():
+    """(command words, option, kind, parser, module) of every path option of every command, read from
+    the parsers (every command and subcommand) and their PATHS tables."""
+    from fxdsp.cli import build_parser
+
+    import argparse
+
+    out = []
+    for name in COMMANDS:
+        top = next(a for a in build_parser(load=[name])._actions if isinstance(a, argparse._SubParsersAction))
+        module = top.choices[name].get_default("_module")   # a subcommand's too (``sweep rtl``)
+        for words, sp in _leaves([name], top.choices[name]):
+            options = {a.option_strings[0] if a.option_strings else a.dest for a in sp._actions}
+            table = {**_paths_of(module, sp, False), **_paths_of(module, sp, True)}
+            out += [(words, o, k, sp, module) for o, k in table.items() if o in options]
+    return out
+
+
+def _argv_for(words, sp, module, probe: str, value: str, tmp: Path) -> list[str]:
+    """A command line with every required argument given a value of its kind and the probed option
+    ``value``."""
+    import argparse
+
+    from fxdsp.outputs import IN, IN_DIR
+
+    paths = _paths_of(module, sp, False)
+    (tmp / "in.txt").write_text("x\n")
+    (tmp / "in_dir").mkdir(exist_ok=True)
+    argv = list(words)
+    for a in sp._actions:
+        if isinstance(a, (argparse._HelpAction, argparse._SubParsersAction)):
+            continue
+        opt = a.option_strings[0] if a.option_strings else a.dest
+        if opt != probe and not a.required and a.option_strings:
+            continue
+        if opt == probe:
+            v = value
+        elif opt in paths:
+            v = str(tmp / ("in.txt" if paths[opt] == IN else "in_dir" if paths[opt] == IN_DIR else f"out_{a.dest}"))
+        elif a.choices:
+            v = str(list(a.choices)[0])
+        else:
+            v = "1"
+        argv += ([opt] if a.option_strings else []) + [v]
+    return argv
+
+
+@pytest.mark.parametrize("value", ["", "   "])
+def test_an_empty_path_is_refused_by_every_option_of_every_command(tmp_path, monkeypatch, capsys, value):
+    """Generated from the parsers (a new command or path option is covered without a new probe):
+    an empty or blank path is one line naming the option, exit 2, before any work, nothing written
+    (pathlib reads "" as ".": unchecked, `--out ''` wrote the vectors into the current folder)."""
+    cases = _path_options()
+    assert len({tuple(c[0]) for c in cases}) >= 12 and any(c[2] == "out-dir" for c in cases)
+    monkeypatch.chdir(tmp_path)
+    for words, option, kind, sp, module in cases:
+        work = tmp_path / "_".join([*words, option.strip("-")])
+        work.mkdir()
+        argv = _argv_for(words, sp, module, option, value, work)
+        before = snapshot(tmp_path)
+
+        def work_started(args, argv=argv):
+            raise AssertionError(f"{argv}: the work started with an empty path")
+
+        monkeypatch.setattr(module, "run", work_started)
+        assert main(argv) == 2, argv
+        err = one_line_error(capsys)
+        assert option in err and "empty path" in err, (argv, err)
+        assert snapshot(tmp_path) == before, argv
