@@ -135,12 +135,12 @@ def failing_writes(k: int | None, exc: type[BaseException]):
 # the run has compiled the numba kernels its installed package loads (test_wheel._seed_numba_cache).
 # A wrong or stale number costs wall time, never a test.
 FILE_SECONDS = {
-    "hdl/test_hdl_corners.py": 97,
-    "hdl/test_hdl_random.py": 91,
-    "hdl/test_hdl_golden.py": 61,
+    "hdl/test_hdl_corners.py": 80,
+    "hdl/test_hdl_random.py": 75,
+    "hdl/test_hdl_golden.py": 55,
     "hdl/test_rtl_command.py": 59,
-    "hdl/test_hdl_loop.py": 40,
-    "hdl/test_formal.py": 51,
+    "hdl/test_hdl_loop.py": 35,
+    "hdl/test_formal.py": 36,
     "hdl/test_hdl_long_blocks.py": 39,
     "test_wheel.py": 38,
     "test_sweep.py": 38,
@@ -155,7 +155,7 @@ FILE_SECONDS = {
     "test_budget.py": 16,
     "test_fixed_properties.py": 16,
     "test_drive.py": 30,
-    "hdl/test_mutation.py": 14,
+    "hdl/test_mutation.py": 44,
     "test_fixed_mutation.py": 13,
     "test_outputs.py": 12,
     "test_config_errors.py": 9,

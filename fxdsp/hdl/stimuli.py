@@ -16,7 +16,7 @@ from .schedule import cycles_per_sample
 # shorter; a chain's from its one-sample-per-clock schedule, CHAIN_CYCLES cycles in all
 # (demod 1200: its low-passes settle in ~80 samples; Icarus runs its one-sample-per-clock RTL at ~1.7 k
 # samples/s)
-MAX_SAMPLES = {"demod": 1200, "iir": 1500, "lag": 2000}
+MAX_SAMPLES = {"demod": 1200, "iir": 1500, "lag": 2000, "drive": 1500}
 CHAIN_CYCLES = 40_000
 # A serial variant takes 12-350 cycles per sample and Icarus simulates ~10-15k of its cycles per
 # second (it, not the Python driver, is the limit), so its Python-driven Icarus streams are cut to a
