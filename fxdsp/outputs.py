@@ -2,10 +2,11 @@
 
 Every command declares its path options in a module-level ``PATHS`` table (option dest -> kind:
 ``IN`` an input file, ``IN_DIR`` an input folder, ``OUT_FILE`` a file it writes, ``OUT_DIR`` a folder
-it writes into). :func:`check_paths` validates them all before the command does any work: an output
-must be of the right kind (a file target is not a folder, a folder target not a file), the folder
-that holds it must exist and be writable, and no output may be an input or another output. A bad
-path is one :class:`ValueError` naming the option.
+it writes into). :func:`check_paths` validates them all before the command does any work: no path
+is empty, blank or holds a NUL; an input file is UTF-8 text (not compressed, not binary: the file and
+the byte named); an output must be of the right kind (a file target is not a folder, a folder
+target not a file), the folder that holds it must exist and be writable, and no output may be an
+input or another output. A bad path is one :class:`ValueError` naming the option.
 
 Writing goes through :func:`staged`: each output is written to a staging folder created beside its
 target (same file system), and only when the whole command has succeeded are the staged files moved
@@ -21,6 +22,7 @@ tests use it to show that they fail without the staging.
 
 from __future__ import annotations
 
+import codecs
 import json
 import math
 import os
@@ -70,6 +72,40 @@ def check_output(path: Path, kind: str, option: str) -> None:
         raise ValueError(f"{option}: cannot write {path}: {writable} is not writable")
 
 
+# compressed files a user may hand over for a text one (a log straight from the logger's archive)
+_COMPRESSED = ((b"\x1f\x8b", "gzip-compressed"), (b"PK\x03\x04", "a zip archive"), (b"\xfd7zXZ\x00", "xz-compressed"),
+               (b"\x28\xb5\x2f\xfd", "zstd-compressed"), (b"BZh", "bzip2-compressed"))
+_CHUNK = 1 << 20
+
+
+def check_text_input(path: Path, option: str) -> None:
+    """InputError naming ``option`` and the file when an input file is not UTF-8 text (every input
+    of the commands is: TOML, CSV, JSON): compressed, binary (a NUL byte), or not decodable, with
+    the byte where it fails. Checked whole, before any work, so no reader later fails on it without
+    saying which file."""
+    with open(path, "rb") as f:
+        head = f.read(10)
+        for magic, what in _COMPRESSED:
+            if head.startswith(magic) and (magic != b"BZh" or head[3:4].isdigit() and head[4:10] == b"1AY&SY"):
+                raise InputError(f"{option}: {path} is {what}; expected text (decompress it first)")
+        f.seek(0)
+        decoder = codecs.getincrementaldecoder("utf-8")()
+        offset = 0
+        while True:
+            chunk = f.read(_CHUNK)
+            nul = chunk.find(b"\0")
+            if nul >= 0:
+                raise InputError(f"{option}: {path} is binary (a NUL byte at byte {offset + nul}); expected text")
+            try:
+                decoder.decode(chunk, final=not chunk)
+            except UnicodeDecodeError as exc:
+                raise InputError(f"{option}: {path} is not UTF-8 text ({exc.reason} at byte {offset + exc.start})") \
+                    from None
+            if not chunk:
+                return
+            offset += len(chunk)
+
+
 def check_paths(args, paths) -> None:
     """Validate every path option of a command before it runs (see the module docstring). ``paths``
     maps the option as the user types it (``--out``, or a positional's name) to its kind; it may be a
@@ -95,6 +131,8 @@ def check_paths(args, paths) -> None:
         if kind == IN:
             if path.is_dir():
                 raise ValueError(f"{option}: {path} is a directory, expected a file")
+            if path.is_file():
+                check_text_input(path, option)
         elif kind == IN_DIR:
             if path.exists() and not path.is_dir():
                 raise ValueError(f"{option}: {path} is not a directory")
