@@ -88,6 +88,10 @@ def check_text_input(path: Path, option: str) -> None:
         for magic, what in _COMPRESSED:
             if head.startswith(magic) and (magic != b"BZh" or head[3:4].isdigit() and head[4:10] == b"1AY&SY"):
                 raise InputError(f"{option}: {path} is {what}; expected text (decompress it first)")
+        for bom, what in ((codecs.BOM_UTF32_LE, "UTF-32"), (codecs.BOM_UTF32_BE, "UTF-32"),
+                          (codecs.BOM_UTF16_LE, "UTF-16"), (codecs.BOM_UTF16_BE, "UTF-16")):
+            if head.startswith(bom):
+                raise InputError(f"{option}: {path} is {what} text; expected UTF-8 (save it as UTF-8)")
         f.seek(0)
         decoder = codecs.getincrementaldecoder("utf-8")()
         offset = 0

@@ -401,14 +401,15 @@ def test_an_empty_path_is_refused_by_every_option_of_every_command(tmp_path, mon
 
 
 def test_an_input_that_is_not_text_is_named_by_every_input_option(tmp_path, monkeypatch, capsys):
-    """Every input file option of every command (from the parsers) reads text: a gzip-compressed
-    file, a binary one and one in Latin-1 are each one line naming the option and the file, exit 2,
-    before any work (a reader's UnicodeDecodeError named neither)."""
+    """Every input file option of every command (from the parsers) reads UTF-8 text: a
+    gzip-compressed file, a binary one, one in Latin-1 and one in UTF-16 are each one line naming the
+    option and the file, exit 2, before any work (a reader's UnicodeDecodeError named neither)."""
     import gzip
 
     bad = {"gzip-compressed": gzip.compress(b"t_s,temp_c\n0,25\n" * 50),
            "binary": b"t_s,temp_c\n" + bytes(range(256)),
-           "not UTF-8": "t_s,temp_c\n0,25 \u00b0C\n".encode("latin-1")}
+           "not UTF-8": "t_s,temp_c\n0,25 \u00b0C\n".encode("latin-1"),
+           "UTF-16": "t_s,temp_c\n0,25\n".encode("utf-16")}
     cases = [c for c in _path_options() if c[2] == "in"]
     assert len({c[1] for c in cases}) >= 5
     for words, option, kind, sp, module in cases:

@@ -195,9 +195,8 @@ def ramp(drive: Drive, rate_full_scale_dps: float, lo_c: float = RAMP[0], hi_c: 
     steps = int(math.ceil((hold + ramp_s) / STEP_S))
     t = (np.arange(steps) + 0.5) * STEP_S
     temps = np.interp(t, [0.0, hold, hold + ramp_s], [lo_c, lo_c, hi_c])
-    out = _budget(drive, res, f"ramp {lo_c:g} .. {hi_c:g} C at {c_per_min:g} C/min", temps, steps * STEP_S, hold,
-                  seed, rate_full_scale_dps, progress)
-    return out
+    return _budget(drive, res, f"ramp {lo_c:g} .. {hi_c:g} C at {c_per_min:g} C/min", temps, steps * STEP_S, hold,
+                   seed, rate_full_scale_dps, progress)
 
 
 def format_budget(b: DriveBudget) -> str:

@@ -77,6 +77,9 @@ def run_loop_cosim(design, name: str, d: Path, models: Path | None, temp_c: floa
             "outputs": list(drive.outputs), "dac_w": drive.dac_format.wl, "in_w": drive.in_format.wl,
             "fs_hz": drive.fs_hz}
     summary = run_cocotb_test(design, name, LOOP_DRIVER, spec, d, models, None, sim, rtl)
+    # a simulation that ended without its summary (a crash) ran no sample that was compared
+    for key, empty in (("samples", 0), ("mismatch", None), ("codes_match", False)):
+        summary.setdefault(key, empty)
     summary["samples_per_s"] = (summary["samples"] / summary["seconds"]) if summary.get("seconds") else None
     summary["expected_samples"] = twin.n
     return summary

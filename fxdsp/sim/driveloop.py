@@ -30,6 +30,12 @@ STEP_S = 0.01   # the temperature (and resonance) profile's step
 MAX_KEPT = 50_000_000   # ADC codes a run keeps at most (400 MB)
 
 
+def records_of(drive: Drive, record_every: int | None) -> int:
+    """Samples per record of a closed-loop run (default: one per control update); the run's chunks
+    follow it, so a run replayed (:class:`ModeTwin`) must use the same."""
+    return int(record_every or drive.update_every)
+
+
 def samples_per_step(fs_hz: float) -> int:
     """Samples of one profile step at ``fs_hz``."""
     return max(1, round(fs_hz * STEP_S))
@@ -156,12 +162,13 @@ class ModeTwin:
     reads the model's ADC codes. Per sample: :meth:`code`, then :meth:`drive` with the DAC word."""
 
     def __init__(self, drive: Drive, resonator: DriveResonator, temp_c, seconds: float, seed: int = 1,
-                 samples_per_temp: int | None = None):
+                 samples_per_temp: int | None = None, record_every: int | None = None):
+        """The arguments of the :func:`closed_loop` run to replay (its chunks follow its records)."""
         fs = drive.fs_hz
         self.n = int(round(seconds * fs))
         self.per_step = int(samples_per_temp or samples_per_step(fs))
         temps, freqs = _profile(temp_c, None)
-        rec = drive.update_every
+        rec = records_of(drive, record_every)
         self._chunks = list(_chunks(drive, resonator, temps, freqs, self.n, self.per_step, rec, seed))
         fi = drive.in_format
         self._adc = (float(2**fi.fl), fi.min_int, fi.max_int)
@@ -203,7 +210,7 @@ def closed_loop(drive: Drive, resonator: DriveResonator, temp_c, seconds: float,
     fs = drive.fs_hz
     n = int(round(seconds * fs))
     per_step = int(samples_per_temp or samples_per_step(fs))
-    rec = int(record_every or drive.update_every)
+    rec = records_of(drive, record_every)
     if rec < 1 or n < rec:
         raise ValueError(f"record_every: {rec} must be within 1..{n} samples")
     if keep_codes and n > MAX_KEPT:

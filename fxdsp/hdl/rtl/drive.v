@@ -129,9 +129,6 @@ module drive #(
     reg  signed [63:0]    integ_f, integ_a;
     reg  [GAIN_W-1:0]     gain;
     reg  [CW-1:0]         cnt;            // samples since the last update
-    reg  [DATA_W-1:0]     amp_q;
-    reg  [ANGLE_W-1:0]    err_q;
-    reg  [FREQ_W-1:0]     f_q;
 
     // ---- phase detector: NCO, mixers, low-pass ----
     wire pend;                            // the low-pass outputs of the last sample: its update now
@@ -235,8 +232,6 @@ module drive #(
             integ_f <= 64'sd0; integ_a <= 64'sd0;
             gain <= {GAIN_W{1'b0}};
             cnt <= {CW{1'b0}};
-            amp_q <= {DATA_W{1'b0}}; err_q <= {ANGLE_W{1'b0}};
-            f_q <= HZ_C[FREQ_W-1:0];
             out_valid <= 1'b0;
             dac <= {DAC_W{1'b0}}; f <= HZ_C[FREQ_W-1:0]; amp <= {DATA_W{1'b0}}; phase <= {ANGLE_W{1'b0}};
             ovf <= {(2*LPF_SECTIONS+5){1'b0}};
@@ -247,20 +242,18 @@ module drive #(
                 ftw <= ftw_u;
                 gain <= gain_u[GAIN_W-1:0];
                 cnt <= upd ? {CW{1'b0}} : cnt + {{(CW-1){1'b0}}, 1'b1};
+                // f, amp and phase are the model's held words: the outputs hold them between updates
                 if (pll_upd) begin
                     integ_f <= integ_f_n;
-                    f_q <= f_c;
+                    f <= f_c;
                 end
                 if (upd) begin
                     integ_a <= integ_a_n;
-                    amp_q <= amp_c;
-                    err_q <= e_w[ANGLE_W-1:0];
+                    amp <= amp_c;
+                    phase <= e_w[ANGLE_W-1:0];
                 end
                 dac <= dac_c;
                 nco <= ph_q;
-                f <= pll_upd ? f_c : f_q;
-                amp <= upd ? amp_c : amp_q;
-                phase <= upd ? e_w[ANGLE_W-1:0] : err_q;
                 ovf <= {pll_upd & ovf_f, ovf_dac, upd & ovf_amp, ovf_ml};
             end
             if (in_valid) ph_q <= ph_in;
