@@ -204,9 +204,9 @@ def test_every_chain_gets_a_generated_top_and_shares_engines_by_wiring_and_forma
         return {p.name for p in hh.rtl_sources(None, design, tmp_path) if p.name.startswith("chain_")}
 
     d = build()
-    # a chain with a drive loop has no top until the loop has RTL
+    # a chain with a block without RTL has no top: the demodulator referenced to the drive loop's NCO
     assert tops(d) == {f"{c}.v" for c in d.chains if d.instances[c].hardware} == {
-        "chain_paper000.v", "chain_paper001.v", "chain_paper002.v"}
+        "chain_paper000.v", "chain_paper001.v", "chain_paper001_loop.v", "chain_paper002.v"}
     assert {c for c in d.chains if not d.instances[c].hardware} == {"chain_paper002_drive"}
     shares = engine_sharing(d, "chain_paper002")
     assert {g: (s.kind, s.host) for g, s in shares.items()} == {"piecewise.bias": ("set", "piecewise.sf"),
@@ -222,7 +222,7 @@ def test_every_chain_gets_a_generated_top_and_shares_engines_by_wiring_and_forma
     assert engine_sharing(split, "chain_paper002") == {}
     assert " u_piecewise_bias (" in hh.hp.generated_tops(split)["chain_paper002.v"]
     data = copy.deepcopy(DATA)
-    del data["chain"]["paper001"]
+    del data["chain"]["paper001"], data["chain"]["paper001_loop"]
     data["piecewise"]["bias001"]["temp_format"] = str(d.blocks["freq2temp"].temp_format)
     data["bias_subtract001"]["bias_format"] = str(d.blocks["piecewise_bias001"].out_format)
     without = build(Config(data, source="<test>"))

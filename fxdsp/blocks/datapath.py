@@ -94,6 +94,8 @@ class RtlPorts:
     mac_bundle: bool = False    # the shared-multiplier bundle (mac_*, fx_mac_port): tied off on its own multiplier
     aux: bool = False           # the auxiliary low-pass channel (aux_*, read only with AUX_LPF = 1)
     second_set: bool = False    # a second coefficient set's outputs (out_valid_1, y_1, ovf_1; SETS = 2)
+    reference: bool = False     # the reference input and wave pass (ref_phase: phase_bits bits, wave_*), unused:
+                                # a demodulator on its own NCO (REF = 0, WAVE = 0)
     signed: tuple[str, ...] = ()   # ports the RTL treats as signed (sign-extended, compared, subtracted):
                                    # the model allows an unsigned format there, the RTL does not
 

@@ -293,7 +293,7 @@ class DemodDatapath(Datapath):
     """Fields in the order of the ``demod`` RTL module's parameters."""
 
     MODULE = "demod"
-    RTL = RtlPorts(ready=True, serial=True, mac_bundle=True, aux=True)
+    RTL = RtlPorts(ready=True, serial=True, mac_bundle=True, aux=True, reference=True)
     LATENCY = 2
 
     @staticmethod

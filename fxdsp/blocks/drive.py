@@ -56,7 +56,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, product_format, quantize
 from ..fixed.kernels import convert, shift_right_round
 from .base import Block, corner_codes
-from .datapath import Datapath, OvfField, Rom, RtlPorts, const, info, nested
+from .datapath import Datapath, OvfField, Rom, RtlPorts, const, info, limbs, nested
 from .demod import INV_K_FORMAT, TWO_PI_FORMAT, Nco, _nco_wave, cordic_one, cordic_words, mixer_format
 from .iir import Iir, IirDatapath, df1_cascade_step
 
@@ -360,8 +360,46 @@ class DriveDatapath(Datapath):
     """The drive loop's arithmetic (fields in the order of its future RTL module's parameters)."""
 
     MODULE = "drive"
-    RTL = RtlPorts(signed=("x", "dac", "f", "amp", "phase"))   # hdl/rtl/drive.v: one sample per cycle (no serial variant yet)
+    RTL = RtlPorts(ready=True, serial=True, mac_bundle=True, signed=("x", "dac", "f", "amp", "phase"))   # hdl/rtl/drive.v
     LATENCY = 2
+
+    @staticmethod
+    def controller_operands(p: dict) -> tuple[tuple[int, int], ...]:
+        """The serial variant's (ARCH = 1) own products, (a, b) bits each in the order drive.v issues
+        them: KP_F e, KI_F e, KP_A ea, KI_A ea, ftw ADVANCE, df HZ_COEF, gain -sin' (e ANGLE_W + 3
+        bits, ea DATA_W + 2, ftw and df within FTW_CENTER +- LOCK_RANGE, the constants at their own
+        width, at least 2)."""
+        ew, aw = p["ANGLE_W"] + 3, p["DATA_W"] + 2
+        fw = max(_sbits(p["FTW_CENTER"] + p["LOCK_RANGE"]), _sbits(p["FTW_CENTER"] - p["LOCK_RANGE"]))
+        c = lambda k: max(2, _sbits(p[k]))  # noqa: E731
+        return ((ew, c("KP_F")), (ew, c("KI_F")), (aw, c("KP_A")), (aw, c("KI_A")), (fw, c("ADVANCE")),
+                (_sbits(p["LOCK_RANGE"]), c("HZ_COEF")), (p["GAIN_W"] + 1, p["NCO_W"]))
+
+    @staticmethod
+    def serial_cycles(p: dict, unroll: int = 1) -> int:
+        """hdl/rtl/drive.v, ARCH = 1, the same on every sample: the serial demodulator's pass (its
+        cycles, demod.v, on the loop's parameters), its wave pass and the cycle after (3 N + 13), the
+        controller's seven products on their own limb counts and 25 cycles of its own (5 of them the
+        pipelined PIs')."""
+        from .demod import DemodDatapath
+
+        n = limbs(*DemodDatapath._mixer_operands(p))
+        products = sum(limbs(a, b) for a, b in DriveDatapath.controller_operands(p))
+        return DemodDatapath.serial_cycles(p) + 3 * n + 13 + products + 25
+
+    @staticmethod
+    def mac_operands(p: dict) -> tuple[int, int]:
+        """The serial variant's multiplier (ENG_A_W x ENG_B_W): its detector's and its own products."""
+        return p["ENG_A_W"], p["ENG_B_W"]
+
+    @staticmethod
+    def engine_widths(p: dict) -> tuple[int, int]:
+        """ENG_A_W, ENG_B_W: the widest a and b of the detector's products (the serial demodulator's
+        bundle, :meth:`DemodDatapath.mac_operands`) and of the controller's, in whole 16-bit limbs."""
+        from .demod import DemodDatapath
+
+        ops = (DemodDatapath.mac_operands(p), *DriveDatapath.controller_operands(p))
+        return tuple(16 * -(-max(o[k] for o in ops) // 16) for k in (0, 1))
 
     in_w: int
     data_w: int
@@ -405,12 +443,20 @@ class DriveDatapath(Datapath):
     hz_shift: int
     freq_w: int
     min_amp: int = const()       # the PLL holds below this amplitude (data_format)
+    eng_a_w: int                 # the serial variant's multiplier: a and b operands, whole limbs
+    eng_b_w: int
     qsin: Rom
     atan: Rom
     data_format: Format = info()
     dac_format: Format = info()
     freq_format: Format = info()
     ovf: tuple = info()
+
+
+def _sbits(v: int) -> int:
+    """Bits of a 64-bit two's-complement constant, sign included (drive.v's sbits)."""
+    v = v - (1 << 64) if v >= 1 << 63 else v
+    return max(1, (v if v >= 0 else ~v).bit_length() + 1)
 
 
 def hz_words(fs_hz: float, phase_bits: int, ftw_center: int, lock_range: int, freq_format: Format,
@@ -500,6 +546,13 @@ class Drive(Block):
                              f"{f_hz + lock_range_hz} Hz")
         lpf_dp = lpf.datapath
         lpf_ovf = lambda ch: tuple(OvfField(f"lpf_{ch}.{f.counter}", f.width) for f in lpf_dp.ovf)  # noqa: E731
+        widths = dict(IN_W=in_format.wl, DATA_W=data_format.wl, INTERP_BITS=nco.interp_bits, TWO_PI_W=TWO_PI_FORMAT.wl,
+                      NCO_W=nco.nco_format.wl, INV_K_W=INV_K_FORMAT.wl, MIX_SHIFT=mix.fl - data_format.fl,
+                      AMP_SHIFT=cordic.amp_format.fl - data_format.fl, LPF_ACOEF_W=lpf_dp.acoef_w,
+                      LPF_OUT_SHIFT=lpf_dp.out_shift, ANGLE_W=angle_format.wl, FTW_CENTER=nco.ftw, LOCK_RANGE=lock,
+                      KP_F=kp_f, KI_F=ki_f, KP_A=kp_a, KI_A=ki_a, ADVANCE=advance, HZ_COEF=hz_coef,
+                      GAIN_W=gain_format.wl)
+        eng_a_w, eng_b_w = DriveDatapath.engine_widths(widths)
         self.datapath = DriveDatapath(
             in_w=in_format.wl, data_w=data_format.wl, phase_bits=nco.phase_bits, lut_bits=nco.lut_bits,
             lut_w=nco.lut_format.wl, interp_bits=nco.interp_bits, two_pi=nco.two_pi, two_pi_w=TWO_PI_FORMAT.wl,
@@ -511,7 +564,7 @@ class Drive(Block):
             kp_a=kp_a, ki_a=ki_a, pi_shift_a=sh_a, gain_w=gain_format.wl, gain_max=q(gain_max, gain_format),
             advance=advance, advance_bits=advance_bits, dac_w=dac_format.wl, dac_shift=gain_prod.fl - dac_format.fl,
             hz_center=hz_center, hz_coef=hz_coef, hz_shift=hz_shift, freq_w=freq_format.wl, min_amp=q(pll_min_amp, data_format),
-            qsin=Rom(nco.qsin, nco.lut_format.wl), atan=cordic.atan,
+            eng_a_w=eng_a_w, eng_b_w=eng_b_w, qsin=Rom(nco.qsin, nco.lut_format.wl), atan=cordic.atan,
             data_format=data_format, dac_format=dac_format, freq_format=freq_format,
             ovf=(OvfField("mix_i", 1), OvfField("mix_q", 1), *lpf_ovf("i"), *lpf_ovf("q"), OvfField("amp", 1),
                  OvfField("dac", 1), OvfField("f", 1)))

@@ -238,14 +238,16 @@ class _Top:
             extra = [", .SETS(2), .SETS_FILE(\"" + share.file + "\")",
                      ", " + ", ".join(f".{k}({literal(hinst, k[:-2], val)})"
                                       for k, val in set_parameters(self.design, share).items())]
-            ties = [f".out_valid_1({gv}_out_valid)", f".y_1({self.outs(g).get('y', '')})", f".ovf_1({gv}_ovf)"]
+            ties = [f".out_valid_1({gv}_out_valid)", f".y_1({self.outs(g).get('y', '')})", f".ovf_1({gv}_ovf)",
+                    *tie_offs(self.inst[hv], mac=False, used=("second_set",))]
             unused = (f"go_{gv}_q ^ own[{self.bundles.index(g)}];   // the guest's pass is the host's (its start, "
                       "its products on the host's bundle)")
             what = "its second coefficient set"
         else:
             extra = [", .AUX_LPF(SHARE), .AUX_COEF_FILE(\"" + share.file + "\")"]
             ties = [f".aux_in_valid(go_{gv}_q)", f".aux_x({self.src(g, 'x')})", f".aux_out_valid({gv}_out_valid)",
-                    f".aux_y({self.outs(g).get('y', '')})", f".aux_ovf({gv}_ovf)"]
+                    f".aux_y({self.outs(g).get('y', '')})", f".aux_ovf({gv}_ovf)",
+                    *tie_offs(self.inst[hv], mac=False, used=("aux",))]
             unused = f"own[{self.bundles.index(g)}];   // the channel's products are the host's (its bundle)"
             what = "the filter engine's third channel"
         shared = [f"    // ---- {g} on {h}'s engine in the serial variant ({what}, coefficient sets in {share.file}) ----",
@@ -488,19 +490,21 @@ def _check_port_names(net, text: str) -> None:
                                  f"cannot have a port of that name; rename it")
 
 
-def tie_offs(inst, mac: bool = True) -> list[str]:
+def tie_offs(inst, mac: bool = True, used: tuple[str, ...] = ()) -> list[str]:
     """The connections that tie off an instance's unused bundles (:class:`RtlPorts`), as a harness and
     a generated top write them (``mac``: the multiplier bundle too, for a block on a multiplier of its
-    own)."""
+    own; ``used``: the bundles the caller connects itself, "aux" or "second_set")."""
     rtl, out = inst.rtl, []
     if mac and rtl.mac_bundle:
         out += [".mac_in_valid()", ".mac_in_ready(1'b0)", ".mac_a()", ".mac_b()", ".mac_na()", ".mac_nb()",
                 ".mac_out_valid(1'b0)", ".mac_p(4'd0)"]
-    if rtl.aux:
+    if rtl.aux and "aux" not in used:
         w = inst.ports["i"].format.wl
         out += [".aux_in_valid(1'b0)", f".aux_x({w}'d0)", ".aux_out_valid()", ".aux_y()", ".aux_ovf()"]
-    if rtl.second_set:
+    if rtl.second_set and "second_set" not in used:
         out += [".out_valid_1()", ".y_1()", ".ovf_1()"]
+    if rtl.reference:
+        out += [f".ref_phase({inst.block.datapath.phase_bits}'d0)", ".wave_in_valid(1'b0)", ".wave_out_valid()", ".wave_msin()"]
     return out
 
 

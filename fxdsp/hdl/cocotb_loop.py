@@ -4,8 +4,10 @@ closed on the simulated resonator (cocotb 2.x API).
 ``spec.json`` (path in ``FXDSP_SPEC``) names the pickled :class:`fxdsp.sim.driveloop.ModeTwin` (the
 mode and its pick-off ADC, the model's own coefficients and noise) and the expected words (``.npz``:
 the model's closed loop, every ADC code it read and every output word, unsigned at the port's
-width). Per sample: the twin's ADC code goes in with in_valid (one cycle), the DUT's outputs are
-read at its out_valid, and the DAC word drives the twin for the next sample. The RTL's words are
+width). Per sample: the twin's ADC code goes in with in_valid (one cycle, once in_ready is high), the
+DUT's outputs are read at its out_valid, and the DAC word drives the twin for the next sample. A
+serial variant's out_valid comes its schedule's cycles after the sample (``quiet``: the cycles the
+driver sleeps through before it watches each edge; ``output_limit``: the most it waits in all). The RTL's words are
 compared with the model's sample by sample; the first sample where any differs ends the run (the
 loop has left the model's trajectory: later words differ because the earlier did). Summary: the
 samples run, cycles, seconds, the first mismatch and whether every ADC code was the model's.
@@ -21,11 +23,10 @@ import time
 import cocotb
 import numpy as np
 from cocotb.clock import Clock
-from cocotb.triggers import RisingEdge
+from cocotb.triggers import RisingEdge, Timer
 from cocotb.utils import get_sim_time
 
 PERIOD_NS = 10
-OUTPUT_LIMIT = 64   # cycles from a sample to its out_valid: a hung DUT
 
 
 def _u(handle) -> int:
@@ -41,6 +42,7 @@ async def closed_loop(dut):
         twin = pickle.load(f)
     exp = np.load(spec["expected"])
     outs, dac_w, in_w = spec["outputs"], int(spec["dac_w"]), int(spec["in_w"])
+    limit, quiet = int(spec["output_limit"]), int(spec["quiet"])
     n = min(int(spec["samples"]), twin.n)
     want = {p: exp[p] for p in outs}
     codes_want = exp["codes"]
@@ -67,13 +69,17 @@ async def closed_loop(dut):
         dut.x.value = code & in_mask
         dut.in_valid.value = 1
         await RisingEdge(dut.clk)
+        while int(dut.in_ready.value) != 1:   # taken at an edge with in_ready
+            await RisingEdge(dut.clk)
         dut.in_valid.value = 0
-        for _ in range(OUTPUT_LIMIT):
+        if quiet:   # to mid-cycle (never on an edge), then edge by edge
+            await Timer(quiet * PERIOD_NS - PERIOD_NS // 2, unit="ns")
+        for _ in range(limit - quiet):
             await RisingEdge(dut.clk)
             if int(dut.out_valid.value) == 1:
                 break
         else:
-            errors.append(f"sample {i}: no out_valid within {OUTPUT_LIMIT} cycles")
+            errors.append(f"sample {i}: no out_valid within {limit} cycles")
             break
         words = {p: _u(out_h[p]) for p in outs}
         ovf_seen += bin(_u(dut.ovf)).count("1")

@@ -21,7 +21,8 @@ import numpy as np
 from ..blocks.drive import Drive
 from ..sim.driveloop import ModeTwin, closed_loop, lock_time
 from ..sim.resonator import DriveResonator, resonator_for
-from .harness import run_cocotb_test, to_unsigned
+from .harness import is_serial, run_cocotb_test, to_unsigned
+from .schedule import member_cycles
 
 LOOP_DRIVER = "fxdsp.hdl.cocotb_loop"
 # the co-simulation's temperature: the end of the papers' range, where both papers' modes are
@@ -55,13 +56,22 @@ def expected_words(design, name: str, resonator: DriveResonator, temp_c: float, 
     return {"codes": run.adc_codes, **words}
 
 
+def _waits(design, name: str, extra: dict | None) -> dict:
+    """How long the driver waits for a sample's out_valid: ``quiet`` cycles it need not watch (a
+    serial variant's schedule, less 3), ``output_limit`` cycles in all."""
+    serial = is_serial(extra)
+    cycles = member_cycles(design, name, 1 if serial else 0)
+    return {"quiet": max(0, cycles - 3) if serial else 0, "output_limit": cycles + 64}
+
+
 def run_loop_cosim(design, name: str, d: Path, models: Path | None, temp_c: float = COSIM_TEMP_C, seconds: float = 0.05,
                    seed: int = 1, sim: str = "verilator", rtl: Path | None = None,
-                   resonator: DriveResonator | None = None) -> dict:
+                   resonator: DriveResonator | None = None, extra: dict | None = None) -> dict:
     """Close the RTL of drive loop ``name`` on its mode (default :func:`resonator_for`: the mode its
     table was designed for) at ``temp_c`` from power-on for ``seconds``, in the empty folder ``d``.
     Returns the co-simulation's summary (samples, cycles, seconds, errors, the first mismatch,
-    codes_match) with ``samples_per_s`` and ``build_seconds``."""
+    codes_match) with ``samples_per_s`` and ``build_seconds``. ``extra``: the parameters selecting a
+    variant (the serial one's ARCH), its schedule from its datapath."""
     drive = design.all[name]
     if not isinstance(drive, Drive):
         raise ValueError(f"{name}: not a drive loop")
@@ -75,8 +85,8 @@ def run_loop_cosim(design, name: str, d: Path, models: Path | None, temp_c: floa
         pickle.dump(twin, f)
     spec = {"twin": str(d / "twin.pkl"), "expected": str(d / "expected.npz"), "samples": twin.n,
             "outputs": list(drive.outputs), "dac_w": drive.dac_format.wl, "in_w": drive.in_format.wl,
-            "fs_hz": drive.fs_hz}
-    summary = run_cocotb_test(design, name, LOOP_DRIVER, spec, d, models, None, sim, rtl)
+            "fs_hz": drive.fs_hz, **_waits(design, name, extra)}
+    summary = run_cocotb_test(design, name, LOOP_DRIVER, spec, d, models, extra, sim, rtl)
     # a simulation that ended without its summary (a crash) ran no sample that was compared
     for key, empty in (("samples", 0), ("mismatch", None), ("codes_match", False)):
         summary.setdefault(key, empty)

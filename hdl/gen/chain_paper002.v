@@ -389,7 +389,11 @@ module chain_paper002 #(
             .aux_x(bias_subtract_y_q),
             .aux_out_valid(iir_out_valid),
             .aux_y(iir_y),
-            .aux_ovf(iir_ovf)
+            .aux_ovf(iir_ovf),
+            .ref_phase(48'd0),
+            .wave_in_valid(1'b0),
+            .wave_out_valid(),
+            .wave_msin()
         );
         assign iir_in_ready = demod_in_ready;
         assign iir_mac_req = 1'b0;
@@ -429,7 +433,11 @@ module chain_paper002 #(
             .aux_x(24'd0),
             .aux_out_valid(),
             .aux_y(),
-            .aux_ovf()
+            .aux_ovf(),
+            .ref_phase(48'd0),
+            .wave_in_valid(1'b0),
+            .wave_out_valid(),
+            .wave_msin()
         );
     iir #(
 `include "iir_params.vh"

@@ -52,5 +52,7 @@
     .HZ_SHIFT(39),
     .FREQ_W(32),
     .MIN_AMP(64'h00000000000051ec),
+    .ENG_A_W(48),
+    .ENG_B_W(32),
     .QSIN_FILE("drive_qsin.hex"),
     .ATAN_FILE("drive_atan.hex")

@@ -47,6 +47,9 @@ TOWARD_ZERO = {"bias_subtract": {"out_format": "s23.21", "rounding": "toward_zer
 NCO_GENERIC = {"demod": {"f_hz": 7993.1234, "phase_offset_turns": 0.3}}
 # the drive DAC one bit short of the gain's range: it saturates whenever the carrier passes half scale
 DAC_HALF = {"drive": {"dac_format": "s16.16"}}
+# the drive loop's PLL from its first update (no minimum amplitude), and the serial variant
+PLL_ALWAYS = {"drive": {"pll_min_amp": 0.0}}
+SER = {"ARCH": 1}
 
 
 @dataclass
@@ -134,7 +137,8 @@ MUTATIONS = [
     Mutation("cordic_logical_shift", "cordic_vector.v", "tx = cx - (cy >>> j);", "tx = cx - (cy >> j);",
              "CORDIC arithmetic shift -> logical", ((None, "demod", False),)),
     # ---- the drive loop (one sample per clock): its loop filter, phase detector, control and drive ----
-    Mutation("drive_pll_rounding_floor", "drive.v", ".ROUNDING(ROUNDING)) u_pll", ".ROUNDING(0)) u_pll",
+    Mutation("drive_pll_rounding_floor", "drive.v", ".ROUNDING(ROUNDING), .PIPE(ARCH)) u_pll",
+             ".ROUNDING(0), .PIPE(ARCH)) u_pll",
              "drive: the PLL's loop filter rounds by floor, not the configured rule (a frequency bias)",
              ((None, "drive", False),)),
     Mutation("drive_pi_winds_up", "drive_pi.v", "wire hold = ((o1w > hi_w) && e_pos) || ((o1w < lo_w) && e_neg);",
@@ -160,8 +164,32 @@ MUTATIONS = [
              "drive: the frequency word in Hz rounded by floor", ((None, "drive", False),)),
     Mutation("drive_pll_not_held", "drive.v", "wire pll_upd = upd && pll_on;", "wire pll_upd = upd;",
              "drive: the PLL runs below the minimum amplitude (on the noise's angle)", ((None, "drive", False),)),
-    Mutation("drive_dac_flag_lost", "drive.v", "ovf <= {pll_upd & ovf_f, ovf_dac,", "ovf <= {pll_upd & ovf_f, 1'b0,",
+    Mutation("drive_dac_flag_lost", "drive.v", "ovf <= {s_pll & ovf_f, ovf_dac, s_upd & s_ovf_amp, s_ovf_det};",
+             "ovf <= {s_pll & ovf_f, 1'b0, s_upd & s_ovf_amp, s_ovf_det};",
              "drive: the DAC's overflow not flagged", ((DAC_HALF, "drive", False),)),
+    # ---- the serial drive loop (ARCH = 1): its products' windows, the carrier's wave pass, the stall;
+    # the PLL on from the first update (no minimum amplitude) so that its words move in the window ----
+    Mutation("drive_serial_product_routed_wrong", "drive.v", "K_PF:    pf_q <= pf64;", "K_PF:    pf_q <= if64;",
+             "serial drive: the PLL's KP_F e register takes the KI_F e port's product (the wrong window)",
+             ((PLL_ALWAYS, "drive", False, SER),)),
+    Mutation("drive_serial_hz_product_routed_wrong", "drive.v", "K_HZ:    hz_q <= hz64;", "K_HZ:    hz_q <= adv_p;",
+             "serial drive: the frequency word in Hz from the carrier advance's product",
+             ((PLL_ALWAYS, "drive", False, SER),)),
+    Mutation("drive_serial_stale_carrier", "drive.v", "S_WV: if (wave_v) st <= S_DIS;", "S_WV: st <= S_DIS;",
+             "serial drive: the DAC product issued before the wave pass returns -sin' (the last sample's)",
+             ((None, "drive", False, SER),)),
+    Mutation("drive_serial_carrier_at_detector_phase", "drive.v", "(st == S_CAR) ? car_q : ph_next", "ph_next",
+             "serial drive: the wave pass reads the detector's phase, not the advanced carrier's",
+             ((None, "drive", False, SER),)),
+    Mutation("drive_serial_pll_every_sample", "drive.v", "wire pll_upd = upd_q && pll_on;", "wire pll_upd = pll_on;",
+             "serial drive: the PLL's state kept at every sample, not only at an update",
+             ((PLL_ALWAYS, "drive", False, SER),)),
+    Mutation("drive_serial_missed_stall", "drive.v", "assign in_ready = (st == S_IDLE);", "assign in_ready = 1'b1;",
+             "serial drive: in_ready high while a sample is computed (samples taken mid-schedule are lost)",
+             ((None, "drive", True, SER),)),
+    Mutation("demod_wave_pass_runs_on", "demod.v", "st <= wave_q ? S_IDLE : S_PI;", "st <= S_PI;",
+             "serial demod: a wave pass goes on into the mixers (its products collide with the caller's)",
+             ((None, "drive", False, SER),)),
     Mutation("divider_strict_compare", "sf_divide.v", "qb_v = ~t_v[DW+1];", "qb_v = ~t_v[DW+1] & (t_v[DW:0] != 0);",
              "division step takes r >= d as r > d (an exact step's quotient bit lost)", ((None, "sf_divide", False),)),
     Mutation("divider_always_subtracts", "sf_divide.v", "({2'b00, dmag} ^ {(DW+2){~r_v[DW]}}) + {{(DW+1){1'b0}}, ~r_v[DW]}",

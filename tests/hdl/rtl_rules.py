@@ -49,7 +49,8 @@ ALLOWED: dict[tuple[str, str, str], tuple[int, str]] = {
         1, "CORDIC micro-rotation of x, then y, on one shifter: floor shift by definition (blocks.demod.cordic_vector)"),
     ("cordic_vector", "select", "atan_flat[ANGLE_W*j+:ANGLE_W]"): (1, "field of the flat arctan table, not a value"),
     ("drive", "right-shift", "adv_p>>>ADVANCE_BITS"): (
-        1, "the carrier's advance, a phase offset: floor by definition (blocks.drive: (ftw * adv) >> advance_bits)"),
+        2, "the carrier's advance, a phase offset: floor by definition (blocks.drive: (ftw * adv) >> advance_bits); "
+           "once per architecture"),
     # the NCO phase word's fields, read by nco.v and the serial demod (ARCH = 1) through nco_phase
     ("nco_phase", "select", "phase[PHASE_BITS-1-:2]"): (1, "quadrant = top two phase bits (model: Nco bin, a >> (L - 2))"),
     ("nco_phase", "select", "phase[PHASE_BITS-3-:QBITS]"): (

@@ -26,13 +26,14 @@ def design():
     return design_of()
 
 
-# the blocks whose proof takes minutes: `make formal` (demod: induction 77 s, bounded 69 s, at 208 cycles)
-LONG = {"demod"}
+# the modules whose proof takes minutes: `make formal` (demod: induction 77 s, bounded 69 s, at 208
+# cycles; drive: its 409-cycle schedule with the demodulator inside)
+LONG = {"demod", "drive"}
 
 
 def _blocks():
     d = design_of()
-    return [n for n in formal.serial_duts(d) if not d.instances[n].members and n not in LONG]
+    return [n for n in formal.serial_duts(d) if not d.instances[n].members and d.instances[n].module not in LONG]
 
 
 @pytest.mark.parametrize("name", _blocks())

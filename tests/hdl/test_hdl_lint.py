@@ -46,6 +46,14 @@ VARIANTS = [
     ("rtd", {"ARCH": 1, "EXT_MAC": 1}),
     ("piecewise", {"ARCH": 1, "EXT_MAC": 1}),
     ("demod", {"ARCH": 1, "EXT_MAC": 1}),
+    # the reference an input (a drive loop's phase), and the wave pass (the drive loop's carrier)
+    ("demod", {"REF": 1, "PHASE_TRIM": "64'd12345"}),
+    ("demod", {"ARCH": 1, "REF": 1, "WAVE": 1, "EXT_MAC": 1, "MAC_A_W": 64, "MAC_B_W": 64}),
+    ("demod", {"ARCH": 1, "REF": 1, "WAVE": 1, "AUX_LPF": 1, "LPF_SECTIONS": 2}),
+    # the serial drive loop on its own multiplier and on an external one
+    ("drive", {"ARCH": 1}),
+    ("drive", {"ARCH": 1, "EXT_MAC": 1, "MAC_A_W": 64, "MAC_B_W": 80}),
+    ("drive", {"ARCH": 1, "UPDATE_EVERY": 1, "LPF_SECTIONS": 1, "ROUNDING": 2, "OVERFLOW": 0}),
     ("sf_divide", {"UNROLL": 7, "SF_SIGNED": 1, "ROUNDING": 2}),
     ("sf_divide", {"UNROLL": 42, "OUT_SHIFT": -2}),
     ("sf_divide", {"ARCH": 1, "SF_SIGNED": 1, "ROUNDING": 2}),

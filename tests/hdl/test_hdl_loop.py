@@ -32,6 +32,22 @@ def test_the_rtl_loop_closed_on_its_mode_is_the_models_closed_loop(name):
 
 
 @pytest.mark.hdl
+def test_the_serial_rtl_loop_closed_on_its_mode_is_the_models_closed_loop():
+    """The serial variant (ARCH = 1) in the same closed loop: the same words at every sample, one
+    sample per its schedule's cycles (the handshake's cycle added)."""
+    require_simulator("verilator")
+    from fxdsp.hdl.schedule import member_cycles
+
+    design, d = design_of(), build_dir("cosim_drive_serial")
+    s = run_loop_cosim(design, "drive", d, VERILATOR_MODELS, temp_c=TEMP_C, seconds=SHORT_S, extra={"ARCH": 1})
+    assert s["errors"] == [], s["errors"]
+    assert s["samples"] == s["expected_samples"] and s["codes_match"]
+    assert len(np.unique(np.load(d / "expected.npz")["f"])) > 10, "the PLL must act within the compared window"
+    assert s["cycles"] == s["samples"] * (member_cycles(design, "drive") + 1)
+    record_throughput("cosim", "drive (serial)", s["cycles"], s["seconds"], sim="verilator")
+
+
+@pytest.mark.hdl
 @pytest.mark.parametrize("key", ["drive_pll_rounding_floor", "drive_detector_q_sign"])
 def test_a_loop_mutant_leaves_the_models_trajectory(key, tmp_path):
     require_simulator("verilator")

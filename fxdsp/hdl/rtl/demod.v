@@ -78,6 +78,17 @@
 //   caller gives it only when in_ready is high (chain_paper002's output low-pass, after the
 //   subtraction; a simulation check stops otherwise). AUX_LPF = 0: the aux ports are not read, aux_y
 //   and aux_ovf are 0 and aux_out_valid low.
+// REF = 1: the reference is an input: the table is read at (ref_phase + PHASE_TRIM) mod
+//   2**PHASE_BITS, ref_phase taken with x (a drive loop's accumulator word, the model's input ref; FTW
+//   and PHASE0 are not read). REF = 0: ref_phase is not read (the demodulator's own accumulator).
+// WAVE = 1 (ARCH = 1): a wave pass: wave_in_valid (while in_ready, never with in_valid) takes ref_phase and
+//   runs the table engine alone (edges 0 .. 3N + 11 of the schedule above: the ROM, the multiplier
+//   and the correction's adder), then wave_out_valid is high for one cycle with wave_msin = -sin at
+//   ref_phase + PHASE_TRIM (the bit-exact word the mixers would read there, held until the next pass)
+//   and in_ready again: 3 N + 12 cycles from its accepting edge to the next (the drive loop's carrier,
+//   read ahead of its detector).
+//   The mixers, filters and CORDIC do not run; x is loaded into the CORDIC's x and cleared before it
+//   is read. WAVE = 0: wave_in_valid is not read, wave_out_valid is low and wave_msin 0.
 `default_nettype none
 
 module demod #(
@@ -121,7 +132,9 @@ module demod #(
     parameter integer MAC_A_W       = 48,   // EXT_MAC = 1: the external multiplier's operand widths (>= the
     parameter integer MAC_B_W       = 32,   // demod's and its low-pass filters' operands)
     parameter integer AUX_LPF       = 0,    // ARCH = 1: 1 the filter engine also runs the aux low-pass (aux_*)
-    parameter         AUX_COEF_FILE = "demod_aux_lpf_coef.hex"   // AUX_LPF = 1: the I, Q and aux sets
+    parameter         AUX_COEF_FILE = "demod_aux_lpf_coef.hex",  // AUX_LPF = 1: the I, Q and aux sets
+    parameter integer REF           = 0,    // 1: the reference is the ref input (else the own accumulator)
+    parameter integer WAVE          = 0     // ARCH = 1: 1 the table engine also runs wave passes (wave_*)
 ) (
     input  wire                      clk,
     input  wire                      rst,
@@ -148,7 +161,14 @@ module demod #(
     input  wire [DATA_W-1:0]             aux_x,
     output wire                          aux_out_valid,
     output wire [DATA_W-1:0]             aux_y,
-    output wire [LPF_SECTIONS-1:0]       aux_ovf
+    output wire [LPF_SECTIONS-1:0]       aux_ovf,
+    // the reference (REF = 1): an accumulator word per sample, taken with x (or by a wave pass); not
+    // named ref (a SystemVerilog keyword)
+    input  wire [PHASE_BITS-1:0]         ref_phase,
+    // the wave pass (ARCH = 1 and WAVE = 1)
+    input  wire                          wave_in_valid,
+    output wire                          wave_out_valid,
+    output wire [NCO_W-1:0]              wave_msin
 `ifdef FORMAL
     ,
     // the products requested on the mac_* bundle and not yet answered (ARCH = 1, EXT_MAC = 1): a
@@ -168,6 +188,24 @@ module demod #(
         if (AUX_LPF != 0 && (ARCH != 1 || AUX_LPF != 1)) begin : g_bad_aux
             initial begin $display("demod: AUX_LPF = 1 needs ARCH = 1, got AUX_LPF %0d, ARCH %0d", AUX_LPF, ARCH);
                           $finish; end
+        end
+        if (REF != 0 && REF != 1) begin : g_bad_ref
+            initial begin $display("demod: REF must be 0 or 1, got %0d", REF); $finish; end
+        end
+        if (WAVE != 0 && (ARCH != 1 || WAVE != 1)) begin : g_bad_wave
+            initial begin $display("demod: WAVE = 1 needs ARCH = 1, got WAVE %0d, ARCH %0d", WAVE, ARCH); $finish; end
+        end
+        if (WAVE == 0) begin : g_no_wave_port
+            assign wave_out_valid = 1'b0;
+            assign wave_msin = {NCO_W{1'b0}};
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire unused_wave = wave_in_valid;
+            /* verilator lint_on UNUSEDSIGNAL */
+        end
+        if (REF == 0) begin : g_no_ref
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire unused_ref = ^ref_phase;
+            /* verilator lint_on UNUSEDSIGNAL */
         end
         if (AUX_LPF == 0) begin : g_no_aux_port
             // no auxiliary channel (always so at ARCH = 0): aux_* not read, the outputs 0
@@ -195,10 +233,18 @@ module demod #(
 
             // ---- NCO and mixers ----
             wire [NCO_W-1:0] cos_w, msin_w;
-            nco #(.PHASE_BITS(PHASE_BITS), .LUT_BITS(LUT_BITS), .LUT_W(LUT_W), .INTERP_BITS(INTERP_BITS),
-                  .TWO_PI(TWO_PI), .TWO_PI_W(TWO_PI_W), .CORR_SHIFT(CORR_SHIFT), .NCO_W(NCO_W), .FTW(FTW),
-                  .PHASE0(PHASE0), .PHASE_TRIM(PHASE_TRIM), .ROUNDING(ROUNDING), .QSIN_FILE(QSIN_FILE)) u_nco
-                (.clk(clk), .rst(rst), .step(in_valid), .cos_o(cos_w), .msin_o(msin_w));
+            if (REF != 0) begin : g_ref     // the table at the input's word plus the trim
+                localparam [PHASE_BITS-1:0] TRIM_C = PHASE_TRIM[PHASE_BITS-1:0];
+                nco_wave #(.PHASE_BITS(PHASE_BITS), .LUT_BITS(LUT_BITS), .LUT_W(LUT_W), .INTERP_BITS(INTERP_BITS),
+                           .TWO_PI(TWO_PI), .TWO_PI_W(TWO_PI_W), .CORR_SHIFT(CORR_SHIFT), .NCO_W(NCO_W),
+                           .ROUNDING(ROUNDING), .QSIN_FILE(QSIN_FILE)) u_wave
+                    (.phase(ref_phase + TRIM_C), .cos_o(cos_w), .msin_o(msin_w));
+            end else begin : g_own
+                nco #(.PHASE_BITS(PHASE_BITS), .LUT_BITS(LUT_BITS), .LUT_W(LUT_W), .INTERP_BITS(INTERP_BITS),
+                      .TWO_PI(TWO_PI), .TWO_PI_W(TWO_PI_W), .CORR_SHIFT(CORR_SHIFT), .NCO_W(NCO_W), .FTW(FTW),
+                      .PHASE0(PHASE0), .PHASE_TRIM(PHASE_TRIM), .ROUNDING(ROUNDING), .QSIN_FILE(QSIN_FILE)) u_nco
+                    (.clk(clk), .rst(rst), .step(in_valid), .cos_o(cos_w), .msin_o(msin_w));
+            end
 
             wire [DATA_W-1:0] li, lq;
             wire [2*LPF_SECTIONS+1:0] ovf_ml;      // {lpf_q, lpf_i, mix_q, mix_i}
@@ -319,15 +365,20 @@ module demod #(
             reg [2:0] rk;                       // the next product to come back from the MAC
             wire aux_busy;                      // AUX_LPF: the filter engine runs the aux channel
             wire idle = (st == S_IDLE) && !aux_busy;
-            wire take = idle && in_valid;
+            // a sample, or (WAVE) a wave pass: the same front end (phase fields, ROM, products D, C, M)
+            wire wave_go = (WAVE != 0) && wave_in_valid;
+            wire take = idle && (in_valid || wave_go);
             assign in_ready = idle;
+            reg  wave_q;                        // the pass in the engine is a wave pass
+            reg  wave_v;                        // its -sin in mb_q: wave_out_valid
 
             // ---- phase accumulator: PHASE0 + PHASE_TRIM + n FTW, in two halves (short carry chains) ----
             reg [PL-1:0] ph_lo;
             reg [PH-1:0] ph_hi;
             reg          ph_c;                  // carry of the low half, added into the high half next cycle
+            localparam [PHASE_BITS-1:0] TRIM_C = PHASE_TRIM[PHASE_BITS-1:0];
             /* verilator lint_off UNUSEDSIGNAL */  // the bits below the interpolation offset: residual phase
-            wire [PHASE_BITS-1:0] ph = {ph_hi, ph_lo};
+            wire [PHASE_BITS-1:0] ph = (REF != 0) ? ref_phase + TRIM_C : {ph_hi, ph_lo};
             /* verilator lint_on UNUSEDSIGNAL */
             wire [PL:0] ph_lo_n = {1'b0, ph_lo} + {1'b0, FTW_LO};
             /* verilator lint_off UNUSEDSIGNAL */
@@ -535,6 +586,27 @@ module demod #(
                 assign lpf_o = lpf_oall;
             end
 
+            // ---- the wave pass's answer: -sin in mb_q from its last add to the next pass ----
+            if (WAVE != 0) begin : g_wave
+                assign wave_out_valid = wave_v;
+                assign wave_msin = mb_q;
+`ifndef FORMAL
+`ifndef SYNTHESIS
+                // a wave pass with a sample in the same cycle would lose the sample: the caller's rule
+                always @(posedge clk) begin
+                    if (!rst && wave_in_valid && (in_valid || !idle)) begin
+                        $display("demod: wave_in_valid with in_valid or while busy (state %0d)", st);
+                        $finish;
+                    end
+                end
+`endif
+`endif
+            end else begin : g_wave_off
+                /* verilator lint_off UNUSEDSIGNAL */
+                wire unused_wave_regs = wave_v;
+                /* verilator lint_on UNUSEDSIGNAL */
+            end
+
             // ---- CORDIC: one step per cycle on cx, cy, cz ----
             reg [JW-1:0] j;
             reg          pre;                   // the pre-rotation step (before step 0)
@@ -617,6 +689,7 @@ module demod #(
             always @(posedge clk) begin
                 if (rst) begin
                     st <= S_IDLE; rk <= R_D; add_go <= 1'b0; add_sin <= 1'b0; got_i <= 1'b0;
+                    wave_q <= 1'b0; wave_v <= 1'b0;
                     j <= {JW{1'b0}}; pre <= 1'b0; cp <= CP_X;
                     out_valid <= 1'b0;
                     i <= {DATA_W{1'b0}}; q <= {DATA_W{1'b0}};
@@ -624,20 +697,21 @@ module demod #(
                     ovf <= {(2*LPF_SECTIONS+3){1'b0}};
                 end else begin
                     out_valid <= 1'b0;
+                    wave_v <= (st == S_WSIN) && add_go && add_sin && wave_q;
                     cp <= (cp == CP_X) ? CP_Y : CP_X;   // outside the CORDIC: x, y shifted in turn
                     add_go  <= mac_valid && (rk == R_C || rk == R_M);
                     add_sin <= (rk == R_M);
                     if (mac_valid) rk <= rk + 3'd1;
                     case (st)
                         S_IDLE: if (take) begin
-                            rk <= R_D; got_i <= 1'b0; st <= S_RD;
+                            rk <= R_D; got_i <= 1'b0; st <= S_RD; wave_q <= wave_go;
                         end
                         S_RD:   st <= S_NB;
                         S_NB:   st <= S_WD;
                         S_WD:   if (mac_valid) st <= S_PC;
                         S_PC:   if (mac_ready) st <= S_PM;
                         S_PM:   if (mac_ready) st <= S_WSIN;
-                        S_WSIN: if (add_go && add_sin) st <= S_PI;
+                        S_WSIN: if (add_go && add_sin) st <= wave_q ? S_IDLE : S_PI;   // a wave pass ends
                         S_PI:   if (mac_ready) st <= S_PQ;
                         S_PQ:   if (mac_ready) st <= S_WMIX;
                         S_WMIX: if (mix_v) begin
@@ -692,7 +766,7 @@ module demod #(
                     fsm_state_is_one_of_fourteen: assert(st <= S_WA);
                     // rk: the products returned so far, by the state that waits for them
                     returned_products_match_the_state: assert(
-                        (st == S_IDLE) ? (rk == R_D || rk == R_A + 3'd1) :
+                        (st == S_IDLE) ? (rk == R_D || rk == R_A + 3'd1 || (wave_q && rk == R_I)) :
                         (st <= S_WD)   ? (rk == R_D) :
                         (st <= S_PM)   ? (rk == R_C) :
                         (st == S_WSIN) ? (rk >= R_C && rk <= R_I) :
