@@ -34,10 +34,14 @@ def icarus_samples(design, name: str) -> int:
 
 
 def max_samples(design, name: str) -> int | None:
-    """The longest random stream of an instance (None: its whole stimulus)."""
+    """The longest random stream of an instance (None: its whole stimulus); a chain's no longer than
+    its slowest member's (a drive loop's one-sample-per-clock RTL is as slow to simulate in a top)."""
     inst = design.instances[name]
     if inst.members:
-        return max(400, CHAIN_CYCLES // cycles_per_sample(design, name, 0))
+        own = max(400, CHAIN_CYCLES // cycles_per_sample(design, name, 0))
+        caps = [MAX_SAMPLES[m] for m in (design.instances[v.replace(".", "_")].module for v in inst.members)
+                if m in MAX_SAMPLES]
+        return min([own, *caps])
     return MAX_SAMPLES.get(inst.module)
 
 
