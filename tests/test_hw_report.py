@@ -407,3 +407,25 @@ def test_a_bad_number_is_refused_before_any_synthesis(tmp_path, capsys, args):
     assert main(["hw-report", "--only", "lag", *args, "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and args[0] in err and not out.exists(), err
+
+
+def test_every_serial_row_states_its_cycles_per_sample_against_the_period():
+    """The committed report's serial rows carry their schedule (the datapath's for a block, the top's for a
+    chain) and the period at 40 MHz; the Markdown lists them, a row over the period with the clock it needs."""
+    from fxdsp.hdl.schedule import chain_schedule, member_cycles
+
+    d = build()
+    d.with_rtl()
+    rows = {r["name"]: r for r in load_hw_report()["rows"]}
+    serial = {n: r for n, r in rows.items() if n.endswith(" (ARCH=1)")}
+    assert {n.split(" (")[0] for n in serial} == {n for n in d.hardware if d.instances[n].rtl.variant()}
+    period = int(40e6 // d.fs_hz)
+    for n, r in serial.items():
+        name = n.split(" (")[0]
+        want = chain_schedule(d, name)[0] if d.instances[name].members else member_cycles(d, name, 1)
+        assert (r["cycles_per_sample"], r["cycle_budget"]) == (want, period), n
+    text = (ROOT / "hdl" / "HW_REPORT.md").read_text()
+    over = [n for n, r in serial.items() if r["cycles_per_sample"] > period]
+    assert over, "paper 001's whole design (the loop and the thermometer on one multiplier) is over the period"
+    for n in over:
+        assert f"* {n}: {serial[n]['cycles_per_sample']} of {period} (needs " in text

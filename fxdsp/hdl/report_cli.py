@@ -474,11 +474,19 @@ def _fmax_cell(r) -> str:
 
 def _schedule_fields(design, name: str, extra) -> dict:
     """A chain row's cycles per sample (its generated top's schedule, :func:`fxdsp.hdl.schedule.chain_schedule`,
-    at the row's ARCH) and the budget at 40 MHz and the config's sample rate; nothing for a block."""
-    from .schedule import chain_schedule
+    at the row's ARCH) and the budget at 40 MHz and the config's sample rate; a block's serial row its
+    module's cycles per sample (:func:`fxdsp.hdl.schedule.member_cycles`) against the design's rate;
+    nothing for a block's one-sample-per-clock row."""
+    from .schedule import chain_schedule, member_cycles
 
     if not design.instances[name].members:
-        return {}
+        if not int((extra or {}).get("ARCH", 0)):
+            return {}
+        try:
+            per = member_cycles(design, name, 1)
+        except ValueError:   # a schedule that varies from sample to sample (a decimating lag)
+            per = None
+        return {"cycles_per_sample": per, "cycle_budget": int(40e6 // design.fs_hz)}
     arch = int((extra or {}).get("ARCH", 0))
     try:
         per = chain_schedule(design, name, arch)[0]
@@ -542,6 +550,14 @@ def markdown(rows, freq, source_sha256: str = "") -> str:
         lines += ["", "Critical path of each swept row's slowest seed (nextpnr, posedge to posedge):", ""]
         lines += [f"* {r['name']}, seed {r.get('critical_seed')} ({_fmt(_slowest(r))} MHz): `{r['critical_path']}`"
                   for r in swept]
+    serial = [r for r in rows if r["name"].endswith("(ARCH=1)") and r.get("cycle_budget")]
+    if serial:
+        lines += ["", "Cycles per sample of each serial row (its schedule, from its datapath or its top's netlist), "
+                  "against the sample period at 40 MHz (a row over it needs a faster clock):", ""]
+        lines += [f"* {r['name']}: {_fmt(r.get('cycles_per_sample'))} of {r['cycle_budget']}"
+                  + (f" (needs {40 * r['cycles_per_sample'] / r['cycle_budget']:.1f} MHz)"
+                     if r.get("cycles_per_sample") and r["cycles_per_sample"] > r["cycle_budget"] else "")
+                  for r in serial]
     missed = []
     for chain_name in dict.fromkeys(r["name"].split(" (")[0] for r in rows if r.get("target")):
         chain = next((r for r in rows if r["name"] == f"{chain_name} (ARCH=1)"), None) or \
