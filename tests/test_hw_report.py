@@ -429,3 +429,42 @@ def test_every_serial_row_states_its_cycles_per_sample_against_the_period():
     assert over, "paper 001's whole design (the loop and the thermometer on one multiplier) is over the period"
     for n in over:
         assert f"* {n}: {serial[n]['cycles_per_sample']} of {period} (needs " in text
+
+
+def test_the_ecp5_placement_is_read_from_its_tools_logs():
+    """nextpnr-ecp5's Fmax line (the last of a run: the routed one) and yosys's ECP5 cell counts."""
+    log = ("Info: Max frequency for clock '$glbnet$clk$TRELLIS_IO_IN': 61.20 MHz (PASS at 40.00 MHz)\n"
+           "Info: Routing..\n"
+           "Info: Max frequency for clock '$glbnet$clk$TRELLIS_IO_IN': 66.64 MHz (PASS at 40.00 MHz)\n")
+    assert report_cli.ecp5_fmax(log) == 66.64 and report_cli.ecp5_fmax("ERROR: no BELs") is None
+    stat = "   Number of cells: 9\n     CCU2C   1026\n     DP16KD   7\n     LUT4   2822\n     MULT18X18D   1\n" \
+           "     TRELLIS_FF   3250\n"
+    assert report_cli._ecp5_stat(stat) == {"LUT": 2822, "FF": 3250, "CARRY": 1026, "MULT18": 1, "EBR": 7}
+
+
+def test_a_serial_row_that_does_not_place_is_shown_on_the_ecp5_against_the_clock_it_needs():
+    row = {"name": "chain_x (ARCH=1)", "module": "chain_x", "LUT": 4280, "FF": 3803, "MAC16": 2, "fmax": None,
+           "note": "does not place: 4280 LUT4 and 3803 FF need 6765 logic cells (packed), the device has 5280",
+           "cycles_per_sample": 475, "cycle_budget": 416,
+           "ecp5": {"device": "LFE5U-12F", "LUT": 3277, "FF": 4060, "CARRY": 1177, "MULT18": 2, "EBR": 7,
+                    "fmax": 66.8, "fmax_seeds": {"1": 72.3, "2": 67.0, "3": 66.8}, "tool": "nextpnr-0.11.1"}}
+    text = markdown([row], 40.0)
+    line = next(l for l in text.splitlines() if l.startswith("| chain_x (ARCH=1) | LFE5U-12F"))
+    assert "min 66.8, median 67.0" in line and "| 45.7 |" in line   # 475 of 416 cycles at 40 MHz
+    assert json.loads(report_json([row], 40.0, UP5K))["rows"][0]["ecp5"]["fmax_seeds"] == {"1": 72.3, "2": 67.0,
+                                                                                            "3": 66.8}
+
+
+def test_every_serial_row_the_up5k_cannot_hold_meets_its_clock_on_the_ecp5():
+    """The committed report: a serial row that does not place on the UP5K has an ECP5 placement whose
+    slowest seed runs at least as fast as its cycles per sample need at the design's rate."""
+    rows = [r for r in load_hw_report()["rows"] if r["name"].endswith(" (ARCH=1)")
+            and str(r.get("note", "")).startswith("does not place")]
+    assert {r["name"] for r in rows} >= {"drive (ARCH=1)", "chain_paper001_loop (ARCH=1)"}
+    for r in rows:
+        e = r.get("ecp5") or {}
+        need = 40.0 * max(1.0, r["cycles_per_sample"] / r["cycle_budget"])
+        assert e.get("fmax") is not None and e["fmax"] >= need, (r["name"], e, need)
+        # a carry cell (CCU2C) takes two LUT4 sites of the part's count
+        assert e["LUT"] + 2 * e["CARRY"] <= report_cli.ECP5["LUT"] and e["MULT18"] <= report_cli.ECP5["MULT18"]
+        assert e["EBR"] <= report_cli.ECP5["EBR"]

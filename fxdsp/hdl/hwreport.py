@@ -34,6 +34,8 @@ from . import HW_REPORT_JSON, RTL_DIR
 COLUMNS = ("name", "module", "LC", "LUT", "FF", "CARRY", "MAC16", "BRAM", "GB", "fmax", "fmax_seeds", "critical_seed",
            "critical_path", "cycles_per_sample", "cycle_budget", "target", "warnings", "note", "sha256")
 XC7_COLUMNS = ("LUT", "DSP48E1", "FF", "BRAM36", "BRAM18", "LUTRAM", "SRL", "warnings", "note")
+# a serial row that does not place on the UP5K, placed on the smallest ECP5 (fxdsp.hdl.report_cli.place_ecp5)
+ECP5_COLUMNS = ("device", "LUT", "FF", "CARRY", "MULT18", "EBR", "fmax", "fmax_seeds", "tool", "note")
 
 
 def hw_report_path() -> Path:
@@ -165,6 +167,8 @@ def _row(row: dict) -> dict:
     out = {c: row.get(c, "" if c == "note" else None) for c in COLUMNS}
     xc7 = row.get("xc7") or {}
     out["xc7"] = {c: xc7.get(c, "" if c == "note" else None) for c in XC7_COLUMNS}
+    if row.get("ecp5"):
+        out["ecp5"] = {c: row["ecp5"].get(c, "" if c == "note" else None) for c in ECP5_COLUMNS}
     return out
 
 

