@@ -334,7 +334,8 @@ def place_ecp5(design, name: str, work: Path, freq: float, timeout: int, params:
             out["note"] = next((l.strip() for l in text.splitlines() if "ERROR" in l), "nextpnr-ecp5 failed")
             break
     out["fmax"] = None if None in sweep.values() else min(sweep.values())
-    out["fmax_seeds"] = sweep
+    if len(seeds) > 1:   # as a UP5K row: every seed's only for a sweep
+        out["fmax_seeds"] = sweep
     return out
 
 
@@ -526,7 +527,8 @@ def _xc7_cells(r) -> str:
 
 
 def _fmax_cell(r) -> str:
-    """Seed 1's Fmax; for a swept row the lowest over its seeds, the median and every seed's."""
+    """Seed 1's Fmax; for a swept row (an ECP5 placement's too) the lowest over its seeds, the median
+    and every seed's."""
     seeds = r.get("fmax_seeds") or {}
     if not seeds:
         return _fmt(None if r.get("fmax") is None else round(r["fmax"], 1))
@@ -633,16 +635,10 @@ def markdown(rows, freq, source_sha256: str = "") -> str:
                   "|---|---|---:|---:|---:|---:|---:|---:|---:|---|"]
         for r in on_ecp5:
             e = r["ecp5"]
-            seeds = {k: v for k, v in (e.get("fmax_seeds") or {}).items()}
-            placed = sorted(v for v in seeds.values() if v is not None)
-            fmax = _fmt(None if e.get("fmax") is None else round(e["fmax"], 1))
-            if len(seeds) > 1 and len(placed) == len(seeds):
-                fmax = (f"min {fmax}, median {round(float(statistics.median(placed)), 1)} ("
-                        + ", ".join(f"seed {k}: {v:.1f}" for k, v in seeds.items()) + ")")
             per, cap = r.get("cycles_per_sample"), r.get("cycle_budget")
             need = "-" if not (per and cap) else f"{max(40.0, 40 * per / cap):.1f}"
             lines.append(f"| {r['name']} | {e.get('device')} | {_fmt(e.get('LUT'))} | {_fmt(e.get('FF'))} | "
-                         f"{_fmt(e.get('CARRY'))} | {_fmt(e.get('MULT18'))} | {_fmt(e.get('EBR'))} | {fmax} | {need} | "
+                         f"{_fmt(e.get('CARRY'))} | {_fmt(e.get('MULT18'))} | {_fmt(e.get('EBR'))} | {_fmax_cell(e)} | {need} | "
                          f"{e.get('note') or ''} |")
     missed = []
     for chain_name in dict.fromkeys(r["name"].split(" (")[0] for r in rows if r.get("target")):
