@@ -168,6 +168,10 @@ class Instance:
     def ports(self) -> dict[str, Port]:
         return {p.name: p for p in (*self.inputs, *self.outputs)}
 
+    def rtl_port(self, port: str) -> str:
+        """The RTL port of the model's port ``port`` (a generated top's: the chain's own name)."""
+        return port if self.members else self.rtl.port(port)
+
     @property
     def rtl(self) -> RtlPorts:
         """The RTL interface: a block's is its datapath's; a chain top (generated)

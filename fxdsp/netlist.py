@@ -11,7 +11,10 @@ A ``[chain.<name>]`` table lists
 * ``sensor`` (optional): the physical stimulus model of its inputs (:mod:`fxdsp.sensors`);
 * ``hardware`` (optional): the targets its generated top is judged on by ``fxdsp hw-report``,
   ``{lut4 = .., mac16 = .., bram = .., mhz = ..}`` (any of them; the cycles per sample are always
-  judged against the sample period at 40 MHz).
+  judged against the sample period at 40 MHz);
+* ``own_multiplier`` (optional): instances whose serial RTL keeps a multiplier of its own in the
+  generated top instead of taking turns on the top's shared one, so that it runs beside the other
+  members (a drive loop beside its sense path): one more multiplier, its cycles no longer added.
 
 An instance's port is written ``<table>.<port>``: the port is what follows the last dot. Every
 instance input must be driven exactly once; nothing may loop. The errors name the chain, the line
@@ -32,7 +35,8 @@ from .errors import InputError
 from .units import quantity
 
 ARROW = "->"
-CHAIN_KEYS = ("sensor", "instances", "inputs", "input_units", "wires", "outputs", "fs_hz", "hardware")
+CHAIN_KEYS = ("sensor", "instances", "inputs", "input_units", "wires", "outputs", "fs_hz", "hardware",
+              "own_multiplier")
 HARDWARE_KEYS = ("lut4", "mac16", "bram", "mhz")   # the targets a chain's hardware table may set
 
 
@@ -68,6 +72,7 @@ class Netlist:
     hardware: dict[str, float] | None = None  # the hw-report targets of its generated top (HARDWARE_KEYS)
     input_units: dict[str, str] = field(default_factory=dict)  # chain input -> quantity (fxdsp.units)
     fs_hz: float | None = None                # the chain's own sample rate (None: [system].fs_hz)
+    own_multiplier: tuple[str, ...] = ()      # members whose serial RTL keeps a multiplier of its own
 
     @property
     def instance_name(self) -> str:
@@ -219,7 +224,22 @@ def parse(sec: Section, ports: PortNames, known: tuple[str, ...]) -> Netlist:
     if sensor is not None and not isinstance(sensor, str):
         raise WiringError(f"{sec.field('sensor')}: expected a name, got {sensor!r}")
     return Netlist(chain, tuple(inst), drivers, {k: tuple(v) for k, v in inputs.items()}, outputs, order,
-                   sensor, lines, _hardware(sec), _input_units(sec, inputs), _fs_hz(sec))
+                   sensor, lines, _hardware(sec), _input_units(sec, inputs), _fs_hz(sec), _own_multiplier(sec, inst))
+
+
+def _own_multiplier(sec: Section, inst: list[str]) -> tuple[str, ...]:
+    """The chain's ``own_multiplier``: instances of the chain, each at most once."""
+    names = sec._get("own_multiplier", [])
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        raise WiringError(f"{sec.field('own_multiplier')}: expected a list of the chain's instances, got {names!r}")
+    for k, name in enumerate(names):
+        if name not in inst:
+            near = nearest(name, inst)
+            raise WiringError(f"{sec.field('own_multiplier')}: {name!r} is not an instance of the chain" +
+                              (f" (did you mean {near!r}?)" if near else f"; its instances: {', '.join(inst)}"))
+        if name in names[:k]:
+            raise WiringError(f"{sec.field('own_multiplier')}: {name!r} is listed twice")
+    return tuple(names)
 
 
 def _fs_hz(sec: Section) -> float | None:

@@ -176,7 +176,7 @@ def test_lag(rounding, overflow):
 
 NARROW_NCO = {"drive.phase_bits": 16, "drive.lut_bits": 8, "drive.interp_bits": 8, "drive.lut_format": "s12.11",
               # the demodulator on the loop's NCO takes its width: its table and interpolation must fit it
-              "demod002.lut_bits": 8, "demod002.interp_bits": 8}
+              "demod002.lut_bits": 8, "demod002.interp_bits": 8, "demod02.lut_bits": 8, "demod02.interp_bits": 8}
 
 
 @pytest.mark.parametrize("rounding,overflow,lpf_rules,update,narrow", [

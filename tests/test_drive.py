@@ -392,10 +392,9 @@ def test_an_hdl_command_on_a_design_without_rtl_is_bad_input(tmp_path, command):
     from conftest import default_data, run_cli
     from fxdsp.config import dumps
 
-    # a demodulator on an input reference (the drive loop's NCO), alone: it has no RTL yet
-    data = {k: v for k, v in default_data().items() if k in ("system", "stimulus", "demod002")}
-    data["demod002"]["phase_bits"] = 48   # no wire to take it from
-    path = tmp_path / "ref_demod.toml"
+    # every kind of block has RTL now: a design of no block at all
+    data = {k: v for k, v in default_data().items() if k in ("system", "stimulus")}
+    path = tmp_path / "no_blocks.toml"
     path.write_text(dumps(data), encoding="utf-8")
     rc, err = run_cli([command, "--config", str(path), "--out", str(tmp_path / "out")])
     assert rc == 2 and len(err.strip().splitlines()) == 1 and "no block or chain has RTL" in err, err

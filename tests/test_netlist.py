@@ -204,10 +204,9 @@ def test_every_chain_gets_a_generated_top_and_shares_engines_by_wiring_and_forma
         return {p.name for p in hh.rtl_sources(None, design, tmp_path) if p.name.startswith("chain_")}
 
     d = build()
-    # a chain with a block without RTL has no top: the demodulator referenced to the drive loop's NCO
     assert tops(d) == {f"{c}.v" for c in d.chains if d.instances[c].hardware} == {
-        "chain_paper000.v", "chain_paper001.v", "chain_paper001_loop.v", "chain_paper002.v"}
-    assert {c for c in d.chains if not d.instances[c].hardware} == {"chain_paper002_drive"}
+        "chain_paper000.v", "chain_paper001.v", "chain_paper001_loop.v", "chain_paper002.v", "chain_paper002_drive.v",
+        "chain_paper002_loop.v"}
     shares = engine_sharing(d, "chain_paper002")
     assert {g: (s.kind, s.host) for g, s in shares.items()} == {"piecewise.bias": ("set", "piecewise.sf"),
                                                               "iir": ("aux", "demod")}
@@ -302,3 +301,47 @@ def test_a_chain_port_the_generated_top_cannot_carry_is_refused_naming_the_line(
     with pytest.raises(InputError) as info:       # ... the RTL generator refuses it, naming the chain
         chain_top(d, f"chain_{name}")
     assert f"chain.{name}." in str(info.value) and repr(new) in str(info.value), str(info.value)
+
+
+# ---- own multipliers and words read ahead (paper 002's whole design) --------------------------------
+@pytest.mark.parametrize("value,needle", [(["nosuch"], "'nosuch' is not an instance of the chain"),
+                                          (["drive", "drive"], "'drive' is listed twice"),
+                                          ("drive", "expected a list of the chain's instances"),
+                                          ([1], "expected a list of the chain's instances")])
+def test_an_own_multiplier_that_is_not_a_member_once_is_refused_naming_the_field(value, needle):
+    table = {**DATA["chain"]["paper002_loop"], "own_multiplier": value}
+    message = _error("paper002_loop", table)
+    assert message.startswith("chain.paper002_loop.own_multiplier: ") and needle in message, message
+
+
+def test_an_own_multiplier_without_a_bundle_is_refused_naming_the_member():
+    from fxdsp.errors import InputError
+    from fxdsp.hdl.chain_top import chain_top
+
+    table = {**DATA["chain"]["paper002_loop"], "own_multiplier": ["drive", "sf_divide"]}
+    with pytest.raises(InputError, match=r"chain\.paper002_loop\.own_multiplier: 'sf_divide' has no shared-multiplier"):
+        chain_top(build(_with_chain("paper002_loop", table)), "chain_paper002_loop")
+
+
+def test_the_loop_runs_beside_the_sense_path_and_its_reference_is_read_ahead():
+    """In paper 002's whole design the drive loop keeps its own multiplier and the sense demodulator
+    reads the loop's nco ahead (drive.v nco_next): the sense path starts with the loop and the
+    demodulator before the loop's result, so a sample takes the longer of the two, not their sum.
+    Without own_multiplier the loop takes turns on the one multiplier and the sample takes both."""
+    from fxdsp.hdl.chain_top import chain_top
+    from fxdsp.hdl.schedule import chain_schedule, member_cycles
+
+    d = build()
+    per, start = chain_schedule(d, "chain_paper002_loop")
+    loop_start, loop_cycles = start["drive"]
+    assert start["rtd"][0] == loop_start
+    assert start["demod02"][0] < loop_start + loop_cycles
+    sense_end = max(b + c for m, (b, c) in start.items() if m != "drive")
+    assert per == 3 + max(loop_start + loop_cycles, sense_end)
+    top = chain_top(d, "chain_paper002_loop")
+    assert "if (accept) drive_nco_ahead_q <= drive_nco_next;" in top and ".ref_phase(drive_nco_ahead_q)" in top
+    assert "want_demod02 = busy & ~started_demod02 & done_sf_divide & demod02_in_ready;" in top   # not done_drive
+    table = {k: v for k, v in DATA["chain"]["paper002_loop"].items() if k != "own_multiplier"}
+    shared = build(_with_chain("paper002_loop", table))
+    per_shared, _ = chain_schedule(shared, "chain_paper002_loop")
+    assert per_shared >= member_cycles(shared, "drive") + member_cycles(shared, "demod02") > per

@@ -94,10 +94,23 @@ class RtlPorts:
     mac_bundle: bool = False    # the shared-multiplier bundle (mac_*, fx_mac_port): tied off on its own multiplier
     aux: bool = False           # the auxiliary low-pass channel (aux_*, read only with AUX_LPF = 1)
     second_set: bool = False    # a second coefficient set's outputs (out_valid_1, y_1, ovf_1; SETS = 2)
-    reference: bool = False     # the reference input and wave pass (ref_phase: phase_bits bits, wave_*), unused:
-                                # a demodulator on its own NCO (REF = 0, WAVE = 0)
+    reference: bool = False     # the reference input and wave pass ports (ref_phase: phase_bits bits, wave_*):
+                                # tied off but for a model input mapped to ref_phase (``names``: REF = 1)
     signed: tuple[str, ...] = ()   # ports the RTL treats as signed (sign-extended, compared, subtracted):
                                    # the model allows an unsigned format there, the RTL does not
+    names: tuple[tuple[str, str], ...] = ()   # (model port, RTL port) where they differ (a model name that
+                                              # is a Verilog / SystemVerilog keyword, e.g. demod's ref)
+    ahead: tuple[tuple[str, str], ...] = ()   # (output, RTL port): the port holds the value the output will
+                                              # carry for the NEXT sample, whenever no sample is in flight
+                                              # (a loop's state word, known before the sample is taken)
+
+    def port(self, name: str) -> str:
+        """The RTL port of the model's port ``name``."""
+        return dict(self.names).get(name, name)
+
+    def ahead_port(self, output: str) -> str | None:
+        """The RTL port holding output ``output``'s next value ahead of the sample (None: none)."""
+        return dict(self.ahead).get(output)
 
     def variant(self) -> dict | None:
         """The parameters selecting the serial variant (None: the module has none)."""

@@ -36,6 +36,7 @@ mixers, scipy sosfilt with the float design, hypot and arctan2.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -359,11 +360,14 @@ class DemodDatapath(Datapath):
     ovf: tuple = info()
 
 
+@dataclass(frozen=True, eq=False)
 class DemodRefDatapath(DemodDatapath):
     """A demodulator whose reference is an input (``reference = "input"``: the drive loop's NCO):
-    the same arithmetic without its accumulator; no RTL yet (demod.v has its own NCO)."""
+    the same arithmetic without its accumulator (demod.v REF = 1: the model's input ``ref`` is the
+    port ``ref_phase``, ``ref`` being a SystemVerilog keyword)."""
 
-    RTL = None
+    RTL = dataclasses.replace(DemodDatapath.RTL, names=(("ref", "ref_phase"),))
+    ref: int = 1             # REF: the table at the ref input's word (FTW and PHASE0 not read)
 
 
 REFERENCES = ("nco", "input")   # the demodulator's own accumulator, or the accumulator words of an input

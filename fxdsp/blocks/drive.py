@@ -360,7 +360,8 @@ class DriveDatapath(Datapath):
     """The drive loop's arithmetic (fields in the order of its future RTL module's parameters)."""
 
     MODULE = "drive"
-    RTL = RtlPorts(ready=True, serial=True, mac_bundle=True, signed=("x", "dac", "f", "amp", "phase"))   # hdl/rtl/drive.v
+    RTL = RtlPorts(ready=True, serial=True, mac_bundle=True, signed=("x", "dac", "f", "amp", "phase"),
+                   ahead=(("nco", "nco_next"),))   # hdl/rtl/drive.v
     LATENCY = 2
 
     @staticmethod

@@ -16,7 +16,10 @@ The top runs one sample in flight through any feed-forward netlist of blocks:
 serial variant every member with a multiplier bundle (:class:`~fxdsp.blocks.datapath.RtlPorts`) issues
 on ONE shared ``fx_mac_serial``, sized here from the members' operands; a member on it starts only
 when no other works on it (the earlier in the execution order first), so at most one requests at a
-time, and two members that can share an engine do (:mod:`fxdsp.hdl.sharing`). The schedule that
+time, and two members that can share an engine do (:mod:`fxdsp.hdl.sharing`); a member the chain
+lists in ``own_multiplier`` keeps one of its own and runs beside them. A wire from an output the
+member's interface holds ahead (``RtlPorts.ahead``: a loop's phase word, known before its sample) is
+read from that port as the chain accepts the sample, so its reader does not wait for the pass. The schedule that
 results is :func:`fxdsp.hdl.schedule.chain_schedule`, stated as numbers in the header. Members are
 independent blocks with fixed per-block behaviour, so the generator needs only each module's ports,
 its RTL interface and its parameters.
@@ -101,19 +104,31 @@ class _Top:
         self.inst = design.instances
         self.members = list(self.net.instances)
         self.order = list(self.net.order)       # priority on the shared multiplier: the execution order
-        self.wanted = self.chain.wanted()
         self.shares = engine_sharing(design, name)
         self.hosted = {s.host: s for s in self.shares.values()}
-        self.on_mac = [m for m in self.order if self.inst[_v(m)].rtl.mac_bundle]
+        from .schedule import ahead_source, on_shared_multiplier
+
+        for m in self.net.own_multiplier:
+            if not self.inst[_v(m)].rtl.mac_bundle:
+                raise InputError(f"{self.net.name}.own_multiplier: {m!r} has no shared-multiplier bundle "
+                                 f"({self.inst[_v(m)].module}.v): it never takes turns on the top's multiplier")
+        self.on_mac = on_shared_multiplier(design, name)
         self.bundles = list(self.on_mac)   # every member on the multiplier has a bundle (a guest's tied off when shared)
+        # the words read ahead (member output -> its RTL port): taken when the chain accepts a sample
+        self.ahead = {src: ahead_source(design, src) for src in self.net.drivers.values()
+                      if not isinstance(src, str) and ahead_source(design, src) is not None}
 
     # ---- helpers ----
     def src(self, m: str, port: str) -> str:
         s = self.net.driver(m, port)
-        return f"in_{s}_q" if isinstance(s, str) else f"{_v(s.instance)}_{s.port}_q"
+        if isinstance(s, str):
+            return f"in_{s}_q"
+        return f"{_v(s.instance)}_{s.port}_" + ("ahead_q" if s in self.ahead else "q")
 
     def deps(self, m: str) -> list[str]:
-        return sorted(self.net.upstream(m))
+        from .schedule import waits_on
+
+        return sorted(waits_on(self.design, self.name, m))
 
     def ready(self, m: str) -> bool:
         return self.inst[_v(m)].rtl.ready
@@ -141,23 +156,37 @@ class _Top:
         conns = [".clk(clk)", ".rst(rst)", f".in_valid(go_{v}_q)"]
         if rtl.ready:
             conns.append(f".in_ready({v}_in_ready)")
-        conns += [f".{p}({self.src(m, p)})" for p in block.inputs]
+        conns += [f".{inst.rtl_port(p)}({self.src(m, p)})" for p in block.inputs]
         conns.append(f".out_valid({v}_out_valid)")
-        conns += [f".{p}({outs.get(p, '')})" for p in block.outputs]
+        conns += [f".{inst.rtl_port(p)}({outs.get(p, '')})" for p in block.outputs]
+        conns += [f".{port}({v}_{p}_next)" if Endpoint(m, p) in self.ahead else f".{port}()" for p, port in rtl.ahead]
         conns.append(f".ovf({v}_ovf)")
-        if rtl.mac_bundle:
+        if m in self.on_mac:
             conns += [f".{port}({v}_mac_{sig})" for port, sig, _ in MAC_PORTS]
             conns += [".mac_in_ready(sh_ready)", f".mac_out_valid(sh_valid & own[{self.bundles.index(m)}])",
                       ".mac_p(sh_p)"]
             over.insert(1 if rtl.serial else 0, ", .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)")
+        elif rtl.mac_bundle:   # own_multiplier: its own (EXT_MAC = 0), the bundle tied off at 2 x 2 bits
+            conns += [c for c in tie_offs(inst, mac=True, used=("aux", "second_set", "ahead"))
+                      if c.startswith(".mac_")]
+            over.append(", .MAC_A_W(2), .MAC_B_W(2)")
         conns += [c for c in conns_extra]
         ind = "    " + label
         return [f"{ind}{inst.module} #(", f'`include "{v}_params.vh"', *(f"{ind}    {o}" for o in over),
                 f"{ind}) u_{v} (", f"{ind}    " + f",\n{ind}    ".join(conns), f"{ind});"]
 
     def outs(self, m: str) -> dict[str, str]:
+        """The member's outputs something reads after its result: not those read only ahead."""
         v = _v(m)
-        return {p: f"{v}_{p}" for p in self.wanted[m]}
+        return {p: f"{v}_{p}" for p in self.captured(m)}
+
+    def captured(self, m: str) -> set[str]:
+        """The member's outputs the top captures on its out_valid: read by a wire that waits for the
+        result, or a chain output."""
+        later = {src.port for src in [*self.net.drivers.values(), *self.net.outputs.values()]
+                 if not isinstance(src, str) and src.instance == m and src not in self.ahead}
+        later |= {src.port for src in self.net.outputs.values() if src.instance == m}
+        return later
 
     def mac_tie(self, m: str, ind: str) -> list[str]:
         """A guest's bundle when its engine is the host's: no request, zero operands."""
@@ -171,9 +200,14 @@ class _Top:
         w_ovf = self.design.ovf_width(v)
         out = [f"    // ---- {m} ----", f"    reg started_{v}, done_{v};", f"    wire {v}_out_valid;",
                f"    wire [{w_ovf - 1}:0] {v}_ovf;", f"    reg  [{w_ovf - 1}:0] {v}_ovf_q;"]
-        for p in sorted(self.wanted[m]):
+        for p in sorted(self.captured(m)):
             w = block.outputs[p].wl
             out += [f"    wire {_vec(w)}{v}_{p};", f"    reg  {_vec(w)}{v}_{p}_q;"]
+        for src in self.ahead:   # read ahead: the word taken as the chain accepts the sample
+            if src.instance == m:
+                w = block.outputs[src.port].wl
+                out += [f"    wire {_vec(w)}{v}_{src.port}_next;", f"    reg  {_vec(w)}{v}_{src.port}_ahead_q;",
+                        f"    always @(posedge clk) if (accept) {v}_{src.port}_ahead_q <= {v}_{src.port}_next;"]
         if self.ready(m):
             out.append(f"    wire {v}_in_ready;")
         if m in self.on_mac:
@@ -181,7 +215,7 @@ class _Top:
         deps = [f"done_{_v(s)}" for s in self.deps(m)] + ([f"{v}_in_ready"] if self.ready(m) else [])
         out.append(f"    wire want_{v} = " + " & ".join(["busy", f"~started_{v}"] + deps) + ";")
         out.append(f"    always @(posedge clk) if ({v}_out_valid) begin")
-        out += [f"        {v}_{p}_q <= {v}_{p};" for p in sorted(self.wanted[m])]
+        out += [f"        {v}_{p}_q <= {v}_{p};" for p in sorted(self.captured(m))]
         out += [f"        {v}_ovf_q <= {v}_ovf;", "    end"]
         return out
 
@@ -219,7 +253,7 @@ class _Top:
 
     def unused_ties(self, m: str) -> list[str]:
         """The connections tying off a member's auxiliary channel and second set (not shared here)."""
-        return tie_offs(self.inst[_v(m)], mac=False)
+        return tie_offs(self.inst[_v(m)], mac=False, used=("ahead",))   # instance_text connects those
 
     def member_body(self, m: str) -> list[str]:
         """The instance of a member that is neither a host nor a guest of a shared engine."""
@@ -239,7 +273,7 @@ class _Top:
                      ", " + ", ".join(f".{k}({literal(hinst, k[:-2], val)})"
                                       for k, val in set_parameters(self.design, share).items())]
             ties = [f".out_valid_1({gv}_out_valid)", f".y_1({self.outs(g).get('y', '')})", f".ovf_1({gv}_ovf)",
-                    *tie_offs(self.inst[hv], mac=False, used=("second_set",))]
+                    *tie_offs(self.inst[hv], mac=False, used=("second_set", "ahead"))]
             unused = (f"go_{gv}_q ^ own[{self.bundles.index(g)}];   // the guest's pass is the host's (its start, "
                       "its products on the host's bundle)")
             what = "its second coefficient set"
@@ -247,7 +281,7 @@ class _Top:
             extra = [", .AUX_LPF(SHARE), .AUX_COEF_FILE(\"" + share.file + "\")"]
             ties = [f".aux_in_valid(go_{gv}_q)", f".aux_x({self.src(g, 'x')})", f".aux_out_valid({gv}_out_valid)",
                     f".aux_y({self.outs(g).get('y', '')})", f".aux_ovf({gv}_ovf)",
-                    *tie_offs(self.inst[hv], mac=False, used=("aux",))]
+                    *tie_offs(self.inst[hv], mac=False, used=("aux", "ahead"))]
             unused = f"own[{self.bundles.index(g)}];   // the channel's products are the host's (its bundle)"
             what = "the filter engine's third channel"
         shared = [f"    // ---- {g} on {h}'s engine in the serial variant ({what}, coefficient sets in {share.file}) ----",
@@ -415,6 +449,10 @@ def chain_top(design: Design, name: str) -> str:
              "// ARCH = 0: every member in its one-sample-per-clock variant. ARCH = 1: its serial variant, every",
              "// member with a multiplier bundle on ONE shared fx_mac_serial (one SB_MAC16), one at a time;",
              f"// shared engines (ARCH = 1): {share_words}.",
+             *([f"// own multipliers (own_multiplier: beside the shared one, not taking turns): {', '.join(net.own_multiplier)}."]
+               if net.own_multiplier else []),
+             *(["// read ahead (taken as the chain accepts the sample, not waiting for the member's pass): "
+                + ", ".join(f"{src} (port {port})" for src, port in t.ahead.items()) + "."] if t.ahead else []),
              *_schedule_lines(design, name),
              "`default_nettype none", "", f"module {name} #(",
              "    parameter integer ARCH = 0" + ("," if has_div else "")
@@ -493,7 +531,7 @@ def _check_port_names(net, text: str) -> None:
 def tie_offs(inst, mac: bool = True, used: tuple[str, ...] = ()) -> list[str]:
     """The connections that tie off an instance's unused bundles (:class:`RtlPorts`), as a harness and
     a generated top write them (``mac``: the multiplier bundle too, for a block on a multiplier of its
-    own; ``used``: the bundles the caller connects itself, "aux" or "second_set")."""
+    own; ``used``: the bundles the caller connects itself, "aux", "second_set" or "ahead")."""
     rtl, out = inst.rtl, []
     if mac and rtl.mac_bundle:
         out += [".mac_in_valid()", ".mac_in_ready(1'b0)", ".mac_a()", ".mac_b()", ".mac_na()", ".mac_nb()",
@@ -504,7 +542,11 @@ def tie_offs(inst, mac: bool = True, used: tuple[str, ...] = ()) -> list[str]:
     if rtl.second_set and "second_set" not in used:
         out += [".out_valid_1()", ".y_1()", ".ovf_1()"]
     if rtl.reference:
-        out += [f".ref_phase({inst.block.datapath.phase_bits}'d0)", ".wave_in_valid(1'b0)", ".wave_out_valid()", ".wave_msin()"]
+        mapped = {rtl.port(p.name) for p in inst.inputs}
+        out += [f".ref_phase({inst.block.datapath.phase_bits}'d0)"] if "ref_phase" not in mapped else []
+        out += [".wave_in_valid(1'b0)", ".wave_out_valid()", ".wave_msin()"]
+    if "ahead" not in used:
+        out += [f".{port}()" for _, port in rtl.ahead]
     return out
 
 

@@ -33,7 +33,7 @@ from cocotb.triggers import First, ReadOnly, RisingEdge, Timer
 from cocotb.utils import get_sim_time
 
 PERIOD_NS = 10
-IDLE_LIMIT = 500   # cycles without an output once everything is fed: a hung DUT
+IDLE_LIMIT = 500   # cycles without an output beyond the DUT's stated cycles per sample: a hung DUT
 
 
 def _u(handle) -> int:
@@ -53,21 +53,22 @@ def _drive(dut, ins, in_h, seg, idx, drive: bool, noise: random.Random, widths: 
     dut.in_valid.value = int(drive)
 
 
-async def _sleep_while_busy(dut, ins, in_h, seg, idx, drive: bool, noise: random.Random, widths: dict) -> bool:
+async def _sleep_while_busy(dut, ins, in_h, seg, idx, drive: bool, noise: random.Random, widths: dict,
+                            idle: int) -> bool:
     """Set the next cycle's inputs, then sleep until the edge before which in_ready or out_valid is high.
 
     Called right after an edge (before the DUT's registers update). The next cycle's inputs (the
     sample at idx if ``drive``, else in_valid low; a gapped segment draws ``drive`` as for any
     cycle) are held over the whole busy stretch, so the caller must not set them again; ReadOnly
     then shows the ports the next edge will sample. If neither handshake signal is high, wait for
-    one to rise (or IDLE_LIMIT cycles: the caller's timeout) and return before the edge that
+    one to rise (or ``idle`` cycles: the caller's timeout) and return before the edge that
     samples it, where the caller resumes. Returns whether in_valid is driven.
     """
     _drive(dut, ins, in_h, seg, idx, drive, noise, widths)
     await ReadOnly()
     if int(dut.in_ready.value) == 0 and int(dut.out_valid.value) == 0:
         await First(RisingEdge(dut.in_ready), RisingEdge(dut.out_valid),
-                    Timer(IDLE_LIMIT * PERIOD_NS + PERIOD_NS // 2, unit="ns"))
+                    Timer(idle * PERIOD_NS + PERIOD_NS // 2, unit="ns"))
     return drive
 
 
@@ -79,10 +80,12 @@ async def stream(dut):
     noise = random.Random(spec["seed"] + 1)   # its own stream: the gap draws stay as they were
     widths = spec["widths"]
     abort_cycles = int(spec.get("abort_cycles", 0))
+    idle = IDLE_LIMIT + abort_cycles   # a sample may take its stated cycles; then it has hung
     ins, outs, ready, gap = spec["inputs"], spec["outputs"], spec["ready"], spec["gap"]
     ignore = int(spec.get("ovf_ignore", 0))
-    in_h = {p: getattr(dut, p) for p in ins}
-    out_h = {p: getattr(dut, p) for p in outs}
+    names = spec.get("rtl_names", {})   # the model's port -> the RTL's, where they differ
+    in_h = {p: getattr(dut, names.get(p, p)) for p in ins}
+    out_h = {p: getattr(dut, names.get(p, p)) for p in outs}
     cocotb.start_soon(Clock(dut.clk, PERIOD_NS, unit="ns").start())
     t0 = time.perf_counter()
     sim0 = get_sim_time(unit="ns")
@@ -137,13 +140,13 @@ async def stream(dut):
                     break
             elif len(got[outs[0]]) >= n:
                 break
-            if now - last_progress > IDLE_LIMIT * PERIOD_NS:
+            if now - last_progress > idle * PERIOD_NS:
                 errors.append(f"segment {s_i}: timeout, {len(got[outs[0]])} of {n} outputs")
                 break
             # busy before this edge (in_ready low): most likely busy for many more
             if ready and int(dut.in_ready.value) == 0:
                 drive = idx < n_feed and rng.random() >= seg_gap
-                driving = await _sleep_while_busy(dut, ins, in_h, seg, idx, drive, noise, widths)
+                driving = await _sleep_while_busy(dut, ins, in_h, seg, idx, drive, noise, widths, idle)
                 resume = True
         for p in outs:
             want = exp[p][: len(got[p])] if "abort_after" in seg else exp[p]

@@ -149,10 +149,10 @@ def wrapper(design, name: str, cut: bool = False, rtl_dir: Path | None = None) -
              "    wire rst = init | rst_any;   // a reset in the first cycle, and at any cycle after",
              "    wire in_valid = $anyseq;"]
     conns = [".clk(clk)", ".rst(rst)", ".in_valid(in_valid)", ".in_ready(in_ready)"]
-    for p in inst.inputs:
-        lines.append(f"    wire [{p.format.wl - 1}:0] {p.name} = $anyseq;")
-        conns.append(f".{p.name}({p.name})")
-    conns += [".out_valid(out_valid)"] + [f".{p.name}()" for p in inst.outputs] + [".ovf()"]
+    for p in inst.inputs:   # d_<port>: a model port may be a keyword (demod's ref), its RTL port is not
+        lines.append(f"    wire [{p.format.wl - 1}:0] d_{p.name} = $anyseq;")
+        conns.append(f".{inst.rtl_port(p.name)}(d_{p.name})")
+    conns += [".out_valid(out_valid)"] + [f".{inst.rtl_port(p.name)}()" for p in inst.outputs] + [".ovf()"]
     lines += ["    wire in_ready, out_valid;"]
     over = [".ARCH(1)"]
     mac_req = None   # a block's bundle request; a top's one multiplier is its own (its one_request)
@@ -254,13 +254,13 @@ def miter(design, name: str) -> str:
              "    wire take = in_valid & ser_ready;   // the serial variant's accepting edge: both take it"]
     ins = []
     for p in inst.inputs:
-        lines.append(f"    wire [{p.format.wl - 1}:0] {p.name} = $anyseq;")
-        ins.append(f".{p.name}({p.name})")
+        lines.append(f"    wire [{p.format.wl - 1}:0] d_{p.name} = $anyseq;")
+        ins.append(f".{inst.rtl_port(p.name)}(d_{p.name})")
     for p in inst.outputs:
         lines.append(f"    wire [{p.format.wl - 1}:0] ser_{p.name}, par_{p.name};")
     for tag, arch, valid in (("ser", 1, "in_valid"), ("par", 0, "take")):
         conns = [".clk(clk)", ".rst(rst)", f".in_valid({valid})", f".in_ready({tag}_ready)", *ins,
-                 f".out_valid({tag}_valid)", *[f".{p.name}({tag}_{p.name})" for p in inst.outputs],
+                 f".out_valid({tag}_valid)", *[f".{inst.rtl_port(p.name)}({tag}_{p.name})" for p in inst.outputs],
                  f".ovf({tag}_ovf)", *tie_offs(inst, mac=True)]
         lines += [f"    {inst.module} #(", f'`include "{name}_params.vh"', f"        , .ARCH({arch})",
                   f"    ) u_{tag} (", "        " + ",\n        ".join(conns), "    );"]
@@ -434,9 +434,9 @@ def prove(design, name: str, d: Path, depth: int | None = None, induction: bool 
     # cut: every module instance of the top (its members and the shared multiplier) replaced by free
     # outputs, constrained only by the contracts the top states of them
     cutting = f"hierarchy -top fx_formal\ncutpoint {_paramod(name)}/c:u_* {_paramod(name)}/c:*.u_*\n" if cut else ""
-    # -defer (a miter): each module elaborated only with the parameters it is used with (its default
-    # ROM file names are another config's)
-    defer = " -defer" if equivalence else ""
+    # -defer: each module elaborated only with the parameters it is used with (its default ROM file
+    # names, demod_atan.hex ..., are another config's: a design without a table of that name has none)
+    defer = " -defer"
     script = (f"read_verilog -formal{defer}{define} -I. " + " ".join(_local(d, sources)) + " fx_formal.v\n"
               f"{cutting}prep -flatten -top fx_formal\nasync2sync\ndffunmap\n{UNSRC}write_smt2 -wires fx_formal.smt2\n")
     mode = ("induction" if induction else "bmc") + (" (miter)" if equivalence else "") + (" (members cut)" if cut else "")

@@ -181,7 +181,8 @@ def run_cocotb(design, name: str, segments: list[dict], d: Path, models: Path | 
     _, ins, outs, ready = ports_of(design, name, extra_params)
     block = design.all[name]
     spec = {"segments": segments, "inputs": ins, "outputs": outs, "ready": ready, "gap": gap, "seed": int(seed),
-            "widths": {p: block.inputs[p].wl for p in ins}, "abort_cycles": schedule_cycles(design, name, extra_params),
+            "widths": {p: block.inputs[p].wl for p in ins},
+            "rtl_names": {p: design.instances[name].rtl_port(p) for p in (*ins, *outs)}, "abort_cycles": schedule_cycles(design, name, extra_params),
             "ovf_ignore": ovf_ignore(design, name)}
     return run_cocotb_test(design, name, DRIVER, spec, d, models, extra_params, sim, rtl)
 
@@ -280,12 +281,13 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
     conns = [".clk(clk)", ".rst(rst)", ".in_valid(in_valid)"]
     for p in ins:
         w = block.inputs[p].wl
-        L += [f"    reg [{w - 1}:0] mem_{p} [0:N-1];", f"    wire [{w - 1}:0] {p} = mem_{p}[idx];"]
-        conns.append(f".{p}({p})")
+        # d_<port>: a model port may be a keyword (demod's ref), its RTL port is not (rtl_port)
+        L += [f"    reg [{w - 1}:0] mem_{p} [0:N-1];", f"    wire [{w - 1}:0] d_{p} = mem_{p}[idx];"]
+        conns.append(f".{design.instances[name].rtl_port(p)}(d_{p})")
     for p in outs:
         w = block.outputs[p].wl
-        L += [f"    reg [{w - 1}:0] res_{p} [0:N-1];", f"    wire [{w - 1}:0] {p};"]
-        conns.append(f".{p}({p})")
+        L += [f"    reg [{w - 1}:0] res_{p} [0:N-1];", f"    wire [{w - 1}:0] d_{p};"]
+        conns.append(f".{design.instances[name].rtl_port(p)}(d_{p})")
     # gapped valid: a 16-bit LFSR idles about one cycle in four
     L += ["    wire out_valid;", f"    wire [{n_ovf - 1}:0] ovf;", "    reg [15:0] lfsr = 16'hace1;",
           "    always @(posedge clk) lfsr <= {lfsr[14:0], lfsr[15] ^ lfsr[13] ^ lfsr[12] ^ lfsr[10]};",
@@ -319,7 +321,7 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
           "        if (in_valid && in_ready) idx <= idx + 1;",
           "        if (out_valid) begin"]
     for p in outs:
-        L.append(f"            res_{p}[oidx] = {p};")
+        L.append(f"            res_{p}[oidx] = d_{p};")
     L += [f"            for (b = 0; b < {n_ovf}; b = b + 1) ovf_total = ovf_total + {{31'd0, ovf[b] & ~ign[b]}};",
           "            oidx = oidx + 1;"]
     if waves is not None:

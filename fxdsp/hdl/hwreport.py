@@ -139,11 +139,15 @@ def rtl_closure(module: str, generated: str | None = None, rtl_dir: Path | None 
     return sorted(seen)
 
 
-def row_files(files: dict[str, str], instances: list[str]) -> dict[str, str]:
+def row_files(files: dict[str, str], instances: list[str], every: list[str]) -> dict[str, str]:
     """The generated files a row reads: those named after its instances (``<inst>_params.vh``,
     ``<inst>_*.hex``, a generated top ``<chain>.v``), so that adding an instance to the config
-    re-runs no other row."""
-    return {f: t for f, t in files.items() if any(f.startswith(i + "_") or f == i + ".v" for i in instances)}
+    re-runs no other row. A file belongs to the longest of ``every`` instance name it is named
+    after (``chain_paper002_loop_*.hex`` is chain_paper002_loop's, not chain_paper002's)."""
+    def owner(f: str) -> str | None:
+        return max((i for i in every if f.startswith(i + "_") or f == i + ".v"), key=len, default=None)
+
+    return {f: t for f, t in files.items() if owner(f) in instances}
 
 
 def row_hash(module: str, params: dict[str, str] | None, files: dict[str, str], recipe: str = "") -> str:

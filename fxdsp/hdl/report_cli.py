@@ -130,13 +130,13 @@ def wrapper(design, name: str, params: dict[str, str] | None, ready: bool = Fals
          f"    reg [{in_bits - 1}:0] si = {in_bits}'d0;", f"    reg [{out_bits - 1}:0] so = {out_bits}'d0;",
          f"    always @(posedge clk) si <= {{si[{in_bits - 2}:0], sin}};"]
     conns, pos = [".clk(clk)", ".rst(si[0])", ".in_valid(si[1])"], 2
-    for p in ins:
-        conns.append(f".{p}(si[{pos + w[p] - 1}:{pos}])")
+    for p in ins:   # the RTL's port names (demod's ref is ref_phase)
+        conns.append(f".{inst.rtl_port(p)}(si[{pos + w[p] - 1}:{pos}])")
         pos += w[p]
     cat = []
     for p in outs:
         L.append(f"    wire [{w[p] - 1}:0] o_{p};")
-        conns.append(f".{p}(o_{p})")
+        conns.append(f".{inst.rtl_port(p)}(o_{p})")
         cat.append(f"o_{p}")
     L += ["    wire ov;", f"    wire [{n_ovf - 1}:0] of;"]
     conns += [".out_valid(ov)", ".ovf(of)"]
@@ -403,7 +403,7 @@ def _digest(design, files: dict[str, str], plan: tuple, freq: float, seeds: tupl
     """:func:`row_hash` of one planned row (an entry of :func:`planned_rows`)."""
     name, module, params, extra = plan
     instances = [name, *design.instances[name].members]
-    return row_hash(module, params, row_files(files, instances), recipe(design, name, params, bool(extra), freq, seeds))
+    return row_hash(module, params, row_files(files, instances, list(design.instances)), recipe(design, name, params, bool(extra), freq, seeds))
 
 
 def expected_row_hashes(design, freq: float) -> dict[str, str]:

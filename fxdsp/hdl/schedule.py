@@ -11,6 +11,32 @@ def whole_limbs(w: int) -> int:
     return max(16, -(-w // 16) * 16)
 
 
+def ahead_source(design, src) -> str | None:
+    """The RTL port holding a wire source's next value ahead of the sample (None: the wire waits for
+    its driver's result): a member output declared so by its interface (RtlPorts.ahead)."""
+    if isinstance(src, str):   # a chain input
+        return None
+    return design.instances[src.instance.replace(".", "_")].rtl.ahead_port(src.port)
+
+
+def waits_on(design, name: str, member: str) -> set[str]:
+    """The members of chain ``name`` whose results ``member`` waits for: the drivers of its inputs,
+    but not those read ahead (a wire from an output with an ahead port: the top takes that word when
+    it accepts the sample, :mod:`fxdsp.hdl.chain_top`)."""
+    net = design.chains[name].netlist
+    return {src.instance for dst, src in net.drivers.items()
+            if dst.instance == member and not isinstance(src, str) and ahead_source(design, src) is None}
+
+
+def on_shared_multiplier(design, name: str) -> list[str]:
+    """The members of chain ``name`` on its serial top's one shared multiplier, in execution order:
+    those with a multiplier bundle, but the chain's ``own_multiplier`` ones (a multiplier of their
+    own: they run beside the others instead of taking turns)."""
+    net = design.chains[name].netlist
+    return [m for m in net.order if design.instances[m.replace(".", "_")].rtl.mac_bundle
+            and m not in net.own_multiplier]
+
+
 def mac_operands(design, name: str) -> tuple[int, int]:
     """The widest (a, b) operands instance ``name`` issues on its multiplier bundle at the design's
     parameters (its datapath's :meth:`~fxdsp.blocks.datapath.Datapath.mac_operands`)."""
@@ -49,15 +75,15 @@ def chain_schedule(design, name: str, arch: int = 1, unroll: int = 1) -> tuple[i
     In the serial variant the members on the one multiplier (and the engines they share,
     :mod:`fxdsp.hdl.sharing`) are also started only when no other one is working on it (from its
     in_valid to its result's capture), the earlier in the netlist's order first; a shared set's guest
-    pass runs as its host's result leaves. Then the out_valid register (busy clears with it and the
+    pass runs as its host's result leaves. A wire read ahead (:func:`waits_on`) does not wait. Then the out_valid register (busy clears with it and the
     next sample enters as it leaves): cycles per sample = 3 + the last member's in_valid + cycles."""
     net = design.chains[name].netlist
     from .sharing import engine_sharing
 
     shares = engine_sharing(design, name) if arch else {}
     cycles = {m: member_cycles(design, m.replace(".", "_"), arch, unroll) for m in net.order}
-    on_mac = {m for m in net.order if arch and design.instances[m.replace(".", "_")].rtl.mac_bundle}
-    deps = {m: net.upstream(m) for m in net.order}
+    on_mac = set(on_shared_multiplier(design, name)) if arch else set()
+    deps = {m: waits_on(design, name, m) for m in net.order}
     guest_of = {s.host: s.guest for s in shares.values() if s.kind == "set"}
     valid: dict[str, int] = {}   # each member's in_valid cycle
     t = 0

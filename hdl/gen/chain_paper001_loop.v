@@ -179,6 +179,7 @@ module chain_paper001_loop #(
         .amp(),
         .phase(),
         .nco(),
+        .nco_next(),
         .ovf(drive001_ovf),
         .mac_in_valid(drive001_mac_req),
         .mac_a(drive001_mac_a),

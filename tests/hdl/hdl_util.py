@@ -62,6 +62,20 @@ def _serial() -> dict[str, dict]:
 
 SERIAL = _serial()
 
+# the default config's tables that copy another for the drive loop's sense paths (their own tables, so
+# that two chains' formats are not tied together): a design that changes the original changes them alike
+COPIES = {"demod002": "demod", "demod02": "demod", "bias_subtract02": "bias_subtract", "iir02": "iir"}
+
+
+def with_copies(overrides: dict) -> dict:
+    """``overrides`` (a design's config changes) with each original's changes also applied to its
+    copies (:data:`COPIES`), but phase_bits: a demodulator on the loop's reference takes the loop's."""
+    out = dict(overrides)
+    for twin, original in COPIES.items():
+        if original in overrides and twin not in overrides:
+            out[twin] = {k: v for k, v in overrides[original].items() if k != "phase_bits"}
+    return out
+
 
 def require_iverilog() -> None:
     if shutil.which("iverilog") is None or shutil.which("vvp") is None:

@@ -342,6 +342,17 @@ MUTATIONS = [
              "always @(posedge clk) if (go_bias_subtract) begin",
              "generated chain 002: the subtraction's result captured as it starts, not on its out_valid (stale)",
              ((None, "chain_paper002", False, SERIAL["chain_paper002"]),)),
+    # ---- the generated chain_paper002_loop top: the sense demodulator on the drive loop's nco, read ahead ----
+    Mutation("drive_next_nco_is_the_last_samples", "drive.v", "assign nco_next = ph_next;", "assign nco_next = ph_q;",
+             "drive: nco_next gives the last sample's phase, not the next one's (the sense demodulator in paper "
+             "002's whole design a sample behind the loop)",
+             ((None, "chain_paper002_loop", False, SERIAL["chain_paper002_loop"]),)),
+    Mutation("chain002_loop_reference_not_held", "chain_paper002_loop.v",
+             "always @(posedge clk) if (accept) drive_nco_ahead_q <= drive_nco_next;",
+             "always @(posedge clk) drive_nco_ahead_q <= drive_nco_next;",
+             "generated chain 002 loop: the reference read ahead is not held from the accepting edge (the "
+             "demodulator, starting after the loop's pass in ARCH = 0, reads the next sample's phase)",
+             ((None, "chain_paper002_loop", False),)),
     # ---- one multiplier shared by the serial blocks: demod ARCH = 1 with its filters, chain 002 ARCH = 1 ----
     Mutation("chain002_mac_guest_products_lost", "chain_paper002.v",
              "on_mac_piecewise_sf | ((SHARE != 0) & on_mac_piecewise_bias)", "on_mac_piecewise_sf",

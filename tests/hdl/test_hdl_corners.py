@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from fxdsp.hdl.stimuli import corners
-from hdl_util import SERIAL, SIMULATORS, design_of, icarus_samples, icarus_window, one_per_module, run_cocotb, segment
+from hdl_util import SERIAL, SIMULATORS, design_of, icarus_samples, icarus_window, one_per_module, run_cocotb, segment, \
+    with_copies
 
 _NARROW = {
     "rtd": {"temp_format": "s14.7"},                        # +-64 C: the LUT range saturates
@@ -26,7 +27,7 @@ _NARROW = {
     "lag": {"tau_s": 0.4, "alpha_bits": 8, "state_guard_bits": 2},   # alpha 0.22, ties every few steps
 }
 DESIGNS = {
-    "narrow_half_up_saturate": _NARROW,
+    "narrow_half_up_saturate": with_copies(_NARROW),
     "narrow_half_even_wrap": {
         **{k: {**v, "rounding": "half_even", "overflow": "wrap"} for k, v in _NARROW.items()},
         # SF(T) with steps at the breakpoints (the default is continuous there): the segment
@@ -38,6 +39,7 @@ DESIGNS = {
         "demod": {"rounding": "half_even", "overflow": "wrap", "lpf": {"overflow": "wrap"}},
     },
 }
+DESIGNS["narrow_half_even_wrap"] = with_copies(DESIGNS["narrow_half_even_wrap"])
 # the chain tops and one instance per block module: resets anywhere and gaps test a module's protocol
 # (every instance's own formats: golden vectors with their corner codes, the random parameter sets)
 BLOCKS = sorted(one_per_module(design_of()))

@@ -98,7 +98,7 @@ def test_an_injected_fault_is_named_with_its_first_mismatch_and_a_waveform(tmp_p
 
 @pytest.mark.parametrize("argv, words", [
     (["--only", "sf_divid"], ("--only", "sf_divide")),
-    (["--only", "demod002"], ("--only", "'demod002'", "no RTL", "sf_divide")),   # a block without RTL (yet)
+    (["--only", "chain_paper002_lop"], ("--only", "'chain_paper002_lop'", "chain_paper002_loop")),
     (["--only", ","], ("--only",)),
     (["--long", "0"], ("--long",)),
 ])

@@ -13,7 +13,9 @@
 //     samples ahead (phase + ((ftw ADVANCE) >>> ADVANCE_BITS), floor): the DAC's latency and hold;
 //   phase += ftw (mod 2**PHASE_BITS).
 // Outputs per sample: dac, f (Hz on the freq format), amp and phase (held between updates; phase is
-// e, on ANGLE_W bits), nco (the phase word the mixers read: a demodulator's reference).
+// e, on ANGLE_W bits), nco (the phase word the mixers read: a demodulator's reference). nco_next is
+// the word the next sample's nco will be, valid whenever no sample is in flight (after out_valid, and
+// from reset): a reader takes its reference with the sample instead of waiting for the loop's pass.
 // Rounding R by ROUNDING (0 floor, 1 half_up, 2 half_even, 3 toward_zero); every fit by OVERFLOW
 // (0 wrap, 1 saturate), flagged in ovf = {f, dac, amp, lpf_q[LPF_SECTIONS], lpf_i[LPF_SECTIONS],
 // mix_q, mix_i} (amp's flag only at an update, f's only at a PLL update: the model counts them
@@ -130,6 +132,7 @@ module drive #(
     output reg  [DATA_W-1:0]         amp,
     output reg  [ANGLE_W-1:0]        phase,
     output reg  [PHASE_BITS-1:0]     nco,
+    output wire [PHASE_BITS-1:0]     nco_next,   // the nco the next sample will output, while none is in flight
     output reg  [2*LPF_SECTIONS+4:0] ovf,
     // the external multiplier (ARCH = 1 and EXT_MAC = 1; else the outputs are 0): fx_mac_port's bundle
     output wire                          mac_in_valid,
@@ -195,6 +198,7 @@ module drive #(
     // ---- loop state (the model's S_* registers) ----
     reg  [PHASE_BITS-1:0] ph_next;        // the phase the next sample reads, once the last update is in
     reg  [PHASE_BITS-1:0] ph_q;           // the phase of the sample in the detector
+    assign nco_next = ph_next;
     reg  signed [63:0]    ftw;            // the frequency word
     reg  signed [63:0]    integ_f, integ_a;
     reg  [GAIN_W-1:0]     gain;
