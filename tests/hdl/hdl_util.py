@@ -53,6 +53,22 @@ def one_per_module(d) -> list[str]:
     return out
 
 
+def covering_tops(d) -> list[str]:
+    """The fewest chain tops (greedy) that hold every block module any chain top holds: where a test
+    checks the members' modules in a top (their corner codes through a top's wiring, their formats
+    under a random parameter set, a Verilator model of their serial variants), a top whose modules
+    another chosen top already holds adds a C++ build and a run for nothing new. Every top still runs
+    its golden vectors, its long stream (its own schedule, cycle for cycle) and its serial corners on
+    Icarus (resets anywhere in its own schedule). Ties: the top with fewer members, then by name."""
+    tops = {n: {d.instances[m].module for m in inst.members} for n, inst in d.hardware.items() if inst.members}
+    left, out = set().union(*tops.values()) if tops else set(), []
+    while left:
+        best = min(tops, key=lambda n: (-len(tops[n] & left), len(d.instances[n].members), n))
+        out.append(best)
+        left -= tops[best]
+    return sorted(out)
+
+
 def _serial() -> dict[str, dict]:
     """Every instance with a serial variant among :func:`one_per_module`'s, with its selecting
     parameters (from its RTL interface)."""
