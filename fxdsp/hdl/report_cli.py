@@ -526,6 +526,13 @@ def _xc7_cells(r) -> str:
     return f"{_fmt(x.get('LUT'))} | {_fmt(x.get('DSP48E1'))} | {_fmt(x.get('FF'))} | {_fmt(bram)}"
 
 
+def needed_mhz(r) -> float | None:
+    """The clock a serial row's cycles per sample need at the design's rate: 40 MHz, or more when its
+    schedule is longer than the sample period at 40 MHz (None: no constant schedule)."""
+    per, cap = r.get("cycles_per_sample"), r.get("cycle_budget")
+    return max(40.0, 40 * per / cap) if per and cap else None
+
+
 def _fmax_cell(r) -> str:
     """Seed 1's Fmax; for a swept row (an ECP5 placement's too) the lowest over its seeds, the median
     and every seed's."""
@@ -622,9 +629,7 @@ def markdown(rows, freq, source_sha256: str = "") -> str:
         lines += ["", "Cycles per sample of each serial row (its schedule, from its datapath or its top's netlist), "
                   "against the sample period at 40 MHz (a row over it needs a faster clock):", ""]
         lines += [f"* {r['name']}: {_fmt(r.get('cycles_per_sample'))} of {r['cycle_budget']}"
-                  + (f" (needs {40 * r['cycles_per_sample'] / r['cycle_budget']:.1f} MHz)"
-                     if r.get("cycles_per_sample") and r["cycles_per_sample"] > r["cycle_budget"] else "")
-                  for r in serial]
+                  + (f" (needs {needed_mhz(r):.1f} MHz)" if (needed_mhz(r) or 0) > 40 else "") for r in serial]
     on_ecp5 = [r for r in rows if r.get("ecp5")]
     if on_ecp5:
         lines += ["", f"Serial rows that do not place on the UP5K, on an ECP5 {ECP5['name']} ({ECP5['LUT']:,} LUT4, "
@@ -635,8 +640,7 @@ def markdown(rows, freq, source_sha256: str = "") -> str:
                   "|---|---|---:|---:|---:|---:|---:|---:|---:|---|"]
         for r in on_ecp5:
             e = r["ecp5"]
-            per, cap = r.get("cycles_per_sample"), r.get("cycle_budget")
-            need = "-" if not (per and cap) else f"{max(40.0, 40 * per / cap):.1f}"
+            need = "-" if needed_mhz(r) is None else f"{needed_mhz(r):.1f}"
             lines.append(f"| {r['name']} | {e.get('device')} | {_fmt(e.get('LUT'))} | {_fmt(e.get('FF'))} | "
                          f"{_fmt(e.get('CARRY'))} | {_fmt(e.get('MULT18'))} | {_fmt(e.get('EBR'))} | {_fmax_cell(e)} | {need} | "
                          f"{e.get('note') or ''} |")

@@ -6,11 +6,6 @@ long-stream tests measure the RTL against them, back to back."""
 from __future__ import annotations
 
 
-def whole_limbs(w: int) -> int:
-    """A multiplier bundle's operand width for ``w`` bits: whole 16-bit limbs, at least one."""
-    return max(16, -(-w // 16) * 16)
-
-
 def ahead_source(design, src) -> str | None:
     """The RTL port holding a wire source's next value ahead of the sample (None: the wire waits for
     its driver's result): a member output declared so by its interface (RtlPorts.ahead)."""
