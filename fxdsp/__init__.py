@@ -52,21 +52,21 @@ _EXPORTS: dict[str, str] = {
 __all__ = [*_EXPORTS]
 
 if TYPE_CHECKING:  # for type checkers and IDEs; at run time the names load lazily
-    from .api import quantize, to_real
-    from .blocks.base import Block, Result
-    from .blocks.bias_subtract import BiasSubtract
-    from .blocks.demod import Demod
-    from .blocks.freq2temp import Freq2Temp
-    from .blocks.iir import Iir
-    from .blocks.lag import Lag
-    from .blocks.piecewise import Piecewise
-    from .blocks.rtd import Rtd
-    from .blocks.sf_divide import SfDivide
-    from .chains import Chain, Design, build
-    from .config import Config, load_config
-    from .fixed.format import Format
-    from .fixed.ops import OverflowLog
-    from .fixed.rules import Rules
+    from fxdsp.api import quantize, to_real
+    from fxdsp.blocks.base import Block, Result
+    from fxdsp.blocks.bias_subtract import BiasSubtract
+    from fxdsp.blocks.demod import Demod
+    from fxdsp.blocks.freq2temp import Freq2Temp
+    from fxdsp.blocks.iir import Iir
+    from fxdsp.blocks.lag import Lag
+    from fxdsp.blocks.piecewise import Piecewise
+    from fxdsp.blocks.rtd import Rtd
+    from fxdsp.blocks.sf_divide import SfDivide
+    from fxdsp.chains import Chain, Design, build
+    from fxdsp.config import Config, load_config
+    from fxdsp.fixed.format import Format
+    from fxdsp.fixed.ops import OverflowLog
+    from fxdsp.fixed.rules import Rules
 
 
 def __getattr__(name: str):

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .fixed import ops
-from .fixed.format import Format
-from .fixed.ops import OverflowLog
-from .fixed.rules import Rules, check_overflow, check_rounding
+from fxdsp.fixed import ops
+from fxdsp.fixed.format import Format
+from fxdsp.fixed.ops import OverflowLog
+from fxdsp.fixed.rules import Rules, check_overflow, check_rounding
 
 
 def _shaped(out: np.ndarray, shape: tuple):

@@ -20,14 +20,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .blocks.base import Block
-from .blocks.datapath import RtlPorts
-from .blocks.kinds import Context, Wired, block_tables, kind_of
-from .config import Config, load_config, one_edit, table_at
-from .errors import InputError
-from .fixed import Format, OverflowLog
-from .netlist import STAGES, Endpoint, Netlist, WiringError, parse, topological
-from .units import display, instance_units, quantity
+from fxdsp.blocks.base import Block
+from fxdsp.blocks.datapath import RtlPorts
+from fxdsp.blocks.kinds import Context, Wired, block_tables, kind_of
+from fxdsp.config import Config, load_config, one_edit, register_design_builder, table_at
+from fxdsp.errors import InputError
+from fxdsp.fixed import Format, OverflowLog
+from fxdsp.netlist import STAGES, Endpoint, Netlist, WiringError, parse, topological
+from fxdsp.units import display, instance_units, quantity
 
 
 class Chain(Block):
@@ -35,7 +35,7 @@ class Chain(Block):
     counters its members' (members in the order of ``instances``, which is the RTL ovf order)."""
 
     def __init__(self, netlist: Netlist, blocks: dict[str, Block], kinds: dict[str, str], fs_hz: float):
-        from .sensors import sensor_for
+        from fxdsp.sensors import sensor_for
 
         self.netlist = netlist
         self.fs_hz = fs_hz   # its sample rate: its own fs_hz, else [system].fs_hz
@@ -321,7 +321,7 @@ def stream_key(name: str) -> int:
 def _check_top_level(cfg: Config, tables: list[str]) -> None:
     """A top-level table that is no block, chain or system table is a typo: named (with the table it
     most likely meant) before the chains are read, which would only say that a block is missing."""
-    from .config import default_config_text, nearest
+    from fxdsp.config import default_config_text, nearest
     import tomllib
 
     known = {"system", "stimulus", "chain"} | {t.split(".")[0] for t in tables}
@@ -467,3 +467,6 @@ def build(config: Config | str | None = None, chains: bool = True) -> Design:
     design.instances = _instance_table(design, _quantities(design, tables, nets))
     cfg.check_all_read()
     return design
+
+
+register_design_builder(build)   # the config learns the keys a table may hold from the design, for its hints

@@ -20,32 +20,32 @@ import sys
 import tomllib
 from collections.abc import Iterable
 
-from .interrupts import interrupts_held
+from fxdsp.interrupts import interrupts_held
 
 # name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("fxdsp.commands.demo", "generate the golden vectors on the default config and print a summary"),
     "vectors": ("fxdsp.commands.vectors", "write (or --check) the golden vectors of every block and chain"),
     "bench": ("fxdsp.commands.bench", "throughput of the bit-exact models against fxpmath and apytypes"),
-    "simulate": ("fxdsp.sim.cli", "simulate a chamber run and write a canonical log"),
-    "calibrate": ("fxdsp.sim.calibrate_cli", "fit the compensation of a paper from a chamber log"),
-    "repro": ("fxdsp.repro.cli", "reproduce the papers' experiments on the simulated devices, bit-exact"),
-    "diagnose": ("fxdsp.diagnose.cli", "explain where a measured log disagrees with the simulation"),
-    "budget": ("fxdsp.budget.cli", "float vs fixed error budget in physical units; word-length exploration"),
-    "rtl": ("fxdsp.hdl.rtl_cli", "RTL regression of a config: vectors, headers, every block and chain simulated "
+    "simulate": ("fxdsp.commands.simulate", "simulate a chamber run and write a canonical log"),
+    "calibrate": ("fxdsp.commands.calibrate", "fit the compensation of a paper from a chamber log"),
+    "repro": ("fxdsp.commands.repro", "reproduce the papers' experiments on the simulated devices, bit-exact"),
+    "diagnose": ("fxdsp.commands.diagnose", "explain where a measured log disagrees with the simulation"),
+    "budget": ("fxdsp.commands.budget", "float vs fixed error budget in physical units; word-length exploration"),
+    "rtl": ("fxdsp.commands.rtl", "RTL regression of a config: vectors, headers, every block and chain simulated "
                                  "against the model, report"),
-    "formal": ("fxdsp.hdl.formal_cli", "formal proofs of every serial block's and chain top's handshake, latency "
+    "formal": ("fxdsp.commands.formal", "formal proofs of every serial block's and chain top's handshake, latency "
                                        "and shared-multiplier rules (yosys-smtbmc)"),
-    "hdl-gen": ("fxdsp.hdl.gen_cli", "write the Verilog parameter headers and ROM files from the config"),
-    "hw-report": ("fxdsp.hdl.report_cli", "synthesise every block for the iCE40UP5K and tabulate the cost"),
+    "hdl-gen": ("fxdsp.commands.hdl_gen", "write the Verilog parameter headers and ROM files from the config"),
+    "hw-report": ("fxdsp.commands.hw_report", "synthesise every block for the iCE40UP5K and tabulate the cost"),
     "diagnose-bench": ("fxdsp.commands.diagnose_bench", "seconds to diagnose simulated logs of given sizes"),
     "diagnose-hidden": ("fxdsp.commands.diagnose_hidden",
                         "confusion matrix of the diagnosis on simulated logs with a random hidden cause"),
     "diagnose-rtd": ("fxdsp.commands.diagnose_rtd",
                      "linear RTD law vs Callendar-Van Dusen on a resistance table, and its diagnosis"),
-    "extend": ("fxdsp.extend.cli", "diagnose a log, extend the compensation with hardware remedies, write the config, "
+    "extend": ("fxdsp.commands.extend", "diagnose a log, extend the compensation with hardware remedies, write the config, "
                                    "vectors, RTL headers, cocotb regression and report"),
-    "sweep": ("fxdsp.sweep.cli", "Monte-Carlo budget, word-length search, confusion matrix, RTL regressions "
+    "sweep": ("fxdsp.commands.sweep", "Monte-Carlo budget, word-length search, confusion matrix, RTL regressions "
                                  "on Dask workers"),
 }
 
@@ -92,7 +92,7 @@ def _main(argv: list[str] | None) -> int:
         parser.print_help()
         return 2
     try:
-        from .outputs import check_paths
+        from fxdsp.outputs import check_paths
 
         check_paths(args, getattr(args._module, "PATHS", {}))
         return int(args._module.run(args) or 0)

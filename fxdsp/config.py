@@ -26,8 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from .fixed import Format, Rules
-from .fixed.rules import check_overflow, check_rounding
+from fxdsp.fixed import Format, Rules
+from fxdsp.fixed.rules import check_overflow, check_rounding
 
 DEFAULT_CONFIG_NAME = "default.toml"
 
@@ -260,6 +260,16 @@ _REQUIRED = object()
 
 
 _SCHEMA_BUSY = False
+_DESIGN_BUILDER = None
+
+
+def register_design_builder(build) -> None:
+    """The function that builds a design from a Config (:func:`fxdsp.chains.build`, which registers
+    itself when imported). The config layer sits below the design and never imports it; the keys a
+    table may hold are learnt by building the default through this hook, for an error's hint."""
+    global _DESIGN_BUILDER
+    _DESIGN_BUILDER = build
+    _default_schema.cache_clear()
 
 
 @functools.cache
@@ -267,7 +277,9 @@ def _default_schema() -> dict[str, frozenset[str]]:
     """Table path -> the keys that table may hold: its keys in the built-in default and every key
     a design built from the default reads there (optional keys read with their default included)."""
     global _SCHEMA_BUSY
-    from .chains import build   # the design reads the config; imported here, when an error needs it
+    build = _DESIGN_BUILDER
+    if build is None:   # no design layer loaded: a block read on its own; no guess
+        return {}
 
     _SCHEMA_BUSY = True
     try:

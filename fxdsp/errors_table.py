@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .chains import Design, stream_key
+from fxdsp.chains import Design, stream_key
 
 
 

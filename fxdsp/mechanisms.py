@@ -1,7 +1,8 @@
 """The physical mechanisms of the measured-data contract (shared/spec/measured-data.md, section 3).
 
 One implementation serves both directions: `fxdsp simulate` injects a cause with these functions,
-`fxdsp diagnose` fits the same functions to a log. Names and parameter names are the contract's.
+`fxdsp diagnose` fits the same functions to a log. Each cause's record (name, parameters, where it
+acts, its fit) is in :mod:`fxdsp.causes`.
 
 All functions are float (physics, not fixed point) and work on numpy arrays sampled at possibly
 irregular times ``time_s`` (non-decreasing seconds since power-on).
@@ -13,34 +14,6 @@ import numpy as np
 from numba import njit
 
 from fxdsp.ramps import derivative, read_ramps
-
-# cause name -> parameter names, in the contract's order and units
-CAUSES: dict[str, tuple[str, ...]] = {
-    "none": (),
-    "thermal_lag": ("tau_s",),
-    "ramp_rate": ("k_per_c_per_s",),
-    "hysteresis": ("h",),
-    "warmup": ("a", "tau_s"),
-    "aging_drift": ("r_per_h",),
-    "quadrature_leak": ("c",),
-    "sf_nonlinearity": ("k3",),
-    "rtd_nonlinearity": ("b_per_c",),
-    "frequency_nonlinearity": ("k2_hz_per_c2",),
-}
-
-# the channel in which each cause shows (where its held-out gain is measured)
-CHANNEL: dict[str, str] = {
-    "none": "output",
-    "thermal_lag": "output",
-    "ramp_rate": "output",
-    "hysteresis": "output",
-    "warmup": "output",
-    "aging_drift": "output",
-    "quadrature_leak": "output",
-    "sf_nonlinearity": "output",
-    "rtd_nonlinearity": "temp_c",
-    "frequency_nonlinearity": "freq_hz",
-}
 
 # reference temperature of the curvature terms of the contract
 T_CURVE_C = 25.0
@@ -124,23 +97,3 @@ def rtd_curvature(ref_temp_c, b_per_c: float) -> np.ndarray:
 def frequency_curvature(te_c, k2_hz_per_c2: float) -> np.ndarray:
     """Turnover of a resonator: k2 * (Te - 25)^2 added to f0 + k Te."""
     return k2_hz_per_c2 * (_as_1d("te_c", te_c) - T_CURVE_C) ** 2
-
-
-def check_parameters(cause: str, parameters: dict[str, float]) -> dict[str, float]:
-    """Validate a cause name and its parameters against the contract; return them as floats."""
-    if cause not in CAUSES:
-        raise ValueError(f"cause: unknown name {cause!r}; expected one of {', '.join(CAUSES)}")
-    expected = CAUSES[cause]
-    unknown = sorted(set(parameters) - set(expected))
-    if unknown:
-        raise ValueError(f"{cause}: unknown parameter {unknown[0]!r}; expected {', '.join(expected) or 'none'}")
-    missing = [p for p in expected if p not in parameters]
-    if missing:
-        raise ValueError(f"{cause}: missing parameter {missing[0]!r}")
-    out = {}
-    for name in expected:
-        value = float(parameters[name])
-        if not np.isfinite(value):
-            raise ValueError(f"{cause}.{name}: must be a finite number, got {parameters[name]!r}")
-        out[name] = value
-    return out

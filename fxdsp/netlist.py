@@ -30,9 +30,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable
 
-from .config import Section, nearest
-from .errors import InputError
-from .units import quantity
+from fxdsp.config import Section, nearest
+from fxdsp.errors import InputError
+from fxdsp.units import quantity
 
 ARROW = "->"
 CHAIN_KEYS = ("sensor", "instances", "inputs", "input_units", "wires", "outputs", "fs_hz", "hardware",

@@ -33,8 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError
-from .interrupts import interrupts_held
+from fxdsp.errors import InputError
+from fxdsp.interrupts import interrupts_held
 
 IN, IN_DIR, OUT_FILE, OUT_DIR = "in", "in-dir", "out-file", "out-dir"
 _WHAT = {IN: "file to read", IN_DIR: "folder to read", OUT_FILE: "file to write", OUT_DIR: "folder to write into"}

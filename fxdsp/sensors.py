@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import InputError
-from .fixed import Rules, quantize
-from .netlist import Endpoint
+from fxdsp.errors import InputError
+from fxdsp.fixed import Rules, quantize
+from fxdsp.netlist import Endpoint
 
 NEAREST_SAT = Rules("half_up", "saturate")   # an ADC: nearest code, clipped at full scale
 # the gyro's quadrature in the nominal stimulus (FS): an untrimmed MEMS gyro's 10 deg/s at 200 deg/s

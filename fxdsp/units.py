@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from typing import Callable
 
-from .errors import InputError
+from fxdsp.errors import InputError
 
 QUANTITIES = ("C", "Hz", "Hz/g", "g", "1", "FS", "deg/h", "rad", "turn", "sensor")
 

@@ -14,10 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .chains import Design, stream_key
-from .fixed import Format
-from .fixed.hexfile import hex_words, read_hex_words
-from .outputs import staged
+from fxdsp.chains import Design, stream_key
+from fxdsp.fixed import Format
+from fxdsp.fixed.hexfile import hex_words, read_hex_words
+from fxdsp.outputs import staged
 
 MANIFEST = "manifest.json"
 

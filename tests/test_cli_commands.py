@@ -72,7 +72,7 @@ def test_only_the_command_being_run_is_imported():
             "print(sorted(m for m in sys.modules if m.startswith('fxdsp.') or m == 'numba'))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     loaded = out.strip().splitlines()[-1]
-    assert "fxdsp.diagnose.cli" in loaded
+    assert "fxdsp.commands.diagnose" in loaded
     assert "numba" not in loaded and "fxdsp.commands.demo" not in loaded and "fxdsp.chains" not in loaded
 
 

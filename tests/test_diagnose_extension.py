@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 from fxdsp.diagnose.api import diagnose_log
-from fxdsp.diagnose.logio import Log
+from fxdsp.logfile import Log
 from fxdsp.diagnose.report import report_dict
 from fxdsp.sim import generate_log
 

@@ -16,7 +16,7 @@ import os
 import numpy as np
 import pytest
 
-from fxdsp import mechanisms as mech
+from fxdsp import causes
 from fxdsp.diagnose.api import diagnose_columns
 from fxdsp.diagnose.hidden import ALL_CAUSES, diagnose_case, make_case, parameters_within
 from fxdsp.diagnose.report import report_dict
@@ -42,10 +42,10 @@ def test_hidden_cause_is_named_with_its_parameters(cause, seed):
         return
     assert diag.causes and diag.causes[0] == cause, f"{diag.causes} for {where}"
     found = diag.parameters[cause]
-    assert set(found) == set(mech.CAUSES[cause])
+    assert set(found) == set(causes.PARAMETERS[cause])
     assert parameters_within(case, found), f"{found} for {where}"
     gain = diag.gain
-    assert gain["heldout"] and gain["channel"] == mech.CHANNEL[cause]
+    assert gain["heldout"] and gain["channel"] == causes.CAUSES[cause].channel
     assert gain["ratio"] > 1.3, f"{gain} for {where}"
     # the uncertainties must be real numbers, and they must not claim more than the data give
     for name, value in found.items():

@@ -15,7 +15,7 @@ from numba import njit
 
 from fxdsp.diagnose.api import series_from_log
 from fxdsp.diagnose.engine import diagnose_series
-from fxdsp.diagnose.logio import Log
+from fxdsp.logfile import Log
 from fxdsp.ramps import derivative, moving_average
 
 from independent.chamber_logs import CAUSES, PAIRS, fast_ramp_logs

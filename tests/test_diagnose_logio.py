@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from fxdsp.cli import main
-from fxdsp.diagnose.logio import parse_mapping, read_log
+from fxdsp.logfile import parse_mapping, read_log
 from fxdsp.errors import InputError
 
 
@@ -186,7 +186,7 @@ def test_two_readings_per_stamp_give_the_same_diagnosis():
     lines): derivatives see zero-length intervals, which the shared mechanisms must handle; a
     ramp-rate term, which lives on d(temp_c)/dt, must still be found with its coefficient."""
     from fxdsp.diagnose.api import diagnose_log
-    from fxdsp.diagnose.logio import Log
+    from fxdsp.logfile import Log
     from fxdsp.sim import generate_log
 
     effects = {"ramp_rate": {"k_per_c_per_s": 400.0}}

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from fxdsp.cli import main
-from fxdsp.diagnose.logio import parse_mapping, read_log
+from fxdsp.logfile import parse_mapping, read_log
 from fxdsp.diagnose.rtd import IEC60751, cvd_law, fit_cvd, fit_linear, linear_temperature, load_table, rtd_study
 from fxdsp.schemas import diagnose_report_schema
 

@@ -22,7 +22,7 @@ from conftest import SHARED, needs_shared
 from fxdsp.chains import build
 from fxdsp.cli import main
 from fxdsp.config import Config
-from fxdsp.diagnose.logio import read_log
+from fxdsp.logfile import read_log
 from fxdsp.extend.evaluate import compensate002, heldout_rows_rate_table
 from fxdsp.netlist import with_stage
 
@@ -248,7 +248,7 @@ def test_extend_the_tckit_log(tmp_path, capsys):
     assert s["gain"] > 2.0, s
     # the lag carries the gain: the final config's bit-exact chain with its lag bypassed (the cubic
     # fitted on Te, fed the thermometer's T) leaves much more of the output's temperature dependence
-    from fxdsp.diagnose.logio import parse_mapping
+    from fxdsp.logfile import parse_mapping
     from fxdsp.extend.configure import thermometer_chain
     from fxdsp.extend.evaluate import thermometer_bitexact, thermometer_words
     from fxdsp.extend.roles import own_thermometer_roles

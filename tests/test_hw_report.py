@@ -11,9 +11,10 @@ import pytest
 
 from fxdsp.chains import build
 
-from fxdsp.hdl import hwreport, report_cli
+from fxdsp.hdl import hwreport
+from fxdsp.commands import hw_report as report_cli
 from fxdsp.hdl.hwreport import hw_report_path, load_hw_report, report_json, synthesised_cost
-from fxdsp.hdl.report_cli import UP5K, XC7A35T, markdown
+from fxdsp.commands.hw_report import UP5K, XC7A35T, markdown
 
 ROOT = Path(__file__).parents[1]
 
@@ -86,12 +87,12 @@ def test_committed_report_is_current_for_the_rtl_and_default_config():
     design = build()
     report = load_hw_report()
     assert report.get("source_sha256") == source_hash(design), "hdl/HW_REPORT.* is stale: run make hw-report"
-    from fxdsp.hdl.report_cli import variants
+    from fxdsp.commands.hw_report import variants
 
     # a row per instance, and one per resource-shared variant of a block (e.g. the serial iir)
     assert {r["name"] for r in report["rows"]} == set(design.hardware) | set(variants(design))
     # and each row's own hash is that of what it synthesises now (what a regeneration reuses)
-    from fxdsp.hdl.report_cli import expected_row_hashes
+    from fxdsp.commands.hw_report import expected_row_hashes
 
     expected = expected_row_hashes(design, report["target_mhz"])
     stale = [r["name"] for r in report["rows"] if r.get("sha256") != expected[r["name"]]]
@@ -112,7 +113,7 @@ def test_row_hash_changes_for_exactly_the_rows_that_read_a_changed_file(tmp_path
     (demod, the paper 002 chain) and no other;
     a change to a shared primitive re-runs every row that instantiates it."""
     from fxdsp.chains import build
-    from fxdsp.hdl.report_cli import expected_row_hashes
+    from fxdsp.commands.hw_report import expected_row_hashes
 
     design = build()
     before = expected_row_hashes(design, 40.0)
@@ -131,7 +132,7 @@ def test_row_hash_changes_for_exactly_the_rows_that_read_a_changed_file(tmp_path
 
 
 def test_previous_rows_are_reused_only_under_the_same_tools_and_when_complete():
-    from fxdsp.hdl.report_cli import reusable_rows
+    from fxdsp.commands.hw_report import reusable_rows
 
     good = {"sha256": "a", "LUT": 10, "xc7": {"LUT": 5}}
     failed = {"sha256": "b", "LUT": None, "xc7": {"LUT": 5}}
@@ -158,7 +159,7 @@ def test_source_hash_sees_a_one_character_rtl_change(tmp_path, monkeypatch):
 
 
 def test_a_module_larger_than_the_device_is_not_sent_to_the_placer():
-    from fxdsp.hdl.report_cli import too_big
+    from fxdsp.commands.hw_report import too_big
 
     assert too_big({"MAC16": UP5K["MAC16"], "LUT": UP5K["LUT"]}) == ""
     assert "SB_MAC16" in too_big({"MAC16": UP5K["MAC16"] + 1, "LUT": 10})
@@ -172,7 +173,7 @@ def test_only_reruns_its_rows_and_keeps_the_reports_other_current_rows(tmp_path,
     import argparse
     import shutil as sh
 
-    from fxdsp.hdl import report_cli
+    from fxdsp.commands import hw_report as report_cli
 
     out = tmp_path / "HW_REPORT.md"
     sh.copy(ROOT / "hdl" / "HW_REPORT.json", out.with_suffix(".json"))
@@ -237,7 +238,7 @@ def test_adding_an_instance_reruns_no_other_row():
     from conftest import default_data
     from fxdsp.chains import build
     from fxdsp.config import Config
-    from fxdsp.hdl.report_cli import expected_row_hashes
+    from fxdsp.commands.hw_report import expected_row_hashes
 
     before = expected_row_hashes(build(), 40.0)
     data = copy.deepcopy(default_data())
@@ -260,7 +261,7 @@ def test_a_comment_or_whitespace_edit_of_the_rtl_needs_no_new_synthesis(tmp_path
     every row's hash as it was (no re-synthesis), while a one-character change of its code makes
     exactly the rows that read it stale."""
     from fxdsp.chains import build
-    from fxdsp.hdl.report_cli import expected_row_hashes
+    from fxdsp.commands.hw_report import expected_row_hashes
 
     design = build()
     before = expected_row_hashes(design, 40.0)
@@ -379,7 +380,7 @@ def test_a_chains_targets_come_from_its_config_table():
 
     from conftest import edited_data
     from fxdsp.config import Config
-    from fxdsp.hdl.report_cli import _schedule_fields
+    from fxdsp.commands.hw_report import _schedule_fields
 
     data = edited_data()
     data["chain"]["paper001"]["hardware"] = {"lut4": 100, "mhz": 45.0}

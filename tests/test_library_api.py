@@ -224,7 +224,7 @@ def test_the_log_format_ships_in_the_package_and_docs_links_it():
 
 
 def test_the_log_format_names_every_column_the_reader_knows():
-    from fxdsp.diagnose.logio import OPTIONAL, REQUIRED, SENTINEL_ABS
+    from fxdsp.logfile import OPTIONAL, REQUIRED, SENTINEL_ABS
 
     doc = _log_doc()
     rows = dict(re.findall(r"^\| `(\w+)` \|[^|]*\| (required|optional) \|", doc, re.M))

@@ -169,7 +169,7 @@ def test_pt_element_in_the_bridge_read_with_a_linear_law_bends_like_cvd():
     """A real Pt element read with the paper's linear law: the readout error is the CVD curvature,
     B/A (T - 25)^2 to first order (IEC 60751: B/A = -1.478e-4 /C), and the diagnosis names it."""
     from fxdsp.diagnose.api import diagnose_log
-    from fxdsp.diagnose.logio import Log
+    from fxdsp.logfile import Log
     from fxdsp.sim import generate_log
 
     log = generate_log(scenario="paper001", seed=2, columns=("ref_temp_c",), rtd_element="pt_bridge",

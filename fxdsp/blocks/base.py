@@ -13,8 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..config import nearest
-from ..fixed import Format, OverflowLog, check_in_format, to_float
+from fxdsp.config import nearest
+from fxdsp.fixed import Format, OverflowLog, check_in_format, to_float
 
 
 @dataclass
@@ -91,7 +91,7 @@ class Block:
         ``saturate`` or ``wrap``: fitted and counted in the result's overflows under
         ``<block>.<input>``). Outputs are stored integers as from ``run``: ``real_outputs(result)``
         gives their real values."""
-        from ..api import quantize
+        from fxdsp.api import quantize
 
         self._check_names(real)
         log = OverflowLog() if log is None else log

@@ -28,8 +28,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..fixed import Rules
-from ..fixed.rules import OVERFLOW_CODE, ROUNDING_CODE
+from fxdsp.fixed import Rules
+from fxdsp.fixed.rules import OVERFLOW_CODE, ROUNDING_CODE
 
 PARAM, CONST, PACKED, INFO, NESTED = "param", "const", "packed", "info", "nested"
 

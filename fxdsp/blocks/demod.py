@@ -42,12 +42,12 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..config import Section
-from ..fixed import Format, OverflowLog, Rules, product_format, quantize, resize
-from ..fixed.kernels import convert, shift_right_round
-from .base import Block, corner_codes
-from .datapath import Datapath, limbs, OvfField, Rom, RtlPorts, const, info, nested
-from .iir import Iir, IirDatapath
+from fxdsp.config import Section
+from fxdsp.fixed import Format, OverflowLog, Rules, product_format, quantize, resize
+from fxdsp.fixed.kernels import convert, shift_right_round
+from fxdsp.blocks.base import Block, corner_codes
+from fxdsp.blocks.datapath import Datapath, limbs, OvfField, Rom, RtlPorts, const, info, nested
+from fxdsp.blocks.iir import Iir, IirDatapath
 
 
 @njit(cache=True)

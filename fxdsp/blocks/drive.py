@@ -53,13 +53,13 @@ from fractions import Fraction
 import numpy as np
 from numba import njit
 
-from ..config import Section
-from ..fixed import Format, OverflowLog, Rules, product_format, quantize
-from ..fixed.kernels import convert, shift_right_round
-from .base import Block, corner_codes
-from .datapath import Datapath, OvfField, Rom, RtlPorts, const, info, limbs, nested, whole_limbs
-from .demod import INV_K_FORMAT, TWO_PI_FORMAT, Nco, _nco_wave, cordic_one, cordic_words, mixer_format
-from .iir import Iir, IirDatapath, df1_cascade_step
+from fxdsp.config import Section
+from fxdsp.fixed import Format, OverflowLog, Rules, product_format, quantize
+from fxdsp.fixed.kernels import convert, shift_right_round
+from fxdsp.blocks.base import Block, corner_codes
+from fxdsp.blocks.datapath import Datapath, OvfField, Rom, RtlPorts, const, info, limbs, nested, whole_limbs
+from fxdsp.blocks.demod import INV_K_FORMAT, TWO_PI_FORMAT, Nco, _nco_wave, cordic_one, cordic_words, mixer_format
+from fxdsp.blocks.iir import Iir, IirDatapath, df1_cascade_step
 
 # int64 parameter vector of the kernels (indices)
 (P_ADDR_SHIFT, P_LUT_BITS, P_INTERP_BITS, P_TWO_PI, P_CORR_SHIFT, P_PHASE_MASK, P_MIX_SHIFT, P_RND, P_OVF,
@@ -383,7 +383,7 @@ class DriveDatapath(Datapath):
         cycles, demod.v, on the loop's parameters), its wave pass and the cycle after (3 N + 13), the
         controller's seven products on their own limb counts and 25 cycles of its own (5 of them the
         pipelined PIs')."""
-        from .demod import DemodDatapath
+        from fxdsp.blocks.demod import DemodDatapath
 
         n = limbs(*DemodDatapath._mixer_operands(p))
         products = sum(limbs(a, b) for a, b in DriveDatapath.controller_operands(p))
@@ -398,7 +398,7 @@ class DriveDatapath(Datapath):
     def engine_widths(p: dict) -> tuple[int, int]:
         """ENG_A_W, ENG_B_W: the widest a and b of the detector's products (the serial demodulator's
         bundle, :meth:`DemodDatapath.mac_operands`) and of the controller's, in whole 16-bit limbs."""
-        from .demod import DemodDatapath
+        from fxdsp.blocks.demod import DemodDatapath
 
         ops = (DemodDatapath.mac_operands(p), *DriveDatapath.controller_operands(p))
         return tuple(whole_limbs(max(o[k] for o in ops)) for k in (0, 1))

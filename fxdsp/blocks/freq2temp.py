@@ -21,10 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..config import Section
-from ..fixed import Format, OverflowLog, Rules, product_format, quantize, resize, sub
-from .base import Block, corner_codes
-from .datapath import Datapath, limbs, OvfField, RtlPorts, const, info
+from fxdsp.config import Section
+from fxdsp.fixed import Format, OverflowLog, Rules, product_format, quantize, resize, sub
+from fxdsp.blocks.base import Block, corner_codes
+from fxdsp.blocks.datapath import Datapath, limbs, OvfField, RtlPorts, const, info
 
 
 @dataclass(frozen=True, eq=False)

@@ -37,11 +37,11 @@ import numpy as np
 import scipy.signal as sps
 from numba import njit
 
-from ..config import Section
-from ..fixed import Format, OverflowLog, Rules, quantize
-from ..fixed.kernels import fit, shift_right_round
-from .base import Block, corner_codes, random_codes
-from .datapath import Datapath, limbs, OvfField, Rom, RtlPorts, info, signed_width
+from fxdsp.config import Section
+from fxdsp.fixed import Format, OverflowLog, Rules, quantize
+from fxdsp.fixed.kernels import fit, shift_right_round
+from fxdsp.blocks.base import Block, corner_codes, random_codes
+from fxdsp.blocks.datapath import Datapath, limbs, OvfField, Rom, RtlPorts, info, signed_width
 
 DESIGNS = ("butter", "cheby1", "bessel")
 BTYPES = ("lowpass", "highpass")

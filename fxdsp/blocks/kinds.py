@@ -14,9 +14,9 @@ import re
 from dataclasses import dataclass
 from typing import Callable
 
-from ..config import Section
-from ..errors import InputError
-from ..fixed import Format
+from fxdsp.config import Section
+from fxdsp.errors import InputError
+from fxdsp.fixed import Format
 
 
 @dataclass(frozen=True)
@@ -81,26 +81,26 @@ def _own_format(block, sec: Section, key: str, port: str, wired: dict[str, Wired
 
 
 def _rtd(sec, wired, ctx):
-    from .rtd import Rtd
+    from fxdsp.blocks.rtd import Rtd
 
     return _own_format(Rtd.from_config(sec), sec, "adc_format", "code", wired, ctx)
 
 
 def _piecewise(sec, wired, ctx):
-    from .piecewise import Piecewise
+    from fxdsp.blocks.piecewise import Piecewise
 
     return Piecewise.from_config(sec, port_format(sec, "temp_format", "temp", wired, ctx))
 
 
 def _sf_divide(sec, wired, ctx):
-    from .sf_divide import SfDivide
+    from fxdsp.blocks.sf_divide import SfDivide
 
     return SfDivide.from_config(sec, port_format(sec, "in_format", "x", wired, ctx),
                                 port_format(sec, "sf_format", "sf", wired, ctx))
 
 
 def _demod(sec, wired, ctx):
-    from .demod import Demod
+    from fxdsp.blocks.demod import Demod
 
     # a wired reference (enabled: chains._check_optional) brings its accumulator's width (phase_bits,
     # derived; a stated one must agree)
@@ -119,32 +119,32 @@ def _demod(sec, wired, ctx):
 
 
 def _bias_subtract(sec, wired, ctx):
-    from .bias_subtract import BiasSubtract
+    from fxdsp.blocks.bias_subtract import BiasSubtract
 
     return BiasSubtract.from_config(sec, port_format(sec, "in_format", "x", wired, ctx),
                                     port_format(sec, "bias_format", "bias", wired, ctx))
 
 
 def _iir(sec, wired, ctx):
-    from .iir import Iir
+    from fxdsp.blocks.iir import Iir
 
     return Iir.from_config(sec, ctx.fs_hz, port_format(sec, "data_format", "x", wired, ctx), sec.path)
 
 
 def _freq2temp(sec, wired, ctx):
-    from .freq2temp import Freq2Temp
+    from fxdsp.blocks.freq2temp import Freq2Temp
 
     return Freq2Temp.from_config(sec, sec.format("temp_format"), port_format(sec, "freq_format", "f", wired, ctx))
 
 
 def _drive(sec, wired, ctx):
-    from .drive import Drive
+    from fxdsp.blocks.drive import Drive
 
     return _own_format(Drive.from_config(sec, ctx.fs_hz, sec.format("in_format")), sec, "in_format", "x", wired, ctx)
 
 
 def _lag(sec, wired, ctx):
-    from .lag import Lag
+    from fxdsp.blocks.lag import Lag
 
     # in a chain, the lag's input arrives once per chain sample and it updates at its rate_hz
     rate = (ctx.fs_hz, ctx.fs_field, ctx.enforce) if ctx.in_chain else ()

@@ -37,11 +37,11 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..config import Section
-from ..fixed import Format, OverflowLog, Rules
-from ..fixed.kernels import convert, shift_right_round
-from .base import Block, corner_codes
-from .datapath import Datapath, limbs, OvfField, RtlPorts, info
+from fxdsp.config import Section
+from fxdsp.fixed import Format, OverflowLog, Rules
+from fxdsp.fixed.kernels import convert, shift_right_round
+from fxdsp.blocks.base import Block, corner_codes
+from fxdsp.blocks.datapath import Datapath, limbs, OvfField, RtlPorts, info
 
 
 @njit(cache=True)

@@ -29,11 +29,11 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..config import Section
-from ..fixed import Format, OverflowLog, Rules, product_format, quantize, sum_format
-from ..fixed.kernels import convert
-from .base import Block
-from .datapath import Datapath, limbs, OvfField, Rom, RtlPorts, const, frozen_array, info, packed, signed_width
+from fxdsp.config import Section
+from fxdsp.fixed import Format, OverflowLog, Rules, product_format, quantize, sum_format
+from fxdsp.fixed.kernels import convert
+from fxdsp.blocks.base import Block
+from fxdsp.blocks.datapath import Datapath, limbs, OvfField, Rom, RtlPorts, const, frozen_array, info, packed, signed_width
 
 
 @njit(cache=True)

@@ -21,11 +21,11 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..config import Section
-from ..fixed import Format, OverflowLog, Rules, quantize
-from ..fixed.kernels import convert
-from .base import Block, corner_codes, random_codes, tie_codes
-from .datapath import Datapath, OvfField, RtlPorts, info
+from fxdsp.config import Section
+from fxdsp.fixed import Format, OverflowLog, Rules, quantize
+from fxdsp.fixed.kernels import convert
+from fxdsp.blocks.base import Block, corner_codes, random_codes, tie_codes
+from fxdsp.blocks.datapath import Datapath, OvfField, RtlPorts, info
 
 
 @njit(cache=True)

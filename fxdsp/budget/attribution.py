@@ -27,9 +27,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..chains import Design, stream_key
-from ..errors_table import port_unit
-from .hybrid import CATEGORIES, Source, Switch, chain_analog, chain_sources, lowpass_of, run_chain
+from fxdsp.chains import Design, stream_key
+from fxdsp.errors_table import port_unit
+from fxdsp.budget.hybrid import CATEGORIES, Source, Switch, chain_analog, chain_sources, lowpass_of, run_chain
 
 ADDITIVITY_DB = 0.5     # stated tolerance of the power sum against the total
 THEORY_DB = 1.0         # a rounding point worse than theory by more than this is flagged

@@ -31,12 +31,12 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..blocks.drive import Drive
-from ..fixed import quantize
-from ..sensors import NEAREST_SAT, NOMINAL_QUADRATURE_FS
-from ..sim.driveloop import STEP_S, ClosedLoopRun, closed_loop, lock_time, samples_per_step
-from ..sim.resonator import DriveResonator, resonator_for
-from .attribution import expected_mean_q
+from fxdsp.blocks.drive import Drive
+from fxdsp.fixed import quantize
+from fxdsp.sensors import NEAREST_SAT, NOMINAL_QUADRATURE_FS
+from fxdsp.sim.driveloop import STEP_S, ClosedLoopRun, closed_loop, lock_time, samples_per_step
+from fxdsp.sim.resonator import DriveResonator, resonator_for
+from fxdsp.budget.attribution import expected_mean_q
 
 WITHIN_DB = 3.0
 TEMPS_C = (-40.0, 25.0, 85.0)   # the range's ends and room temperature
@@ -267,7 +267,7 @@ def reference_allan(drive: Drive, rate_full_scale_dps: float, seconds: float = 3
     left out), in deg/h of rate on the nominal quadrature, against the open-loop NCO's drift."""
     import allantools
 
-    from .floor import octave_taus
+    from fxdsp.budget.floor import octave_taus
 
     res = resonator or resonator_for(drive)
     settle = 10 * float(res.tau_s(temp_c))

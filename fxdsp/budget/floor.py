@@ -27,14 +27,14 @@ import allantools
 import numpy as np
 import scipy.signal as sps
 
-from ..chains import Design, build
-from ..config import Config, table_at
-from ..errors_table import port_unit
-from .attribution import Attribution
-from .hybrid import ADC, lowpass_of
-from .optimise import demod_of
-from .static import static_errors
-from .table import budget_rows
+from fxdsp.chains import Design, build
+from fxdsp.config import Config, table_at
+from fxdsp.errors_table import port_unit
+from fxdsp.budget.attribution import Attribution
+from fxdsp.budget.hybrid import ADC, lowpass_of
+from fxdsp.budget.optimise import demod_of
+from fxdsp.budget.static import static_errors
+from fxdsp.budget.table import budget_rows
 
 WITHIN_DB = 3.0          # "within 3 dB of its floor"
 DOMINANT_FACTOR = 0.5    # rms >= total / 2: power within 20 log10(2) = 6.02 dB of the total power

@@ -19,10 +19,10 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..chains import Chain
-from ..fixed import Format, OverflowLog, Rules, quantize
-from ..fixed.kernels import FLOOR, TOWARD_ZERO, round_float
-from ..blocks.lag import held
+from fxdsp.chains import Chain
+from fxdsp.fixed import Format, OverflowLog, Rules, quantize
+from fxdsp.fixed.kernels import FLOOR, TOWARD_ZERO, round_float
+from fxdsp.blocks.lag import held
 
 # categories of the attribution (item 2)
 ADC = "ADC quantisation"

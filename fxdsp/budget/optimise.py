@@ -30,12 +30,12 @@ import math
 from dataclasses import dataclass, field
 
 
-from ..chains import build
-from ..config import Config, table_at
-from ..errors_table import block_errors
-from ..fixed import Format
-from .static import static_error
-from .units import Target
+from fxdsp.chains import build
+from fxdsp.config import Config, table_at
+from fxdsp.errors_table import block_errors
+from fxdsp.fixed import Format
+from fxdsp.budget.static import static_error
+from fxdsp.budget.units import Target
 
 HEADROOM = 4
 
@@ -132,7 +132,7 @@ def _chain_table(data: dict, chain: str) -> dict:
 
 def chain_members(data: dict, chain: str) -> list[tuple[str, str]]:
     """(table, kind) of each instance of the chain's table, in its order."""
-    from ..blocks.kinds import kind_of
+    from fxdsp.blocks.kinds import kind_of
 
     return [(t, kind_of(t).name) for t in _chain_table(data, chain).get("instances", [])]
 

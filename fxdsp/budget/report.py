@@ -11,8 +11,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import scipy.signal as sps  # noqa: E402
 
-from .attribution import Attribution  # noqa: E402
-from .hybrid import CATEGORIES  # noqa: E402
+from fxdsp.budget.attribution import Attribution  # noqa: E402
+from fxdsp.budget.hybrid import CATEGORIES  # noqa: E402
 
 
 def plot_spectra(att: Attribution, fs: float, path: Path) -> None:

@@ -11,8 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..chains import Design
-from ..errors_table import ErrorStats, block_errors
+from fxdsp.chains import Design
+from fxdsp.errors_table import ErrorStats, block_errors
 
 
 @dataclass

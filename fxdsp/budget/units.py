@@ -8,8 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..chains import Design
-from ..errors_table import port_units
+from fxdsp.chains import Design
+from fxdsp.errors_table import port_units
 
 _TARGET_RE = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(\S+)\s*$")
 

@@ -17,10 +17,10 @@ import time
 
 import numpy as np
 
-from ..chains import build
-from ..errors import InputError
-from ..fixed import Format
-from ..outputs import IN, OUT_FILE, json_text, staged
+from fxdsp.chains import build
+from fxdsp.errors import InputError
+from fxdsp.fixed import Format
+from fxdsp.outputs import IN, OUT_FILE, json_text, staged
 
 
 APY_QUANT = {"floor": "TO_NEG", "half_up": "TIES_POS", "half_even": "TIES_EVEN", "toward_zero": "TO_ZERO"}
@@ -130,9 +130,9 @@ def biquad_fxpmath(iir, x: np.ndarray) -> np.ndarray:
 def _drive_loops(design, samples: int, repeat: int) -> dict:
     """Every drive loop of the config closed on its mode (:func:`fxdsp.sim.resonator.resonator_for`):
     samples per second of the bit-exact and the float loop, and of the resonator with its ADC alone."""
-    from ..blocks.drive import Drive
-    from ..sim.driveloop import closed_loop
-    from ..sim.resonator import _open_drive, resonator_for
+    from fxdsp.blocks.drive import Drive
+    from fxdsp.sim.driveloop import closed_loop
+    from fxdsp.sim.resonator import _open_drive, resonator_for
 
     out = {}
     for name, drive in design.blocks.items():

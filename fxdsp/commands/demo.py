@@ -11,10 +11,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..chains import build
-from ..errors_table import all_errors, format_table
-from ..outputs import IN, OUT_DIR
-from ..vectors import generate, write
+from fxdsp.chains import build
+from fxdsp.errors_table import all_errors, format_table
+from fxdsp.outputs import IN, OUT_DIR
+from fxdsp.vectors import generate, write
 
 
 PATHS = {"--config": IN, "--out": OUT_DIR}

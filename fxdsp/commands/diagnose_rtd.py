@@ -4,7 +4,7 @@ of each, and the cause the diagnosis names for the linear readout (see :mod:`fxd
 
 from __future__ import annotations
 
-from ..outputs import IN
+from fxdsp.outputs import IN
 
 PATHS = {"table": IN}
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ..vectors import write_or_check
+from fxdsp.vectors import write_or_check
 
 MAX_LISTED = 20  # a regenerated directory can differ everywhere: the first few say enough
 

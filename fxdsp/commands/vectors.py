@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..chains import build
-from ..outputs import IN, IN_DIR, OUT_DIR
-from ..vectors import generate
-from .generated import sync_generated
+from fxdsp.chains import build
+from fxdsp.outputs import IN, IN_DIR, OUT_DIR
+from fxdsp.vectors import generate
+from fxdsp.commands.generated import sync_generated
 
 
 def PATHS(args) -> dict:

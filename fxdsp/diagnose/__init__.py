@@ -9,13 +9,15 @@ from __future__ import annotations
 
 import importlib
 
-_EXPORTS = {"diagnose_file": "api", "diagnose_log": "api", "series_from_log": "api",
-            "Log": "logio", "parse_mapping": "logio", "read_log": "logio"}
+_EXPORTS = {"diagnose_file": "fxdsp.diagnose.api", "diagnose_log": "fxdsp.diagnose.api",
+            "series_from_log": "fxdsp.diagnose.api",
+            # the contract's log reader lives below the simulator and the diagnosis, which both read logs
+            "Log": "fxdsp.logfile", "parse_mapping": "fxdsp.logfile", "read_log": "fxdsp.logfile"}
 
 __all__ = list(_EXPORTS)
 
 
 def __getattr__(name: str):
     if name in _EXPORTS:
-        return getattr(importlib.import_module(f"fxdsp.diagnose.{_EXPORTS[name]}"), name)
+        return getattr(importlib.import_module(_EXPORTS[name]), name)
     raise AttributeError(f"module 'fxdsp.diagnose' has no attribute {name!r}")

@@ -6,7 +6,7 @@ import numpy as np
 
 from fxdsp.diagnose import model as M
 from fxdsp.diagnose.engine import Diagnosis, diagnose_series
-from fxdsp.diagnose.logio import Log, read_log
+from fxdsp.logfile import Log, read_log
 from fxdsp.errors import InputError
 
 MIN_ROWS = 50

@@ -6,26 +6,16 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from fxdsp.diagnose import model as M
+from fxdsp.causes import CAUSES
 from fxdsp.diagnose.blockfit import jackknife_sd, parabolic_argmin
 from fxdsp.diagnose.context import MIN_GAIN, Candidate, Context
 from fxdsp.diagnose.identify import judge
 from fxdsp.ramps import sample_interval
 
 
-# causes that live at the start of the log rather than throughout it
-TRANSIENT = ("warmup",)
-
-
 def affected_channels(ctx: Context, cause: str) -> list[str]:
     """Channels whose fit a cause changes (and where its held-out evidence is counted)."""
-    if cause == "thermal_lag":
-        return ["output"] + (["freq_hz"] if ctx.series.freq is not None else [])
-    if cause == "frequency_nonlinearity":
-        return ["freq_hz"]
-    if cause == "rtd_nonlinearity":
-        return ["temp_c"]
-    return ["output"]
+    return CAUSES[cause].channels(ctx.series.freq is not None)
 
 
 def available(ctx: Context, cause: str) -> bool:
@@ -57,15 +47,20 @@ def grid(ctx: Context, cause: str) -> np.ndarray:
     s = ctx.series
     dt = sample_interval(s.t) if np.ptp(s.t) > 0 else 1.0
     lo = max(2.0 * dt, 5.0)
-    if cause == "thermal_lag":
-        return np.geomspace(lo, max(s.duration, 4 * lo), 36)
-    if cause == "warmup":
-        return np.geomspace(lo, max(0.5 * s.duration, 4 * lo), 30)
-    raise KeyError(cause)
+    search = CAUSES[cause].search
+    if search is None:
+        raise KeyError(cause)
+    return np.geomspace(lo, max(search.span * s.duration, 4 * lo), search.points)
 
 
 def _log_axis(cause: str) -> bool:
-    return cause in ("thermal_lag", "warmup")
+    return CAUSES[cause].search is not None   # time constants: searched on a log axis
+
+
+def _searched(cause: str) -> str | None:
+    """The parameter of ``cause`` searched on a grid (None: the cause is linear)."""
+    search = CAUSES[cause].search
+    return None if search is None else search.parameter
 
 
 def _evaluate_state(ctx: Context, state: dict, channels: list[str]):
@@ -82,13 +77,13 @@ def _evaluate_state(ctx: Context, state: dict, channels: list[str]):
 def evaluate(ctx: Context, state: dict, cause: str, base_held: dict) -> Candidate:
     """Fit one candidate on top of ``state``; score it on held-out folds against ``state``."""
     channels = affected_channels(ctx, cause)
-    if cause not in M.NONLINEAR:
+    if _searched(cause) is None:
         res = _evaluate_state(ctx, {**state, cause: {}}, channels)
         held = {ch: res[ch][1] for ch in channels}
         nonlinear, nonlinear_sd = {}, {}
         at_bound = False
     else:
-        pname = M.NONLINEAR[cause]
+        pname = _searched(cause)
         values = grid(ctx, cause)
         train = np.zeros((values.size, ctx.blocks.n_folds))
         full = np.zeros(values.size)
@@ -106,7 +101,7 @@ def evaluate(ctx: Context, state: dict, cause: str, base_held: dict) -> Candidat
         held = {ch: held_g[ch][pick, np.arange(pick.size)] for ch in channels}
         axis = np.log(values) if _log_axis(cause) else values
         best = _refine(ctx, state, cause, channels, values, full, axis)
-        if cause in TRANSIENT:
+        if CAUSES[cause].transient:
             # a settling lives in the first few time constants of the log: deleting one of the 20
             # contiguous groups can delete most of it and throw the estimate to the grid's end.
             # Its uncertainty comes from the interleaved cross-validation folds instead, each of
@@ -131,8 +126,9 @@ def evaluate(ctx: Context, state: dict, cause: str, base_held: dict) -> Candidat
         ratios[ch] = rms_b / rms_a if rms_a > 0 else np.inf
         before_after[ch] = (rms_b, rms_a)
     main = max(channels, key=lambda ch: ratios[ch])
-    if cause == "thermal_lag" and ratios["output"] >= MIN_GAIN:
-        main = "output"  # the contract's channel for a lag, whenever it shows there
+    own = CAUSES[cause].channel
+    if ratios[own] >= MIN_GAIN:
+        main = own  # the contract's channel for the cause (a lag's: output), whenever it shows there
     return Candidate(cause=cause, channel=main, evidence=float(evidence), ratio=float(ratios[main]),
                      rms_before=float(before_after[main][0]), rms_after=float(before_after[main][1]),
                      nonlinear=nonlinear, nonlinear_sd=nonlinear_sd, ratios=ratios, at_bound=at_bound,
@@ -142,7 +138,7 @@ def evaluate(ctx: Context, state: dict, cause: str, base_held: dict) -> Candidat
 
 def _refine(ctx, state, cause, channels, values, full, axis) -> float:
     """Full-data minimum of the weighted SSE between the grid neighbours of the grid minimum."""
-    pname = M.NONLINEAR[cause]
+    pname = _searched(cause)
     i = int(np.argmin(full))
     lo, hi = axis[max(i - 1, 0)], axis[min(i + 1, values.size - 1)]
     if lo == hi:
@@ -166,9 +162,9 @@ def refit_nonlinear(ctx: Context, state: dict, accepted: list[Candidate]) -> Non
     """Re-estimate the nonlinear parameters of earlier causes with the later ones in the model:
     a lag time constant fitted while a quadrature leak was still unexplained is biased."""
     for cand in accepted:
-        if cand.cause not in M.NONLINEAR:
+        pname = _searched(cand.cause)
+        if pname is None:
             continue
-        pname = M.NONLINEAR[cand.cause]
         channels = affected_channels(ctx, cand.cause)
         others = {k: v for k, v in state.items() if k != cand.cause}
 

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fxdsp import mechanisms as mech
+from fxdsp.causes import PARAMETERS
 from fxdsp.diagnose import model as M
 from fxdsp.diagnose.candidates import affected_channels, refit_nonlinear
 from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, ORDER_CHOICES, Context, Diagnosis, choose_orders, set_noise_weights, sf_estimate
@@ -82,7 +82,7 @@ def diagnose_series(series: M.Series, n_segments: int = 200, n_folds: int = 5) -
         for cand in doubtful:
             _set_aside(unidentified, notes, cand.cause,
                        {k: described(parameters[cand.cause][k], uncertainty[cand.cause].get(k), verdicts[cand.cause][k])
-                        for k in mech.CAUSES[cand.cause]})
+                        for k in PARAMETERS[cand.cause]})
         accepted = [c for c in accepted if c not in doubtful]
         state = {k: v for k, v in state.items() if k in {c.cause for c in accepted}}
         refit_nonlinear(search, state, accepted)
@@ -138,7 +138,7 @@ def _final_parameters(ctx: Context, state: dict, accepted: list):
     for cand in accepted:
         p = {**linear.get(cand.cause, {}), **cand.nonlinear}
         u = {**linear_sd.get(cand.cause, {}), **cand.nonlinear_sd}
-        names = mech.CAUSES[cand.cause]
+        names = PARAMETERS[cand.cause]
         parameters[cand.cause] = {k: float(p[k]) for k in names}
         uncertainty[cand.cause] = {k: float(u[k]) for k in names if np.isfinite(u.get(k, np.nan))}
         verdicts[cand.cause] = {k: judge(k, parameters[cand.cause][k], uncertainty[cand.cause].get(k),

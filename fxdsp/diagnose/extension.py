@@ -15,10 +15,9 @@ without / with the extension.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from fxdsp.causes import phase_trim_rad
 from fxdsp.diagnose.context import Diagnosis
 from fxdsp.ramps import sample_interval
 
@@ -80,7 +79,7 @@ def phase_trim_extension(diag: Diagnosis, c: float) -> dict:
     folds = diag.context.blocks.row_fold()
     before = _heldout_rms(s.out, s.temp, s.rate, folds)
     after = _heldout_rms(s.out - c * s.quad, s.temp, s.rate, folds)
-    return {"extension": "phase_trim", "phase_trim_rad": -math.atan(c), "c": c, "rms_without": before,
+    return {"extension": "phase_trim", "phase_trim_rad": phase_trim_rad(c), "c": c, "rms_without": before,
             "rms_with": after, "ratio": before / after if after > 0 else float("inf"), "heldout": True}
 
 

@@ -41,17 +41,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fxdsp import mechanisms as mech
+from fxdsp import logfile, mechanisms as mech
+from fxdsp.causes import CAUSES
 
 SNR_RANGE = (5.0, 20.0)
 WANDER_RANGE = (2.0, 10.0)
 TAU_LAG_RANGE = (300.0, 4000.0)
 TAU_WARMUP_RANGE = (900.0, 7200.0)
-ALL_CAUSES = tuple(mech.CAUSES)
+ALL_CAUSES = tuple(CAUSES)
 # columns without which a cause cannot be seen at all
-NEEDS = {"quadrature_leak": ("quad",), "sf_nonlinearity": ("rate_dps",),
-         "rtd_nonlinearity": ("ref_temp_c",), "frequency_nonlinearity": ("freq_hz",)}
-OPTIONAL = ("ref_temp_c", "rate_dps", "freq_hz", "quad")
+NEEDS = {c.name: c.needs for c in CAUSES.values() if c.needs}
+OPTIONAL = logfile.OPTIONAL
 SCENARIOS_FOR = {
     # paper000's tumble applies a = cos(theta) in {1, 0, -1}: a^3 = a, k3 cannot be told from S
     "sf_nonlinearity": ("paper002", "random"),

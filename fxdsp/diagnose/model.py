@@ -15,15 +15,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fxdsp import mechanisms as mech
+from fxdsp.causes import CAUSES
 from fxdsp.ramps import quantisation_step, read_ramps
 
 T_REF_C = mech.T_CURVE_C
 
-# causes whose mechanism has one nonlinear parameter searched on a grid (the others are linear)
-NONLINEAR = {"thermal_lag": "tau_s", "warmup": "tau_s"}
-# the extra column each linear-in-output cause adds to the output design
-OUTPUT_COLUMN = {"ramp_rate": "k_per_c_per_s", "hysteresis": "h", "warmup": "a",
-                 "aging_drift": "r_per_h", "quadrature_leak": "c", "sf_nonlinearity": "k3"}
+# the causes that add a column to the output design (fxdsp.causes: the column and its parameter)
+OUTPUT_TERMS = tuple(c for c in CAUSES.values() if c.channel == "output" and c.term is not None)
 
 
 @dataclass
@@ -176,18 +174,10 @@ def output_design(series: Series, state: dict, orders: tuple[int, int | None], s
         for j in range(ps + 1):
             cols.append(rate * powers[j])
             names.append(f"s{j}")
-    extra = {
-        "ramp_rate": lambda: series.dtdt,
-        "hysteresis": lambda: series.hyst,
-        "warmup": lambda: np.exp(-series.t / state["warmup"]["tau_s"]),
-        "aging_drift": lambda: series.t / 3600.0,
-        "quadrature_leak": lambda: series.quad,
-        "sf_nonlinearity": lambda: series.sf_estimate * series.rate ** 3,
-    }
-    for cause, make in extra.items():
-        if cause in state:
-            cols.append(make())
-            names.append(cause)
+    for cause in OUTPUT_TERMS:
+        if cause.name in state:
+            cols.append(cause.term(series, state))
+            names.append(cause.name)
     if "thermal_lag" in state and has_lag_start(series, state["thermal_lag"]["tau_s"]):
         cols.append(lag_start(series, state["thermal_lag"]["tau_s"]))
         names.append("lag_start")
@@ -220,9 +210,7 @@ def freq_design(series: Series, state: dict, scale: Scaling) -> tuple[np.ndarray
         te = lagged(series, te, state["thermal_lag"]["tau_s"])
     x = scale(te)
     cols, names = [np.ones_like(x), x], ["f0", "k"]
-    if "frequency_nonlinearity" in state:
-        cols.append(x * x)
-        names.append("frequency_nonlinearity")
+    cols, names = _curvatures("freq_hz", state, x, cols, names)
     if "thermal_lag" in state and has_lag_start(series, state["thermal_lag"]["tau_s"]):
         cols.append(lag_start(series, state["thermal_lag"]["tau_s"]))
         names.append("lag_start")
@@ -233,7 +221,14 @@ def temp_design(series: Series, state: dict, scale: Scaling) -> tuple[np.ndarray
     """temp_c = offset + gain * ref_temp_c [+ curvature]."""
     x = scale(series.ref)
     cols, names = [np.ones_like(x), x], ["t0", "t1"]
-    if "rtd_nonlinearity" in state:
-        cols.append(x * x)
-        names.append("rtd_nonlinearity")
+    cols, names = _curvatures("temp_c", state, x, cols, names)
     return np.column_stack(cols), names
+
+
+def _curvatures(channel: str, state: dict, x: np.ndarray, cols: list, names: list) -> tuple[list, list]:
+    """The x^2 column of each curvature cause of ``channel`` in play (fxdsp.causes)."""
+    for cause in CAUSES.values():
+        if cause.curvature is not None and cause.channel == channel and cause.name in state:
+            cols.append(x * x)
+            names.append(cause.name)
+    return cols, names

@@ -6,33 +6,11 @@ from pathlib import Path
 
 import numpy as np
 
-from fxdsp import mechanisms as mech
+from fxdsp.causes import CAUSES
 from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, Diagnosis
 from fxdsp.diagnose.identify import TAU_LENGTHS, Verdict, described, reasons
 from fxdsp.diagnose.selection import NULL_DRAWS, NULL_QUANTILE, WANDER_GAIN
 from fxdsp.diagnose.results import heldout_residuals
-
-_EXPLAIN = {
-    "thermal_lag": ("The sensing element lags the logged temperature through a first-order lag of "
-                    "tau = {tau_s:.0f} s: heating and cooling give different outputs at the same temp_c "
-                    "and the difference decays through the dwells after each ramp."),
-    "ramp_rate": ("The output carries a term proportional to d(temp_c)/dt (k = {k_per_c_per_s:.4g} per C/s): "
-                  "a thermal-gradient effect that vanishes as soon as the temperature stops moving."),
-    "hysteresis": ("The output differs by {h:.4g} (2h between the two branches) after heating and after "
-                   "cooling ramps and keeps that offset through the dwells: hysteresis, not a lag."),
-    "warmup": ("A settling transient after power-on: output += {a:.4g} exp(-t / {tau_s:.0f} s)."),
-    "aging_drift": ("The output drifts linearly with time at {r_per_h:.4g} per hour, independent of "
-                    "temperature."),
-    "quadrature_leak": ("The quadrature channel leaks into the rate channel with coefficient c = {c:.4g} "
-                        "(a demodulation phase error of about {phase_mrad:.3g} mrad)."),
-    "sf_nonlinearity": ("The scale factor depends on the rate: output = B + S (rate + k3 rate^3) with "
-                        "k3 = {k3:.4g} per (rate unit)^2."),
-    "rtd_nonlinearity": ("temp_c is curved against the reference thermometer: b = {b_per_c:.4g} /C, i.e. "
-                         "a linear RTD law misreads by b (T - 25)^2 (Callendar-Van Dusen curvature)."),
-    "frequency_nonlinearity": ("The resonant frequency is curved in temperature: k2 = {k2_hz_per_c2:.4g} Hz/C^2 "
-                               "on top of f0 + k Te (a turnover)."),
-}
-
 
 def explanation(diag: Diagnosis) -> str:
     unnamed = "".join(f" {_UNNAMED.format(cause=c, why=reasons(p))}" for c, p in diag.unidentified.items())
@@ -45,9 +23,8 @@ def explanation(diag: Diagnosis) -> str:
     parts = []
     for cause in diag.causes:
         params = dict(diag.parameters[cause])
-        if cause == "quadrature_leak":
-            params["phase_mrad"] = 1e3 * float(np.arctan(abs(params["c"])))
-        parts.append(_EXPLAIN[cause].format(**params))
+        record = CAUSES[cause]
+        parts.append(record.explain.format(**params, **record.explain_extra(params)))
     g = diag.gain
     parts.append(f"Held-out rms of {g['channel']}: {g['rms_before']:.4g} -> {g['rms_after']:.4g} "
                  f"({g['ratio']:.2f}x).")
@@ -224,4 +201,4 @@ def write_report(diag: Diagnosis, directory) -> Path:
     return path
 
 
-_OUTPUT_CAUSES = tuple(c for c, ch in mech.CHANNEL.items() if ch == "output" and c != "none")
+_OUTPUT_CAUSES = tuple(c.name for c in CAUSES.values() if c.channel == "output" and c.name != "none")

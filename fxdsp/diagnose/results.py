@@ -6,9 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from fxdsp import mechanisms as mech
-from fxdsp.diagnose import model as M
+from fxdsp.causes import CAUSES
 from fxdsp.diagnose.blockfit import SegmentNormals, jackknife_sd
-from fxdsp.diagnose.candidates import TRANSIENT
 from fxdsp.diagnose.context import Context
 
 def linear_parameters(ctx: Context, state: dict):
@@ -25,8 +24,8 @@ def linear_parameters(ctx: Context, state: dict):
             pname, fn = conv
             params.setdefault(cause, {})[pname] = fn(coef)
             # a settling's amplitude, like its time constant, from the interleaved folds: one
-            # contiguous group can hold the whole transient (see candidates.TRANSIENT)
-            samples = normals.jackknife("fold")[0] if cause in TRANSIENT else jk
+            # contiguous group can hold the whole transient (a transient cause, fxdsp.causes)
+            samples = normals.jackknife("fold")[0] if CAUSES[cause].transient else jk
             sds.setdefault(cause, {})[pname] = jackknife_sd(np.array([fn(c) for c in samples]))
     return params, sds
 
@@ -34,21 +33,15 @@ def linear_parameters(ctx: Context, state: dict):
 def _converter(ctx: Context, channel: str, cause: str, names: list[str]):
     """(parameter name, coefficients -> value in contract units) of a cause's linear parameter."""
     sd_y = ctx.norm[channel][1]
-    if channel == "output" and cause in M.OUTPUT_COLUMN:
-        j = names.index(cause)
-        return M.OUTPUT_COLUMN[cause], lambda c: float(c[j] * sd_y)
-    if channel == "freq_hz" and cause == "frequency_nonlinearity":
-        j, half = names.index(cause), ctx.scales["freq_hz"].half
-        return "k2_hz_per_c2", lambda c: float(c[j] * sd_y / half ** 2)
-    if channel == "temp_c" and cause == "rtd_nonlinearity":
-        sc = ctx.scales["temp_c"]
-
-        def b_per_c(c):
-            quad = c[2] / sc.half ** 2  # coefficient of ref^2
-            slope = c[1] / sc.half + 2.0 * c[2] * (mech.T_CURVE_C - sc.mid) / sc.half ** 2
-            return float(quad / slope) if slope != 0 else float("nan")
-
-        return "b_per_c", b_per_c
+    record = CAUSES[cause]
+    if channel != record.channel or cause not in names:
+        return None
+    j = names.index(cause)
+    if record.curvature is not None:
+        sc = ctx.scales[channel]
+        return record.parameters[0], lambda c: record.curvature(c, j, sd_y, sc)
+    if record.linear is not None:
+        return record.linear, lambda c: float(c[j] * sd_y)
     return None
 
 

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fxdsp.blocks.rtd import RtdPhysics
-from fxdsp.diagnose.logio import lines_and_header
+from fxdsp.logfile import lines_and_header
 
 IEC60751 = {"R0": 100.0, "A": 3.9083e-3, "B": -5.775e-7, "C": -4.183e-12}
 
@@ -112,7 +112,7 @@ def diagnose_linear_readout(temp_c, resistance, r0: float, beta: float, seed: in
     output channel has nothing to explain and only the thermometers can disagree.
     """
     from fxdsp.diagnose.api import diagnose_log
-    from fxdsp.diagnose.logio import Log
+    from fxdsp.logfile import Log
 
     t = np.asarray(temp_c, float)
     rng = np.random.default_rng(seed)

@@ -5,14 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from fxdsp import mechanisms as mech
+from fxdsp.causes import CAUSES
 from fxdsp.diagnose.candidates import affected_channels, available, evaluate, refit_nonlinear
 from fxdsp.diagnose.context import (MAX_CAUSES, MIN_EVIDENCE, MIN_GAIN, Candidate, Context, innovations,
                                     residual, set_noise_weights, white_noise_variance)
 
 # causes whose regressor is slow in time, so a bias random walk can imitate them: a drift, a
 # settling, a level that changes a few times, a quadrature level wandering over hours
-TIME_TIED = ("aging_drift", "warmup", "hysteresis", "quadrature_leak")
+TIME_TIED = tuple(c.name for c in CAUSES.values() if c.time_tied)
 # the re-test of a time-like cause in a wandering log: its held-out evidence must exceed the
 # NULL_QUANTILE of NULL_DRAWS random walks at the residual's level (fixed seed: reproducible), and
 # pass on innovations unless its held-out rms ratio is at least WANDER_GAIN
@@ -30,7 +30,7 @@ def greedy_search(ctx: Context) -> tuple[dict, list[Candidate], list[Candidate]]
     alone explains little, together nearly everything), which one-at-a-time selection never
     finds. So every pair of candidates is also scored together, and the forward selection is run
     again from the best pair that passes; the model with the lower held-out error wins."""
-    causes = [c for c in mech.CAUSES if available(ctx, c)]
+    causes = [c for c in CAUSES if available(ctx, c)]
     state, accepted, first_round = _forward(ctx, causes, {}, [])
     pair = _best_pair(ctx, causes, first_round)
     if pair is not None and {c.cause for c in pair} != set(state):

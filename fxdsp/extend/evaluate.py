@@ -23,8 +23,6 @@ that the stage produced the gain.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from fxdsp.diagnose.extension import heldout_residual, log_rate_lag
@@ -32,30 +30,9 @@ from fxdsp.errors import InputError
 from fxdsp.extend.plan import parameter
 from fxdsp.fixed import OverflowLog, Rules, quantize, to_float
 from fxdsp.repro.points import rate_table_windows
+from fxdsp.repro.stages import stage_inputs, trim_angle
 
 ROUND = Rules("half_up", "saturate")
-
-
-def trim_angle(nco) -> float:
-    """The NCO's quantised trim word as an angle in (-pi, pi]."""
-    turn = nco.trim / 2.0**nco.phase_bits
-    return float(2 * math.pi * (turn - 1.0 if turn > 0.5 else turn))
-
-
-def config_stages(chain) -> tuple[set[str], float | None, float]:
-    """The stages a gyro_rtd chain (built, :class:`fxdsp.chains.Chain`) carries: ({"lag", "trim",
-    "cvd"} subset, lag tau, trim angle), read from its own blocks."""
-    on, tau = set(), None
-    s = chain.sensor
-    if s.rtd.physics.law == "cvd":
-        on.add("cvd")
-    if s.lag is not None:
-        on.add("lag")
-        tau = s.lag.tau_s
-    theta = trim_angle(s.demod.nco)
-    if s.demod.nco.trim != 0:
-        on.add("trim")
-    return on, tau, theta
 
 
 def heldout_rows_rate_table(columns: dict) -> np.ndarray:
@@ -93,32 +70,6 @@ def compensate002(columns: dict, config_text_: str, on: set[str], tau_s: float |
     got = comp.run(out, code, ovf)
     return got["rate_dps"] - np.asarray(columns["rate_dps"], float), int(ovf.total)
 
-
-def linear_readout_codes(rtd, temp_c, ovf=None) -> np.ndarray:
-    """The ADC codes behind a temperature read with the linear law R0 (1 + A T) from an element whose
-    table is now Callendar-Van Dusen (A = cvd_a): a log's temp_c back to its resistance, then the
-    bridge and ADC. What the ``cvd`` remedy assumes of a log: its temp_c is that linear reading."""
-    p = rtd.physics
-    r = p.r0 * (1.0 + p.a * np.asarray(temp_c, float))
-    return rtd.adc_quantize(p.adc_fraction(r), ovf)
-
-
-def stage_inputs(comp, columns: dict, on: set[str], tau_s: float | None, theta: float, ovf=None):
-    """(temperature code the engines see, output the divider sees) with the stages ``on``. A config
-    whose RTD table is CVD reads the log's temp_c as a linear reading of that element."""
-    if "trim" in on and "quad" not in columns:
-        raise ValueError("log: the config's demodulation phase trim needs the quad column to compensate at log rate")
-    ovf = OverflowLog() if ovf is None else ovf
-    if "cvd" in on:
-        code = comp.rtd.stream(ovf, code=linear_readout_codes(comp.rtd, columns["temp_c"], ovf))["temp"]
-    else:
-        code = comp.temperature_code(columns["temp_c"], ovf)
-    if "lag" in on:
-        code = log_rate_lag(comp.lag_template, tau_s, columns["time_s"]).run(log=ovf, temp=code).outputs["te"]
-    out = np.asarray(columns["output"], float)
-    if "trim" in on:
-        out = out * math.cos(theta) + np.asarray(columns["quad"], float) * math.sin(theta)
-    return code, out
 
 
 def gyro_rtd_applied(columns: dict, variants: dict, remedies, roles) -> dict:

@@ -70,7 +70,7 @@ def extend_log(path, mapping=None, delimiter=",", time_format=None, chain="auto"
                rtl: bool = True, build_root=None, widen: bool = False, strict: bool = False,
                base_name: str | None = None) -> Extension:
     from fxdsp.diagnose.api import diagnose_log
-    from fxdsp.diagnose.logio import read_log
+    from fxdsp.logfile import read_log
 
     diag = diagnose_log(read_log(path, mapping, delimiter, time_format))
     return extend_diagnosis(diag, Path(str(path)).name, chain, base_text, rtl, build_root, widen=widen,

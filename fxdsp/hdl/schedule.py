@@ -35,7 +35,7 @@ def on_shared_multiplier(design, name: str) -> list[str]:
 def mac_operands(design, name: str) -> tuple[int, int]:
     """The widest (a, b) operands instance ``name`` issues on its multiplier bundle at the design's
     parameters (its datapath's :meth:`~fxdsp.blocks.datapath.Datapath.mac_operands`)."""
-    from .params import instance
+    from fxdsp.hdl.params import instance
 
     return design.instances[name].block.datapath.mac_operands(instance(design, name).params)
 
@@ -44,7 +44,7 @@ def member_cycles(design, name: str, arch: int = 1, unroll: int = 1) -> int:
     """A block instance's cycles from its accepting edge to its successor's at the design's parameters:
     ARCH = 1 its serial cycles per sample, ARCH = 0 its latency (``unroll``: the divider's UNROLL),
     each its datapath's (:class:`fxdsp.blocks.datapath.Datapath`)."""
-    from .params import instance
+    from fxdsp.hdl.params import instance
 
     dp, p = design.instances[name].block.datapath, instance(design, name).params
     return dp.serial_cycles(p, unroll) if arch else dp.latency(p, unroll)
@@ -73,7 +73,7 @@ def chain_schedule(design, name: str, arch: int = 1, unroll: int = 1) -> tuple[i
     pass runs as its host's result leaves. A wire read ahead (:func:`waits_on`) does not wait. Then the out_valid register (busy clears with it and the
     next sample enters as it leaves): cycles per sample = 3 + the last member's in_valid + cycles."""
     net = design.chains[name].netlist
-    from .sharing import engine_sharing
+    from fxdsp.hdl.sharing import engine_sharing
 
     shares = engine_sharing(design, name) if arch else {}
     cycles = {m: member_cycles(design, m.replace(".", "_"), arch, unroll) for m in net.order}

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..fixed.hexfile import hex_words
+from fxdsp.fixed.hexfile import hex_words
 
 # the piecewise parameters a second coefficient set has of its own (piecewise.v SETS = 2: the "_1"
 # parameters); the files are each set's ROMs

@@ -29,7 +29,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import InputError
+from fxdsp.errors import InputError
 
 INSTALL_HDL = "pip install 'fxdsp[hdl]'"
 

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..blocks.base import corner_codes, tie_codes
-from .schedule import cycles_per_sample
+from fxdsp.blocks.base import corner_codes, tie_codes
+from fxdsp.hdl.schedule import cycles_per_sample
 
 # samples of a random stream per block module (its corners first, then a random tail): the slow ones
 # shorter; a chain's from its one-sample-per-clock schedule, CHAIN_CYCLES cycles in all

@@ -5,5 +5,5 @@ Modules: :mod:`~fxdsp.repro.points` (per-temperature SF/bias points, tempco),
 :mod:`~fxdsp.repro.calibrate` (fits in table form), :mod:`~fxdsp.repro.calconfig` (quantised
 calibrated config), :mod:`~fxdsp.repro.bitexact` (log-rate bit-exact compensation),
 :mod:`~fxdsp.repro.paper002` / ``paper001`` / ``paper000`` / ``paper003`` (the reproductions),
-:mod:`~fxdsp.repro.report` (plots and markdown), :mod:`~fxdsp.repro.cli` (the command).
+:mod:`~fxdsp.repro.report` (plots and markdown), :mod:`~fxdsp.commands.repro` (the command).
 """

@@ -12,6 +12,7 @@ from fxdsp.repro.bitexact import Compensator000, Compensator001, Compensator002
 from fxdsp.repro.calconfig import config_from_text, config_text, paper000_tables, paper001_tables, paper002_tables
 from fxdsp.repro.calibrate import calibrate002
 from fxdsp.repro.points import rate_table_points, tempco
+from fxdsp.repro.stages import config_stages, stage_inputs
 from fxdsp.sim.calibration import calibrate_paper000_log, calibrate_paper001, tumble_points_from_log
 
 PAPERS = ("002", "001", "000")
@@ -26,8 +27,6 @@ def calibrated_config(paper: str, log: dict, order: int = 1, base_text: str | No
     if paper == "002":
         on = set()
         if base_text is not None:
-            from fxdsp.extend.evaluate import config_stages, stage_inputs
-
             comp = Compensator002(config_from_text(base_text))
             on, tau, theta = config_stages(comp.chain)
         if on:
@@ -65,8 +64,6 @@ def apply_config(paper: str, config_text_: str, log: dict) -> dict:
     """Bit-exact compensation of ``log`` with a config; figures before and after."""
     cfg = config_from_text(config_text_)
     if paper == "002":
-        from fxdsp.extend.evaluate import config_stages, stage_inputs
-
         comp = Compensator002(cfg)
         on, tau, theta = config_stages(comp.chain)
         ovf = OverflowLog()

@@ -20,10 +20,10 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..blocks.drive import (_drive_step, _drive_step_float, Drive, FS_AMP, FS_ERR, FS_F, FS_PHASE, S_AMP, S_ERR, S_F,
+from fxdsp.blocks.drive import (_drive_step, _drive_step_float, Drive, FS_AMP, FS_ERR, FS_F, FS_PHASE, S_AMP, S_ERR, S_F,
                             S_FTW, S_PHASE, wrap_rad)
-from ..fixed import OverflowLog
-from .resonator import DriveResonator, adc_code, resonator_step
+from fxdsp.fixed import OverflowLog
+from fxdsp.sim.resonator import DriveResonator, adc_code, resonator_step
 
 CHUNK = 1 << 20
 STEP_S = 0.01   # the temperature (and resonance) profile's step

@@ -23,17 +23,18 @@ import dataclasses
 
 import numpy as np
 
-from fxdsp import mechanisms as mech
+from fxdsp.causes import inject
 from fxdsp.errors import InputError
 from fxdsp.sim import noise as noise_mod
 from fxdsp.sim.model import Baseline, as_model, scenario_baseline, validate_effects
+from fxdsp import logfile
 from fxdsp.sim.programmes import PROGRAMMES, programme, sample
 from fxdsp.sim.repeatability import Repeatability
 from fxdsp.sim.thermal import ThermalChain
 
 SCENARIOS: tuple[str, ...] = tuple(PROGRAMMES)
-REQUIRED_COLUMNS = ("time_s", "temp_c", "output")
-OPTIONAL_COLUMNS = ("ref_temp_c", "rate_dps", "freq_hz", "quad")
+REQUIRED_COLUMNS = logfile.REQUIRED   # the contract's columns, said once in the log file's module
+OPTIONAL_COLUMNS = logfile.OPTIONAL
 DEFAULT_TIME_STEP_S = 10.0
 
 # quadrature: a level of 2 S0 (i.e. 2 deg/s-equivalent, typical of an untrimmed MEMS gyro) wandering
@@ -175,19 +176,15 @@ def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: 
     nodes = (thermal.temperatures(t, run.air_c) if thermal
              else {"air": run.air_c, "package": run.air_c, "die": run.air_c})
     rtd_true = nodes[thermal.rtd_node] if thermal else run.air_c
-    rtd_c = _rtd_readout(rtd_true, rtd_element)
-    if "rtd_nonlinearity" in causes:
-        rtd_c = rtd_true + mech.rtd_curvature(rtd_true, causes["rtd_nonlinearity"]["b_per_c"])
+    signals = {"t": t, "rtd_true": rtd_true}   # what a cause's injection may read (fxdsp.causes)
+    rtd_c = inject("rtd", _rtd_readout(rtd_true, rtd_element), causes, signals)
     temp_clean = baseline.rtd_offset_c + baseline.rtd_gain * rtd_c
     te = baseline.rtd_offset_c + baseline.rtd_gain * nodes["die"]  # the die on the RTD's linear scale
-    if "thermal_lag" in causes:
-        te = mech.first_order_lag(t, te, causes["thermal_lag"]["tau_s"])
+    te = inject("te", te, causes, signals)
 
     # --- output and resonator ------------------------------------------------------------------
     rate = _applied_input(scenario, run)
-    effective_rate = rate
-    if "sf_nonlinearity" in causes:
-        effective_rate = rate + causes["sf_nonlinearity"]["k3"] * rate ** 3
+    effective_rate = inject("rate", rate, causes, signals)
     output = baseline.bias(te) + baseline.sf(te) * effective_rate
     rep_draw = None
     if repeatability is not None:
@@ -196,20 +193,9 @@ def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: 
         rep_bias, rep_sf, rep_draw = repeatability.offsets(streams["repeatability"], t, segments, start_c)
         output = output + baseline.sf_poly[0] * rep_bias + baseline.sf(te) * rep_sf * effective_rate
     quad = _quadrature(streams["quad"], t, baseline.sf_poly[0])
-    if "ramp_rate" in causes:
-        output = output + causes["ramp_rate"]["k_per_c_per_s"] * mech.rate_of_change(t, temp_clean)
-    if "hysteresis" in causes:
-        output = output + causes["hysteresis"]["h"] * mech.ramp_direction(t, temp_clean)
-    if "warmup" in causes:
-        output = output + mech.warmup(t, **causes["warmup"])
-    if "aging_drift" in causes:
-        output = output + mech.aging_drift(t, causes["aging_drift"]["r_per_h"])
-    if "quadrature_leak" in causes:
-        # the demodulator leaks the true quadrature; the logged quad channel adds its own noise
-        output = output + causes["quadrature_leak"]["c"] * quad
-    freq = baseline.freq(te)
-    if "frequency_nonlinearity" in causes:
-        freq = freq + mech.frequency_curvature(te, causes["frequency_nonlinearity"]["k2_hz_per_c2"])
+    signals.update(temp_clean=temp_clean, te=te, quad=quad)
+    output = inject("output", output, causes, signals)
+    freq = inject("freq", baseline.freq(te), causes, signals)
 
     # --- noise ----------------------------------------------------------------------------------
     levels = noise_mod.resolve_noise(noise, baseline.sf_poly[0])

@@ -12,9 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fxdsp.sim.generate import OPTIONAL_COLUMNS, REQUIRED_COLUMNS
-
-CANONICAL = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
+from fxdsp.logfile import CANONICAL, read_log as read_contract, REQUIRED as REQUIRED_COLUMNS
 
 
 def _comment_lines(header_comments) -> list[str]:
@@ -50,10 +48,8 @@ def write_log(path, log: dict, header_comments: dict | list | None = None) -> No
 
 def read_log(path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     """(columns, header comments as key -> value) of a canonical log. The columns come from the one
-    reader of the contract (:func:`fxdsp.diagnose.logio.read_log`: unusable rows dropped, duplicate
+    reader of the contract (:func:`fxdsp.logfile.read_log`: unusable rows dropped, duplicate
     or missing columns and a flat output refused); the ``# key: value`` lines are this writer's."""
-    from fxdsp.diagnose.logio import read_log as read_contract
-
     columns = read_contract(path).columns
     comments = {}
     with open(path, encoding="utf-8-sig") as handle:

@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fxdsp.mechanisms import CAUSES, check_parameters
+from fxdsp.causes import PARAMETERS, check_parameters
 
 
 @dataclass(frozen=True)
@@ -154,12 +154,12 @@ def validate_effects(effects, where: str = "effects") -> dict[str, dict[str, flo
         raise ValueError(f"{where}: must be a mapping cause -> {{parameter: value}}")
     out = {}
     for cause, params in effects.items():
-        if cause not in CAUSES:
-            raise ValueError(f"{where}: unknown cause {cause!r}; expected one of {', '.join(CAUSES)}")
+        if cause not in PARAMETERS:
+            raise ValueError(f"{where}: unknown cause {cause!r}; expected one of {', '.join(PARAMETERS)}")
         if not isinstance(params, dict):
             raise ValueError(f"{where}.{cause}: must be a mapping parameter -> value")
         for pname, pvalue in params.items():
-            if pname in CAUSES[cause]:  # a JSON string or null would otherwise pass float() or fail unnamed
+            if pname in PARAMETERS[cause]:  # a JSON string or null would otherwise pass float() or fail unnamed
                 _number(f"{where}.{cause}.{pname}", pvalue)
         checked = check_parameters(cause, params)
         for pname, value in checked.items():

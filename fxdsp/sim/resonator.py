@@ -31,7 +31,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numba import njit
 
-from ..fixed.kernels import HALF_UP, round_float
+from fxdsp.fixed.kernels import HALF_UP, round_float
 
 KELVIN = 273.15
 

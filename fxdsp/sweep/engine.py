@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..outputs import plain
+from fxdsp.outputs import plain
 
 JOURNAL = "journal.jsonl"
 JOURNAL_VERSION = 1

@@ -13,7 +13,7 @@ from functools import partial
 
 
 def settings(per_cause: int, first_seed: int, causes, snr_range) -> dict:
-    from ..diagnose.hidden import ALL_CAUSES
+    from fxdsp.diagnose.hidden import ALL_CAUSES
 
     causes = tuple(causes)
     unknown = [c for c in causes if c not in ALL_CAUSES]
@@ -43,7 +43,7 @@ def task_function(settings: dict):
 def _task(snr_range: tuple, params: dict, seed: int) -> dict:
     """Simulate and diagnose one case (``seed``, the engine's, is unused: the case seed is the
     one ``diagnose-hidden`` would use, so both give the same case)."""
-    from ..diagnose.hidden import case_outcome, diagnose_case, make_case
+    from fxdsp.diagnose.hidden import case_outcome, diagnose_case, make_case
 
     case = make_case(params["cause"], params["case_seed"], snr_range=snr_range)
     return case_outcome(case, diagnose_case(case))
@@ -51,15 +51,15 @@ def _task(snr_range: tuple, params: dict, seed: int) -> dict:
 
 def confusion_of(settings: dict, records: list[dict], seconds: float = 0.0):
     """The :class:`fxdsp.diagnose.hidden.Confusion` of the finished cases (failed ones left out)."""
-    from ..diagnose.hidden import tally
+    from fxdsp.diagnose.hidden import tally
 
     done = [(r["params"]["cause"], r["params"]["case_seed"], r["result"]) for r in records if "result" in r]
     return tally(settings["per_cause"], settings["causes"], done, seconds)
 
 
 def summarise(settings: dict, records: list[dict]) -> dict:
-    from ..diagnose.hidden import ALL_CAUSES
-    from .engine import failed_records
+    from fxdsp.diagnose.hidden import ALL_CAUSES
+    from fxdsp.sweep.engine import failed_records
 
     c = confusion_of(settings, records)
     return {"per_cause": settings["per_cause"], "first_seed": settings["first_seed"], "snr": settings["snr"],
@@ -72,7 +72,7 @@ def summarise(settings: dict, records: list[dict]) -> dict:
 
 def format_report(settings: dict, records: list[dict], seconds: float | None = None) -> str:
     """``diagnose-hidden``'s table; without ``seconds`` its timing line is left out (for files)."""
-    from ..diagnose.hidden import format_confusion
+    from fxdsp.diagnose.hidden import format_confusion
 
     c = confusion_of(settings, records, seconds or 0.0)
     lines = format_confusion(c, timing=seconds is not None).splitlines()

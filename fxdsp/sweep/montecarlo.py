@@ -33,8 +33,8 @@ from functools import lru_cache, partial
 import numpy as np
 from scipy.stats import binom
 
-from ..errors import InputError
-from .engine import failed_records
+from fxdsp.errors import InputError
+from fxdsp.sweep.engine import failed_records
 
 CHAIN = "chain_paper002"
 PERCENTILES = (0.5, 0.9, 0.99)
@@ -45,8 +45,8 @@ LEVEL = 0.95
 # Settings and the grid
 # ----------------------------------------------------------------------------------------------
 def _chain(config_data: dict, chain: str):
-    from ..chains import build
-    from ..config import Config
+    from fxdsp.chains import build
+    from fxdsp.config import Config
 
     design = build(Config(copy.deepcopy(config_data), source="<sweep montecarlo>"))
     c = design.chain(chain, "fxdsp sweep montecarlo")
@@ -70,7 +70,7 @@ def grid(config_data: dict, temps: int = 16, freqs: int | None = None, temp_rang
     default the chain's sensor's chamber range); ``freqs`` = 1: the demodulator's f_hz alone (None
     for a chain without one), else ``freqs`` evenly across the drive band and f0 (default 2 with a
     demodulator, 1 without)."""
-    from ..budget.floor import drive_frequencies
+    from fxdsp.budget.floor import drive_frequencies
 
     if temps < 1:
         raise ValueError(f"--temps: need at least 1 temperature, got {temps}")
@@ -122,9 +122,9 @@ def settings(config_data: dict, seeds: int, temps: list, freqs: list, samples: i
 @lru_cache(maxsize=32)
 def _design(config_json: str, chain: str, demod: str | None, f_hz: float | None):
     """The chain at one drive frequency and its settling length, kept per worker process."""
-    from ..budget.floor import settling_samples
-    from ..chains import build
-    from ..config import Config
+    from fxdsp.budget.floor import settling_samples
+    from fxdsp.chains import build
+    from fxdsp.config import Config
 
     data = json.loads(config_json)
     if demod is not None:

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..hdl.harness import RTL_DIR  # noqa: F401  (the default --rtl of `sweep rtl`)
+from fxdsp.hdl.harness import RTL_DIR  # noqa: F401  (the default --rtl of `sweep rtl`)
 ROUNDINGS = ("floor", "half_up", "half_even", "toward_zero")
 OVERFLOWS = ("wrap", "saturate")
 ORDERS = (2, 4)
@@ -44,7 +44,7 @@ GAP = 0.25
 def unroll_params(design, name: str) -> dict | None:
     """The divider setting of a shard run of ``name`` (:data:`DIV_UNROLL`): a divider's UNROLL, a
     chain top's DIV_UNROLL when one of its members is a divider; None for anything else."""
-    from ..hdl.chain_top import has_divider
+    from fxdsp.hdl.chain_top import has_divider
 
     inst = design.instances[name]
     key = "chain" if inst.members and has_divider(design, name) else inst.module
@@ -53,8 +53,8 @@ def unroll_params(design, name: str) -> dict | None:
 
 def check_tools(rtl_dir: Path, sim: str = "icarus") -> None:
     """InputError when this machine cannot run a shard (it is the one that checks, before work)."""
-    from ..errors import InputError
-    from ..hdl.simulators import require_simulator
+    from fxdsp.errors import InputError
+    from fxdsp.hdl.simulators import require_simulator
 
     require_simulator(sim)
     if not sorted(Path(rtl_dir).glob("*.v")):
@@ -63,8 +63,8 @@ def check_tools(rtl_dir: Path, sim: str = "icarus") -> None:
 
 def instance_names(config_data: dict) -> list[str]:
     """Every block and chain of the config: what a shard runs by default (``--blocks``)."""
-    from ..chains import build
-    from ..config import Config
+    from fxdsp.chains import build
+    from fxdsp.config import Config
 
     return list(build(Config(copy.deepcopy(config_data), source="<sweep rtl>")).hardware)
 
@@ -117,10 +117,10 @@ def draw(base: dict, seed: int):
     """(config data, design, changes from ``base`` as
     {dotted path: value}, draws needed) of a random parameter set that builds and that the RTL
     generator accepts."""
-    from ..budget.optimise import _field_defaults, knob_value, knobs_of, set_knob
-    from ..chains import build
-    from ..config import Config
-    from ..hdl import params as hp
+    from fxdsp.budget.optimise import _field_defaults, knob_value, knobs_of, set_knob
+    from fxdsp.chains import build
+    from fxdsp.config import Config
+    from fxdsp.hdl import params as hp
 
     rng = np.random.default_rng([seed, 0])
     for attempt in range(1, MAX_DRAWS + 1):
@@ -159,8 +159,8 @@ def run_block(design, name: str, build: Path, rtl_dir: Path, seed: int) -> dict:
     """Stream the block's random stimulus (:func:`fxdsp.hdl.stimuli.random_stimulus`, gapped valid)
     through its RTL on Icarus in ``build`` (the harness writes the design's headers there); pass/fail,
     samples, cycles, first errors (a DUT that does not build is a failure, named)."""
-    from ..hdl import harness as hh
-    from ..hdl.stimuli import random_stimulus
+    from fxdsp.hdl import harness as hh
+    from fxdsp.hdl.stimuli import random_stimulus
 
     extra = unroll_params(design, name)
     stim = random_stimulus(design, name, seed)
@@ -208,7 +208,7 @@ def _task(settings: dict, rtl_dir: str, build_root: str | None, params: dict, se
 
 
 def summarise(settings: dict, records: list[dict]) -> dict:
-    from .engine import failed_records
+    from fxdsp.sweep.engine import failed_records
 
     good = [r for r in records if "result" in r]
     return {"shards": settings["shards"], "blocks": settings["blocks"],

@@ -37,7 +37,7 @@ CHUNK = 4   # candidates per task: fewer, longer tasks (a fixed number, so task 
 
 def _evaluate(spec: dict, params: dict, seed: int) -> dict:
     """A few candidates: the evaluator's error of each (None: the config does not build or overflows)."""
-    from ..budget.optimise import Evaluator
+    from fxdsp.budget.optimise import Evaluator
 
     ev = Evaluator(spec["base"], spec["chain"], spec["port"], spec["metric"], spec["samples"], spec["mean_weight"],
                    tuple(spec["frequencies"]))
@@ -65,7 +65,7 @@ def prefetcher(sweep):
                              for chunk in chunks], desc="word-length candidates")
         for chunk, rec in zip(chunks, records):
             if "error" in rec:
-                from .engine import failure_line
+                from fxdsp.sweep.engine import failure_line
 
                 raise TaskFailed(f"word-length {failure_line(rec)}")
             for (key, _), err in zip(chunk, rec["result"]["errors"]):
@@ -76,7 +76,7 @@ def prefetcher(sweep):
 
 def search(sweep, config, target, metric: str, margin: float, cost_model: str, max_mean, frequencies):
     """:func:`fxdsp.budget.optimise.optimise` with its batches on ``sweep``."""
-    from ..budget import optimise as opt
+    from fxdsp.budget import optimise as opt
 
     return opt.optimise(config, target, metric, margin, cost_model=cost_model, max_mean=max_mean,
                         frequencies=tuple(frequencies), prefetch=prefetcher(sweep))
@@ -89,7 +89,7 @@ def summary(result, settings: dict) -> dict:
 
 
 def format_summary(result) -> str:
-    from ..budget.optimise import format_result
+    from fxdsp.budget.optimise import format_result
 
     t = result.target
     return (f"word-length search on {t.chain}.{t.port} ({result.metric}), target {t.value:.4g} {t.unit}: "

@@ -24,7 +24,7 @@ from pathlib import Path
 
 from fxdsp.outputs import IN, OUT_FILE, json_text, staged
 from fxdsp.sim import calibration
-from fxdsp.diagnose.logio import read_log
+from fxdsp.logfile import read_log
 
 FITS = {"002": calibration.calibrate_paper002, "001": calibration.calibrate_paper001,
         "000": calibration.calibrate_paper000_log}

@@ -29,7 +29,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from ..outputs import IN, IN_DIR, OUT_DIR
+from fxdsp.outputs import IN, IN_DIR, OUT_DIR
 
 PATHS = {"--config": IN, "--rtl": IN_DIR, "--out": OUT_DIR}
 
@@ -70,11 +70,11 @@ def markdown(report: dict) -> str:
 def run(args) -> int:
     from tqdm import tqdm
 
-    from ..chains import build
-    from ..errors import InputError
-    from ..outputs import json_text, staged
-    from . import formal
-    from .schedule import cycles_per_sample
+    from fxdsp.chains import build
+    from fxdsp.errors import InputError
+    from fxdsp.outputs import json_text, staged
+    from fxdsp.hdl import formal
+    from fxdsp.hdl.schedule import cycles_per_sample
 
     if not (math.isfinite(args.timeout) and args.timeout > 0):   # nan, inf and <= 0 alike
         raise InputError(f"--timeout: need a positive, finite number of seconds, got {args.timeout}")

@@ -41,12 +41,12 @@ import tempfile
 import time
 from pathlib import Path
 
-from ..chains import build
-from ..errors import InputError
-from ..outputs import IN, OUT_FILE, check_output, staged
-from . import RTL_DIR as RTL
-from .hwreport import load_hw_report, report_json, row_files, row_hash, source_hash
-from .params import generate, instance, iverilog_params
+from fxdsp.chains import build
+from fxdsp.errors import InputError
+from fxdsp.outputs import IN, OUT_FILE, check_output, staged
+from fxdsp.hdl import RTL_DIR as RTL
+from fxdsp.hdl.hwreport import load_hw_report, report_json, row_files, row_hash, source_hash
+from fxdsp.hdl.params import generate, instance, iverilog_params
 
 UP5K = {"LUT": 5280, "MAC16": 8, "FF": 5280, "BRAM": 30, "LC": 5280, "GB": 8}
 # the Artix-7 the xc7 columns are read against (a common small one); yosys estimates, not Vivado
@@ -164,7 +164,7 @@ def _stat(text: str) -> dict:
 def _sources(design, work: Path):
     """The RTL sources of ``design`` (:func:`fxdsp.hdl.harness.rtl_sources`: its generated chain tops
     in ``work``), as yosys reads them."""
-    from .harness import rtl_sources
+    from fxdsp.hdl.harness import rtl_sources
 
     return " ".join(str(p) for p in rtl_sources(RTL, design, work))
 
@@ -551,7 +551,7 @@ def _schedule_fields(design, name: str, extra) -> dict:
     at the row's ARCH) and the budget at 40 MHz and the config's sample rate; a block's serial row its
     module's cycles per sample (:func:`fxdsp.hdl.schedule.member_cycles`) against the design's rate;
     nothing for a block's one-sample-per-clock row."""
-    from .schedule import chain_schedule, member_cycles
+    from fxdsp.hdl.schedule import chain_schedule, member_cycles
 
     if not design.instances[name].members:
         if not int((extra or {}).get("ARCH", 0)):

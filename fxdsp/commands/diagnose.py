@@ -29,7 +29,7 @@ def configure(parser) -> None:
 
 def run(args) -> int:
     from fxdsp.diagnose.api import diagnose_file
-    from fxdsp.diagnose.logio import parse_mapping
+    from fxdsp.logfile import parse_mapping
     from fxdsp.diagnose.report import replay_model, report_dict, write_json, write_report
     from fxdsp.errors import InputError
 

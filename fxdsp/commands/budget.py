@@ -14,20 +14,20 @@ from pathlib import Path
 
 from tqdm import tqdm as _tqdm
 
-from ..chains import build
-from ..errors_table import port_unit
-from ..config import dumps, load_config
-from ..hdl.hwreport import hw_report_path, synthesised_cost
-from ..outputs import IN, OUT_DIR, OUT_FILE, json_text, plain, staged
-from . import optimise as opt
-from .attribution import ADDITIVITY_DB, THEORY_DB, Attribution, attribute
-from .floor import (DOMINANT_FACTOR, FLICKER_FACTOR, WITHIN_DB, Allan, DriveSweep, Floor, allan_chain,
+from fxdsp.chains import build
+from fxdsp.errors_table import port_unit
+from fxdsp.config import dumps, load_config
+from fxdsp.hdl.hwreport import hw_report_path, synthesised_cost
+from fxdsp.outputs import IN, OUT_DIR, OUT_FILE, json_text, plain, staged
+from fxdsp.budget import optimise as opt
+from fxdsp.budget.attribution import ADDITIVITY_DB, THEORY_DB, Attribution, attribute
+from fxdsp.budget.floor import (DOMINANT_FACTOR, FLICKER_FACTOR, WITHIN_DB, Allan, DriveSweep, Floor, allan_chain,
                     carrier_chains, demod_f_hz, drive_frequencies, drive_sweep, floor_of)
-from .drive_loop import TEMPS_C, at_temperature, format_allan as format_reference_allan, format_budget, ramp, \
+from fxdsp.budget.drive_loop import TEMPS_C, at_temperature, format_allan as format_reference_allan, format_budget, ramp, \
     reference_allan
-from .static import static_errors
-from .table import budget_rows, format_rows
-from .units import parse_target
+from fxdsp.budget.static import static_errors
+from fxdsp.budget.table import budget_rows, format_rows
+from fxdsp.budget.units import parse_target
 
 # progress bars on a terminal only: redirected, stderr keeps to the one line an error needs
 tqdm = partial(_tqdm, disable=None)
@@ -52,7 +52,7 @@ def downstream_outputs(design, chain_name: str, kind: str) -> list[str]:
 
 def drive_loop_budgets(design, with_ramp: bool) -> list:
     """Every drive loop of the design at TEMPS_C, and over the chamber ramp with ``with_ramp``."""
-    from ..blocks.drive import Drive
+    from fxdsp.blocks.drive import Drive
 
     out = []
     fs_dps = design.rate_full_scale_dps
@@ -66,7 +66,7 @@ def drive_loop_budgets(design, with_ramp: bool) -> list:
 
 def drive_reference_allans(design) -> list:
     """Every drive loop's NCO as a demodulator reference over an hour of lock (reference_allan)."""
-    from ..blocks.drive import Drive
+    from fxdsp.blocks.drive import Drive
 
     return [reference_allan(b, rate_full_scale_dps=design.rate_full_scale_dps, progress=True)
             for b in design.blocks.values() if isinstance(b, Drive)]
@@ -355,7 +355,7 @@ def _figures(md: list, out: Path, items, stem: str, plot, text) -> None:
 
 def _report(out: Path, design, cfg, rows, attrs, statics, target, result, args, floors, allans, sweeps,
             loops, references) -> None:
-    from . import report as rp
+    from fxdsp.budget import report as rp
 
     out.mkdir(parents=True, exist_ok=True)
     figs = {}

@@ -18,7 +18,7 @@ import os
 import sys
 from pathlib import Path
 
-from ..outputs import IN, IN_DIR, OUT_DIR
+from fxdsp.outputs import IN, IN_DIR, OUT_DIR
 
 PATHS = {"--config": IN, "--rtl": IN_DIR, "--out": OUT_DIR, "--cache": OUT_DIR}
 
@@ -45,11 +45,11 @@ def configure(parser) -> None:
 
 
 def run(args) -> int:
-    from ..chains import build
-    from ..errors import InputError
-    from ..outputs import json_text, staged, write_tree
-    from .params import design_files
-    from .regression import duts, markdown, regression
+    from fxdsp.chains import build
+    from fxdsp.errors import InputError
+    from fxdsp.outputs import json_text, staged, write_tree
+    from fxdsp.hdl.params import design_files
+    from fxdsp.hdl.regression import duts, markdown, regression
 
     only = [n.strip() for n in args.only.split(",") if n.strip()] if args.only is not None else None
     if only is not None and not only:

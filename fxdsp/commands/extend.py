@@ -57,7 +57,7 @@ def configure(parser) -> None:
 
 
 def run(args) -> int:
-    from fxdsp.diagnose.logio import parse_mapping, read_log
+    from fxdsp.logfile import parse_mapping, read_log
     from fxdsp.errors import InputError
     from fxdsp.extend.pipeline import extend_log
     from fxdsp.outputs import staged

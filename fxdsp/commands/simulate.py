@@ -16,7 +16,7 @@ import math
 from pathlib import Path
 
 from fxdsp.errors import InputError
-from fxdsp.mechanisms import CAUSES
+from fxdsp.causes import PARAMETERS
 from fxdsp.outputs import IN, OUT_FILE, staged
 from fxdsp.sim.generate import DEFAULT_TIME_STEP_S, OPTIONAL_COLUMNS, SCENARIOS, generate_log, parse_columns
 from fxdsp.sim.logio import write_log
@@ -75,16 +75,16 @@ def parse_effects(specs: list[str]) -> dict[str, dict[str, float]]:
         if not sep:
             raise ValueError(f"--effect {spec!r}: expected CAUSE.PARAM=VALUE or CAUSE=VALUE")
         cause, dot, param = key.partition(".")
-        if cause not in CAUSES:
-            raise ValueError(f"--effect {spec!r}: unknown cause {cause!r}; expected one of {', '.join(CAUSES)}")
+        if cause not in PARAMETERS:
+            raise ValueError(f"--effect {spec!r}: unknown cause {cause!r}; expected one of {', '.join(PARAMETERS)}")
         if not dot:
-            if len(CAUSES[cause]) != 1:
-                names = ", ".join(f"{cause}.{p}" for p in CAUSES[cause]) or "no parameters"
+            if len(PARAMETERS[cause]) != 1:
+                names = ", ".join(f"{cause}.{p}" for p in PARAMETERS[cause]) or "no parameters"
                 raise ValueError(f"--effect {spec!r}: {cause} takes {names}; give each as CAUSE.PARAM=VALUE")
-            param = CAUSES[cause][0]
-        if param not in CAUSES[cause]:
+            param = PARAMETERS[cause][0]
+        if param not in PARAMETERS[cause]:
             raise ValueError(f"--effect {spec!r}: unknown parameter {param!r} of {cause}; "
-                             f"expected {', '.join(CAUSES[cause]) or 'none'}")
+                             f"expected {', '.join(PARAMETERS[cause]) or 'none'}")
         effects.setdefault(cause, {})[param] = _number(f"--effect {cause}.{param}", text)
     return effects
 

@@ -29,7 +29,7 @@ import time
 from functools import partial
 from pathlib import Path
 
-from ..outputs import IN, IN_DIR, OUT_DIR
+from fxdsp.outputs import IN, IN_DIR, OUT_DIR
 
 PATHS = {"--out": OUT_DIR, "--config": IN, "--rtl": IN_DIR, "--build-dir": OUT_DIR}
 
@@ -49,8 +49,8 @@ def _common(p, config: bool = True, seed: bool = True) -> None:
 
 
 def configure(parser) -> None:
-    from ..diagnose.hidden import ALL_CAUSES, SNR_RANGE
-    from .montecarlo import CHAIN
+    from fxdsp.diagnose.hidden import ALL_CAUSES, SNR_RANGE
+    from fxdsp.sweep.montecarlo import CHAIN
 
     sub = parser.add_subparsers(dest="kind", metavar="KIND", required=True)
     mc = sub.add_parser("montecarlo", help="error budget over seeds x temperatures x drive frequencies",
@@ -109,8 +109,8 @@ def _progress():
 
 
 def run(args) -> int:
-    from ..outputs import staged
-    from .engine import Executor, Sweep
+    from fxdsp.outputs import staged
+    from fxdsp.sweep.engine import Executor, Sweep
 
     t0 = time.perf_counter()
     if args.scheduler is not None and args.workers is not None:
@@ -137,14 +137,14 @@ def run(args) -> int:
     print(f"\n{sweep.computed} tasks run, {sweep.resumed} from the journal, {len(failed)} failed; "
           f"{time.perf_counter() - t0:.1f} s ({where}); results in {out}")
     for rec in failed[:10]:
-        from .engine import failure_line
+        from fxdsp.sweep.engine import failure_line
 
         print(f"fxdsp sweep {args.kind}: failed {failure_line(rec)}", file=sys.stderr)
     return 1 if failed else status
 
 
 def _write(stage, out: Path, sweep, summary: dict, report: str) -> None:
-    from ..outputs import json_text, plain
+    from fxdsp.outputs import json_text, plain
 
     stage.write_text(out / "results.jsonl", sweep.results_text())
     stage.write_text(out / "summary.json", json_text(plain(summary), "summary.json", indent=1, sort_keys=True))
@@ -153,8 +153,8 @@ def _write(stage, out: Path, sweep, summary: dict, report: str) -> None:
 
 # ----------------------------------------------------------------------------------------------
 def _prepare_montecarlo(args) -> dict:
-    from ..config import load_config
-    from . import montecarlo as mc
+    from fxdsp.config import load_config
+    from fxdsp.sweep import montecarlo as mc
 
     cfg = load_config(args.config)
     temps, freqs = mc.grid(cfg.data, args.temps, args.freqs, args.temp_range, args.chain)
@@ -177,19 +177,19 @@ def _prepare_montecarlo(args) -> dict:
 
 
 def _prepare_wordlength(args) -> dict:
-    from ..budget.floor import demod_f_hz, drive_frequencies
-    from ..budget.optimise import check_search, config_header
-    from ..budget.units import parse_target
-    from ..chains import build
-    from ..config import dumps, load_config
-    from . import wordlength as wl
+    from fxdsp.budget.floor import demod_f_hz, drive_frequencies
+    from fxdsp.budget.optimise import check_search, config_header
+    from fxdsp.budget.units import parse_target
+    from fxdsp.chains import build
+    from fxdsp.config import dumps, load_config
+    from fxdsp.sweep import wordlength as wl
 
     cfg = load_config(args.config)
     design = build(cfg)
     check_search(args.chain, args.margin, chains=design.chains, cost_model=args.cost, drive_band=args.drive_band)
     noise = {}
     if "noise" in args.target or (args.max_mean and "noise" in args.max_mean):
-        from ..budget.attribution import attribute
+        from fxdsp.budget.attribution import attribute
 
         noise = {p: attribute(design, args.chain, p).sensor_noise_rms for p in design.chains[args.chain].outputs}
     target = parse_target(args.target, design, args.chain, noise)
@@ -215,7 +215,7 @@ def _prepare_wordlength(args) -> dict:
 
 
 def _prepare_hidden(args) -> dict:
-    from . import hidden as hd
+    from fxdsp.sweep import hidden as hd
 
     settings = hd.settings(args.per_cause, args.first_seed, [c for c in args.causes.split(",") if c], args.snr)
 
@@ -232,8 +232,8 @@ def _prepare_hidden(args) -> dict:
 
 
 def _prepare_rtl(args) -> dict:
-    from ..config import load_config
-    from . import rtl
+    from fxdsp.config import load_config
+    from fxdsp.sweep import rtl
 
     cfg = load_config(args.config)
     rtl_dir = Path(args.rtl) if args.rtl else rtl.RTL_DIR

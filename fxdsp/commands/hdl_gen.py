@@ -7,10 +7,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..chains import build
-from ..commands.generated import sync_generated
-from ..outputs import IN, IN_DIR, OUT_DIR
-from .params import generate
+from fxdsp.chains import build
+from fxdsp.commands.generated import sync_generated
+from fxdsp.outputs import IN, IN_DIR, OUT_DIR
+from fxdsp.hdl.params import generate
 
 
 def PATHS(args) -> dict:
