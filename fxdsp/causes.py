@@ -77,6 +77,11 @@ class Cause:
     # chain needs none
     remedies: Mapping[str, Callable[[dict], Remedy]] = field(default_factory=dict)
     absorbed: Mapping[str, str] = field(default_factory=dict)
+    # the project's hidden-cause generator (fxdsp.diagnose.hidden): (effects, noise) of this cause
+    # sized to a drawn SNR x its channel's effective white noise, from a draw context ``d`` (rng,
+    # snr, sign, t, truth (the clean log's truth), sigma (effective noise per channel), levels,
+    # simulate(effects) -> (noise-free log, truth))
+    draw: Callable[[object], tuple[dict, dict]] | None = None
 
     def channels(self, has_freq: bool) -> list[str]:
         """Channels whose fit the cause changes (and where its held-out evidence is counted)."""
@@ -114,6 +119,53 @@ def _cvd_remedy(p: dict) -> Remedy:
                   "curvature, read linearly until now)", {"b_per_c": b})
 
 
+# the generator's draw ranges: time constants log-uniform in these (s)
+TAU_LAG_RANGE = (300.0, 4000.0)
+TAU_WARMUP_RANGE = (900.0, 7200.0)
+
+
+def _rms(x) -> float:
+    x = np.asarray(x, float)
+    return float(np.sqrt(np.mean((x - x.mean()) ** 2)))
+
+
+def _log_uniform(rng, bounds) -> float:
+    return float(np.exp(rng.uniform(*np.log(bounds))))
+
+
+def _draw_lag(d):
+    """A lag sets the channel noise itself: the output and RTD noise are scaled together so that
+    the effective output noise is the lag's rms / SNR."""
+    effects = {"thermal_lag": {"tau_s": _log_uniform(d.rng, TAU_LAG_RANGE)}}
+    lagged, clean = d.simulate(effects), d.clean
+    lam = _rms(lagged["output"] - clean["output"]) / d.snr / d.sigma["output"]
+    noise = {"output": lam * d.levels["output"], "temp_c": lam * d.levels["temp_c"],
+             "freq_hz": max(_rms(lagged["freq_hz"] - clean["freq_hz"]) / d.snr, 1e-12)}
+    return effects, noise
+
+
+def _draw_warmup(d):
+    tau = _log_uniform(d.rng, TAU_WARMUP_RANGE)
+    shape = np.exp(-d.t / tau)
+    head = d.t < 3 * tau
+    return {"warmup": {"a": d.sign * d.snr * d.sigma["output"] / float(np.sqrt(np.mean(shape[head] ** 2))),
+                       "tau_s": tau}}, {}
+
+
+def _sized(name: str, channel: str, shape: Callable[[object], np.ndarray] | None = None):
+    """A draw of a cause with one parameter: sign x SNR x the channel's noise / rms of its shape
+    (the cause's signature at a parameter of 1; no shape: a step of 1 itself)."""
+    def draw(d):
+        size = d.sign * d.snr * d.sigma[channel]
+        return {name: {PARAMETERS[name][0]: size / _rms(shape(d)) if shape else size}}, {}
+    return draw
+
+
+def _sf_cubic_shape(d) -> np.ndarray:
+    s = np.polynomial.polynomial.polyval(d.truth["Te"] - 25.0, d.truth["baseline"]["sf_poly"])
+    return s * d.truth["rate_dps"] ** 3
+
+
 def _rtd_b_per_c(c: np.ndarray, j: int, sd_y: float, sc) -> float:
     """b of temp_c = t0 + t1 x + q x^2 (x = (ref - mid) / half): the curvature over the slope at 25 C
     (the sd_y scale cancels in the ratio)."""
@@ -129,7 +181,7 @@ _RECORDS = (
                    "tau = {tau_s:.0f} s: heating and cooling give different outputs at the same temp_c "
                    "and the difference decays through the dwells after each ramp."),
           stage="te", inject=lambda p, te, s: mech.first_order_lag(s["t"], te, p["tau_s"]),
-          search=Search("tau_s", 1.0, 36),
+          search=Search("tau_s", 1.0, 36), draw=_draw_lag,
           remedies={"gyro_rtd": _lag_remedy, "thermometer": _lag_remedy},
           absorbed={"gyro_freq": "the resonant frequency reads the die itself"}),
     Cause("ramp_rate", ("k_per_c_per_s",), "output",
@@ -137,22 +189,25 @@ _RECORDS = (
                    "a thermal-gradient effect that vanishes as soon as the temperature stops moving."),
           stage="output",
           inject=lambda p, out, s: out + p["k_per_c_per_s"] * mech.rate_of_change(s["t"], s["temp_clean"]),
-          term=lambda series, state: series.dtdt, linear="k_per_c_per_s"),
+          term=lambda series, state: series.dtdt, linear="k_per_c_per_s",
+          draw=_sized("ramp_rate", "output", lambda d: mech.rate_of_change(d.t, d.truth["temp_c"]))),
     Cause("hysteresis", ("h",), "output",
           explain=("The output differs by {h:.4g} (2h between the two branches) after heating and after "
                    "cooling ramps and keeps that offset through the dwells: hysteresis, not a lag."),
           stage="output", inject=lambda p, out, s: out + p["h"] * mech.ramp_direction(s["t"], s["temp_clean"]),
-          term=lambda series, state: series.hyst, linear="h", time_tied=True),
+          term=lambda series, state: series.hyst, linear="h", time_tied=True,
+          draw=_sized("hysteresis", "output")),
     Cause("warmup", ("a", "tau_s"), "output",
           explain="A settling transient after power-on: output += {a:.4g} exp(-t / {tau_s:.0f} s).",
           stage="output", inject=lambda p, out, s: out + mech.warmup(s["t"], **p),
           term=lambda series, state: np.exp(-series.t / state["warmup"]["tau_s"]), linear="a",
-          search=Search("tau_s", 0.5, 30), time_tied=True, transient=True),
+          search=Search("tau_s", 0.5, 30), time_tied=True, transient=True, draw=_draw_warmup),
     Cause("aging_drift", ("r_per_h",), "output",
           explain=("The output drifts linearly with time at {r_per_h:.4g} per hour, independent of "
                    "temperature."),
           stage="output", inject=lambda p, out, s: out + mech.aging_drift(s["t"], p["r_per_h"]),
-          term=lambda series, state: series.t / 3600.0, linear="r_per_h", time_tied=True),
+          term=lambda series, state: series.t / 3600.0, linear="r_per_h", time_tied=True,
+          draw=_sized("aging_drift", "output", lambda d: d.t / 3600.0)),
     Cause("quadrature_leak", ("c",), "output", needs=("quad",),
           explain=("The quadrature channel leaks into the rate channel with coefficient c = {c:.4g} "
                    "(a demodulation phase error of about {phase_mrad:.3g} mrad)."),
@@ -160,17 +215,20 @@ _RECORDS = (
           # the demodulator leaks the true quadrature; the logged quad channel adds its own noise
           stage="output", inject=lambda p, out, s: out + p["c"] * s["quad"],
           term=lambda series, state: series.quad, linear="c", time_tied=True,
+          draw=_sized("quadrature_leak", "output", lambda d: d.truth["quad"]),
           remedies={"gyro_rtd": _trim_remedy}),
     Cause("sf_nonlinearity", ("k3",), "output", needs=("rate_dps",),
           explain=("The scale factor depends on the rate: output = B + S (rate + k3 rate^3) with "
                    "k3 = {k3:.4g} per (rate unit)^2."),
           stage="rate", inject=lambda p, rate, s: rate + p["k3"] * rate ** 3,
-          term=lambda series, state: series.sf_estimate * series.rate ** 3, linear="k3"),
+          term=lambda series, state: series.sf_estimate * series.rate ** 3, linear="k3",
+          draw=_sized("sf_nonlinearity", "output", _sf_cubic_shape)),
     Cause("rtd_nonlinearity", ("b_per_c",), "temp_c", needs=("ref_temp_c",),
           explain=("temp_c is curved against the reference thermometer: b = {b_per_c:.4g} /C, i.e. "
                    "a linear RTD law misreads by b (T - 25)^2 (Callendar-Van Dusen curvature)."),
           stage="rtd", inject=lambda p, rtd, s: s["rtd_true"] + mech.rtd_curvature(s["rtd_true"], p["b_per_c"]),
           curvature=_rtd_b_per_c, remedies={"gyro_rtd": _cvd_remedy},
+          draw=_sized("rtd_nonlinearity", "temp_c", lambda d: (d.truth["ref_temp_c"] - 25.0) ** 2),
           absorbed={"thermometer": "absorbed by the cubic bias polynomial",
                     "gyro_freq": "the chamber thermometer is not in the path"}),
     Cause("frequency_nonlinearity", ("k2_hz_per_c2",), "freq_hz", needs=("freq_hz",),
@@ -178,7 +236,8 @@ _RECORDS = (
                    "on top of f0 + k Te (a turnover)."),
           stage="freq", inject=lambda p, f, s: f + mech.frequency_curvature(s["te"], p["k2_hz_per_c2"]),
           curvature=lambda c, j, sd_y, sc: float(c[j] * sd_y / sc.half ** 2),
-          remedies={"gyro_freq": _cubic_remedy}),
+          remedies={"gyro_freq": _cubic_remedy},
+          draw=_sized("frequency_nonlinearity", "freq_hz", lambda d: (d.truth["Te"] - 25.0) ** 2)),
 )
 
 CAUSES: dict[str, Cause] = {c.name: c for c in _RECORDS}
@@ -200,6 +259,8 @@ def check_records(records) -> None:
                   or c.search is not None)
         if not fitted:
             raise AssertionError(f"cause {c.name}: no term the diagnosis fits")
+        if c.draw is None:
+            raise AssertionError(f"cause {c.name}: no draw for the hidden-cause generator")
         if c.search is not None and c.search.parameter not in c.parameters:
             raise AssertionError(f"cause {c.name}: searched parameter {c.search.parameter!r} is not its own")
 

@@ -64,6 +64,7 @@ def test_every_named_parameter_is_sized_here():
     (dict(inject=None), "no simulator stage"),
     (dict(term=None, linear=None, search=None), "no term the diagnosis fits"),
     (dict(channel="quad"), "channel 'quad'"),
+    (dict(draw=None), "no draw for the hidden-cause generator"),
 ])
 def test_a_record_the_simulator_or_the_fit_would_ignore_is_refused(fault, message):
     broken = replace(causes.CAUSES["aging_drift"], name="made_up", **fault)

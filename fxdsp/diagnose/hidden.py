@@ -6,7 +6,8 @@ parameters and its size. Sizes are multiples (SNR) of the effective white noise 
 where the cause shows: the simulator's default channel noise (output 0.05 % of S0, temp_c 0.01 C,
 ref_temp_c 0.005 C, freq_hz 0.001 Hz) combined with the thermometer's noise times the channel's
 temperature slope (a 0.01 C RTD noise on a 1 mV/C bias is 0.01 mV of output noise against the
-baseline), so "detectable" has one meaning across sensors and units:
+baseline), so "detectable" has one meaning across sensors and units (each draw is in its cause's record,
+:mod:`fxdsp.causes`):
 
 ==========================  ==================================================================
 cause                       drawn parameter, and how its size is set
@@ -41,13 +42,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fxdsp import logfile, mechanisms as mech
+from fxdsp import logfile
 from fxdsp.causes import CAUSES
 
 SNR_RANGE = (5.0, 20.0)
 WANDER_RANGE = (2.0, 10.0)
-TAU_LAG_RANGE = (300.0, 4000.0)
-TAU_WARMUP_RANGE = (900.0, 7200.0)
 ALL_CAUSES = tuple(CAUSES)
 # columns without which a cause cannot be seen at all
 NEEDS = {c.name: c.needs for c in CAUSES.values() if c.needs}
@@ -72,11 +71,6 @@ class Case:
     log: dict
     truth: dict
     causes: tuple = ()  # every hidden cause ((cause,) for one, two for a pair, () for none)
-
-
-def _rms(x: np.ndarray) -> float:
-    x = np.asarray(x, float)
-    return float(np.sqrt(np.mean((x - x.mean()) ** 2)))
 
 
 def _effective_noise(truth: dict, levels: dict, columns) -> dict[str, float]:
@@ -149,55 +143,48 @@ def make_case(cause: str, seed: int, scenario: str | None = None, snr_range=SNR_
     return case
 
 
+@dataclass
+class _Draw:
+    """What a cause's draw (fxdsp.causes) reads: the generator's random stream, the SNR and sign
+    drawn for it, the clean log and its truth, the channels' effective noise and the noise levels."""
+
+    rng: np.random.Generator
+    snr: float
+    sign: float
+    clean: dict
+    truth: dict
+    sigma: dict
+    levels: dict
+    scenario: str
+    kw: dict
+
+    @property
+    def t(self) -> np.ndarray:
+        return self.clean["time_s"]
+
+    def simulate(self, effects: dict) -> dict:
+        """The noise-free log of the same run with ``effects``."""
+        from fxdsp.sim import generate_log
+
+        return generate_log(self.scenario, effects, columns=OPTIONAL, noise="off", **self.kw)
+
+
 def _draw_effect(cause, rng, snr, sign, scenario, kw, clean, truth0, levels, sigma):
     """(effects, noise) of one cause, sized to ``snr`` x the channel's effective white noise."""
-    from fxdsp.sim import generate_log
-
-    t = clean["time_s"]
+    if cause != "none":
+        return CAUSES[cause].draw(_Draw(rng, snr, sign, clean, truth0, sigma, levels, scenario, kw))
     noise: dict = {}
-    effects: dict = {}
-    if cause == "thermal_lag":
-        tau = float(np.exp(rng.uniform(*np.log(TAU_LAG_RANGE))))
-        effects = {"thermal_lag": {"tau_s": tau}}
-        lagged, _ = generate_log(scenario, effects, columns=OPTIONAL, noise="off", return_truth=True, **kw)
-        # scale the output and RTD noise together so the effective output noise is rms / SNR
-        lam = _rms(lagged["output"] - clean["output"]) / snr / sigma["output"]
-        noise["output"], noise["temp_c"] = lam * levels["output"], lam * levels["temp_c"]
-        noise["freq_hz"] = max(_rms(lagged["freq_hz"] - clean["freq_hz"]) / snr, 1e-12)
-    elif cause == "ramp_rate":
-        d = mech.rate_of_change(t, truth0["temp_c"])
-        effects = {cause: {"k_per_c_per_s": sign * snr * sigma["output"] / _rms(d)}}
-    elif cause == "hysteresis":
-        effects = {cause: {"h": sign * snr * sigma["output"]}}
-    elif cause == "warmup":
-        tau = float(np.exp(rng.uniform(*np.log(TAU_WARMUP_RANGE))))
-        shape = np.exp(-t / tau)
-        head = t < 3 * tau
-        effects = {cause: {"a": sign * snr * sigma["output"] / float(np.sqrt(np.mean(shape[head] ** 2))),
-                           "tau_s": tau}}
-    elif cause == "aging_drift":
-        effects = {cause: {"r_per_h": sign * snr * sigma["output"] / _rms(t / 3600.0)}}
-    elif cause == "quadrature_leak":
-        effects = {cause: {"c": sign * snr * sigma["output"] / _rms(truth0["quad"])}}
-    elif cause == "sf_nonlinearity":
-        r = truth0["rate_dps"]
-        s = np.polynomial.polynomial.polyval(truth0["Te"] - 25.0, truth0["baseline"]["sf_poly"])
-        effects = {cause: {"k3": sign * snr * sigma["output"] / _rms(s * r ** 3)}}
-    elif cause == "rtd_nonlinearity":
-        effects = {cause: {"b_per_c": sign * snr * sigma["temp_c"] / _rms((truth0["ref_temp_c"] - 25.0) ** 2)}}
-    elif cause == "frequency_nonlinearity":
-        effects = {cause: {"k2_hz_per_c2": sign * snr * sigma["freq_hz"] / _rms((truth0["Te"] - 25.0) ** 2)}}
-    elif cause == "none":
-        kind = rng.integers(3)
-        if kind == 1:
-            # flicker at a tenth of the white level per sample: a wandering bias, not a cause
-            noise["bias_instability"] = 0.1 * levels["output"]
-        elif kind == 2:
-            # bias random walk that wanders WANDER_RANGE x the effective noise over the run: the
-            # look-alike of aging, warm-up and hysteresis
-            wander = float(rng.uniform(*WANDER_RANGE))
-            noise["rate_random_walk"] = wander * sigma["output"] / np.sqrt(t[-1] - t[0])
-    return effects, noise
+    kind = rng.integers(3)
+    if kind == 1:
+        # flicker at a tenth of the white level per sample: a wandering bias, not a cause
+        noise["bias_instability"] = 0.1 * levels["output"]
+    elif kind == 2:
+        # bias random walk that wanders WANDER_RANGE x the effective noise over the run: the
+        # look-alike of aging, warm-up and hysteresis
+        t = clean["time_s"]
+        wander = float(rng.uniform(*WANDER_RANGE))
+        noise["rate_random_walk"] = wander * sigma["output"] / np.sqrt(t[-1] - t[0])
+    return {}, noise
 
 
 def diagnose_case(case: Case):
