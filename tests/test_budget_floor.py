@@ -23,7 +23,7 @@ from fxdsp.budget.static import static_error
 from fxdsp.chains import build
 from fxdsp.cli import main
 from fxdsp.config import load_config
-from fxdsp.errors_table import block_errors
+from fxdsp.float_vs_fixed import block_errors
 
 ADC_CATEGORY = "ADC quantisation"
 

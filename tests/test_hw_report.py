@@ -11,10 +11,10 @@ import pytest
 
 from fxdsp.chains import build
 
-from fxdsp.hdl import hwreport
-from fxdsp.commands import hw_report as report_cli
+from fxdsp.hdl import hwplan, hwreport, synthesis
 from fxdsp.hdl.hwreport import hw_report_path, load_hw_report, report_json, synthesised_cost
-from fxdsp.commands.hw_report import UP5K, XC7A35T, markdown
+from fxdsp.hdl.hwreport_md import markdown
+from fxdsp.hdl.synthesis import UP5K, XC7A35T
 
 ROOT = Path(__file__).parents[1]
 
@@ -87,12 +87,12 @@ def test_committed_report_is_current_for_the_rtl_and_default_config():
     design = build()
     report = load_hw_report()
     assert report.get("source_sha256") == source_hash(design), "hdl/HW_REPORT.* is stale: run make hw-report"
-    from fxdsp.commands.hw_report import variants
+    from fxdsp.hdl.hwplan import variants
 
     # a row per instance, and one per resource-shared variant of a block (e.g. the serial iir)
     assert {r["name"] for r in report["rows"]} == set(design.hardware) | set(variants(design))
     # and each row's own hash is that of what it synthesises now (what a regeneration reuses)
-    from fxdsp.commands.hw_report import expected_row_hashes
+    from fxdsp.hdl.hwplan import expected_row_hashes
 
     expected = expected_row_hashes(design, report["target_mhz"])
     stale = [r["name"] for r in report["rows"] if r.get("sha256") != expected[r["name"]]]
@@ -113,7 +113,7 @@ def test_row_hash_changes_for_exactly_the_rows_that_read_a_changed_file(tmp_path
     (demod, the paper 002 chain) and no other;
     a change to a shared primitive re-runs every row that instantiates it."""
     from fxdsp.chains import build
-    from fxdsp.commands.hw_report import expected_row_hashes
+    from fxdsp.hdl.hwplan import expected_row_hashes
 
     design = build()
     before = expected_row_hashes(design, 40.0)
@@ -132,7 +132,7 @@ def test_row_hash_changes_for_exactly_the_rows_that_read_a_changed_file(tmp_path
 
 
 def test_previous_rows_are_reused_only_under_the_same_tools_and_when_complete():
-    from fxdsp.commands.hw_report import reusable_rows
+    from fxdsp.hdl.hwplan import reusable_rows
 
     good = {"sha256": "a", "LUT": 10, "xc7": {"LUT": 5}}
     failed = {"sha256": "b", "LUT": None, "xc7": {"LUT": 5}}
@@ -159,7 +159,7 @@ def test_source_hash_sees_a_one_character_rtl_change(tmp_path, monkeypatch):
 
 
 def test_a_module_larger_than_the_device_is_not_sent_to_the_placer():
-    from fxdsp.commands.hw_report import too_big
+    from fxdsp.hdl.hwplan import too_big
 
     assert too_big({"MAC16": UP5K["MAC16"], "LUT": UP5K["LUT"]}) == ""
     assert "SB_MAC16" in too_big({"MAC16": UP5K["MAC16"] + 1, "LUT": 10})
@@ -224,9 +224,9 @@ def test_a_budget_row_is_judged_on_its_slowest_seed():
     assert "Fmax met (40.1, the lowest over seeds 1, 2, 3)" in markdown([row], 40.0)
     row["fmax_seeds"]["3"] = None
     assert "Fmax NOT met (-" in markdown([row], 40.0)
-    assert report_cli.seeds_of("chain_paper002 (ARCH=1)") == report_cli.SEED_SWEEP
-    assert report_cli.seeds_of("chain_user (ARCH=1)") == report_cli.SEED_SWEEP and len(report_cli.SEED_SWEEP) >= 10
-    assert report_cli.seeds_of("demod (ARCH=1)") == (1,) and report_cli.seeds_of("chain_paper002") == (1,)
+    assert hwplan.seeds_of("chain_paper002 (ARCH=1)") == hwplan.SEED_SWEEP
+    assert hwplan.seeds_of("chain_user (ARCH=1)") == hwplan.SEED_SWEEP and len(hwplan.SEED_SWEEP) >= 10
+    assert hwplan.seeds_of("demod (ARCH=1)") == (1,) and hwplan.seeds_of("chain_paper002") == (1,)
 
 
 def test_adding_an_instance_reruns_no_other_row():
@@ -238,7 +238,7 @@ def test_adding_an_instance_reruns_no_other_row():
     from conftest import default_data
     from fxdsp.chains import build
     from fxdsp.config import Config
-    from fxdsp.commands.hw_report import expected_row_hashes
+    from fxdsp.hdl.hwplan import expected_row_hashes
 
     before = expected_row_hashes(build(), 40.0)
     data = copy.deepcopy(default_data())
@@ -261,7 +261,7 @@ def test_a_comment_or_whitespace_edit_of_the_rtl_needs_no_new_synthesis(tmp_path
     every row's hash as it was (no re-synthesis), while a one-character change of its code makes
     exactly the rows that read it stale."""
     from fxdsp.chains import build
-    from fxdsp.commands.hw_report import expected_row_hashes
+    from fxdsp.hdl.hwplan import expected_row_hashes
 
     design = build()
     before = expected_row_hashes(design, 40.0)
@@ -346,10 +346,10 @@ Info: 1.2 ns logic, 3.8 ns routing
 def test_the_placement_is_read_from_nextpnrs_log():
     """Logic cells and global buffers of the placed design and the clock's critical path (not a
     cross-domain one): its first source, its last sink, logic and routing."""
-    got = report_cli._placement(NEXTPNR_LOG)
+    got = synthesis._placement(NEXTPNR_LOG)
     assert got == {"LC": 3850, "GB": 8, "critical_path": "dut.done_demod_SB_DFFESR_Q_DFFLC.O -> "
                    "dut.g_mac.u_mac.ia_SB_DFFESR_Q_D_SB_LUT4_O_LC.SR: 5.8 ns logic, 17.4 ns routing"}
-    assert report_cli._placement("Info: nothing placed") == {"LC": None, "GB": None, "critical_path": None}
+    assert synthesis._placement("Info: nothing placed") == {"LC": None, "GB": None, "critical_path": None}
 
 
 def test_tool_warnings_are_kept_but_the_two_every_placement_gives():
@@ -359,10 +359,10 @@ def test_tool_warnings_are_kept_but_the_two_every_placement_gives():
             "Warning: Literal has a width of 28 bit, but value requires 35 bit. (iir.v:1)\n"
             "Info: something\nWarning: Literal has a width of 28 bit, but value requires 35 bit. (iir.v:1)\n"
             "Warning: Max frequency for clock 'clk': 39.1 MHz (FAIL at 40.00 MHz)\n")
-    assert report_cli.tool_warnings(text) == ["Warning: Literal has a width of 28 bit, but value requires 35 bit. "
+    assert synthesis.tool_warnings(text) == ["Warning: Literal has a width of 28 bit, but value requires 35 bit. "
                                               "(iir.v:1)"]
     row = {"name": "iir", "module": "iir", "LUT": 1, "MAC16": 0, "FF": 1, "BRAM": 0, "fmax": 50.0, "note": "",
-           "warnings": report_cli.tool_warnings(text)}
+           "warnings": synthesis.tool_warnings(text)}
     text = markdown([row], 40.0)
     assert "1:" in text and "* iir (iCE40): Warning: Literal has a width" in text
     # a warning nobody has explained says so; an explained one carries its reason
@@ -380,13 +380,13 @@ def test_a_chains_targets_come_from_its_config_table():
 
     from conftest import edited_data
     from fxdsp.config import Config
-    from fxdsp.commands.hw_report import _schedule_fields
+    from fxdsp.hdl.hwreport_md import schedule_fields
 
     data = edited_data()
     data["chain"]["paper001"]["hardware"] = {"lut4": 100, "mhz": 45.0}
     d = build(Config(copy.deepcopy(data), source="<targets>"))
     assert d.chains["chain_paper001"].netlist.hardware == {"lut4": 100.0, "mhz": 45.0}
-    fields = _schedule_fields(d, "chain_paper001", {"ARCH": 1})
+    fields = schedule_fields(d, "chain_paper001", {"ARCH": 1})
     row = {"name": "chain_paper001 (ARCH=1)", "module": "chain_paper001", "LUT": 870, "MAC16": 2, "FF": 1000,
            "BRAM": 0, "fmax": 46.0, "fmax_seeds": {"1": 46.0, "2": 44.0}, "note": "", **fields}
     text = markdown([row], 40.0)
@@ -440,10 +440,10 @@ def test_the_ecp5_placement_is_read_from_its_tools_logs():
     log = ("Info: Max frequency for clock '$glbnet$clk$TRELLIS_IO_IN': 61.20 MHz (PASS at 40.00 MHz)\n"
            "Info: Routing..\n"
            "Info: Max frequency for clock '$glbnet$clk$TRELLIS_IO_IN': 66.64 MHz (PASS at 40.00 MHz)\n")
-    assert report_cli.ecp5_fmax(log) == 66.64 and report_cli.ecp5_fmax("ERROR: no BELs") is None
+    assert synthesis.ecp5_fmax(log) == 66.64 and synthesis.ecp5_fmax("ERROR: no BELs") is None
     stat = "   Number of cells: 9\n     CCU2C   1026\n     DP16KD   7\n     LUT4   2822\n     MULT18X18D   1\n" \
            "     TRELLIS_FF   3250\n"
-    assert report_cli._ecp5_stat(stat) == {"LUT": 2822, "FF": 3250, "CARRY": 1026, "MULT18": 1, "EBR": 7}
+    assert synthesis._ecp5_stat(stat) == {"LUT": 2822, "FF": 3250, "CARRY": 1026, "MULT18": 1, "EBR": 7}
 
 
 def test_a_serial_row_that_does_not_place_is_shown_on_the_ecp5_against_the_clock_it_needs():
@@ -470,5 +470,5 @@ def test_every_serial_row_the_up5k_cannot_hold_meets_its_clock_on_the_ecp5():
         need = 40.0 * max(1.0, r["cycles_per_sample"] / r["cycle_budget"])
         assert e.get("fmax") is not None and e["fmax"] >= need, (r["name"], e, need)
         # a carry cell (CCU2C) takes two LUT4 sites of the part's count
-        assert e["LUT"] + 2 * e["CARRY"] <= report_cli.ECP5["LUT"] and e["MULT18"] <= report_cli.ECP5["MULT18"]
-        assert e["EBR"] <= report_cli.ECP5["EBR"]
+        assert e["LUT"] + 2 * e["CARRY"] <= synthesis.ECP5["LUT"] and e["MULT18"] <= synthesis.ECP5["MULT18"]
+        assert e["EBR"] <= synthesis.ECP5["EBR"]

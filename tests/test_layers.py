@@ -33,7 +33,7 @@ TIERS: list[set[str]] = [
     {"blocks", "netlist", "mechanisms"},
     {"sensors", "causes"},
     {"chains"},
-    {"vectors", "errors_table"},
+    {"vectors", "float_vs_fixed"},
     {"sim"},
     {"hdl"},
     {"budget", "diagnose"},

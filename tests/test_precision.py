@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from conftest import design_with
-from fxdsp.errors_table import all_errors
+from fxdsp.float_vs_fixed import all_errors
 
 
 def test_every_block_close_to_its_float_reference(design):

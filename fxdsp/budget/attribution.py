@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fxdsp.chains import Design, stream_key
-from fxdsp.errors_table import port_unit
+from fxdsp.float_vs_fixed import port_unit
 from fxdsp.budget.hybrid import CATEGORIES, Source, Switch, chain_analog, chain_sources, lowpass_of, run_chain
 
 ADDITIVITY_DB = 0.5     # stated tolerance of the power sum against the total

@@ -29,7 +29,7 @@ import scipy.signal as sps
 
 from fxdsp.chains import Design, build
 from fxdsp.config import Config, table_at
-from fxdsp.errors_table import port_unit
+from fxdsp.float_vs_fixed import port_unit
 from fxdsp.budget.attribution import Attribution
 from fxdsp.budget.hybrid import ADC, lowpass_of
 from fxdsp.budget.optimise import demod_of

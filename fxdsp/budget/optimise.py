@@ -17,7 +17,7 @@ Algorithm ("min + b", Cantin/Sung style, no grid):
 
 The knobs come from the chain's members by their kind (:data:`KIND_KNOBS`), so any chain of the
 config can be searched. The error measured is exactly what ``fxdsp budget`` prints for the chain
-(errors_table's stimulus and seed) and, for a chain with a sensor, the larger of that and the
+(fxdsp.float_vs_fixed's stimulus and seed) and, for a chain with a sensor, the larger of that and the
 quasi-static chamber-point error (see :mod:`fxdsp.budget.static`, also printed by ``fxdsp budget``),
 so the written config meets the target when re-run. The cost proxy counts bits: registers
 and coefficients (word length times instances) and memory (LUT words times word length).
@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 from fxdsp.chains import build
 from fxdsp.config import Config, table_at
-from fxdsp.errors_table import block_errors
+from fxdsp.float_vs_fixed import block_errors
 from fxdsp.fixed import Format
 from fxdsp.budget.static import static_error
 from fxdsp.budget.units import Target

@@ -1,5 +1,5 @@
 """Item 1: bit-exact vs float reference of every block and chain on its nominal stimulus, with SNR
-and ENOB added to :mod:`fxdsp.errors_table`'s statistics (same stimulus, same seeds, same units).
+and ENOB added to :mod:`fxdsp.float_vs_fixed`'s statistics (same stimulus, same seeds, same units).
 
 SNR = 10 log10(P_signal / P_error) with P_signal the mean square of the float reference output and
 P_error the mean square of the difference (bias included); ENOB = (SNR - 1.76) / 6.02.
@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fxdsp.chains import Design
-from fxdsp.errors_table import ErrorStats, block_errors
+from fxdsp.float_vs_fixed import ErrorStats, block_errors
 
 
 @dataclass

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fxdsp.chains import Design
-from fxdsp.errors_table import port_units
+from fxdsp.float_vs_fixed import port_units
 
 _TARGET_RE = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(\S+)\s*$")
 

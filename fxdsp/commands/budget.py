@@ -15,7 +15,7 @@ from pathlib import Path
 from tqdm import tqdm as _tqdm
 
 from fxdsp.chains import build
-from fxdsp.errors_table import port_unit
+from fxdsp.float_vs_fixed import port_unit
 from fxdsp.config import dumps, load_config
 from fxdsp.hdl.hwreport import hw_report_path, synthesised_cost
 from fxdsp.outputs import IN, OUT_DIR, OUT_FILE, json_text, plain, staged

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from fxdsp.chains import build
-from fxdsp.errors_table import all_errors, format_table
+from fxdsp.float_vs_fixed import all_errors, format_table
 from fxdsp.outputs import IN, OUT_DIR
 from fxdsp.vectors import generate, write
 

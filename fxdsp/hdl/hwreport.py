@@ -34,7 +34,7 @@ from fxdsp.hdl import HW_REPORT_JSON, RTL_DIR
 COLUMNS = ("name", "module", "LC", "LUT", "FF", "CARRY", "MAC16", "BRAM", "GB", "fmax", "fmax_seeds", "critical_seed",
            "critical_path", "cycles_per_sample", "cycle_budget", "target", "warnings", "note", "sha256")
 XC7_COLUMNS = ("LUT", "DSP48E1", "FF", "BRAM36", "BRAM18", "LUTRAM", "SRL", "warnings", "note")
-# a serial row that does not place on the UP5K, placed on the smallest ECP5 (fxdsp.commands.hw_report.place_ecp5)
+# a serial row that does not place on the UP5K, placed on the smallest ECP5 (fxdsp.hdl.synthesis.place_ecp5)
 ECP5_COLUMNS = ("device", "LUT", "FF", "CARRY", "MULT18", "EBR", "fmax", "fmax_seeds", "tool", "note")
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import time
 from pathlib import Path
 
@@ -16,6 +17,15 @@ from fxdsp.chains import build  # noqa: E402
 from fxdsp.repro import paper000, paper001, paper002, paper003  # noqa: E402
 
 PAPERS = ("002", "001", "000", "003")
+# the papers' own figures, held by the module that reproduces each paper
+P002, P001, P000, P003 = paper002.PAPER, paper001.PAPER, paper000.PAPER, paper003.PAPER
+# paper 001's f0 as its own numbers imply it: f(-10 C) + 10 k
+F0_IMPLIED = P001["f_at_m10_hz"] + 10.0 * P001["k_hz_per_c"]
+
+
+def _sci(x: float) -> str:
+    """A figure as the papers print it: 5e-5, -6.96e-8 (no padded exponent)."""
+    return re.sub(r"e([+-])0*(\d)", r"e\1\2", f"{x:g}")
 
 
 def run_all(papers=PAPERS, n_freqs: int = 41, progress: bool = True, drive_loop=None) -> dict:
@@ -56,47 +66,47 @@ def summary_rows(res: dict) -> list[tuple[str, str, str, str]]:
         rep = r.get("repeatability")
         if rep:  # the paper's figures on the device with its repeatability: median [p10..p90]
             st = rep["quick"]["stats"]
-            rows += [("002", "SF tempco before (ppm/C)", "316.66", _med(st["before"]["sf_ppm"])),
-                     ("002", "bias tempco before (deg/h/C)", "366.22", _med(st["before"]["bias"])),
-                     ("002", "SF after, integrated RTD", "69.67", _med(st[integ]["sf_ppm"])),
-                     ("002", "bias after, integrated RTD", "115.25", _med(st[integ]["bias"])),
-                     ("002", "SF after, external sensor", "154.97", _med(st[ext]["sf_ppm"])),
-                     ("002", "bias after, external sensor", "172.67", _med(st[ext]["bias"])),
+            rows += [("002", "SF tempco before (ppm/C)", f"{P002['sf_before_ppm']:.2f}", _med(st["before"]["sf_ppm"])),
+                     ("002", "bias tempco before (deg/h/C)", f"{P002['bias_before']:.2f}", _med(st["before"]["bias"])),
+                     ("002", "SF after, integrated RTD", f"{P002['sf_after_ppm']:.2f}", _med(st[integ]["sf_ppm"])),
+                     ("002", "bias after, integrated RTD", f"{P002['bias_after']:.2f}", _med(st[integ]["bias"])),
+                     ("002", "SF after, external sensor", f"{P002['sf_external_ppm']:.2f}", _med(st[ext]["sf_ppm"])),
+                     ("002", "bias after, external sensor", f"{P002['bias_external']:.2f}", _med(st[ext]["bias"])),
                      ("002", "SF/bias after, frequency thermometer", "-",
                       f"{st[freq]['sf_ppm']['median']:.1f} / {st[freq]['bias']['median']:.1f}"),
                      ("002", "SF/bias after, integrated RTD, repeatable device", "-",
                       f"{m[integ]['sf_ppm']:.2f} / {m[integ]['bias']:.2f}")]
         else:
-            rows += [("002", "SF tempco before (ppm/C)", "316.66", f"{b['sf_ppm']:.2f}"),
-                     ("002", "bias tempco before (deg/h/C)", "366.22", f"{b['bias']:.2f}"),
-                     ("002", "SF after, integrated RTD", "69.67", f"{m[integ]['sf_ppm']:.2f}"),
-                     ("002", "bias after, integrated RTD", "115.25", f"{m[integ]['bias']:.2f}"),
-                     ("002", "SF after, external sensor", "154.97", f"{m[ext]['sf_ppm']:.2f}"),
-                     ("002", "bias after, external sensor", "172.67", f"{m[ext]['bias']:.2f}"),
+            rows += [("002", "SF tempco before (ppm/C)", f"{P002['sf_before_ppm']:.2f}", f"{b['sf_ppm']:.2f}"),
+                     ("002", "bias tempco before (deg/h/C)", f"{P002['bias_before']:.2f}", f"{b['bias']:.2f}"),
+                     ("002", "SF after, integrated RTD", f"{P002['sf_after_ppm']:.2f}", f"{m[integ]['sf_ppm']:.2f}"),
+                     ("002", "bias after, integrated RTD", f"{P002['bias_after']:.2f}", f"{m[integ]['bias']:.2f}"),
+                     ("002", "SF after, external sensor", f"{P002['sf_external_ppm']:.2f}", f"{m[ext]['sf_ppm']:.2f}"),
+                     ("002", "bias after, external sensor", f"{P002['bias_external']:.2f}", f"{m[ext]['bias']:.2f}"),
                      ("002", "SF/bias after, frequency thermometer", "-",
                       f"{m[freq]['sf_ppm']:.2f} / {m[freq]['bias']:.2f}")]
     if "001" in res:
         r = res["001"]
         c = r["cal"]
-        rows += [("001", "k (Hz/C)", "0.0536", f"{c['k_hz_per_c']:.5f}"),
-                 ("001", "f0 (Hz)", "3837.4 (3837.471)", f"{c['f0_hz']:.4f}"),
-                 ("001", "random drift before/after (deg/h)", "~3 / ~1",
+        rows += [("001", "k (Hz/C)", f"{P001['k_hz_per_c']:g}", f"{c['k_hz_per_c']:.5f}"),
+                 ("001", "f0 (Hz)", f"{P001['f0_printed_hz']:g} ({F0_IMPLIED:.3f})", f"{c['f0_hz']:.4f}"),
+                 ("001", "random drift before/after (deg/h)", f"~{P001['drift_before']:g} / ~{P001['drift_after']:g}",
                   f"{r['drift_before']:.2f} / {r['drift_after']:.2f}"),
-                 ("001", "T error of rounded f0 (C)", "1.33", f"{r['thermometer_check_rounded']['mean_error_c']:+.2f}")]
+                 ("001", "T error of rounded f0 (C)", f"{P001['rounding_error_c']:g}", f"{r['thermometer_check_rounded']['mean_error_c']:+.2f}")]
     if "000" in res:
         r = res["000"]
-        rows += [("000", "K0 after (mg)", "< 1", f"{r['k0_after_mg']:.4f}"),
-                 ("000", "K1 after", "< 5e-5", f"{r['k1_after']:.2e}")]
+        rows += [("000", "K0 after (mg)", f"< {P000['k0_after_mg']:g}", f"{r['k0_after_mg']:.4f}"),
+                 ("000", "K1 after", f"< {_sci(P000['k1_after'])}", f"{r['k1_after']:.2e}")]
     if "003" in res:
         r = res["003"]
-        rows += [("003", "kxy (N/m)", "0.103", f"{r['filtered']['kxy']:.5f}"),
-                 ("003", "cxy (N s/m)", "-6.96e-8", f"{r['filtered']['cxy']:.4g} ({100 * r['filtered']['err']['cxy']:.1f} %)"),
-                 ("003", "lambda_yx", "-0.000374", f"{r['filtered']['lambda_yx']:.4g}"),
-                 ("003", "cxy error without low-pass", "> 1000 %", f"{100 * r['raw']['err']['cxy']:.0f} %")]
+        rows += [("003", "kxy (N/m)", f"{P003['kxy']:g}", f"{r['filtered']['kxy']:.5f}"),
+                 ("003", "cxy (N s/m)", _sci(P003["cxy"]), f"{r['filtered']['cxy']:.4g} ({100 * r['filtered']['err']['cxy']:.1f} %)"),
+                 ("003", "lambda_yx", f"{P003['lambda_yx']:g}", f"{r['filtered']['lambda_yx']:.4g}"),
+                 ("003", "cxy error without low-pass", f"> {100 * P003['err_raw_cxy']:.0f} %", f"{100 * r['raw']['err']['cxy']:.0f} %")]
         if "mismatch" in r:
             mm = r["mismatch"]["phase"]
             rows.append(("003", f"cxy error, {np.degrees(mm['phase_offset_rad']):.1f} deg channel mismatch: "
-                         "uncorrected / corrected", "- / 6.09 %",
+                         "uncorrected / corrected", f"- / {100 * P003['err_cxy']:.2f} %",
                          f"{100 * mm['filtered, uncorrected']['err']['cxy']:.1f} % / "
                          f"{100 * mm['filtered, corrected']['err']['cxy']:.1f} %"))
     return rows
@@ -307,7 +317,8 @@ def _md002(r: dict) -> str:
             f"({mod['temp_bias_sigma'] * 3600:.0f} deg/h), SF {mod['temp_sf_sigma'] * 100:.3f} % per point; turn-on "
             f"{mod['turn_on_bias_sigma']:.2f} deg/s and {mod['turn_on_sf_sigma'] * 100:.3f} %. **Where they come "
             "from:** a tempco is (max - min) / 80 C of five points, so the paper's compensated figures are ranges "
-            "of 115.25 x 80 = 9220 deg/h and 69.67 x 80 = 5574 ppm; after compensation each point keeps the "
+            f"of {P002['bias_after']:.2f} x 80 = {P002['bias_after'] * 80:.0f} deg/h and {P002['sf_after_ppm']:.2f} x 80 = "
+            f"{P002['sf_after_ppm'] * 80:.0f} ppm; after compensation each point keeps the "
             "difference of two runs' offsets, N(0, 2 sigma^2), and the range of five normal draws has median "
             "2.254; taking the paper's run as a median one, sigma = range / (2.254 sqrt 2): 2892 deg/h = 0.80 "
             "deg/s and 1748 ppm = 0.175 %. On this device 0.80 deg/s is a demodulation phase that repeats "
@@ -463,8 +474,8 @@ def _md001(r: dict) -> str:
         "",
         "| figure | paper | reproduced |",
         "|---|---|---|",
-        f"| k (Hz/C) | 0.0536 | {c['k_hz_per_c']:.5f} |",
-        f"| f0 (Hz) | 3837.4 printed, 3837.471 implied | {c['f0_hz']:.4f} |",
+        f"| k (Hz/C) | {P001['k_hz_per_c']:g} | {c['k_hz_per_c']:.5f} |",
+        f"| f0 (Hz) | {P001['f0_printed_hz']:g} printed, {F0_IMPLIED:.3f} implied | {c['f0_hz']:.4f} |",
         f"| max fit residual (Hz) | 0.01 | {c['max_freq_residual_hz']:.4f} |",
         f"| linearity (max residual / f) | 3.4e-6 | {c['max_freq_residual_hz'] / c['f0_hz']:.2e} |",
         f"| bias fit q(T) (deg/h) | -0.25 T^2 - 36.92 T + 1469.5 | {q[2]:.3f} T^2 {q[1]:+.2f} T {q[0]:+.1f} |",
@@ -529,12 +540,12 @@ def _md000(r: dict) -> str:
         "|---|---|---|",
         f"| K0 variation before (mg) | 10..35 | {r['k0_before_mg']:.1f} |",
         f"| K1 variation before (relative) | 8e-4..1.6e-3 | {r['k1_before']:.2e} |",
-        f"| max abs(K0') after, run-1 coefficients on run 2 (mg) | < 1 | {r['k0_after_mg']:.4f} |",
-        f"| max abs(K1' - 1) after | < 5e-5 | {r['k1_after']:.2e} |",
+        f"| max abs(K0') after, run-1 coefficients on run 2 (mg) | < {P000['k0_after_mg']:g} | {r['k0_after_mg']:.4f} |",
+        f"| max abs(K1' - 1) after | < {_sci(P000['k1_after'])} | {r['k1_after']:.2e} |",
     ]
     if rec:
-        lines += [f"| same with a 0.1 mg turn-on K0 repeatability (`qvba.tumble_run`), K0 (mg) | < 1 | {rec['k0_after_mg']:.4f} |",
-                  f"| same, K1 | < 5e-5 | {rec['k1_after']:.2e} |"]
+        lines += [f"| same with a 0.1 mg turn-on K0 repeatability (`qvba.tumble_run`), K0 (mg) | < {P000['k0_after_mg']:g} | {rec['k0_after_mg']:.4f} |",
+                  f"| same, K1 | < {_sci(P000['k1_after'])} | {rec['k1_after']:.2e} |"]
     lines += [
         "",
         f"Calibrated K0 = {', '.join(f'{v:.6g}' for v in cal['k0_poly'])} (Hz, ascending in t), "
@@ -613,7 +624,7 @@ def _md003(r: dict) -> str:
             f"i.e. a mismatch of {np.degrees(c['phase_y_rad'] - c['phase_x_rad']):.3f} deg, and a gain ratio "
             f"{c['gain_ratio']:.4f} of nominal (with the added 2 % gain error: {pg['correction']['gain_ratio']:.4f}).",
             "",
-            "| channel mismatch | S read | kxy error | cxy error (paper: 6.09 %) | lambda_yx error |",
+            f"| channel mismatch | S read | kxy error | cxy error (paper: {100 * P003['err_cxy']:.2f} %) | lambda_yx error |",
             "|---|---|---|---|---|",
         ]
         for case, label in ((ph, f"{deg:.1f} deg"),
@@ -628,7 +639,7 @@ def _md003(r: dict) -> str:
         lines += [
             "",
             f"Uncorrected, the {deg:.1f} deg mismatch alone puts the cxy error at {100 * pf:.0f} % (kxy stays "
-            f"within 1 %); the corrected snapshot is back at {100 * pc:.1f} %, under the paper's 6.09 % and "
+            f"within 1 %); the corrected snapshot is back at {100 * pc:.1f} %, under the paper's {100 * P003['err_cxy']:.2f} % and "
             f"at the matched-channel level ({100 * r['filtered']['err']['cxy']:.1f} %); a 2 % gain error "
             "alone would move every coefficient by 2 %, and the measured k_SF removes it.",
             "",
