@@ -16,6 +16,7 @@ from fxdsp.fixed import ops
 from fxdsp.fixed.format import Format
 from fxdsp.fixed.ops import OverflowLog
 from fxdsp.fixed.rules import Rules, check_overflow, check_rounding
+from fxdsp.errors import InputError
 
 
 def _shaped(out: np.ndarray, shape: tuple):
@@ -51,7 +52,7 @@ def quantize(values, fmt: Format | str, rounding: str = "half_up", overflow: str
         i = int(outside[0])
         flat = np.atleast_1d(arr.astype(float)).ravel()
         at = f" (index {i})" if flat.size > 1 else ""
-        raise ValueError(f"{where}: {float(flat[i])!r}{at} is outside {fmt} [{fmt.min_value!r}, {fmt.max_value!r}] "
+        raise InputError(f"{where}: {float(flat[i])!r}{at} is outside {fmt} [{fmt.min_value!r}, {fmt.max_value!r}] "
                          f"after {rounding} rounding; pass overflow='saturate' or 'wrap' to fit it (counted in log)")
     if log is not None:
         log.add(where, 0)

@@ -22,6 +22,7 @@ from typing import Callable, Mapping
 import numpy as np
 
 from fxdsp import mechanisms as mech
+from fxdsp.errors import InputError
 
 # where in the simulator's signal path a cause acts, in the order the generator computes them:
 # the RTD element's readout, the temperature the sensor sees, the rate it senses, its output, and
@@ -271,19 +272,19 @@ check_records(_RECORDS)
 def check_parameters(cause: str, parameters: dict[str, float]) -> dict[str, float]:
     """Validate a cause name and its parameters against the contract; return them as floats."""
     if cause not in CAUSES:
-        raise ValueError(f"cause: unknown name {cause!r}; expected one of {', '.join(CAUSES)}")
+        raise InputError(f"cause: unknown name {cause!r}; expected one of {', '.join(CAUSES)}")
     expected = PARAMETERS[cause]
     unknown = sorted(set(parameters) - set(expected))
     if unknown:
-        raise ValueError(f"{cause}: unknown parameter {unknown[0]!r}; expected {', '.join(expected) or 'none'}")
+        raise InputError(f"{cause}: unknown parameter {unknown[0]!r}; expected {', '.join(expected) or 'none'}")
     missing = [p for p in expected if p not in parameters]
     if missing:
-        raise ValueError(f"{cause}: missing parameter {missing[0]!r}")
+        raise InputError(f"{cause}: missing parameter {missing[0]!r}")
     out = {}
     for name in expected:
         value = float(parameters[name])
         if not np.isfinite(value):
-            raise ValueError(f"{cause}.{name}: must be a finite number, got {parameters[name]!r}")
+            raise InputError(f"{cause}.{name}: must be a finite number, got {parameters[name]!r}")
         out[name] = value
     return out
 

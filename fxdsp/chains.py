@@ -89,7 +89,7 @@ class Chain(Block):
         if not keys:
             return super().set_state(state)
         if not isinstance(state, dict) or set(state) != keys:
-            raise ValueError(f"{self.name}: state: expected a previous result's state {{{', '.join(sorted(keys))}}}")
+            raise InputError(f"{self.name}: state: expected a previous result's state {{{', '.join(sorted(keys))}}}")
         for p, block in self._stateful.items():
             block.set_state(state[p.replace(".", "_")])
 
@@ -177,7 +177,7 @@ class Instance:
         """The RTL interface: a block's is its datapath's; a chain top (generated)
         takes one sample at a time (in_ready) and has a serial variant (ARCH = 1), no bundle."""
         if not self.hardware:
-            raise ValueError(f"{self.name}: has no RTL (its datapath states no RTL interface)")
+            raise InputError(f"{self.name}: has no RTL (its datapath states no RTL interface)")
         if self.members:
             return RtlPorts(ready=True, serial=True)
         return self.block.datapath.RTL

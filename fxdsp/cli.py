@@ -18,8 +18,10 @@ import argparse
 import importlib
 import sys
 import tomllib
+import traceback
 from collections.abc import Iterable
 
+from fxdsp.errors import InputError
 from fxdsp.interrupts import interrupts_held
 
 # name -> (module, one-line help)
@@ -48,6 +50,13 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "sweep": ("fxdsp.commands.sweep", "Monte-Carlo budget, word-length search, confusion matrix, RTL regressions "
                                  "on Dask workers"),
 }
+
+
+# what the user controls and got wrong: one line naming it and exit 2. InputError is raised by the
+# validation of options, configs, logs and paths; an OSError is about a path (the user's, or a tool's
+# that is missing); a TOML or UTF-8 decode error is a file the user gave
+BAD_INPUT = (InputError, OSError, tomllib.TOMLDecodeError, UnicodeDecodeError)
+BUG = 70   # any other exception: a bug, with its traceback (EX_SOFTWARE of sysexits.h)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -99,7 +108,7 @@ def _main(argv: list[str] | None) -> int:
     except KeyboardInterrupt:
         print(f"fxdsp {args.command}: interrupted; outputs left as they were", file=sys.stderr)
         return 130
-    except (ValueError, TypeError, OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+    except BAD_INPUT as exc:
         message = str(exc).splitlines()[0] if str(exc) else exc.__class__.__name__
         if isinstance(exc, OSError) and exc.filename:
             message = f"{exc.strerror or exc.__class__.__name__}: {exc.filename}"
@@ -107,6 +116,11 @@ def _main(argv: list[str] | None) -> int:
             message = f"not UTF-8 text ({exc.reason} at byte {exc.start})"
         print(f"fxdsp {args.command}: error: {message}", file=sys.stderr)
         return 2
+    except Exception:   # noqa: BLE001 - anything else is a bug of fxdsp, not of the user's input
+        traceback.print_exc()
+        print(f"fxdsp {args.command}: internal error: a bug in fxdsp, not in the input (the traceback above); "
+              f"exit status {BUG}", file=sys.stderr)
+        return BUG
 
 
 if __name__ == "__main__":

@@ -28,6 +28,7 @@ import numpy as np
 
 from fxdsp.fixed import Format, Rules
 from fxdsp.fixed.rules import check_overflow, check_rounding
+from fxdsp.errors import InputError, InputTypeError
 
 DEFAULT_CONFIG_NAME = "default.toml"
 
@@ -53,7 +54,7 @@ def load_config(path: str | Path | None = None) -> "Config":
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{p}: not valid TOML: {exc}") from None
+        raise InputError(f"{p}: not valid TOML: {exc}") from None
     return Config(data, source=str(p))
 
 
@@ -90,7 +91,7 @@ class Section:
 
     def __init__(self, data: dict[str, Any], path: str):
         if not isinstance(data, dict):
-            raise ValueError(f"{path}: expected a table, got {type(data).__name__}")
+            raise InputError(f"{path}: expected a table, got {type(data).__name__}")
         self.data = data
         self.path = path
         self._read: set[str] = set()
@@ -137,7 +138,7 @@ class Section:
             return wired
         stated = self.format(key)
         if enforce and stated != wired:
-            raise ValueError(f"{self.field(key)}: {stated} must equal {source_field} ({wired}) to connect "
+            raise InputError(f"{self.field(key)}: {stated} must equal {source_field} ({wired}) to connect "
                              f"the chain; leave it out, it is derived")
         return stated
 
@@ -152,9 +153,9 @@ class Section:
         rounding = self._get(prefix + "rounding", default.rounding)
         overflow = self._get(prefix + "overflow", default.overflow)
         if not isinstance(rounding, str):
-            raise TypeError(f"{self.field(prefix + 'rounding')}: expected a string")
+            raise InputTypeError(f"{self.field(prefix + 'rounding')}: expected a string")
         if not isinstance(overflow, str):
-            raise TypeError(f"{self.field(prefix + 'overflow')}: expected a string")
+            raise InputTypeError(f"{self.field(prefix + 'overflow')}: expected a string")
         check_rounding(rounding, self.field(prefix + "rounding"))
         check_overflow(overflow, self.field(prefix + "overflow"))
         return Rules(rounding, overflow)
@@ -162,67 +163,67 @@ class Section:
     def choice(self, key: str, choices: tuple[str, ...], default: Any = None) -> str:
         value = self._get(key, _REQUIRED if default is None else default)
         if value not in choices:
-            raise ValueError(f"{self.field(key)}: {value!r} is not one of {', '.join(choices)}")
+            raise InputError(f"{self.field(key)}: {value!r} is not one of {', '.join(choices)}")
         return value
 
     def names(self, key: str, choices: tuple[str, ...], default: Any = None) -> list[str]:
         """A list of distinct names, each one of ``choices`` (e.g. the optional stages of a chain)."""
         value = self._get(key, _REQUIRED if default is None else default)
         if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
-            raise TypeError(f"{self.field(key)}: expected a list of names, got {value!r}")
+            raise InputTypeError(f"{self.field(key)}: expected a list of names, got {value!r}")
         for v in value:
             if v not in choices:
-                raise ValueError(f"{self.field(key)}: {v!r} is not one of {', '.join(choices)}")
+                raise InputError(f"{self.field(key)}: {v!r} is not one of {', '.join(choices)}")
         if len(set(value)) != len(value):
-            raise ValueError(f"{self.field(key)}: a name is listed twice in {value!r}")
+            raise InputError(f"{self.field(key)}: a name is listed twice in {value!r}")
         return list(value)
 
     def number(self, key: str, default: Any = None, *, low: float | None = None, high: float | None = None,
                low_open: bool = False) -> float:
         value = self._get(key, _REQUIRED if default is None else default)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise TypeError(f"{self.field(key)}: expected a number, got {value!r}")
+            raise InputTypeError(f"{self.field(key)}: expected a number, got {value!r}")
         value = float(value)
         if not math.isfinite(value):
-            raise ValueError(f"{self.field(key)}: must be finite, got {value}")
+            raise InputError(f"{self.field(key)}: must be finite, got {value}")
         if low is not None and (value <= low if low_open else value < low):
-            raise ValueError(f"{self.field(key)}: must be {'>' if low_open else '>='} {low}, got {value}")
+            raise InputError(f"{self.field(key)}: must be {'>' if low_open else '>='} {low}, got {value}")
         if high is not None and value > high:
-            raise ValueError(f"{self.field(key)}: must be <= {high}, got {value}")
+            raise InputError(f"{self.field(key)}: must be <= {high}, got {value}")
         return value
 
     def integer(self, key: str, default: Any = None, *, low: int | None = None, high: int | None = None) -> int:
         value = self._get(key, _REQUIRED if default is None else default)
         if isinstance(value, bool) or not isinstance(value, int):
-            raise TypeError(f"{self.field(key)}: expected an integer, got {value!r}")
+            raise InputTypeError(f"{self.field(key)}: expected an integer, got {value!r}")
         if low is not None and value < low:
-            raise ValueError(f"{self.field(key)}: must be >= {low}, got {value}")
+            raise InputError(f"{self.field(key)}: must be >= {low}, got {value}")
         if high is not None and value > high:
-            raise ValueError(f"{self.field(key)}: must be <= {high}, got {value}")
+            raise InputError(f"{self.field(key)}: must be <= {high}, got {value}")
         return value
 
     def numbers(self, key: str, default: Any = None) -> list[float]:
         value = self._get(key, _REQUIRED if default is None else default)
         if not isinstance(value, list):
-            raise TypeError(f"{self.field(key)}: expected a list of numbers, got {value!r}")
+            raise InputTypeError(f"{self.field(key)}: expected a list of numbers, got {value!r}")
         out = []
         for i, v in enumerate(value):
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
-                raise TypeError(f"{self.field(key)}[{i}]: expected a finite number, got {v!r}")
+                raise InputTypeError(f"{self.field(key)}[{i}]: expected a finite number, got {v!r}")
             out.append(float(v))
         return out
 
     def matrix(self, key: str) -> list[list[float]]:
         value = self._get(key, _REQUIRED)
         if not isinstance(value, list) or not value or not all(isinstance(r, list) for r in value):
-            raise TypeError(f"{self.field(key)}: expected a list of lists of numbers")
+            raise InputTypeError(f"{self.field(key)}: expected a list of lists of numbers")
         rows = []
         for i, row in enumerate(value):
             if not row:
-                raise ValueError(f"{self.field(key)}[{i}]: empty row")
+                raise InputError(f"{self.field(key)}[{i}]: empty row")
             for j, v in enumerate(row):
                 if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
-                    raise TypeError(f"{self.field(key)}[{i}][{j}]: expected a finite number, got {v!r}")
+                    raise InputTypeError(f"{self.field(key)}[{i}][{j}]: expected a finite number, got {v!r}")
             rows.append([float(v) for v in row])
         return rows
 
@@ -253,7 +254,7 @@ class Section:
             # the key meant is most likely one the table does not set already
             near = nearest(key, self._read - set(self.data)) or nearest(key, self._read)
             hint = f" (did you mean {near!r}?)" if near else ""
-            raise ValueError(f"{self.field(key)}: unknown key{hint}")
+            raise InputError(f"{self.field(key)}: unknown key{hint}")
 
 
 _REQUIRED = object()
@@ -385,7 +386,7 @@ def dumps_value(value: Any, path: str = "value") -> str:
     if isinstance(value, (float, np.floating)):
         f = float(value)
         if not math.isfinite(f):  # TOML could say inf/nan, but no config field accepts them
-            raise ValueError(f"{path}: {f} cannot be written to a config")
+            raise InputError(f"{path}: {f} cannot be written to a config")
         return repr(f)
     if isinstance(value, str):
         return _string(value)

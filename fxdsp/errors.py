@@ -6,3 +6,9 @@ class InputError(ValueError):
 
     A ValueError subclass, so library callers can catch ValueError as documented.
     """
+
+
+class InputTypeError(InputError, TypeError):
+    """Bad input of the wrong type (a config value that is not a number, a list that is not one).
+
+    Also a TypeError, so callers that catch TypeError for a wrong type keep working."""

@@ -14,6 +14,7 @@ import numpy as np
 from numba import njit
 
 from fxdsp.ramps import derivative, read_ramps
+from fxdsp.errors import InputError
 
 # reference temperature of the curvature terms of the contract
 T_CURVE_C = 25.0
@@ -22,7 +23,7 @@ T_CURVE_C = 25.0
 def _as_1d(name: str, values) -> np.ndarray:
     arr = np.asarray(values, dtype=float)
     if arr.ndim != 1:
-        raise ValueError(f"{name}: expected a 1-D array, got shape {arr.shape}")
+        raise InputError(f"{name}: expected a 1-D array, got shape {arr.shape}")
     return arr
 
 
@@ -35,9 +36,9 @@ def first_order_lag(time_s, temp_c, tau_s: float, initial: float | None = None) 
     t = _as_1d("time_s", time_s)
     u = _as_1d("temp_c", temp_c)
     if t.shape != u.shape:
-        raise ValueError("time_s and temp_c must have the same length")
+        raise InputError("time_s and temp_c must have the same length")
     if not tau_s > 0:
-        raise ValueError(f"tau_s must be > 0, got {tau_s}")
+        raise InputError(f"tau_s must be > 0, got {tau_s}")
     out = np.empty_like(u)
     if u.size == 0:
         return out
@@ -80,7 +81,7 @@ def ramp_direction(time_s, temp_c) -> np.ndarray:
 def warmup(time_s, a: float, tau_s: float) -> np.ndarray:
     """a * exp(-time_s / tau_s): settling after power-on."""
     if not tau_s > 0:
-        raise ValueError(f"tau_s must be > 0, got {tau_s}")
+        raise InputError(f"tau_s must be > 0, got {tau_s}")
     return a * np.exp(-_as_1d("time_s", time_s) / tau_s)
 
 

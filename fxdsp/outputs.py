@@ -58,18 +58,18 @@ def check_output(path: Path, kind: str, option: str) -> None:
     """ValueError naming ``option`` when ``path`` cannot be written as a ``kind`` output."""
     if path.exists():
         if kind == OUT_FILE and path.is_dir():
-            raise ValueError(f"{option}: {path} is a directory, expected a file")
+            raise InputError(f"{option}: {path} is a directory, expected a file")
         if kind == OUT_DIR and not path.is_dir():
-            raise ValueError(f"{option}: {path} exists and is not a directory")
+            raise InputError(f"{option}: {path} exists and is not a directory")
     holder = path.parent
     if not holder.exists():
-        raise ValueError(f"{option}: cannot write {path}: the folder {holder} does not exist")
+        raise InputError(f"{option}: cannot write {path}: the folder {holder} does not exist")
     if not holder.is_dir():
-        raise ValueError(f"{option}: cannot write {path}: {holder} is a file, not a folder")
+        raise InputError(f"{option}: cannot write {path}: {holder} is a file, not a folder")
     # files are replaced (written aside, then renamed), so the holding folder must be writable
     writable = path if kind == OUT_DIR and path.exists() else holder
     if not os.access(writable, os.W_OK | os.X_OK):
-        raise ValueError(f"{option}: cannot write {path}: {writable} is not writable")
+        raise InputError(f"{option}: cannot write {path}: {writable} is not writable")
 
 
 # compressed files a user may hand over for a text one (a log straight from the logger's archive)
@@ -131,15 +131,15 @@ def check_paths(args, paths) -> None:
         path = Path(value)
         # pathlib reads "f.txt/." as "f.txt": a name that ends like a folder is not a file
         if kind in (IN, OUT_FILE) and (raw.endswith(("/", "/.", "/..")) or raw in (".", "..")):
-            raise ValueError(f"{option}: {raw} names a folder, expected a file")
+            raise InputError(f"{option}: {raw} names a folder, expected a file")
         if kind == IN:
             if path.is_dir():
-                raise ValueError(f"{option}: {path} is a directory, expected a file")
+                raise InputError(f"{option}: {path} is a directory, expected a file")
             if path.is_file():
                 check_text_input(path, option)
         elif kind == IN_DIR:
             if path.exists() and not path.is_dir():
-                raise ValueError(f"{option}: {path} is not a directory")
+                raise InputError(f"{option}: {path} is not a directory")
         else:
             check_output(path, kind, option)
         key = path.resolve()
@@ -148,7 +148,7 @@ def check_paths(args, paths) -> None:
             inputs = (IN, IN_DIR)
             if kind not in inputs or other_kind not in inputs:
                 what = "an input" if kind in inputs or other_kind in inputs else "another output"
-                raise ValueError(f"{option}: {path} is also {other}: an output must not overwrite {what}")
+                raise InputError(f"{option}: {path} is also {other}: an output must not overwrite {what}")
         seen[key] = (option, kind)
 
 
@@ -176,7 +176,7 @@ def json_text(data, what: str, **kw) -> str:
     try:
         return json.dumps(data, allow_nan=False, **kw) + "\n"
     except ValueError:
-        raise ValueError(f"{what}: the result holds a non-finite number (nan or inf); nothing written") from None
+        raise InputError(f"{what}: the result holds a non-finite number (nan or inf); nothing written") from None
 
 
 def write_tree(folder: Path, tree: dict[str, dict[str, str]], encoding: str = "ascii") -> None:

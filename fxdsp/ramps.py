@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
+from fxdsp.errors import InputError
 
 # a move this many noise sigmas (plus a quantisation step) beyond the last extreme is a ramp
 NOISE_MULTIPLE = 10.0
@@ -50,7 +51,7 @@ def sample_interval(time_s) -> float:
     """Median step between distinct time stamps (repeated stamps would make a plain median 0)."""
     steps = _distinct_steps(np.asarray(time_s, float))
     if steps.size == 0:
-        raise ValueError("time_s: the log has no two distinct time stamps")
+        raise InputError("time_s: the log has no two distinct time stamps")
     return float(np.median(steps))
 
 
@@ -144,7 +145,7 @@ def read_ramps(time_s, temp_c) -> RampReading:
     t = np.asarray(time_s, float)
     y = np.asarray(temp_c, float)
     if t.shape != y.shape or t.ndim != 1:
-        raise ValueError("time_s and temp_c must be 1-D arrays of the same length")
+        raise InputError("time_s and temp_c must be 1-D arrays of the same length")
     sigma = white_sigma(y)
     q = quantisation_step(y)
     sigma_eff = float(np.hypot(sigma, q / np.sqrt(12.0)))

@@ -27,8 +27,8 @@ TESTS = Path(__file__).parent
 
 # lowest first: a part may import only parts of a lower tier
 TIERS: list[set[str]] = [
-    {"errors", "interrupts", "ramps"},
-    {"units", "outputs", "logfile", "fixed", "schemas", "configs"},
+    {"errors", "interrupts"},
+    {"units", "ramps", "outputs", "logfile", "fixed", "schemas", "configs"},
     {"api", "config"},
     {"blocks", "netlist", "mechanisms"},
     {"sensors", "causes"},

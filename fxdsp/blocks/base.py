@@ -15,6 +15,7 @@ import numpy as np
 
 from fxdsp.config import nearest
 from fxdsp.fixed import Format, OverflowLog, check_in_format, to_float
+from fxdsp.errors import InputError
 
 
 @dataclass
@@ -54,10 +55,10 @@ class Block:
         if extra:
             near = nearest(extra[0], self.inputs)
             hint = f" (did you mean {near!r}?)" if near else ""
-            raise ValueError(f"{self.name}: unknown {what} {extra[0]!r}{hint}; inputs: {', '.join(self.inputs)}")
+            raise InputError(f"{self.name}: unknown {what} {extra[0]!r}{hint}; inputs: {', '.join(self.inputs)}")
         missing = [k for k in self.inputs if k not in given]
         if missing:
-            raise ValueError(f"{self.name}: missing {what} {missing[0]!r}; inputs: {', '.join(self.inputs)}")
+            raise InputError(f"{self.name}: missing {what} {missing[0]!r}; inputs: {', '.join(self.inputs)}")
 
     def run(self, log: OverflowLog | None = None, state=None, **inputs) -> Result:
         """Bit-exact model: stored integers in, stored integers out (every input checked against
@@ -119,7 +120,7 @@ class Block:
 
     def set_state(self, state) -> None:
         if state is not None:
-            raise ValueError(f"{self.name}: state: this block has no memory, got {type(state).__name__}")
+            raise InputError(f"{self.name}: state: this block has no memory, got {type(state).__name__}")
 
     def stream_outputs(self, log: OverflowLog, wanted: set[str], **inputs) -> dict[str, np.ndarray]:
         """``stream`` when a chain reads only the outputs ``wanted`` (a block that can skip the work of

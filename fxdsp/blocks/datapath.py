@@ -30,6 +30,7 @@ import numpy as np
 
 from fxdsp.fixed import Rules
 from fxdsp.fixed.rules import OVERFLOW_CODE, ROUNDING_CODE
+from fxdsp.errors import InputError
 
 PARAM, CONST, PACKED, INFO, NESTED = "param", "const", "packed", "info", "nested"
 
@@ -177,7 +178,7 @@ class Datapath:
                 continue
             if kind in (PARAM, CONST) and not isinstance(value, (Rules, Rom)) and f.name.upper() in outer:  # shared with the outer module
                 if outer[f.name.upper()] != value:
-                    raise ValueError(f"hdl: {instance}: {f.name.upper()} = {value} differs from the outer "
+                    raise InputError(f"hdl: {instance}: {f.name.upper()} = {value} differs from the outer "
                                      f"module's {outer[f.name.upper()]}")
                 continue
             if isinstance(value, Rules):
@@ -191,7 +192,7 @@ class Datapath:
                 word = 0
                 for k, v in enumerate(value):
                     if not 0 <= int(v) <= 255:
-                        raise ValueError(f"hdl: {instance}: {f.name}[{k}] = {int(v)} outside 0..255")
+                        raise InputError(f"hdl: {instance}: {f.name}[{k}] = {int(v)} outside 0..255")
                     word |= int(v) << (8 * k)
                 params[name] = word
                 consts.add(name)

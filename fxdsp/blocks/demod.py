@@ -48,6 +48,7 @@ from fxdsp.fixed.kernels import convert, shift_right_round
 from fxdsp.blocks.base import Block, corner_codes
 from fxdsp.blocks.datapath import Datapath, limbs, OvfField, Rom, RtlPorts, const, info, nested
 from fxdsp.blocks.iir import Iir, IirDatapath
+from fxdsp.errors import InputError
 
 
 @njit(cache=True)
@@ -158,16 +159,16 @@ class Nco:
                  phase_offset_turns: float = 0.0, interp_bits: int = 0, rules: Rules = Rules("half_up", "saturate"),
                  phase_trim_rad: float = 0.0, name: str = "demod"):
         if not 0 < f_hz < fs_hz / 2:
-            raise ValueError(f"{name}.f_hz: must be within (0, fs/2 = {fs_hz / 2}), got {f_hz}")
+            raise InputError(f"{name}.f_hz: must be within (0, fs/2 = {fs_hz / 2}), got {f_hz}")
         if not 4 <= lut_bits <= phase_bits <= 48:
-            raise ValueError(f"{name}.lut_bits/phase_bits: need 4 <= lut_bits <= phase_bits <= 48, "
+            raise InputError(f"{name}.lut_bits/phase_bits: need 4 <= lut_bits <= phase_bits <= 48, "
                              f"got {lut_bits}, {phase_bits}")
         if not 0 <= interp_bits <= phase_bits - lut_bits:
-            raise ValueError(f"{name}.interp_bits: must be within 0..phase_bits - lut_bits = "
+            raise InputError(f"{name}.interp_bits: must be within 0..phase_bits - lut_bits = "
                              f"{phase_bits - lut_bits}, got {interp_bits}")
         # the correction product qsin x delta_code x two_pi must fit 63 bits
         if lut_format.wl + interp_bits + TWO_PI_FORMAT.wl - 1 > 63:
-            raise ValueError(f"{name}.interp_bits: {interp_bits} with lut_format {lut_format} makes the "
+            raise InputError(f"{name}.interp_bits: {interp_bits} with lut_format {lut_format} makes the "
                              f"interpolation product {lut_format.wl + interp_bits + TWO_PI_FORMAT.wl - 1} bits; "
                              f"more than 63")
         self.fs_hz, self.f_hz = fs_hz, f_hz
@@ -178,7 +179,7 @@ class Nco:
         self.phase0 = int(quantize([phase_offset_turns % 1.0], self.phase_format, Rules("half_up", "wrap"))[0])
         self.phase_offset_turns = phase_offset_turns
         if not abs(phase_trim_rad) <= np.pi:
-            raise ValueError(f"{name}.phase_trim_rad: must be within [-pi, pi], got {phase_trim_rad}")
+            raise InputError(f"{name}.phase_trim_rad: must be within [-pi, pi], got {phase_trim_rad}")
         # the trim word: turns * 2**phase_bits, nearest (half_up), modulo one turn
         self.phase_trim_rad = phase_trim_rad
         turns = (phase_trim_rad / (2 * np.pi)) % 1.0
@@ -277,9 +278,9 @@ def cordic_words(name: str, data_format: Format, angle_format: Format, iteration
     """The words of ``iterations`` steps, each constant quantised half_up; ValueError naming
     ``name``'s field for an iteration count or an angle format the CORDIC cannot use."""
     if not 4 <= iterations <= 40:
-        raise ValueError(f"{name}.cordic_iterations: must be 4..40, got {iterations}")
+        raise InputError(f"{name}.cordic_iterations: must be 4..40, got {iterations}")
     if angle_format.int_bits < 2:
-        raise ValueError(f"{name}.angle_format: {angle_format} cannot hold +-pi radians")
+        raise InputError(f"{name}.angle_format: {angle_format} cannot hold +-pi radians")
     exact = Rules("half_up", "saturate")
     work = Format(True, data_format.wl + 2, data_format.fl)
     return CordicWords(
@@ -382,15 +383,15 @@ class Demod(Block):
     def __init__(self, nco: Nco, in_format: Format, data_format: Format, lpf_i: Iir, lpf_q: Iir,
                  angle_format: Format, cordic_iterations: int, rules: Rules, reference: str = "nco"):
         if lpf_i.data_format != data_format:
-            raise ValueError(f"demod.lpf.data_format: must equal demod.data_format {data_format}")
+            raise InputError(f"demod.lpf.data_format: must equal demod.data_format {data_format}")
         cordic = cordic_words("demod", data_format, angle_format, cordic_iterations)
         if nco.rules.rounding != rules.rounding:
             # the bit-exact mixer rounds the NCO correction by ``rules`` (its datapath), the NCO's own
             # ``wave`` (budget, tests) by ``nco.rules``: they must be one rounding
-            raise ValueError(f"demod.rounding: the NCO rounds its correction by {nco.rules.rounding!r}, "
+            raise InputError(f"demod.rounding: the NCO rounds its correction by {nco.rules.rounding!r}, "
                              f"the demodulator by {rules.rounding!r}; they must be the same")
         if reference not in REFERENCES:
-            raise ValueError(f"demod.reference: one of {', '.join(REFERENCES)}, got {reference!r}")
+            raise InputError(f"demod.reference: one of {', '.join(REFERENCES)}, got {reference!r}")
         self.nco, self.reference_source = nco, reference
         self.in_format, self.data_format, self.angle_format = in_format, data_format, angle_format
         self.lpf_i, self.lpf_q = lpf_i, lpf_q
@@ -447,7 +448,7 @@ class Demod(Block):
 
     def set_state(self, state) -> None:
         if not isinstance(state, dict) or set(state) != {"phase", "lpf_i", "lpf_q"}:
-            raise ValueError(f"{self.name}: state: expected a previous result's state {{'phase', 'lpf_i', 'lpf_q'}}")
+            raise InputError(f"{self.name}: state: expected a previous result's state {{'phase', 'lpf_i', 'lpf_q'}}")
         self.nco.phase = int(state["phase"]) & self.datapath.phase_mask
         self.lpf_i.set_state(state["lpf_i"])
         self.lpf_q.set_state(state["lpf_q"])
@@ -456,10 +457,10 @@ class Demod(Block):
         """The reference words of a run: the input's (reference = "input"), else none."""
         if self.reference_source == "nco":
             if ref is not None:
-                raise ValueError(f"{self.name}: ref: this demodulator runs its own NCO (reference = \"nco\")")
+                raise InputError(f"{self.name}: ref: this demodulator runs its own NCO (reference = \"nco\")")
             return np.empty(0, dtype=np.int64)
         if ref is None or np.shape(ref) != np.shape(x):
-            raise ValueError(f"{self.name}: ref: one reference word per sample of x expected")
+            raise InputError(f"{self.name}: ref: one reference word per sample of x expected")
         return np.asarray(ref, dtype=np.int64)
 
     def mix(self, log: OverflowLog, x: np.ndarray, ref=None) -> tuple[np.ndarray, np.ndarray]:
@@ -503,7 +504,7 @@ class Demod(Block):
 
         if self.reference_source == "input":   # real values: the reference's phase in turns
             if ref is None or np.shape(ref) != np.shape(x):
-                raise ValueError(f"{self.name}: ref: one reference phase per sample of x expected")
+                raise InputError(f"{self.name}: ref: one reference phase per sample of x expected")
             ph = 2 * np.pi * np.asarray(ref, dtype=float) + self.nco.phase_trim_rad
         else:
             self._ref(x, ref)

@@ -60,6 +60,7 @@ from fxdsp.blocks.base import Block, corner_codes
 from fxdsp.blocks.datapath import Datapath, OvfField, Rom, RtlPorts, const, info, limbs, nested, whole_limbs
 from fxdsp.blocks.demod import INV_K_FORMAT, TWO_PI_FORMAT, Nco, _nco_wave, cordic_one, cordic_words, mixer_format
 from fxdsp.blocks.iir import Iir, IirDatapath, df1_cascade_step
+from fxdsp.errors import InputError
 
 # int64 parameter vector of the kernels (indices)
 (P_ADDR_SHIFT, P_LUT_BITS, P_INTERP_BITS, P_TWO_PI, P_CORR_SHIFT, P_PHASE_MASK, P_MIX_SHIFT, P_RND, P_OVF,
@@ -339,7 +340,7 @@ def design_gains(pll_hz: float, agc_hz: float, damping: float, tau_s: float, res
     for loop, f, g in (("f", pll_hz, 2 * np.pi * tau_s), ("a", agc_hz, resonator_gain)):
         w = 2 * np.pi * f
         if 2 * damping * w * tau_s <= 1:
-            raise ValueError(f"{name}.{'pll' if loop == 'f' else 'agc'}_bandwidth_hz: {f} Hz is below what the "
+            raise InputError(f"{name}.{'pll' if loop == 'f' else 'agc'}_bandwidth_hz: {f} Hz is below what the "
                              f"mode's own 1 / (2 pi tau_s) = {1 / (2 * np.pi * tau_s):.3g} Hz allows at damping {damping}")
         out[f"kp_{loop}"] = (2 * damping * w * tau_s - 1) / g
         out[f"ki_{loop}"] = w * w * tau_s / g * update_s
@@ -478,7 +479,7 @@ def hz_words(fs_hz: float, phase_bits: int, ftw_center: int, lock_range: int, fr
         shift -= 1
     coef = int(step * (1 << shift) + Fraction(1, 2)) if shift >= 0 else 0
     if shift < 0 or coef == 0 or 2 * lock_range > (1 << shift):
-        raise ValueError(f"{name}.freq_format: {freq_format} with phase_bits {phase_bits}: the frequency word's "
+        raise InputError(f"{name}.freq_format: {freq_format} with phase_bits {phase_bits}: the frequency word's "
                          f"conversion to Hz would err by more than a quarter of an LSB over the lock range")
     return hz_center, coef, shift
 
@@ -500,17 +501,17 @@ class Drive(Block):
                  rules: Rules, pll_min_amp: float, name: str = "drive"):
         self.name = name
         if not 0 < lock_range_hz < min(f_hz, fs_hz / 2 - f_hz):
-            raise ValueError(f"{name}.lock_range_hz: must be within (0, {min(f_hz, fs_hz / 2 - f_hz)}), got "
+            raise InputError(f"{name}.lock_range_hz: must be within (0, {min(f_hz, fs_hz / 2 - f_hz)}), got "
                              f"{lock_range_hz}")
         if not 0 < amp_setpoint < data_format.max_value:
-            raise ValueError(f"{name}.amp_setpoint: must be within (0, {data_format.max_value}), got {amp_setpoint}")
+            raise InputError(f"{name}.amp_setpoint: must be within (0, {data_format.max_value}), got {amp_setpoint}")
         if not 0 <= pll_min_amp < amp_setpoint:
-            raise ValueError(f"{name}.pll_min_amp: must be within [0, amp_setpoint = {amp_setpoint}), got {pll_min_amp}")
+            raise InputError(f"{name}.pll_min_amp: must be within [0, amp_setpoint = {amp_setpoint}), got {pll_min_amp}")
         if not 0 < gain_max <= gain_format.max_value:
-            raise ValueError(f"{name}.gain_max: must be within (0, {gain_format.max_value}] ({gain_format}), "
+            raise InputError(f"{name}.gain_max: must be within (0, {gain_format.max_value}] ({gain_format}), "
                              f"got {gain_max}")
         if lpf.data_format != data_format:
-            raise ValueError(f"{name}.lpf.data_format: must equal {name}.data_format {data_format}")
+            raise InputError(f"{name}.lpf.data_format: must equal {name}.data_format {data_format}")
         self.fs_hz, self.f_hz, self.lock_range_hz = fs_hz, f_hz, lock_range_hz
         self.nco, self.lpf, self.rules = nco, lpf, rules
         self.in_format, self.data_format, self.angle_format = in_format, data_format, angle_format
@@ -540,11 +541,11 @@ class Drive(Block):
                              + ki_a * (1 << data_format.wl)),
                             ("advance", (nco.ftw + lock) * abs(advance))):
             if bound >= 2**62:
-                raise ValueError(f"{name}: the {what} arithmetic needs more than 63 bits; lower coef_bits")
+                raise InputError(f"{name}: the {what} arithmetic needs more than 63 bits; lower coef_bits")
         gain_prod = product_format(gain_format, nco.nco_format)
         hz_center, hz_coef, hz_shift = hz_words(fs_hz, nco.phase_bits, nco.ftw, lock, freq_format, name)
         if hz_center + ((lock * hz_coef) >> hz_shift) + 1 > freq_format.max_int:
-            raise ValueError(f"{name}.freq_format: {freq_format} cannot hold f_hz + lock_range_hz = "
+            raise InputError(f"{name}.freq_format: {freq_format} cannot hold f_hz + lock_range_hz = "
                              f"{f_hz + lock_range_hz} Hz")
         lpf_dp = lpf.datapath
         lpf_ovf = lambda ch: tuple(OvfField(f"lpf_{ch}.{f.counter}", f.width) for f in lpf_dp.ovf)  # noqa: E731
@@ -639,10 +640,10 @@ class Drive(Block):
 
     def set_state(self, state) -> None:
         if not isinstance(state, dict) or set(state) != {"loop", "lpf", "limits"}:
-            raise ValueError(f"{self.name}: state: expected a previous result's state {{'loop', 'lpf', 'limits'}}")
+            raise InputError(f"{self.name}: state: expected a previous result's state {{'loop', 'lpf', 'limits'}}")
         loop, lpf = np.asarray(state["loop"]), np.asarray(state["lpf"])
         if loop.shape != self.state.shape or lpf.shape != self.lpf_state.shape:
-            raise ValueError(f"{self.name}: state: expected loop {self.state.shape} and lpf {self.lpf_state.shape}, "
+            raise InputError(f"{self.name}: state: expected loop {self.state.shape} and lpf {self.lpf_state.shape}, "
                              f"got {loop.shape} and {lpf.shape}")
         self.state = loop.astype(np.int64).copy()
         self.lpf_state = lpf.astype(np.int64).copy()

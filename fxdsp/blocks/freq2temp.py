@@ -25,6 +25,7 @@ from fxdsp.config import Section
 from fxdsp.fixed import Format, OverflowLog, Rules, product_format, quantize, resize, sub
 from fxdsp.blocks.base import Block, corner_codes
 from fxdsp.blocks.datapath import Datapath, limbs, OvfField, RtlPorts, const, info
+from fxdsp.errors import InputError
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,7 +61,7 @@ class Freq2Temp(Block):
     def __init__(self, freq_format: Format, temp_format: Format, kinv_format: Format, f0_hz: float,
                  k_hz_per_c: float, rules: Rules, t_min_c: float = -40.0, t_max_c: float = 85.0):
         if k_hz_per_c == 0:
-            raise ValueError("freq2temp.k_hz_per_c: must not be zero")
+            raise InputError("freq2temp.k_hz_per_c: must not be zero")
         self.freq_format, self.temp_format, self.kinv_format = freq_format, temp_format, kinv_format
         self.f0_hz, self.k_hz_per_c = f0_hz, k_hz_per_c
         self.rules = rules
@@ -70,9 +71,9 @@ class Freq2Temp(Block):
         self.f0 = int(quantize([f0_hz], freq_format, exact, qlog, "f0")[0])
         self.kinv = int(quantize([1.0 / k_hz_per_c], kinv_format, exact, qlog, "kinv")[0])
         if qlog.get("f0"):
-            raise ValueError(f"freq2temp.f0_hz: {f0_hz} does not fit freq_format {freq_format}")
+            raise InputError(f"freq2temp.f0_hz: {f0_hz} does not fit freq_format {freq_format}")
         if qlog.get("kinv"):
-            raise ValueError(f"freq2temp.kinv_format: {kinv_format} cannot hold 1/k = {1 / k_hz_per_c:.6g}")
+            raise InputError(f"freq2temp.kinv_format: {kinv_format} cannot hold 1/k = {1 / k_hz_per_c:.6g}")
         self.d_format = sub(np.zeros(1, np.int64), freq_format, np.zeros(1, np.int64), freq_format)[1]
         self.p_format = product_format(self.d_format, kinv_format)
         self.datapath = Freq2TempDatapath(

@@ -42,6 +42,7 @@ from fxdsp.fixed import Format, OverflowLog, Rules, quantize
 from fxdsp.fixed.kernels import fit, shift_right_round
 from fxdsp.blocks.base import Block, corner_codes, random_codes
 from fxdsp.blocks.datapath import Datapath, limbs, OvfField, Rom, RtlPorts, info, signed_width
+from fxdsp.errors import InputError
 
 DESIGNS = ("butter", "cheby1", "bessel")
 BTYPES = ("lowpass", "highpass")
@@ -121,7 +122,7 @@ def design_sos(design: str, order: int, cutoff_hz: float, fs_hz: float, btype: s
                ripple_db: float = 0.5) -> np.ndarray:
     """Float SOS from scipy, each low-pass section normalised to unity DC gain."""
     if not 0 < cutoff_hz < fs_hz / 2:
-        raise ValueError(f"cutoff_hz: must be within (0, fs/2 = {fs_hz / 2}), got {cutoff_hz}")
+        raise InputError(f"cutoff_hz: must be within (0, fs/2 = {fs_hz / 2}), got {cutoff_hz}")
     if design == "butter":
         sos = sps.butter(order, cutoff_hz, btype=btype, fs=fs_hz, output="sos")
     elif design == "cheby1":
@@ -185,9 +186,9 @@ class Iir(Block):
                  rules: Rules, name: str = "iir", dc_exact: bool = False, error_feedback: bool = False):
         sos = np.asarray(sos, dtype=float)
         if sos.ndim != 2 or sos.shape[1] != 6 or sos.shape[0] < 1:
-            raise ValueError(f"{name}.sos: expected shape (sections, 6), got {sos.shape}")
+            raise InputError(f"{name}.sos: expected shape (sections, 6), got {sos.shape}")
         if not np.allclose(sos[:, 3], 1.0):
-            raise ValueError(f"{name}.sos: a0 of every section must be 1")
+            raise InputError(f"{name}.sos: a0 of every section must be 1")
         self.name = name
         self.sos = sos
         self.data_format, self.num_format, self.den_format = data_format, num_format, den_format
@@ -201,10 +202,10 @@ class Iir(Block):
         if dc_exact:
             self._make_dc_exact(name)
         if qlog.get("num"):
-            raise ValueError(f"{name}.num_format: {num_format} cannot hold numerator coefficients up to "
+            raise InputError(f"{name}.num_format: {num_format} cannot hold numerator coefficients up to "
                              f"{np.abs(sos[:, :3]).max():.6g}")
         if qlog.get("den"):
-            raise ValueError(f"{name}.den_format: {den_format} cannot hold denominator coefficients up to "
+            raise InputError(f"{name}.den_format: {den_format} cannot hold denominator coefficients up to "
                              f"{np.abs(sos[:, 4:]).max():.6g}")
         fl_b = num_format.fl + data_format.fl
         fl_a = den_format.fl + data_format.fl
@@ -216,11 +217,11 @@ class Iir(Block):
             + 4.0 * 2.0 ** (acc_fl - data_format.fl)  # error feedback: |c1 e1 + c2 e2| < 4 * 2**out_shift
         self.acc_bits = int(np.ceil(np.log2(worst + 1))) + 1
         if self.acc_bits > 63:
-            raise ValueError(f"{name}: accumulator needs {self.acc_bits} bits for data {data_format}, "
+            raise InputError(f"{name}: accumulator needs {self.acc_bits} bits for data {data_format}, "
                              f"num {num_format}, den {den_format}; more than 63")
         out_shift = acc_fl - data_format.fl
         if out_shift < 0:
-            raise ValueError(f"{name}: coefficient formats with negative fraction length are not supported")
+            raise InputError(f"{name}: coefficient formats with negative fraction length are not supported")
         self.error_feedback = error_feedback
         # c = -nearest integer of (a1, a2), ties away from zero; the weights are tiny integers, not a datapath
         self.c = (-np.sign(sos[:, 4:]) * np.floor(np.abs(sos[:, 4:]) + 0.5)).astype(np.int64) if error_feedback \
@@ -245,7 +246,7 @@ class Iir(Block):
     def _make_dc_exact(self, name: str) -> None:
         shift = self.num_format.fl - self.den_format.fl
         if shift < 0:
-            raise ValueError(f"{name}.num_format: a DC-exact low-pass needs num fl >= den fl "
+            raise InputError(f"{name}.num_format: a DC-exact low-pass needs num fl >= den fl "
                              f"({self.num_format} vs {self.den_format})")
         for s in range(self.b.shape[0]):
             gain = self.sos[s, :3].sum() / self.sos[s, 3:].sum()  # 1, but for a cheby1 ripple offset
@@ -254,7 +255,7 @@ class Iir(Block):
                 if gain != 1.0 else den_sum
             self.b[s, 1] = target - self.b[s, 0] - self.b[s, 2]
             if not self.num_format.min_int <= self.b[s, 1] <= self.num_format.max_int:
-                raise ValueError(f"{name}.num_format: {self.num_format} cannot hold the DC-exact middle tap")
+                raise InputError(f"{name}.num_format: {self.num_format} cannot hold the DC-exact middle tap")
 
     @classmethod
     def from_config(cls, sec: Section, fs_hz: float, data_format: Format, name: str = "iir",
@@ -269,7 +270,7 @@ class Iir(Block):
         try:
             sos = design_sos(design, order, cutoff, fs_hz, btype, ripple)
         except ValueError as exc:
-            raise ValueError(f"{sec.field('cutoff_hz')}: {exc}") from None
+            raise InputError(f"{sec.field('cutoff_hz')}: {exc}") from None
         return cls(sos, data_format, sec.format("num_format"), sec.format("den_format"),
                    sec.rules(), name=name, dc_exact=(btype == "lowpass"),
                    error_feedback=sec.choice("error_feedback", ("on", "off"), "on") == "on")
@@ -284,7 +285,7 @@ class Iir(Block):
     def set_state(self, state) -> None:
         st = np.asarray(state)
         if st.shape != self.state.shape or st.dtype.kind not in "iu":
-            raise ValueError(f"{self.name}: state: expected integers of shape {self.state.shape}, got "
+            raise InputError(f"{self.name}: state: expected integers of shape {self.state.shape}, got "
                              f"{st.dtype} {st.shape}")
         self.state = st.astype(np.int64).copy()
 

@@ -42,6 +42,7 @@ from fxdsp.fixed import Format, OverflowLog, Rules
 from fxdsp.fixed.kernels import convert, shift_right_round
 from fxdsp.blocks.base import Block, corner_codes
 from fxdsp.blocks.datapath import Datapath, limbs, OvfField, RtlPorts, info
+from fxdsp.errors import InputError
 
 
 @njit(cache=True)
@@ -87,7 +88,7 @@ class LagDatapath(Datapath):
         (STATE_W + 1 bits) x alpha (ALPHA_W + 1 bits); at DECIM = 1 every sample updates (with
         DECIM > 1 a held sample takes 1 cycle: no one figure, a ValueError)."""
         if p["DECIM"] != 1:
-            raise ValueError("lag: DECIM > 1: the samples between updates take 1 cycle, the updates this many")
+            raise InputError("lag: DECIM > 1: the samples between updates take 1 cycle, the updates this many")
         return limbs(p["STATE_W"] + 1, p["ALPHA_W"] + 1) + 11
 
     temp_w: int
@@ -111,11 +112,11 @@ class Lag(Block):
     def __init__(self, temp_format: Format, tau_s: float, rate_hz: float, alpha_bits: int, state_guard_bits: int,
                  rules: Rules, name: str = "lag", decimation: int = 1):
         if isinstance(decimation, bool) or not isinstance(decimation, int) or decimation < 1:
-            raise ValueError(f"{name}.decimation: must be an integer >= 1, got {decimation!r}")
+            raise InputError(f"{name}.decimation: must be an integer >= 1, got {decimation!r}")
         if not tau_s > 0:
-            raise ValueError(f"{name}.tau_s: must be > 0, got {tau_s}")
+            raise InputError(f"{name}.tau_s: must be > 0, got {tau_s}")
         if not rate_hz > 0:
-            raise ValueError(f"{name}.rate_hz: must be > 0, got {rate_hz}")
+            raise InputError(f"{name}.rate_hz: must be > 0, got {rate_hz}")
         self.name = name
         self.temp_format, self.tau_s, self.rate_hz = temp_format, tau_s, rate_hz
         self.alpha = -math.expm1(-1.0 / (rate_hz * tau_s))
@@ -129,7 +130,7 @@ class Lag(Block):
         self.rules = rules
         self.state_format = Format(True, temp_format.wl + state_guard_bits + 1, temp_format.fl + state_guard_bits)
         if self.state_format.wl + 1 + alpha_bits > 63:
-            raise ValueError(f"{name}: state {self.state_format} times a {alpha_bits}-bit alpha exceeds 63 bits; "
+            raise InputError(f"{name}: state {self.state_format} times a {alpha_bits}-bit alpha exceeds 63 bits; "
                              f"reduce state_guard_bits or alpha_bits")
         self.datapath = LagDatapath(temp_w=temp_format.wl, guard=self.g, state_w=self.state_format.wl,
                                     alpha_w=alpha_bits, alpha_m=self.m, alpha_s=self.s, decim=decimation, rules=rules,
@@ -151,7 +152,7 @@ class Lag(Block):
             ratio = wired_rate_hz / rate
             decimation = round(ratio)
             if decimation < 1 or abs(ratio - decimation) > 1e-9 * ratio:
-                raise ValueError(f"{sec.field('rate_hz')}: {rate:g} must divide {rate_source} ({wired_rate_hz:g}) "
+                raise InputError(f"{sec.field('rate_hz')}: {rate:g} must divide {rate_source} ({wired_rate_hz:g}) "
                                  f"into a whole number of samples: the lag updates once every {rate_source} / "
                                  f"rate_hz samples")
         return cls(temp_format, sec.number("tau_s", low=0, low_open=True), rate,
@@ -169,10 +170,10 @@ class Lag(Block):
 
     def set_state(self, state) -> None:
         if not isinstance(state, dict) or set(state) != {"te", "phase", "primed"}:
-            raise ValueError(f"{self.name}: state: expected a previous result's state {{'te', 'phase', 'primed'}}")
+            raise InputError(f"{self.name}: state: expected a previous result's state {{'te', 'phase', 'primed'}}")
         phase = int(state["phase"])
         if not 0 <= phase < self.decimation:
-            raise ValueError(f"{self.name}: state: phase {phase} outside 0..{self.decimation - 1}")
+            raise InputError(f"{self.name}: state: phase {phase} outside 0..{self.decimation - 1}")
         self.state = np.array([int(state["te"]), phase], dtype=np.int64)
         self.primed = bool(state["primed"])
 

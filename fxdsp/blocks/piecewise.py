@@ -34,6 +34,7 @@ from fxdsp.fixed import Format, OverflowLog, Rules, product_format, quantize, su
 from fxdsp.fixed.kernels import convert
 from fxdsp.blocks.base import Block
 from fxdsp.blocks.datapath import Datapath, limbs, OvfField, Rom, RtlPorts, const, frozen_array, info, packed, signed_width
+from fxdsp.errors import InputError
 
 
 @njit(cache=True)
@@ -122,22 +123,22 @@ class Piecewise(Block):
         coefficients = [list(map(float, c)) for c in coefficients]
         breakpoints_c = [float(b) for b in breakpoints_c]
         if len(coefficients) != len(breakpoints_c) + 1:
-            raise ValueError(f"{name}.coefficients: {len(breakpoints_c)} breakpoints need "
+            raise InputError(f"{name}.coefficients: {len(breakpoints_c)} breakpoints need "
                              f"{len(breakpoints_c) + 1} segments, got {len(coefficients)}")
         orders = {len(c) for c in coefficients}
         if len(orders) != 1:
-            raise ValueError(f"{name}.coefficients: every segment needs the same number of coefficients")
+            raise InputError(f"{name}.coefficients: every segment needs the same number of coefficients")
         n_coef = orders.pop()
         if not 2 <= n_coef <= 4:
-            raise ValueError(f"{name}.coefficients: polynomial order must be 1..3 (2..4 coefficients), "
+            raise InputError(f"{name}.coefficients: polynomial order must be 1..3 (2..4 coefficients), "
                              f"got {n_coef} coefficients")
         if any(b2 <= b1 for b1, b2 in zip(breakpoints_c, breakpoints_c[1:])):
-            raise ValueError(f"{name}.breakpoints_c: must be strictly increasing without duplicates, "
+            raise InputError(f"{name}.breakpoints_c: must be strictly increasing without duplicates, "
                              f"got {breakpoints_c}")
         self.order = n_coef - 1
         coef_formats = list(coef_format) if isinstance(coef_format, (list, tuple)) else [coef_format] * n_coef
         if len(coef_formats) != n_coef:
-            raise ValueError(f"{name}.coef_format: {len(coef_formats)} formats for {n_coef} coefficients per segment")
+            raise InputError(f"{name}.coef_format: {len(coef_formats)} formats for {n_coef} coefficients per segment")
         self.temp_format, self.coef_formats = temp_format, coef_formats
         self.acc_format, self.out_format = acc_format, out_format
         self.rules = rules
@@ -147,19 +148,19 @@ class Piecewise(Block):
         self.breakpoints = quantize(breakpoints_c, temp_format, exact, qlog, "breakpoints") if breakpoints_c \
             else np.zeros(0, np.int64)
         if qlog.total:
-            raise ValueError(f"{name}.breakpoints_c: outside the temperature format {temp_format}")
+            raise InputError(f"{name}.breakpoints_c: outside the temperature format {temp_format}")
         if np.any(np.diff(self.breakpoints) <= 0):
-            raise ValueError(f"{name}.breakpoints_c: two breakpoints fall on the same code of {temp_format}")
+            raise InputError(f"{name}.breakpoints_c: two breakpoints fall on the same code of {temp_format}")
         self.t0_c = t0_c
         self.t0 = quantize([t0_c], temp_format, exact, qlog, "t0")
         if qlog.total:
-            raise ValueError(f"{name}.t0_c: {t0_c} is outside the temperature format {temp_format}")
+            raise InputError(f"{name}.t0_c: {t0_c} is outside the temperature format {temp_format}")
         self.coefficients_real = np.array(coefficients)
         self.coef = np.empty(self.coefficients_real.shape, dtype=np.int64)
         for k, fmt in enumerate(coef_formats):
             self.coef[:, k] = quantize(self.coefficients_real[:, k], fmt, exact, qlog, "coef")
             if qlog.total:
-                raise ValueError(f"{name}.coefficients: c{k} up to {np.abs(self.coefficients_real[:, k]).max():.6g} "
+                raise InputError(f"{name}.coefficients: c{k} up to {np.abs(self.coefficients_real[:, k]).max():.6g} "
                                  f"does not fit coef_format {fmt}")
         self.breakpoints.setflags(write=False)
         t_format = sum_format(temp_format, temp_format)  # T - t0, one bit wider than the temperature

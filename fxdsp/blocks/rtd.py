@@ -36,6 +36,7 @@ from fxdsp.fixed import Format, OverflowLog, Rules, quantize
 from fxdsp.fixed.kernels import convert
 from fxdsp.blocks.base import Block, corner_codes, random_codes
 from fxdsp.blocks.datapath import Datapath, limbs, OvfField, Rom, RtlPorts, info
+from fxdsp.errors import InputError
 
 
 @njit(cache=True)
@@ -103,7 +104,7 @@ class RtdPhysics:
     def resistance_from_fraction(self, frac):
         p = np.asarray(frac, dtype=float) * self.adc_vref / (self.gain * self.v_exc) + self.p_ref
         if np.any((p <= 0.0) | (p >= 1.0)):
-            raise ValueError("rtd: ADC range reaches voltages the bridge cannot produce; "
+            raise InputError("rtd: ADC range reaches voltages the bridge cannot produce; "
                              "lower rtd.adc_vref or rtd.gain")
         return self.r1 * p / (1.0 - p)
 
@@ -150,9 +151,9 @@ class Rtd(Block):
     def __init__(self, physics: RtdPhysics, adc_format: Format, lut_format: Format, temp_format: Format,
                  lut_index_bits: int, rules: Rules, t_min_c: float = -40.0, t_max_c: float = 85.0):
         if not adc_format.signed:
-            raise ValueError("rtd.adc_format: the bridge ADC is bipolar; use a signed format")
+            raise InputError("rtd.adc_format: the bridge ADC is bipolar; use a signed format")
         if not 1 <= lut_index_bits < adc_format.wl:
-            raise ValueError(f"rtd.lut_index_bits: must be 1..{adc_format.wl - 1}, got {lut_index_bits}")
+            raise InputError(f"rtd.lut_index_bits: must be 1..{adc_format.wl - 1}, got {lut_index_bits}")
         self.physics = physics
         self.adc_format, self.lut_format, self.temp_format = adc_format, lut_format, temp_format
         self.k = lut_index_bits
@@ -168,11 +169,11 @@ class Rtd(Block):
         self.lut_real = physics.temperature_from_fraction(frac)
         self.lut = quantize(self.lut_real, lut_format, Rules("half_up", "saturate"), lut_log, "rtd.lut")
         if lut_log.total:
-            raise ValueError(f"rtd.lut_format: {lut_format} cannot hold the LUT range "
+            raise InputError(f"rtd.lut_format: {lut_format} cannot hold the LUT range "
                              f"{self.lut_real.min():.1f}..{self.lut_real.max():.1f} C")
         # exact interpolation value lut.fl + s fraction bits, lut.wl + s + 2 bits wide
         if lut_format.wl + self.s + 2 > 63:
-            raise ValueError(f"rtd: interpolation of {lut_format} over {self.s} fraction bits exceeds 63 bits")
+            raise InputError(f"rtd: interpolation of {lut_format} over {self.s} fraction bits exceeds 63 bits")
         self.datapath = RtdDatapath(adc_w=adc_format.wl, lut_index_bits=self.k, lut_w=lut_format.wl,
                                     temp_w=temp_format.wl, shift=lut_format.fl + self.s - temp_format.fl,
                                     rules=rules, lut=Rom(self.lut, lut_format.wl), frac_bits=self.s,
@@ -197,7 +198,7 @@ class Rtd(Block):
         t_min = sec.number("t_min_c", -40.0)
         t_max = sec.number("t_max_c", 85.0)
         if t_max <= t_min:
-            raise ValueError(f"{sec.field('t_max_c')}: must exceed t_min_c")
+            raise InputError(f"{sec.field('t_max_c')}: must exceed t_min_c")
         block = cls(physics, sec.format("adc_format", "s16.15"), sec.format("lut_format", "s26.16"),
                     sec.format("temp_format"), sec.integer("lut_index_bits", low=1, high=16),
                     sec.rules(), t_min, t_max)

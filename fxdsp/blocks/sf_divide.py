@@ -26,6 +26,7 @@ from fxdsp.fixed import Format, OverflowLog, Rules, quantize
 from fxdsp.fixed.kernels import convert
 from fxdsp.blocks.base import Block, corner_codes, random_codes, tie_codes
 from fxdsp.blocks.datapath import Datapath, OvfField, RtlPorts, info
+from fxdsp.errors import InputError
 
 
 @njit(cache=True)
@@ -92,17 +93,17 @@ class SfDivide(Block):
 
     def __init__(self, in_format: Format, sf_format: Format, out_format: Format, guard_bits: int, rules: Rules):
         if guard_bits < 0:
-            raise ValueError(f"sf_divide.guard_bits: must be >= 0, got {guard_bits}")
+            raise InputError(f"sf_divide.guard_bits: must be >= 0, got {guard_bits}")
         self.num_bits = in_format.wl + sf_format.fl + guard_bits
         if self.num_bits > 63:
-            raise ValueError(f"sf_divide: numerator of {in_format} << ({sf_format.fl} + {guard_bits}) needs "
+            raise InputError(f"sf_divide: numerator of {in_format} << ({sf_format.fl} + {guard_bits}) needs "
                              f"{self.num_bits} bits, more than 63")
         self.in_format, self.sf_format, self.out_format = in_format, sf_format, out_format
         self.guard_bits = guard_bits
         self.rules = rules
         self.q_format = Format(True, min(63, self.num_bits + 1), in_format.fl + guard_bits)
         if sf_format.fl + guard_bits < 0:
-            raise ValueError(f"sf_divide.guard_bits: numerator shift sf.fl + guard_bits = {sf_format.fl + guard_bits} "
+            raise InputError(f"sf_divide.guard_bits: numerator shift sf.fl + guard_bits = {sf_format.fl + guard_bits} "
                              f"must be >= 0")
         self.datapath = SfDivideDatapath(
             in_w=in_format.wl, sf_w=sf_format.wl, sf_signed=int(sf_format.signed), out_w=out_format.wl,

@@ -37,6 +37,7 @@ from fxdsp.sensors import NEAREST_SAT, NOMINAL_QUADRATURE_FS
 from fxdsp.sim.driveloop import STEP_S, ClosedLoopRun, closed_loop, lock_time, samples_per_step
 from fxdsp.sim.resonator import DriveResonator, resonator_for
 from fxdsp.budget.attribution import expected_mean_q
+from fxdsp.errors import InputError
 
 WITHIN_DB = 3.0
 TEMPS_C = (-40.0, 25.0, 85.0)   # the range's ends and room temperature
@@ -120,7 +121,7 @@ def figures(run: ClosedLoopRun, drive: Drive, start_s: float | None = None) -> L
     t0 = start_s if start_s is not None else lock if lock is not None else float(run.t_s[-1]) / 2
     sel = run.t_s > t0
     if np.count_nonzero(sel) < 10:
-        raise ValueError(f"{drive.name}: fewer than 10 records after {t0:.3g} s; run longer")
+        raise InputError(f"{drive.name}: fewer than 10 records after {t0:.3g} s; run longer")
     err = run.f_mean_hz[sel] - run.true_f_hz[sel]
     rms = lambda x: float(np.sqrt(np.mean(x[sel] ** 2)) * 1e6)   # noqa: E731
     return LoopFigures(lock, float(np.mean(err)), float(np.std(err)), float(np.max(np.abs(err))),
@@ -189,7 +190,7 @@ def ramp(drive: Drive, rate_full_scale_dps: float, lo_c: float = RAMP[0], hi_c: 
     ``hi_c`` at ``c_per_min``; measured over the ramp (its records must all be locked)."""
     res = resonator or resonator_for(drive)
     if not c_per_min > 0 or lo_c == hi_c:
-        raise ValueError(f"ramp: needs two temperatures and a rate > 0, got {lo_c} .. {hi_c} C at {c_per_min} C/min")
+        raise InputError(f"ramp: needs two temperatures and a rate > 0, got {lo_c} .. {hi_c} C at {c_per_min} C/min")
     hold = max(3.0, 6 * float(res.tau_s(lo_c)))
     ramp_s = abs(hi_c - lo_c) / c_per_min * 60.0
     steps = int(math.ceil((hold + ramp_s) / STEP_S))

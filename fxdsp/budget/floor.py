@@ -35,6 +35,7 @@ from fxdsp.budget.hybrid import ADC, lowpass_of
 from fxdsp.budget.optimise import demod_of
 from fxdsp.budget.static import static_errors
 from fxdsp.budget.table import budget_rows
+from fxdsp.errors import InputError
 
 WITHIN_DB = 3.0          # "within 3 dB of its floor"
 DOMINANT_FACTOR = 0.5    # rms >= total / 2: power within 20 log10(2) = 6.02 dB of the total power
@@ -157,7 +158,7 @@ def settling_samples(chain, tol: float = SETTLE_TOL) -> int:
     within ``tol`` of its final value: the start-up transient is not part of the noise. 0 for a
     chain without a filter."""
     if not 0 < tol < 1:
-        raise ValueError(f"tol: must be within (0, 1), got {tol}")
+        raise InputError(f"tol: must be within (0, 1), got {tol}")
     filters = chain_filters(chain)
     if not filters:
         return 0
@@ -208,9 +209,9 @@ def allan_figures(error: np.ndarray, fs: float) -> dict:
     tau = 1 s (measured if the record holds MIN_INTERVALS seconds, else extrapolated)."""
     e = np.asarray(error, dtype=float)
     if fs <= 0:
-        raise ValueError(f"fs: must be > 0, got {fs}")
+        raise InputError(f"fs: must be > 0, got {fs}")
     if e.size < 2 * MIN_INTERVALS:
-        raise ValueError(f"error: need at least {2 * MIN_INTERVALS} samples, got {e.size}")
+        raise InputError(f"error: need at least {2 * MIN_INTERVALS} samples, got {e.size}")
     taus, adev, _, ns = allantools.oadev(e, rate=fs, data_type="freq", taus=octave_taus(e.size, fs))
     taus, adev, ns = np.asarray(taus, float), np.asarray(adev, float), np.asarray(ns, float)
     k = int(np.argmin(adev))
@@ -236,10 +237,10 @@ def allan_errors(design: Design, chain_name: str, ports, samples: int = ALLAN_SA
     temperature and the sensor's STEADY_LEVEL input with its noise (which dithers the ADCs as in a
     real sensor), after the filters' settling; one run of each model. Returns ({port: error}, settle)."""
     if samples < 2 * MIN_INTERVALS:
-        raise ValueError(f"samples: need at least {2 * MIN_INTERVALS}, got {samples}")
+        raise InputError(f"samples: need at least {2 * MIN_INTERVALS}, got {samples}")
     chain = design.chain(chain_name, "the Allan deviation")
     if chain.sensor is None:
-        raise ValueError(f"{chain_name}: the Allan deviation needs the chain's sensor (its table's 'sensor')")
+        raise InputError(f"{chain_name}: the Allan deviation needs the chain's sensor (its table's 'sensor')")
     settle = settling_samples(chain)
     n = samples + settle
     rng = np.random.default_rng([design.seed, seed_offset])
@@ -310,9 +311,9 @@ def drive_band(f0: float, a_ppm_per_c: float = SILICON_PPM_PER_C, t0_c: float = 
     (the frequency falls as the temperature rises for a > 0)."""
     lo_t, hi_t = temp_range_c
     if not lo_t < hi_t:
-        raise ValueError(f"temp_range_c: lowest must be below highest, got {temp_range_c}")
+        raise InputError(f"temp_range_c: lowest must be below highest, got {temp_range_c}")
     if f0 <= 0:
-        raise ValueError(f"f0: must be > 0, got {f0}")
+        raise InputError(f"f0: must be > 0, got {f0}")
     a = a_ppm_per_c * 1e-6
     ends = sorted((f0 * (1 - a * (hi_t - t0_c) / 2), f0 * (1 - a * (lo_t - t0_c) / 2)))
     return ends[0], ends[1]
@@ -325,7 +326,7 @@ def drive_frequencies(f0: float, points: int = SWEEP_POINTS, a_ppm_per_c: float 
     f/fs = 1/12 is where a phase-truncating NCO repeats the same few phases and its error becomes a
     bias; an even grid would step over it. ``band``: that band when the caller already has it."""
     if points < 2:
-        raise ValueError(f"points: need at least 2, got {points}")
+        raise InputError(f"points: need at least 2, got {points}")
     if band is None:
         band = drive_band(f0, a_ppm_per_c, t0_c, temp_range_c)
     return np.unique(np.append(np.linspace(band[0], band[1], points), f0))

@@ -23,6 +23,7 @@ from fxdsp.chains import Chain
 from fxdsp.fixed import Format, OverflowLog, Rules, quantize
 from fxdsp.fixed.kernels import FLOOR, TOWARD_ZERO, round_float
 from fxdsp.blocks.lag import held
+from fxdsp.errors import InputError
 
 # categories of the attribution (item 2)
 ADC = "ADC quantisation"
@@ -513,7 +514,7 @@ def lowpass_of(chain: Chain, inst: str):
 def _hybrid_of(chain: Chain, inst: str) -> KindHybrid:
     kind = chain.kinds[inst]
     if kind not in HYBRIDS:
-        raise ValueError(f"{chain.name}: {inst} ({kind}) has no hybrid model in fxdsp.budget.hybrid.HYBRIDS")
+        raise InputError(f"{chain.name}: {inst} ({kind}) has no hybrid model in fxdsp.budget.hybrid.HYBRIDS")
     return HYBRIDS[kind]
 
 

@@ -36,6 +36,7 @@ from fxdsp.float_vs_fixed import block_errors
 from fxdsp.fixed import Format
 from fxdsp.budget.static import static_error
 from fxdsp.budget.units import Target
+from fxdsp.errors import InputError
 
 HEADROOM = 4
 
@@ -126,7 +127,7 @@ def _chain_table(data: dict, chain: str) -> dict:
     name = chain.removeprefix("chain_")
     table = data.get("chain", {}).get(name)
     if not isinstance(table, dict):
-        raise ValueError(f"--chain: no [chain.{name}] table in the config")
+        raise InputError(f"--chain: no [chain.{name}] table in the config")
     return table
 
 
@@ -151,7 +152,7 @@ def demod_of(data: dict, chain: str) -> str:
     its optimiser and the sweeps."""
     found = [t for t, kind in chain_members(data, chain) if kind == "demod"]
     if len(found) != 1:
-        raise ValueError(f"--drive-band: {chain} has {len(found)} demodulators, the drive sweep needs one")
+        raise InputError(f"--drive-band: {chain} has {len(found)} demodulators, the drive sweep needs one")
     return found[0]
 
 
@@ -336,18 +337,18 @@ def check_search(chain: str, margin: float | None = None, *, chains=None, search
     an unknown cost model, a chain without knobs, a ``max_mean`` not on ``target``'s output, a drive
     band on a chain without a drive frequency. The CLIs call it before any work, :func:`optimise` again."""
     if chains is not None and chain not in chains:
-        raise ValueError(f"--chain: unknown chain {chain!r}; expected one of {', '.join(chains)}")
+        raise InputError(f"--chain: unknown chain {chain!r}; expected one of {', '.join(chains)}")
     if margin is not None and not 0 <= margin < 0.5:
-        raise ValueError(f"--margin: must be within [0, 0.5), got {margin}")
+        raise InputError(f"--margin: must be within [0, 0.5), got {margin}")
     if not search:
         return
     if cost_model not in ("total_bits", "register_bits"):
-        raise ValueError(f"--cost: unknown cost model {cost_model!r}; expected total_bits or register_bits")
+        raise InputError(f"--cost: unknown cost model {cost_model!r}; expected total_bits or register_bits")
     if max_mean is not None and target is not None and (max_mean.port != target.port or max_mean.chain != chain):
-        raise ValueError(f"--max-mean: must be on {chain}.{target.port}, like --target, got "
+        raise InputError(f"--max-mean: must be on {chain}.{target.port}, like --target, got "
                          f"{max_mean.chain}.{max_mean.port}")
     if drive_band and chains is not None and "demod" not in chains[chain].kinds.values():
-        raise ValueError(f"--drive-band: {chain} has no demodulator, so no drive frequency")
+        raise InputError(f"--drive-band: {chain} has no demodulator, so no drive frequency")
 
 
 def optimise(config: Config, target: Target, metric: str = "rms", margin: float = 0.02, samples: int | None = None,
@@ -366,7 +367,7 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
     ev = Evaluator(copy.deepcopy(config.data), chain, target.port, metric, samples, weight, tuple(frequencies))
     knobs = ev.knobs
     if not knobs:
-        raise ValueError(f"--chain: no word-length knobs for {chain}")
+        raise InputError(f"--chain: no word-length knobs for {chain}")
     goal = target.value * (1.0 - margin)
     default = {k.name: knob_value(ev.base, k) for k in knobs}
 
@@ -407,7 +408,7 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
     e_hi = ev.error(values_hi)
     log.append(f"every knob at its maximum: {e_hi:.4g} {target.unit}")
     if not e_hi <= goal:
-        raise ValueError(f"--target: {target.text} is unreachable on {chain}.{target.port}: even with every word "
+        raise InputError(f"--target: {target.text} is unreachable on {chain}.{target.port}: even with every word "
                          f"length at its maximum the {metric} error is {e_hi:.4g} {target.unit}")
 
     bar = progress(total=len(knobs) * 2, desc="word-length search", unit="knob") if progress else None

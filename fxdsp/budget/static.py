@@ -11,6 +11,7 @@ sensor's chamber level, and the error is measured after the chain's filters have
 from __future__ import annotations
 
 import numpy as np
+from fxdsp.errors import InputError
 
 POINTS = 16
 HOLD = 1536
@@ -20,7 +21,7 @@ SETTLED = 1024   # samples at the end of each hold that are measured
 def static_stimulus(chain, seed: int) -> tuple[dict, np.ndarray]:
     sensor = chain.sensor
     if sensor is None:
-        raise ValueError(f"{chain.name}: the quasi-static stimulus needs the chain's sensor (its table's 'sensor')")
+        raise InputError(f"{chain.name}: the quasi-static stimulus needs the chain's sensor (its table's 'sensor')")
     rng = np.random.default_rng([seed, 77])
     temps = rng.uniform(*sensor.CHAMBER_C, POINTS)
     t_c = np.repeat(temps, HOLD)

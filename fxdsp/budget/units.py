@@ -10,6 +10,7 @@ import numpy as np
 
 from fxdsp.chains import Design
 from fxdsp.float_vs_fixed import port_units
+from fxdsp.errors import InputError
 
 _TARGET_RE = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(\S+)\s*$")
 
@@ -35,7 +36,7 @@ class Target:
 def _port(option: str, chain: str, ports: list[str], what: str) -> str:
     if len(ports) != 1:
         found = f"its outputs {', '.join(ports)} all are" if ports else "none of its outputs is"
-        raise ValueError(f"{option}: a target in {what} needs one such output of {chain}; {found}")
+        raise InputError(f"{option}: a target in {what} needs one such output of {chain}; {found}")
     return ports[0]
 
 
@@ -47,10 +48,10 @@ def parse_target(text: str, design: Design, chain: str, sensor_noise: dict[str, 
     output with sensor noise (``sensor_noise``: port -> rms in its unit)."""
     m = _TARGET_RE.match(text or "")
     if not m:
-        raise ValueError(f"{option}: {text!r} is not <value><unit> (e.g. 10deg/h, 5mC, 0.25xnoise)")
+        raise InputError(f"{option}: {text!r} is not <value><unit> (e.g. 10deg/h, 5mC, 0.25xnoise)")
     value, unit = float(m.group(1)), m.group(2)
     if not np.isfinite(value) or value <= 0:
-        raise ValueError(f"{option}: the value must be a positive number, got {m.group(1)}")
+        raise InputError(f"{option}: the value must be a positive number, got {m.group(1)}")
     units = {p: u for (c, p), u in port_units(design).items() if c == chain and p in design.chains[chain].outputs}
     for family, factors in FAMILIES.items():
         if unit in factors:
@@ -64,7 +65,7 @@ def parse_target(text: str, design: Design, chain: str, sensor_noise: dict[str, 
     if unit in NOISE_UNITS:
         noisy = {p: n for p, n in (sensor_noise or {}).items() if n}
         if not noisy:
-            raise ValueError(f"{option}: {chain} has no sensor noise on its outputs to take a fraction of")
+            raise InputError(f"{option}: {chain} has no sensor noise on its outputs to take a fraction of")
         port = _port(option, chain, list(noisy), "noise")
         return Target(text, value * NOISE_UNITS[unit] * noisy[port], port, units.get(port, ("", 1.0))[0], chain)
-    raise ValueError(f"{option}: unknown unit {unit!r} in {text!r}; expected one of {', '.join(UNITS)}")
+    raise InputError(f"{option}: unknown unit {unit!r} in {text!r}; expected one of {', '.join(UNITS)}")

@@ -158,12 +158,12 @@ def _drive_loops(design, samples: int, repeat: int) -> dict:
 
 def run(args) -> int:
     if args.samples < 200_000:
-        raise ValueError(f"--samples: the benchmark needs >= 200000 samples, got {args.samples}")
+        raise InputError(f"--samples: the benchmark needs >= 200000 samples, got {args.samples}")
     if args.repeat < 1:
-        raise ValueError(f"--repeat: at least one timed run, got {args.repeat}")
+        raise InputError(f"--repeat: at least one timed run, got {args.repeat}")
     for option, value in (("--prefix-apytypes", args.prefix_apytypes), ("--prefix-fxpmath", args.prefix_fxpmath)):
         if not 1 <= value <= args.samples:
-            raise ValueError(f"{option}: must be within 1..--samples ({args.samples}), got {value}")
+            raise InputError(f"{option}: must be within 1..--samples ({args.samples}), got {value}")
     design = build(args.config)
     iirs = [b for n, b in design.blocks.items() if design.instances[n].module == "iir"]
     if not iirs:

@@ -28,6 +28,7 @@ from fxdsp.budget.drive_loop import TEMPS_C, at_temperature, format_allan as for
 from fxdsp.budget.static import static_errors
 from fxdsp.budget.table import budget_rows, format_rows
 from fxdsp.budget.units import parse_target
+from fxdsp.errors import InputError
 
 # progress bars on a terminal only: redirected, stderr keeps to the one line an error needs
 tqdm = partial(_tqdm, disable=None)
@@ -215,14 +216,14 @@ def _run(args, stage) -> int:
     if args.chain is None:
         args.chain = next(iter(design.chains), None)
     if args.config_out and not args.optimise:
-        raise ValueError("--config-out: only with --optimise")
+        raise InputError("--config-out: only with --optimise")
     if args.optimise and not args.target:
-        raise ValueError("--optimise: needs --target <value><unit>")
+        raise InputError("--optimise: needs --target <value><unit>")
     opt.check_search(args.chain, args.margin, chains=design.chains, search=args.optimise, cost_model=args.cost,
                      drive_band=args.optimise and args.drive_band)
     for opt_only in ("max_mean", "drive_band"):
         if getattr(args, opt_only) and not args.optimise:
-            raise ValueError(f"--{opt_only.replace('_', '-')}: only with --optimise")
+            raise InputError(f"--{opt_only.replace('_', '-')}: only with --optimise")
     # the target's chain first: a target that names no output of it is refused before the rest is run
     own = {(c, p): attribute(design, c, p) for c, p in attributed(design) if c == args.chain}
     noise = {p: a.sensor_noise_rms for (c, p), a in own.items()}

@@ -25,6 +25,7 @@ from pathlib import Path
 from fxdsp.outputs import IN, OUT_FILE, json_text, staged
 from fxdsp.sim import calibration
 from fxdsp.logfile import read_log
+from fxdsp.errors import InputError
 
 FITS = {"002": calibration.calibrate_paper002, "001": calibration.calibrate_paper001,
         "000": calibration.calibrate_paper000_log}
@@ -55,9 +56,9 @@ def run(args) -> int:
 
 def _run(args, stage) -> int:
     if args.paper not in FITS:
-        raise ValueError(f"--paper: unknown paper {args.paper!r}; expected one of {', '.join(FITS)}")
+        raise InputError(f"--paper: unknown paper {args.paper!r}; expected one of {', '.join(FITS)}")
     if args.order not in (1, 2, 3):
-        raise ValueError(f"--order: must be 1, 2 or 3, got {args.order}")
+        raise InputError(f"--order: must be 1, 2 or 3, got {args.order}")
     log = read_log(args.log).columns   # the contract's reader: bad rows dropped, bad logs refused
     result = FITS[args.paper](log)
     if args.config_out or args.apply:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import tempfile
 from pathlib import Path
+from fxdsp.errors import InputError
 
 WARM_UP_ROWS = 500
 
@@ -18,7 +19,7 @@ def run(args) -> int:
     from fxdsp.diagnose.bench import bench
 
     if min(args.rows) < WARM_UP_ROWS:
-        raise ValueError(f"--rows: need at least {WARM_UP_ROWS} rows per log, got {min(args.rows)}")
+        raise InputError(f"--rows: need at least {WARM_UP_ROWS} rows per log, got {min(args.rows)}")
     with tempfile.TemporaryDirectory() as tmp:
         bench(WARM_UP_ROWS, Path(tmp))  # numba's cache and the imports, out of the timings
         for rows in args.rows:

@@ -5,6 +5,7 @@ of each, and the cause the diagnosis names for the linear readout (see :mod:`fxd
 from __future__ import annotations
 
 from fxdsp.outputs import IN
+from fxdsp.errors import InputError
 
 PATHS = {"table": IN}
 
@@ -25,7 +26,7 @@ def run(args) -> int:
         keep = (t >= args.range[0]) & (t <= args.range[1])
         t, r = t[keep], r[keep]
         if t.size < 4:
-            raise ValueError(f"--range: {t.size} rows of {args.table} in {args.range[0]:g}..{args.range[1]:g} C, "
+            raise InputError(f"--range: {t.size} rows of {args.table} in {args.range[0]:g}..{args.range[1]:g} C, "
                              "need at least 4")
     study = rtd_study(t, r)
     for key in ("linear", "cvd_fit", "cvd_iec60751"):

@@ -88,7 +88,7 @@ def run(args) -> int:
     targets = args.only or list(design.hardware)
     unknown = [t for t in targets if t not in design.hardware]
     if unknown:
-        raise ValueError(f"--only: {unknown[0]!r} is not an instance of the design with RTL ({', '.join(design.hardware)})")
+        raise InputError(f"--only: {unknown[0]!r} is not an instance of the design with RTL ({', '.join(design.hardware)})")
     rows = []
     with tempfile.TemporaryDirectory(prefix="fxdsp_hw_") as tmp:
         work = Path(tmp)

@@ -38,9 +38,9 @@ def run(args) -> int:
     from fxdsp.repro.report import PAPERS, run_all, summary_rows, write_report
 
     if args.paper not in CHOICES:
-        raise ValueError(f"--paper: unknown paper {args.paper!r}; expected one of {', '.join(CHOICES)}")
+        raise InputError(f"--paper: unknown paper {args.paper!r}; expected one of {', '.join(CHOICES)}")
     if args.sweep_points < 3:
-        raise ValueError(f"--sweep-points: need at least 3, got {args.sweep_points}")
+        raise InputError(f"--sweep-points: need at least 3, got {args.sweep_points}")
     papers = PAPERS if args.paper == "all" else (args.paper,)
     loop = None
     if args.drive_loop:

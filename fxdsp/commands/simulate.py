@@ -57,9 +57,9 @@ def _number(option: str, text: str) -> float:
     try:
         value = float(text)
     except ValueError:
-        raise ValueError(f"{option}: {text!r} is not a number") from None
+        raise InputError(f"{option}: {text!r} is not a number") from None
     if not math.isfinite(value):
-        raise ValueError(f"{option}: {text!r} is not a finite number")
+        raise InputError(f"{option}: {text!r} is not a finite number")
     return value
 
 
@@ -73,17 +73,17 @@ def parse_effects(specs: list[str]) -> dict[str, dict[str, float]]:
             effects.setdefault("none", {})
             continue
         if not sep:
-            raise ValueError(f"--effect {spec!r}: expected CAUSE.PARAM=VALUE or CAUSE=VALUE")
+            raise InputError(f"--effect {spec!r}: expected CAUSE.PARAM=VALUE or CAUSE=VALUE")
         cause, dot, param = key.partition(".")
         if cause not in PARAMETERS:
-            raise ValueError(f"--effect {spec!r}: unknown cause {cause!r}; expected one of {', '.join(PARAMETERS)}")
+            raise InputError(f"--effect {spec!r}: unknown cause {cause!r}; expected one of {', '.join(PARAMETERS)}")
         if not dot:
             if len(PARAMETERS[cause]) != 1:
                 names = ", ".join(f"{cause}.{p}" for p in PARAMETERS[cause]) or "no parameters"
-                raise ValueError(f"--effect {spec!r}: {cause} takes {names}; give each as CAUSE.PARAM=VALUE")
+                raise InputError(f"--effect {spec!r}: {cause} takes {names}; give each as CAUSE.PARAM=VALUE")
             param = PARAMETERS[cause][0]
         if param not in PARAMETERS[cause]:
-            raise ValueError(f"--effect {spec!r}: unknown parameter {param!r} of {cause}; "
+            raise InputError(f"--effect {spec!r}: unknown parameter {param!r} of {cause}; "
                              f"expected {', '.join(PARAMETERS[cause]) or 'none'}")
         effects.setdefault(cause, {})[param] = _number(f"--effect {cause}.{param}", text)
     return effects
@@ -96,7 +96,7 @@ def _noise(specs: list[str]):
     for spec in specs:
         key, sep, text = spec.partition("=")
         if not sep:
-            raise ValueError(f"--noise {spec!r}: expected KEY=VALUE or 'off'")
+            raise InputError(f"--noise {spec!r}: expected KEY=VALUE or 'off'")
         out[key.strip()] = _number(f"--noise {key.strip()}", text)
     return out
 
@@ -126,11 +126,11 @@ def _drive_loop(args):
 
 def run(args) -> int:
     if args.scenario not in SCENARIOS:
-        raise ValueError(f"--scenario: unknown name {args.scenario!r}; expected one of {', '.join(SCENARIOS)}")
+        raise InputError(f"--scenario: unknown name {args.scenario!r}; expected one of {', '.join(SCENARIOS)}")
     try:
         seed = int(args.seed)
     except ValueError:
-        raise ValueError(f"--seed: {args.seed!r} is not an integer") from None
+        raise InputError(f"--seed: {args.seed!r} is not an integer") from None
     effects = parse_effects(args.effect)
     thermal = ThermalChain(rtd_node=args.rtd_node) if args.rtd_node else None
     drive = _drive_loop(args)

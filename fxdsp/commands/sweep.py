@@ -30,6 +30,7 @@ from functools import partial
 from pathlib import Path
 
 from fxdsp.outputs import IN, IN_DIR, OUT_DIR
+from fxdsp.errors import InputError
 
 PATHS = {"--out": OUT_DIR, "--config": IN, "--rtl": IN_DIR, "--build-dir": OUT_DIR}
 
@@ -114,7 +115,7 @@ def run(args) -> int:
 
     t0 = time.perf_counter()
     if args.scheduler is not None and args.workers is not None:
-        raise ValueError("--workers: not with --scheduler (the cluster has its own workers)")
+        raise InputError("--workers: not with --scheduler (the cluster has its own workers)")
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     prepare = {"montecarlo": _prepare_montecarlo, "wordlength": _prepare_wordlength, "hidden": _prepare_hidden,
                "rtl": _prepare_rtl}[args.kind]

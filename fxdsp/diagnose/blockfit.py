@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from fxdsp.errors import InputError
 
 
 @dataclass(frozen=True)
@@ -137,7 +138,7 @@ class SegmentNormals:
         elif by == "group":
             group, s = self.blocks.group(), self.blocks.n_groups
         else:
-            raise ValueError(f"by: expected 'group' or 'fold', got {by!r}")
+            raise InputError(f"by: expected 'group' or 'fold', got {by!r}")
         t, _, beta = self._left_out(group, s)
         return self.coefficients(beta), self._sse(beta, *t) * self.weight
 

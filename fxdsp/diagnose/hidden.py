@@ -44,6 +44,7 @@ import numpy as np
 
 from fxdsp import logfile
 from fxdsp.causes import CAUSES
+from fxdsp.errors import InputError
 
 SNR_RANGE = (5.0, 20.0)
 WANDER_RANGE = (2.0, 10.0)
@@ -94,7 +95,7 @@ def make_case(cause: str, seed: int, scenario: str | None = None, snr_range=SNR_
 
     causes = (cause,) if second is None else (cause, second)
     if second is not None and (second == cause or "none" in causes):
-        raise ValueError(f"second: a pair needs two different causes other than none, got {causes}")
+        raise InputError(f"second: a pair needs two different causes other than none, got {causes}")
     key = [seed, ALL_CAUSES.index(cause)] + ([ALL_CAUSES.index(second)] if second else [])
     rng = np.random.default_rng(key)
     allowed = [s for s in DEFAULT_SCENARIOS if all(s in SCENARIOS_FOR.get(c, DEFAULT_SCENARIOS) for c in causes)]
@@ -252,9 +253,9 @@ def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, snr_ran
     """Run ``per_cause`` cases per cause and tally what the diagnosis names."""
     unknown = [c for c in causes if c not in ALL_CAUSES]
     if unknown:
-        raise ValueError(f"causes: unknown cause {unknown[0]!r}; expected some of {', '.join(ALL_CAUSES)}")
+        raise InputError(f"causes: unknown cause {unknown[0]!r}; expected some of {', '.join(ALL_CAUSES)}")
     if per_cause < 1:
-        raise ValueError(f"per_cause: need at least 1 case per cause, got {per_cause}")
+        raise InputError(f"per_cause: need at least 1 case per cause, got {per_cause}")
     start = time.perf_counter()
     outcomes = []
     for cause in causes:

@@ -19,6 +19,7 @@ import numpy as np
 
 from fxdsp.blocks.rtd import RtdPhysics
 from fxdsp.logfile import lines_and_header
+from fxdsp.errors import InputError
 
 IEC60751 = {"R0": 100.0, "A": 3.9083e-3, "B": -5.775e-7, "C": -4.183e-12}
 
@@ -40,15 +41,15 @@ def load_table(path) -> tuple[np.ndarray, np.ndarray]:
     lines, header = lines_and_header(path)
     missing = [c for c in ("temperature_c", "resistance_ohm") if c not in header]
     if missing:
-        raise ValueError(f"{path}: expected columns temperature_c,resistance_ohm; the header has "
+        raise InputError(f"{path}: expected columns temperature_c,resistance_ohm; the header has "
                          f"{', '.join(header) or 'nothing'}")
     try:
         data = np.loadtxt(lines[1:], delimiter=",", ndmin=2, usecols=[header.index("temperature_c"),
                                                                       header.index("resistance_ohm")])
     except ValueError as exc:
-        raise ValueError(f"{path}: {str(exc).splitlines()[0]}") from None
+        raise InputError(f"{path}: {str(exc).splitlines()[0]}") from None
     if data.shape[0] < 4 or not np.all(np.isfinite(data)):
-        raise ValueError(f"{path}: need at least 4 rows of finite temperature_c, resistance_ohm")
+        raise InputError(f"{path}: need at least 4 rows of finite temperature_c, resistance_ohm")
     return data[:, 0].copy(), data[:, 1].copy()
 
 

@@ -177,7 +177,7 @@ def gyro_freq_config(columns: dict, remedies, design, roles) -> tuple[str, dict,
     pts = cal["points"]
     check = check_thermometer(config_from_text(text), pts["temp_c"], pts["freq_hz"], chain=roles.instance)
     if not check["ok"]:
-        raise ValueError(f"{f2t_t}: calibrated f0/k put the calibration points {check['mean_error_c']:+.3f} C "
+        raise InputError(f"{f2t_t}: calibrated f0/k put the calibration points {check['mean_error_c']:+.3f} C "
                          f"off the reference (limit {THERMO_TOL_C} C)")
     cal["thermometer_check"] = check
     return text, cal, fit.changes

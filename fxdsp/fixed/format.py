@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from fxdsp.errors import InputError, InputTypeError
 
 MAX_SIGNED_WL = 63
 MAX_UNSIGNED_WL = 62
@@ -42,9 +43,9 @@ class Format:
         limit = MAX_SIGNED_WL if self.signed else MAX_UNSIGNED_WL
         if not 1 <= self.wl <= limit:
             kind = "signed" if self.signed else "unsigned"
-            raise ValueError(f"wl: {kind} word length must be 1..{limit}, got {self.wl}")
+            raise InputError(f"wl: {kind} word length must be 1..{limit}, got {self.wl}")
         if abs(self.fl) > MAX_ABS_FL:
-            raise ValueError(f"fl: fraction length must be within +-{MAX_ABS_FL}, got {self.fl}")
+            raise InputError(f"fl: fraction length must be within +-{MAX_ABS_FL}, got {self.fl}")
 
     # --- construction -------------------------------------------------------------------------
     @classmethod
@@ -53,14 +54,14 @@ class Format:
         if isinstance(text, Format):
             return text
         if not isinstance(text, str):
-            raise TypeError(f"{field}: expected a format string like 's16.15', got {type(text).__name__}")
+            raise InputTypeError(f"{field}: expected a format string like 's16.15', got {type(text).__name__}")
         m = _FORMAT_RE.match(text)
         if not m:
-            raise ValueError(f"{field}: {text!r} is not a format like 's16.15' or 'u12.0'")
+            raise InputError(f"{field}: {text!r} is not a format like 's16.15' or 'u12.0'")
         try:
             return cls(m.group(1) == "s", int(m.group(2)), int(m.group(3)))
         except (ValueError, TypeError) as exc:
-            raise ValueError(f"{field}: {text!r}: {exc}") from None
+            raise InputError(f"{field}: {text!r}: {exc}") from None
 
     # --- ranges -------------------------------------------------------------------------------
     @property

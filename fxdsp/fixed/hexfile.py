@@ -9,6 +9,7 @@ change of padding or case would otherwise make the two disagree about the same w
 from __future__ import annotations
 
 import numpy as np
+from fxdsp.errors import InputError
 
 
 def hex_words(values, wl: int) -> str:
@@ -18,7 +19,7 @@ def hex_words(values, wl: int) -> str:
     anything else is a ValueError rather than a silently truncated word. Python ints of any size
     are taken, so words wider than 64 bits are written exactly."""
     if not isinstance(wl, (int, np.integer)) or wl < 1:
-        raise ValueError(f"wl: word length must be an integer >= 1, got {wl!r}")
+        raise InputError(f"wl: word length must be an integer >= 1, got {wl!r}")
     digits = -(-int(wl) // 4)
     mask = (1 << wl) - 1
     lo, hi = -(1 << (wl - 1)), 1 << wl
@@ -26,7 +27,7 @@ def hex_words(values, wl: int) -> str:
     for v in values:
         v = int(v)
         if not lo <= v < hi:
-            raise ValueError(f"values: word {v} does not fit {wl} bits")
+            raise InputError(f"values: word {v} does not fit {wl} bits")
         lines.append(f"{v & mask:0{digits}x}\n")
     return "".join(lines)
 
@@ -42,9 +43,9 @@ def read_hex_words(text: str, wl: int, signed: bool) -> np.ndarray:
         try:
             w = int(line, 16)
         except ValueError:
-            raise ValueError(f"line {ln}: {line!r} is not a hex word") from None
+            raise InputError(f"line {ln}: {line!r} is not a hex word") from None
         if w >> wl:
-            raise ValueError(f"line {ln}: {line!r} does not fit {wl} bits")
+            raise InputError(f"line {ln}: {line!r} does not fit {wl} bits")
         vals.append(word_value(w, wl, signed))
     return np.array(vals, dtype=np.int64)
 

@@ -14,6 +14,7 @@ import numpy as np
 from fxdsp.fixed import kernels
 from fxdsp.fixed.format import MAX_SIGNED_WL, MAX_UNSIGNED_WL, Format
 from fxdsp.fixed.rules import Rules
+from fxdsp.errors import InputError
 
 _TWO62 = float(2**62)
 
@@ -43,7 +44,7 @@ def stored(x, name: str = "x") -> np.ndarray:
     if not np.issubdtype(arr.dtype, np.integer):
         raise TypeError(f"{name}: stored values must be integers, got dtype {arr.dtype}")
     if arr.dtype == np.uint64 and arr.size and arr.max() > np.iinfo(np.int64).max:
-        raise ValueError(f"{name}: stored value exceeds int64")
+        raise InputError(f"{name}: stored value exceeds int64")
     return np.ascontiguousarray(np.atleast_1d(arr).astype(np.int64, copy=False).ravel())
 
 
@@ -52,7 +53,7 @@ def check_in_format(q: np.ndarray, fmt: Format, name: str = "x") -> np.ndarray:
     q = stored(q, name)
     if q.size and (q.min() < fmt.min_int or q.max() > fmt.max_int):
         bad = q[(q < fmt.min_int) | (q > fmt.max_int)][0]
-        raise ValueError(f"{name}: stored value {int(bad)} is outside {fmt} [{fmt.min_int}, {fmt.max_int}]")
+        raise InputError(f"{name}: stored value {int(bad)} is outside {fmt} [{fmt.min_int}, {fmt.max_int}]")
     return q
 
 
@@ -68,7 +69,7 @@ def quantize(x, fmt: Format, rules: Rules = Rules(), log: OverflowLog | None = N
     decision is made on the exact fraction, not by ``np.round``."""
     xs = np.atleast_1d(np.asarray(x, dtype=float)).ravel()
     if not np.all(np.isfinite(xs)):
-        raise ValueError(f"{where}: cannot quantize NaN or infinity into {fmt}")
+        raise InputError(f"{where}: cannot quantize NaN or infinity into {fmt}")
     with np.errstate(over="ignore", under="ignore"):
         v = xs * (2.0 ** fmt.fl)
     # a finite x scaled past float64's range (|fl| up to 256) is still a finite value outside
@@ -81,7 +82,7 @@ def quantize(x, fmt: Format, rules: Rules = Rules(), log: OverflowLog | None = N
     big = np.abs(r) >= _TWO62
     if big.any():
         if rules.overflow == "wrap":
-            raise ValueError(f"{where}: value {x if np.ndim(x) == 0 else np.asarray(x).ravel()[big][0]!r} "
+            raise InputError(f"{where}: value {x if np.ndim(x) == 0 else np.asarray(x).ravel()[big][0]!r} "
                              f"is too large to wrap exactly into {fmt}")
         # still outside every format (max_int <= 2**62 - 1, min_int >= -2**62, so -2**62 itself
         # would fit s63 and go uncounted): saturates and is counted below
@@ -100,7 +101,7 @@ def round_unfitted(x, fl: int, rounding: str = "half_up", where: str = "round_un
     wide = Format(True, MAX_SIGNED_WL, fl)
     xs = np.atleast_1d(np.asarray(x, dtype=float)).ravel()
     if not np.all(np.isfinite(xs)):     # named here: the wide format is no format of the caller's
-        raise ValueError(f"{where}: cannot quantize NaN or infinity")
+        raise InputError(f"{where}: cannot quantize NaN or infinity")
     q = quantize(xs, wide, Rules(rounding, "saturate"), where=where)
     with np.errstate(over="ignore"):
         v = xs * 2.0 ** fl      # exact; near 2**62 floats are 1024 apart: no rounding decides the ends
@@ -125,7 +126,7 @@ def resize(q, src: Format, dst: Format, rules: Rules = Rules(), log: OverflowLog
 def shift_round(q, n: int, rounding: str) -> np.ndarray:
     """q * 2**-n rounded by ``rounding`` (n >= 0), no range change: the rounding primitive alone."""
     if n < 0:
-        raise ValueError(f"n: shift must be >= 0, got {n}")
+        raise InputError(f"n: shift must be >= 0, got {n}")
     r = Rules(rounding, "wrap")
     out, _ = kernels.convert_array(stored(q), n, r.rounding_code, -(1 << 62), (1 << 62) - 1, r.overflow_code)
     return out
@@ -134,7 +135,7 @@ def shift_round(q, n: int, rounding: str) -> np.ndarray:
 def _grown(signed: bool, wl: int, fl: int, what: str) -> Format:
     limit = MAX_SIGNED_WL if signed else MAX_UNSIGNED_WL
     if wl > limit:
-        raise ValueError(f"{what} needs {wl} bits, more than the {limit}-bit int64 budget; "
+        raise InputError(f"{what} needs {wl} bits, more than the {limit}-bit int64 budget; "
                          f"resize an operand first")
     return Format(signed, wl, fl)
 
@@ -190,7 +191,7 @@ def to_fxp(q, fmt: Format, rules: Rules = Rules()):
     from fxpmath import Fxp
 
     if fmt.wl > _FXP_MAX_WL:
-        raise ValueError(f"fmt: fxpmath interop needs wl <= {_FXP_MAX_WL}, got {fmt}")
+        raise InputError(f"fmt: fxpmath interop needs wl <= {_FXP_MAX_WL}, got {fmt}")
     fxp_round = {"floor": "floor", "half_up": "around", "half_even": "around", "toward_zero": "fix"}
     x = Fxp(None, signed=fmt.signed, n_word=fmt.wl, n_frac=fmt.fl, overflow=rules.overflow,
             rounding=fxp_round[rules.rounding])

@@ -14,6 +14,7 @@ format's min/max). Either way every overflowing sample is counted.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from fxdsp.errors import InputError
 
 ROUNDING_MODES: tuple[str, ...] = ("floor", "half_up", "half_even", "toward_zero")
 OVERFLOW_MODES: tuple[str, ...] = ("wrap", "saturate")
@@ -25,13 +26,13 @@ OVERFLOW_CODE = {name: i for i, name in enumerate(OVERFLOW_MODES)}
 
 def check_rounding(name: str, field: str = "rounding") -> str:
     if name not in ROUNDING_CODE:
-        raise ValueError(f"{field}: unknown rounding {name!r}; expected one of {', '.join(ROUNDING_MODES)}")
+        raise InputError(f"{field}: unknown rounding {name!r}; expected one of {', '.join(ROUNDING_MODES)}")
     return name
 
 
 def check_overflow(name: str, field: str = "overflow") -> str:
     if name not in OVERFLOW_CODE:
-        raise ValueError(f"{field}: unknown overflow {name!r}; expected one of {', '.join(OVERFLOW_MODES)}")
+        raise InputError(f"{field}: unknown overflow {name!r}; expected one of {', '.join(OVERFLOW_MODES)}")
     return name
 
 

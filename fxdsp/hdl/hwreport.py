@@ -30,6 +30,7 @@ from pathlib import Path
 
 from fxdsp.outputs import json_text
 from fxdsp.hdl import HW_REPORT_JSON, RTL_DIR
+from fxdsp.errors import InputError
 
 COLUMNS = ("name", "module", "LC", "LUT", "FF", "CARRY", "MAC16", "BRAM", "GB", "fmax", "fmax_seeds", "critical_seed",
            "critical_path", "cycles_per_sample", "cycle_budget", "target", "warnings", "note", "sha256")
@@ -194,7 +195,7 @@ def load_hw_report(path: str | Path | None = None) -> dict | None:
         return None
     data = json.loads(p.read_text(encoding="utf-8"))
     if not isinstance(data, dict) or not isinstance(data.get("rows"), list):
-        raise ValueError(f"{p}: not a hardware report (no list of rows)")
+        raise InputError(f"{p}: not a hardware report (no list of rows)")
     return data
 
 

@@ -14,6 +14,7 @@ from fxdsp.repro.calibrate import calibrate002
 from fxdsp.repro.points import rate_table_points, tempco
 from fxdsp.repro.stages import config_stages, stage_inputs
 from fxdsp.sim.calibration import calibrate_paper000_log, calibrate_paper001, tumble_points_from_log
+from fxdsp.errors import InputError
 
 PAPERS = ("002", "001", "000")
 
@@ -39,23 +40,23 @@ def calibrated_config(paper: str, log: dict, order: int = 1, base_text: str | No
         tables = paper002_tables(cal)
     elif paper == "001":
         if order != 1:
-            raise ValueError("--order: paper 001's bias is one quadratic; only the default order applies")
+            raise InputError("--order: paper 001's bias is one quadratic; only the default order applies")
         cal = calibrate_paper001(log)
         tables = paper001_tables(cal)
     elif paper == "000":
         if order != 1:
-            raise ValueError("--order: paper 000's K0/K1 are cubics; only the default order applies")
+            raise InputError("--order: paper 000's K0/K1 are cubics; only the default order applies")
         cal = calibrate_paper000_log(log)
         tables = paper000_tables(cal)
     else:
-        raise ValueError(f"--paper: unknown paper {paper!r}; expected one of {', '.join(PAPERS)}")
+        raise InputError(f"--paper: unknown paper {paper!r}; expected one of {', '.join(PAPERS)}")
     text = config_text(tables, base_text, provenance=f"calibrated by fxdsp.repro for paper {paper}")
     if paper == "001":
         pts = cal["points"]
         check = paper001.check_thermometer(config_from_text(text), pts["temp_c"], pts["freq_hz"])
         cal["thermometer_check"] = check
         if not check["ok"]:
-            raise ValueError(f"freq2temp: calibrated f0/k put the calibration points {check['mean_error_c']:+.3f} C "
+            raise InputError(f"freq2temp: calibrated f0/k put the calibration points {check['mean_error_c']:+.3f} C "
                              f"off the reference (limit {paper001.THERMO_TOL_C} C)")
     return text, cal
 
@@ -91,4 +92,4 @@ def apply_config(paper: str, config_text_: str, log: dict) -> dict:
         return {"k0_max_abs_mg": float(np.abs(pts["k0"]).max() * 1e3),
                 "k1_max_abs_dev": float(np.abs(pts["k1"] - 1.0).max()),
                 "temps_c": pts["temp_c"].tolist(), "overflows": out["overflows"].total}
-    raise ValueError(f"--paper: unknown paper {paper!r}; expected one of {', '.join(PAPERS)}")
+    raise InputError(f"--paper: unknown paper {paper!r}; expected one of {', '.join(PAPERS)}")

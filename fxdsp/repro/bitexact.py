@@ -42,7 +42,7 @@ KINV_FORMAT = Format.parse("s24.18")
 def _finite(name: str, values) -> np.ndarray:
     arr = np.asarray(values, float)
     if arr.ndim != 1 or not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name}: must be a 1-D array of finite numbers")
+        raise InputError(f"{name}: must be a 1-D array of finite numbers")
     return arr
 
 
@@ -59,7 +59,7 @@ class Compensator002:
             raise InputError(f"chain.{chain.removeprefix('chain_')}.sensor: the paper 002 compensation reads a gyro_rtd")
         self.rtd, self.sf, self.divide, self.bias, self.subtract = s.rtd, s.sf, s.divide, s.bias, s.subtract
         if self.subtract.in_format != self.divide.out_format:
-            raise ValueError(f"{self.subtract.name}: its input {self.subtract.in_format} must equal "
+            raise InputError(f"{self.subtract.name}: its input {self.subtract.in_format} must equal "
                              f"{self.divide.name}.out_format {self.divide.out_format} for the log-rate path")
         self.lag = s.lag
         # the words of the lag a log-rate run uses: the chain's, else the config's [lag] table
@@ -96,7 +96,7 @@ class Compensator002:
     def compensate_lagged(self, log_data: dict) -> dict[str, np.ndarray]:
         """RTD code -> ``lag`` block (die-temperature estimate, config's [lag]) -> compensation."""
         if self.lag_template is None:
-            raise ValueError("config: has no [lag] table for the lag-aware temperature estimate")
+            raise InputError("config: has no [lag] table for the lag-aware temperature estimate")
         ovf = OverflowLog()
         code = self.temperature_code(log_data["temp_c"], ovf)
         te = self.lag_template.run(log=ovf, temp=code).outputs["te"]

@@ -37,6 +37,7 @@ import numpy as np
 from fxdsp.chains import build
 from fxdsp.config import Config, default_config_text, dumps_value, table_at
 from fxdsp.fixed import Format
+from fxdsp.errors import InputError
 
 FS_MV = 4096.0
 LOG_IN_FORMAT = "s24.23"
@@ -49,7 +50,7 @@ def fit_format(values, wl: int = COEF_WL, headroom_bits: int = 1, signed: bool =
     """The finest ``s<wl>.<fl>`` that holds max|values| with ``headroom_bits`` to spare."""
     v = np.abs(np.asarray(values, float))
     if v.size == 0 or not np.all(np.isfinite(v)):
-        raise ValueError(f"{name}: need finite values to choose a format")
+        raise InputError(f"{name}: need finite values to choose a format")
     peak = float(v.max())
     if peak == 0.0:
         int_bits = 0
@@ -109,7 +110,7 @@ def set_table_keys(text: str, table: str, updates: dict, add_missing: bool = Fal
             tail = "" if not lines or lines[-1].endswith("\n") else "\n"
             return "".join(lines) + tail + f"\n[{table}]\n" + "".join(new)
     if missing:
-        raise ValueError(f"[{table}].{missing[0]}: not in the base config, cannot rewrite it")
+        raise InputError(f"[{table}].{missing[0]}: not in the base config, cannot rewrite it")
     return "".join(lines)
 
 
@@ -142,9 +143,9 @@ def piecewise_table(coefficients, breakpoints=(), t0_c: float = 0.0, out_signed:
     """Keys of a ``[piecewise.*]`` table with formats chosen for these coefficients."""
     coef = np.atleast_2d(np.asarray(coefficients, float))
     if coef.shape[1] < 2 or coef.shape[1] > 4:
-        raise ValueError(f"{name}.coefficients: need 2..4 coefficients per segment, got {coef.shape[1]}")
+        raise InputError(f"{name}.coefficients: need 2..4 coefficients per segment, got {coef.shape[1]}")
     if not np.all(np.isfinite(coef)):
-        raise ValueError(f"{name}.coefficients: must be finite")
+        raise InputError(f"{name}.coefficients: must be finite")
     peak = _range(coef, breakpoints, t0_c)
     out_fmt = fit_format([peak], out_wl, 1, out_signed, f"{name}.out")
     # the accumulator is as wide as the Horner product allows: the top coefficient is converted into
@@ -163,9 +164,9 @@ def piecewise_table(coefficients, breakpoints=(), t0_c: float = 0.0, out_signed:
 def lag_table(tau_s: float, rate_hz: float) -> dict:
     """The ``[lag]`` table: the die-temperature estimate ahead of the coefficient engines."""
     if not (math.isfinite(tau_s) and tau_s > 0):
-        raise ValueError(f"lag.tau_s: must be a finite number > 0, got {tau_s!r}")
+        raise InputError(f"lag.tau_s: must be a finite number > 0, got {tau_s!r}")
     if not (math.isfinite(rate_hz) and rate_hz > 0):
-        raise ValueError(f"lag.rate_hz: must be a finite number > 0, got {rate_hz!r}")
+        raise InputError(f"lag.rate_hz: must be a finite number > 0, got {rate_hz!r}")
     return {"lag": {"tau_s": float(tau_s), "rate_hz": float(rate_hz)}}
 
 
@@ -176,7 +177,7 @@ def paper002_coefficients(cal: dict) -> dict:
     the calibrated SF at 25 C (``sf_nominal``), the bias is in FS units after the division."""
     sfn = float(cal["sf_nominal"])
     if not sfn > 0:
-        raise ValueError(f"sf_nominal: must be > 0, got {sfn!r}")
+        raise InputError(f"sf_nominal: must be > 0, got {sfn!r}")
     sf_coef = np.asarray(cal["sf"]["coefficients"], float) / sfn
     bias_coef = np.asarray(cal["bias"]["coefficients"], float) * sfn / FS_MV
     return {"piecewise.sf": {"breakpoints_c": [float(b) for b in cal["sf"]["breakpoints_c"]],

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from fxdsp.repro.points import rate_table_points
+from fxdsp.errors import InputError
 
 
 def fit_segments(temps_c, values, order: int = 1) -> dict:
@@ -22,13 +23,13 @@ def fit_segments(temps_c, values, order: int = 1) -> dict:
     ending at p_{n-1}; each is a least-squares fit (exact when it holds m + 1 points). Returns inner
     breakpoints (where a segment starts) and ascending coefficients in absolute T."""
     if order not in (1, 2, 3):
-        raise ValueError(f"order: must be 1, 2 or 3, got {order!r}")
+        raise InputError(f"order: must be 1, 2 or 3, got {order!r}")
     t = np.asarray(temps_c, float)
     v = np.asarray(values, float)
     if t.size != v.size:
-        raise ValueError("values: need one value per calibration temperature")
+        raise InputError("values: need one value per calibration temperature")
     if t.size < order + 1:
-        raise ValueError(f"temps_c: order {order} needs at least {order + 1} calibration points, got {t.size}")
+        raise InputError(f"temps_c: order {order} needs at least {order + 1} calibration points, got {t.size}")
     idx = np.argsort(t)
     t, v = t[idx], v[idx]
     starts = list(range(0, t.size - 1, order))
@@ -71,7 +72,7 @@ def frequency_thermometer(log: dict, temp_col: str = "temp_c") -> dict:
     """f = f0 + k T by least squares against ``temp_col`` on the settled tail of each rate-table
     point (the zero-rate stretch before it): the resonator's own thermometer for paper 002."""
     if "freq_hz" not in log:
-        raise ValueError("log: needs the freq_hz column for a frequency thermometer")
+        raise InputError("log: needs the freq_hz column for a frequency thermometer")
     pts_t = rate_table_points(log, temp=log[temp_col], sort=False)["temp_c"]
     pts_f = rate_table_points(log, temp=log["freq_hz"], sort=False)["temp_c"]
     k, f0 = np.polyfit(pts_t, pts_f, 1)

@@ -27,6 +27,7 @@ from fxdsp.sim.calibration import find_plateaus, fit_paper000, tumble_points_fro
 from fxdsp.sim.model import scenario_baseline
 from fxdsp.sim.qvba import DEFAULT_PAIR, tumble_run
 from fxdsp.sim.programmes import PAPER000_TEMPS_C
+from fxdsp.errors import InputError
 
 PAPER = {"k0_before_mg": (10.0, 35.0), "k1_before": (8e-4, 1.6e-3), "k0_after_mg": 1.0, "k1_after": 5e-5}
 NOISE_REL_K1 = 2e-5
@@ -36,7 +37,7 @@ def split_runs(log: dict) -> tuple[dict, dict]:
     """The two tumble passes of a paper000 log (cut before the seventh plateau)."""
     plateaus = find_plateaus(log["time_s"], log["temp_c"])
     if len(plateaus) < 12:
-        raise ValueError(f"log: expected two passes of six tumble plateaus, found {len(plateaus)} plateaus")
+        raise InputError(f"log: expected two passes of six tumble plateaus, found {len(plateaus)} plateaus")
     cut = int(plateaus[6][0])
     return ({k: v[:cut] for k, v in log.items()}, {k: v[cut:] for k, v in log.items()})
 

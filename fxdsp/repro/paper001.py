@@ -29,6 +29,7 @@ from fxdsp.sim.calibration import calibrate_paper001
 from fxdsp.sim.driveloop import loop_frequency
 from fxdsp.sim.model import scenario_baseline
 from fxdsp.sim.resonator import resonator_for
+from fxdsp.errors import InputError
 
 PAPER = {"k_hz_per_c": 0.0536, "f0_hz": 3837.47, "f0_printed_hz": 3837.4, "f_at_m10_hz": 3836.9354,
          "max_residual_hz": 0.01, "linearity": 3.4e-6, "bias_poly": (1469.5, -36.92, -0.25),
@@ -48,7 +49,7 @@ def static_run(seed: int = 3, hours: float = 6.0, dt_s: float = 10.0, wander_c: 
     ``drive_loop``: ``freq_hz`` read through it (closed on the resonance, its own noise) instead of
     the resonance plus ``freq_noise_hz``."""
     if not hours > 0:
-        raise ValueError(f"hours: must be > 0, got {hours!r}")
+        raise InputError(f"hours: must be > 0, got {hours!r}")
     rng = np.random.default_rng(seed)
     t = np.arange(0.0, hours * 3600.0 + dt_s / 2, dt_s)
     periods = rng.uniform(20 * 60.0, 90 * 60.0, 3)
@@ -71,7 +72,7 @@ def random_drift(x, n: int = 1) -> float:
     x = np.asarray(x, float)
     m = x.size // n * n
     if m < 2 * n:
-        raise ValueError("x: too short for the averaging window")
+        raise InputError("x: too short for the averaging window")
     return float(np.std(x[:m].reshape(-1, n).mean(axis=1), ddof=1))
 
 

@@ -52,6 +52,7 @@ from fxdsp.repro.calibrate import calibrate002, frequency_thermometer
 from fxdsp.repro.points import rate_table_points, tempco
 from fxdsp.sim import ThermalChain, generate_log
 from fxdsp.sim.repeatability import PAPER002_REPEATABILITY, Repeatability
+from fxdsp.errors import InputError
 
 PAPER = {"sf_before_ppm": 316.66, "bias_before": 366.22, "sf_after_ppm": 69.67, "bias_after": 115.25,
          "sf_external_ppm": 154.97, "bias_external": 172.67}
@@ -124,9 +125,9 @@ def run_pair(seed_cal: int = 1, seed_verify: int = 2, verify_scale: float = VERI
     methods = METHODS if methods is None else tuple(methods)
     unknown = [m for m in methods if m not in METHODS]
     if unknown:
-        raise ValueError(f"methods: unknown method {unknown[0]!r}; expected some of {', '.join(METHODS)}")
+        raise InputError(f"methods: unknown method {unknown[0]!r}; expected some of {', '.join(METHODS)}")
     if not verify_scale > 0:
-        raise ValueError(f"verify_scale: must be > 0, got {verify_scale!r}")
+        raise InputError(f"verify_scale: must be > 0, got {verify_scale!r}")
     res = {"methods": {}}
     for label, node in NODES.items():
         variants = {n: v for n, v in _variants(label).items() if n in methods}
@@ -151,7 +152,7 @@ def run_pair(seed_cal: int = 1, seed_verify: int = 2, verify_scale: float = VERI
 def seed_pairs(n_pairs: int) -> list[tuple[int, int]]:
     """The (calibration, verification) seeds of the statistics: (1, 2), (3, 4), ..."""
     if isinstance(n_pairs, bool) or not isinstance(n_pairs, (int, np.integer)) or n_pairs < 1:
-        raise ValueError(f"n_pairs: must be a positive integer, got {n_pairs!r}")
+        raise InputError(f"n_pairs: must be a positive integer, got {n_pairs!r}")
     return [(2 * k + 1, 2 * k + 2) for k in range(int(n_pairs))]
 
 

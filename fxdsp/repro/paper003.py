@@ -36,6 +36,7 @@ from fxdsp.blocks.demod import Demod, Nco
 from fxdsp.chains import build
 from fxdsp.fixed import OverflowLog, Rules, quantize, resize, to_float
 from fxdsp.sim.gyro import PAPER002_GYRO, fit_coupling
+from fxdsp.errors import InputError
 
 PAPER = {"lambda_yx": -0.000374, "cxy": -6.96e-8, "kxy": 0.103, "err_cxy": 0.0609,
          "err_raw_cxy": 10.0, "err_filtered_cxy": 0.09, "r2": 0.99}
@@ -56,7 +57,7 @@ def _setup():
     fmt = base.in_format  # the demodulator's input word (s24.22, +-2)
     adc = design.blocks["sf_divide"].in_format  # the sense ADC (s16.15, +-1)
     if fmt.fl < adc.fl:
-        raise ValueError(f"demod.in_format: {fmt} has fewer fraction bits than the ADC {adc}")
+        raise InputError(f"demod.in_format: {fmt} has fewer fraction bits than the ADC {adc}")
     return design.fs_hz, base, fmt, adc
 
 
@@ -102,11 +103,11 @@ def measure(freqs_hz, gyro=PAPER002_GYRO, seed: int = 1, phase_noise_rad: float 
     which is the one divided out."""
     freqs = np.asarray(freqs_hz, float)
     if freqs.ndim != 1 or freqs.size < 3:
-        raise ValueError("freqs_hz: need at least three sweep frequencies")
+        raise InputError("freqs_hz: need at least three sweep frequencies")
     if not dwell_s > 0:
-        raise ValueError(f"dwell_s: must be > 0, got {dwell_s!r}")
+        raise InputError(f"dwell_s: must be > 0, got {dwell_s!r}")
     if not sense_gain_error > -1:
-        raise ValueError(f"sense_gain_error: must be > -1, got {sense_gain_error!r}")
+        raise InputError(f"sense_gain_error: must be > -1, got {sense_gain_error!r}")
     fs, base, fmt, adc = _setup()
     n = int(round(dwell_s * fs))
     rng = np.random.default_rng(seed)
@@ -152,9 +153,9 @@ def channel_correction(gain: float, gyro=PAPER002_GYRO, seed: int = 2, phase_noi
     ``gain_ratio`` = k_SF / ``gain`` (the nominal sense gain that :func:`measure` divides out);
     :func:`correct` applies them."""
     if not gain > 0:
-        raise ValueError(f"gain: must be > 0, got {gain!r}")
+        raise InputError(f"gain: must be > 0, got {gain!r}")
     if not excitation_ratio > 0:
-        raise ValueError(f"excitation_ratio: must be > 0, got {excitation_ratio!r}")
+        raise InputError(f"excitation_ratio: must be > 0, got {excitation_ratio!r}")
     fs, base, fmt, adc = _setup()
     n = int(round(dwell_s * fs))
     rng = np.random.default_rng(seed)
@@ -217,7 +218,7 @@ def mismatch_case(freqs_hz, phase_offset_rad: float = MISMATCH_PHASE_RAD, sense_
 
 def reproduce(n_freqs: int = 41, seed: int = 1, progress: bool = False) -> dict:
     if n_freqs < 3:
-        raise ValueError(f"n_freqs: need at least 3, got {n_freqs}")
+        raise InputError(f"n_freqs: need at least 3, got {n_freqs}")
     freqs = np.linspace(*SPAN_HZ, n_freqs)
     meas = measure(freqs, seed=seed, progress=progress)
     out = {"paper": PAPER, "measure": meas, "params": {"phase_noise_rad": PHASE_NOISE_RAD,

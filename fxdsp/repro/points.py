@@ -10,6 +10,7 @@ the SF. The temperature of the point is the mean of ``temp_col`` over the sample
 from __future__ import annotations
 
 import numpy as np
+from fxdsp.errors import InputError
 
 
 def rate_table_windows(log: dict, log_s: float = 3600.0) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -17,9 +18,9 @@ def rate_table_windows(log: dict, log_s: float = 3600.0) -> list[tuple[np.ndarra
     contiguous zero-rate stretch (at most ``log_s``) right before it. These rows are what a paper 002
     calibration reads; every other row is held out from it."""
     if "rate_dps" not in log:
-        raise ValueError("log: needs the rate_dps column (rate-table steps)")
+        raise InputError("log: needs the rate_dps column (rate-table steps)")
     if not log_s > 0:
-        raise ValueError(f"log_s: must be > 0, got {log_s!r}")
+        raise InputError(f"log_s: must be > 0, got {log_s!r}")
     t = np.asarray(log["time_s"], float)
     rate = np.asarray(log["rate_dps"], float)
     moving = rate != 0
@@ -54,7 +55,7 @@ def rate_table_points(log: dict, output=None, temp_col: str = "temp_c", log_s: f
         sfs.append(float(sf))
         biases.append(float(np.mean(out[zero])))
     if len(temps) < 2:
-        raise ValueError("log: fewer than two rate-table sequences with a zero-rate stretch before them")
+        raise InputError("log: fewer than two rate-table sequences with a zero-rate stretch before them")
     order = np.argsort(temps) if sort else np.arange(len(temps))
     return {"temp_c": np.asarray(temps)[order], "sf": np.asarray(sfs)[order], "bias": np.asarray(biases)[order]}
 
@@ -65,6 +66,6 @@ def tempco(temps_c, values, relative: bool = False) -> float:
     v = np.asarray(values, float)
     tc = np.asarray(temps_c, float)
     if v.size < 2 or tc.size != v.size:
-        raise ValueError("values: need at least two points, one per temperature")
+        raise InputError("values: need at least two points, one per temperature")
     span = (v.max() - v.min()) / (tc.max() - tc.min())
     return float(span / abs(v.mean())) if relative else float(span)

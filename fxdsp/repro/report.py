@@ -15,6 +15,7 @@ from tqdm import tqdm  # noqa: E402
 
 from fxdsp.chains import build  # noqa: E402
 from fxdsp.repro import paper000, paper001, paper002, paper003  # noqa: E402
+from fxdsp.errors import InputError
 
 PAPERS = ("002", "001", "000", "003")
 # the papers' own figures, held by the module that reproduces each paper
@@ -32,7 +33,7 @@ def run_all(papers=PAPERS, n_freqs: int = 41, progress: bool = True, drive_loop=
     """Every paper's reproduction; ``drive_loop``: paper 001's frequency read through it."""
     for p in papers:
         if p not in PAPERS:
-            raise ValueError(f"paper: unknown paper {p!r}; expected one of {', '.join(PAPERS)} or all")
+            raise InputError(f"paper: unknown paper {p!r}; expected one of {', '.join(PAPERS)} or all")
     out = {}
     for p in tqdm(list(papers), desc="reproductions", disable=not progress):
         t0 = time.perf_counter()
@@ -657,7 +658,7 @@ def write_report(res: dict, out_dir, command: str = "fxdsp repro --paper all --r
     try:
         img.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise ValueError(f"--report: cannot create {img}: {exc.strerror or exc}") from None
+        raise InputError(f"--report: cannot create {img}: {exc.strerror or exc}") from None
     parts = [
         "# Reproductions of the four papers",
         "",

@@ -21,6 +21,7 @@ import numpy as np
 from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
 from fxdsp.ramps import sample_interval
+from fxdsp.errors import InputError
 
 G = 1.0  # the tumble's input unit: accelerations in g, so K1 is per g and K0/K1 is in g
 
@@ -67,7 +68,7 @@ def fit_piecewise_linear(temps_c, values, breakpoints) -> dict:
     for lo, hi in zip(bp[:-1], bp[1:]):
         inside = (x >= lo - 1e-9) & (x <= hi + 1e-9)
         if inside.sum() < 2:
-            raise ValueError(f"segment [{lo:g}, {hi:g}] C has fewer than two calibration points")
+            raise InputError(f"segment [{lo:g}, {hi:g}] C has fewer than two calibration points")
         a, b = np.polyfit(x[inside], y[inside], 1)
         slopes.append(float(a))
         intercepts.append(float(b))
@@ -85,7 +86,7 @@ def eval_piecewise_linear(fit: dict, temp_c) -> np.ndarray:
 def calibration_points_paper002(log: dict) -> dict[str, np.ndarray]:
     """Per plateau: RTD temperature, SF (rate-table slope) and zero-rate bias, in output units."""
     if "rate_dps" not in log:
-        raise ValueError("log: paper 002 calibration needs the rate_dps column (rate-table steps)")
+        raise InputError("log: paper 002 calibration needs the rate_dps column (rate-table steps)")
     temps, sfs, biases = [], [], []
     for idx in find_plateaus(log["time_s"], log["temp_c"]):
         rate, out = log["rate_dps"][idx], log["output"][idx]
@@ -96,10 +97,10 @@ def calibration_points_paper002(log: dict) -> dict[str, np.ndarray]:
         sfs.append(sf)
         biases.append(np.mean(out[rate == 0]))
     if not temps:
-        raise ValueError("log: no temperature plateau with a rate-table sequence (rate_dps steps)")
+        raise InputError("log: no temperature plateau with a rate-table sequence (rate_dps steps)")
     merged = merge_repeats(np.asarray(temps), np.asarray(sfs), np.asarray(biases))
     if len(merged[0]) < 2:
-        raise ValueError("log: fewer than two calibration temperatures with a rate-table sequence")
+        raise InputError("log: fewer than two calibration temperatures with a rate-table sequence")
     return {"temp_c": merged[0], "sf": merged[1], "bias": merged[2]}
 
 
@@ -145,13 +146,13 @@ def calibrate_paper001(log: dict, bias_order: int = 2) -> dict:
     taken; ``bias_poly`` is ascending in T (C) like the paper's -0.25 T^2 - 36.92 T + 1469.5.
     """
     if "freq_hz" not in log:
-        raise ValueError("log: paper 001 calibration needs the freq_hz column")
+        raise InputError("log: paper 001 calibration needs the freq_hz column")
     thermometer = log["ref_temp_c"] if "ref_temp_c" in log else log["temp_c"]
     plateaus = find_plateaus(log["time_s"], thermometer)
     if bias_order not in (2, 3):
-        raise ValueError(f"bias_order: must be 2 or 3, got {bias_order!r}")
+        raise InputError(f"bias_order: must be 2 or 3, got {bias_order!r}")
     if len(plateaus) < bias_order + 1:
-        raise ValueError(f"log: paper 001 calibration needs at least {bias_order + 1} temperature plateaus")
+        raise InputError(f"log: paper 001 calibration needs at least {bias_order + 1} temperature plateaus")
     temps = np.array([np.mean(thermometer[i]) for i in plateaus])
     freqs = np.array([np.mean(log["freq_hz"][i]) for i in plateaus])
     bias = np.array([np.mean(log["output"][i]) for i in plateaus])
@@ -186,7 +187,7 @@ def fit_paper000(temps_c, k0, k1, t_ref_c: float = 25.0, order: int = 3) -> dict
     """Cubic K0(t), K1(t) in t = T - 25 C by least squares; ascending coefficients."""
     t = np.asarray(temps_c, float) - t_ref_c
     if t.size <= order:
-        raise ValueError(f"paper 000 fit needs more than {order} temperatures, got {t.size}")
+        raise InputError(f"paper 000 fit needs more than {order} temperatures, got {t.size}")
     return {"paper": "000", "t_ref_c": t_ref_c,
             "k0_poly": [float(c) for c in np.polynomial.polynomial.polyfit(t, k0, order)],
             "k1_poly": [float(c) for c in np.polynomial.polynomial.polyfit(t, k1, order)]}
@@ -205,7 +206,7 @@ def tumble_points_from_log(log: dict) -> dict[str, np.ndarray]:
     """K0, K1 per temperature plateau of a paper000 log; the applied-input column (rate_dps) holds
     a = g cos(theta): +1 g at 0 deg, 0 at 90/270 deg, -1 g at 180 deg."""
     if "rate_dps" not in log:
-        raise ValueError("log: paper 000 calibration needs the applied-input column rate_dps (a in g)")
+        raise InputError("log: paper 000 calibration needs the applied-input column rate_dps (a in g)")
     temps, k0s, k1s = [], [], []
     for idx in find_plateaus(log["time_s"], log["temp_c"]):
         a, out = log["rate_dps"][idx], log["output"][idx]
@@ -218,7 +219,7 @@ def tumble_points_from_log(log: dict) -> dict[str, np.ndarray]:
         k0s.append(float(k0))
         k1s.append(float(k1))
     if len(temps) < 4:
-        raise ValueError("log: paper 000 calibration needs tumbles at four or more temperatures")
+        raise InputError("log: paper 000 calibration needs tumbles at four or more temperatures")
     return {"temp_c": np.asarray(temps), "k0": np.asarray(k0s), "k1": np.asarray(k1s)}
 
 

@@ -24,6 +24,7 @@ from fxdsp.blocks.drive import (_drive_step, _drive_step_float, Drive, FS_AMP, F
                             S_FTW, S_PHASE, wrap_rad)
 from fxdsp.fixed import OverflowLog
 from fxdsp.sim.resonator import DriveResonator, adc_code, resonator_step
+from fxdsp.errors import InputError
 
 CHUNK = 1 << 20
 STEP_S = 0.01   # the temperature (and resonance) profile's step
@@ -124,11 +125,11 @@ def _profile(temp_c, freq_hz):
     freqs = None if freq_hz is None else np.atleast_1d(np.asarray(freq_hz, dtype=float))
     if freqs is not None and freqs.shape != temps.shape:
         if temps.size != 1:
-            raise ValueError(f"temp_c: {temps.size} steps, freq_hz {freqs.size}: one value, or one per step of both")
+            raise InputError(f"temp_c: {temps.size} steps, freq_hz {freqs.size}: one value, or one per step of both")
         temps = np.broadcast_to(temps, freqs.shape)
     for what, arr in (("temp_c", temps), ("freq_hz", freqs)):
         if arr is not None and not np.all(np.isfinite(arr)):
-            raise ValueError(f"{what}: not finite")
+            raise InputError(f"{what}: not finite")
     return temps, freqs
 
 
@@ -212,9 +213,9 @@ def closed_loop(drive: Drive, resonator: DriveResonator, temp_c, seconds: float,
     per_step = int(samples_per_temp or samples_per_step(fs))
     rec = records_of(drive, record_every)
     if rec < 1 or n < rec:
-        raise ValueError(f"record_every: {rec} must be within 1..{n} samples")
+        raise InputError(f"record_every: {rec} must be within 1..{n} samples")
     if keep_codes and n > MAX_KEPT:
-        raise ValueError(f"keep_codes: {n} samples; at most {MAX_KEPT} are kept ({MAX_KEPT / fs:g} s)")
+        raise InputError(f"keep_codes: {n} samples; at most {MAX_KEPT} are kept ({MAX_KEPT / fs:g} s)")
     temps, freqs = _profile(temp_c, freq_hz)
     fi = drive.in_format
     adc_scale = float(2**fi.fl)
@@ -273,12 +274,12 @@ def loop_frequency(drive: Drive, resonator: DriveResonator, t_s, freq_hz, temp_c
     the interval of the first row, at the first row's conditions."""
     t = np.asarray(t_s, dtype=float)
     if t.size < 2:
-        raise ValueError("t_s: the drive loop needs a log of at least two rows")
+        raise InputError("t_s: the drive loop needs a log of at least two rows")
     dt = float(t[1] - t[0])
     rec = int(round(dt * drive.fs_hz))
     if rec < 1 or abs(rec / drive.fs_hz - dt) > 1e-9 * max(1.0, dt) or not np.allclose(np.diff(t), dt, rtol=0,
                                                                                         atol=1e-9 * max(1.0, dt)):
-        raise ValueError(f"t_s: the rows must be a whole number of drive-loop samples apart (fs = "
+        raise InputError(f"t_s: the rows must be a whole number of drive-loop samples apart (fs = "
                          f"{drive.fs_hz:g} Hz), evenly; got a step of {dt:g} s")
     per_step = samples_per_step(drive.fs_hz)
     # whole records from the start: the warm-up is a whole number of rows before the first one

@@ -55,7 +55,7 @@ def parse_columns(columns) -> tuple[str, ...]:
         if name in REQUIRED_COLUMNS:
             continue  # always present; asking for them is harmless
         if name not in OPTIONAL_COLUMNS:
-            raise ValueError(f"columns: unknown column {name!r}; optional columns are "
+            raise InputError(f"columns: unknown column {name!r}; optional columns are "
                              f"{', '.join(OPTIONAL_COLUMNS)}")
         if name not in out:
             out.append(name)
@@ -84,7 +84,7 @@ RTD_ELEMENTS = ("ideal", "pt_bridge")
 def _rtd_readout(t_c: np.ndarray, element: str) -> np.ndarray:
     """Temperature the readout reports for an element at t_c."""
     if element not in RTD_ELEMENTS:
-        raise ValueError(f"rtd_element: unknown {element!r}; expected one of {', '.join(RTD_ELEMENTS)}")
+        raise InputError(f"rtd_element: unknown {element!r}; expected one of {', '.join(RTD_ELEMENTS)}")
     if element == "ideal":
         return t_c
     from fxdsp.blocks.rtd import RtdPhysics
@@ -155,9 +155,9 @@ def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: 
     ``log`` (dict column -> float array), or ``(log, truth)`` with ``return_truth=True``.
     """
     if scenario not in SCENARIOS:
-        raise ValueError(f"scenario: unknown name {scenario!r}; expected one of {', '.join(SCENARIOS)}")
+        raise InputError(f"scenario: unknown name {scenario!r}; expected one of {', '.join(SCENARIOS)}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed: must be a non-negative integer, got {seed!r}")
+        raise InputError(f"seed: must be a non-negative integer, got {seed!r}")
     wanted = parse_columns(columns)
     replay = as_model(model)
     baseline: Baseline = scenario_baseline(scenario)
@@ -189,7 +189,7 @@ def generate_log(scenario: str = "paper002", effects: dict | None = None, seed: 
     rep_draw = None
     if repeatability is not None:
         if not isinstance(repeatability, Repeatability):
-            raise ValueError(f"repeatability: expected a Repeatability, got {type(repeatability).__name__}")
+            raise InputError(f"repeatability: expected a Repeatability, got {type(repeatability).__name__}")
         rep_bias, rep_sf, rep_draw = repeatability.offsets(streams["repeatability"], t, segments, start_c)
         output = output + baseline.sf_poly[0] * rep_bias + baseline.sf(te) * rep_sf * effective_rate
     quad = _quadrature(streams["quad"], t, baseline.sf_poly[0])

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from fxdsp.logfile import CANONICAL, read_log as read_contract, REQUIRED as REQUIRED_COLUMNS
+from fxdsp.errors import InputError
 
 
 def _comment_lines(header_comments) -> list[str]:
@@ -30,14 +31,14 @@ def write_log(path, log: dict, header_comments: dict | list | None = None) -> No
     """Write ``log`` (column -> 1-D array) as a canonical CSV, with ``# key: value`` comment lines."""
     missing = [c for c in REQUIRED_COLUMNS if c not in log]
     if missing:
-        raise ValueError(f"log: missing required column {missing[0]!r}")
+        raise InputError(f"log: missing required column {missing[0]!r}")
     unknown = [c for c in log if c not in CANONICAL]
     if unknown:
-        raise ValueError(f"log: {unknown[0]!r} is not a canonical column ({', '.join(CANONICAL)})")
+        raise InputError(f"log: {unknown[0]!r} is not a canonical column ({', '.join(CANONICAL)})")
     names = [c for c in CANONICAL if c in log]
     data = np.column_stack([np.asarray(log[c], float) for c in names])
     if data.ndim != 2 or any(np.asarray(log[c]).shape != (data.shape[0],) for c in names):
-        raise ValueError("log: all columns must be 1-D arrays of the same length")
+        raise InputError("log: all columns must be 1-D arrays of the same length")
     buffer = io.StringIO()
     for line in _comment_lines(header_comments):
         buffer.write(line + "\n")

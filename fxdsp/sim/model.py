@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from fxdsp.causes import PARAMETERS, check_parameters
+from fxdsp.errors import InputError
 
 
 @dataclass(frozen=True)
@@ -124,7 +125,7 @@ _BASELINES = {"paper002": _paper002, "paper001": _paper001, "paper000": _paper00
 
 def scenario_baseline(scenario: str) -> Baseline:
     if scenario not in _BASELINES:
-        raise ValueError(f"scenario: unknown name {scenario!r}; expected one of {', '.join(_BASELINES)}")
+        raise InputError(f"scenario: unknown name {scenario!r}; expected one of {', '.join(_BASELINES)}")
     return _BASELINES[scenario]()
 
 
@@ -136,13 +137,13 @@ _OPTIONAL = ("sf_poly", "t_ref_c", "f0_hz", "k_hz_per_c", "rtd_offset_c", "rtd_g
 
 def _number(name: str, value) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ValueError(f"{name}: must be a finite number, got {value!r}")
+        raise InputError(f"{name}: must be a finite number, got {value!r}")
     return float(value)
 
 
 def _poly(name: str, value) -> tuple[float, ...]:
     if not isinstance(value, (list, tuple)) or not value:
-        raise ValueError(f"{name}: must be a non-empty list of numbers (ascending powers of T - t_ref_c)")
+        raise InputError(f"{name}: must be a non-empty list of numbers (ascending powers of T - t_ref_c)")
     return tuple(_number(f"{name}[{i}]", v) for i, v in enumerate(value))
 
 
@@ -151,20 +152,20 @@ def validate_effects(effects, where: str = "effects") -> dict[str, dict[str, flo
     if effects is None:
         return {}
     if not isinstance(effects, dict):
-        raise ValueError(f"{where}: must be a mapping cause -> {{parameter: value}}")
+        raise InputError(f"{where}: must be a mapping cause -> {{parameter: value}}")
     out = {}
     for cause, params in effects.items():
         if cause not in PARAMETERS:
-            raise ValueError(f"{where}: unknown cause {cause!r}; expected one of {', '.join(PARAMETERS)}")
+            raise InputError(f"{where}: unknown cause {cause!r}; expected one of {', '.join(PARAMETERS)}")
         if not isinstance(params, dict):
-            raise ValueError(f"{where}.{cause}: must be a mapping parameter -> value")
+            raise InputError(f"{where}.{cause}: must be a mapping parameter -> value")
         for pname, pvalue in params.items():
             if pname in PARAMETERS[cause]:  # a JSON string or null would otherwise pass float() or fail unnamed
                 _number(f"{where}.{cause}.{pname}", pvalue)
         checked = check_parameters(cause, params)
         for pname, value in checked.items():
             if pname == "tau_s" and not value > 0:  # a time constant; the mechanism would divide by it
-                raise ValueError(f"{where}.{cause}.tau_s: must be > 0, got {value!r}")
+                raise InputError(f"{where}.{cause}.tau_s: must be > 0, got {value!r}")
         if cause != "none":
             out[cause] = checked
     return out
@@ -172,25 +173,25 @@ def validate_effects(effects, where: str = "effects") -> dict[str, dict[str, flo
 
 def model_from_dict(data) -> Model:
     if not isinstance(data, dict):
-        raise ValueError("model: top level must be a JSON object with 'baseline' and 'effects'")
+        raise InputError("model: top level must be a JSON object with 'baseline' and 'effects'")
     if "baseline" not in data:
-        raise ValueError("model: missing field 'baseline'")
+        raise InputError("model: missing field 'baseline'")
     base = data["baseline"]
     if not isinstance(base, dict):
-        raise ValueError("baseline: must be a JSON object")
+        raise InputError("baseline: must be a JSON object")
     unknown = sorted(set(base) - set(_REQUIRED) - set(_OPTIONAL))
     if unknown:
-        raise ValueError(f"baseline.{unknown[0]}: unknown field; expected {', '.join(_REQUIRED + _OPTIONAL)}")
+        raise InputError(f"baseline.{unknown[0]}: unknown field; expected {', '.join(_REQUIRED + _OPTIONAL)}")
     for name in _REQUIRED:
         if name not in base:
-            raise ValueError(f"baseline.{name}: missing field")
+            raise InputError(f"baseline.{name}: missing field")
     kwargs = {"bias_poly": _poly("baseline.bias_poly", base["bias_poly"]),
               "sf_poly": _poly("baseline.sf_poly", base["sf_poly"]) if "sf_poly" in base else ()}
     for name in _OPTIONAL:
         if name in base and name != "sf_poly":
             kwargs[name] = _number(f"baseline.{name}", base[name])
     if "rtd_gain" in kwargs and kwargs["rtd_gain"] == 0:
-        raise ValueError("baseline.rtd_gain: must be non-zero")
+        raise InputError("baseline.rtd_gain: must be non-zero")
     return Model(Baseline(**kwargs), validate_effects(data.get("effects", {})),
                  given=frozenset(k for k in _REQUIRED + _OPTIONAL if k in base))
 
@@ -200,11 +201,11 @@ def read_model(path) -> Model:
     try:
         text = Path(path).read_text(encoding="utf-8")
     except OSError as exc:
-        raise ValueError(f"model: cannot read {path}: {exc.strerror or exc}") from None
+        raise InputError(f"model: cannot read {path}: {exc.strerror or exc}") from None
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
-        raise ValueError(f"model: {path} is not valid JSON ({exc.msg}, line {exc.lineno})") from None
+        raise InputError(f"model: {path} is not valid JSON ({exc.msg}, line {exc.lineno})") from None
     return model_from_dict(data)
 
 
@@ -222,4 +223,4 @@ def as_model(model) -> Model | None:
         return model_from_dict(model)
     if isinstance(model, (str, Path)):
         return read_model(model)
-    raise ValueError(f"model: expected a path, a dict or a Model, got {type(model).__name__}")
+    raise InputError(f"model: expected a path, a dict or a Model, got {type(model).__name__}")

@@ -38,6 +38,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from fxdsp.errors import InputError
 
 NOISE_KEYS = ("output", "temp_c", "ref_temp_c", "freq_hz", "quad", "bias_instability",
               "rate_random_walk")
@@ -59,14 +60,14 @@ def resolve_noise(overrides: dict | str | None, sf_at_ref: float) -> dict[str, f
     levels = default_noise(sf_at_ref)
     if isinstance(overrides, str):
         if overrides != "off":
-            raise ValueError(f"noise: expected a mapping of levels or 'off', got {overrides!r}")
+            raise InputError(f"noise: expected a mapping of levels or 'off', got {overrides!r}")
         return {k: 0.0 for k in levels}
     for key, value in (overrides or {}).items():
         if key not in levels:
-            raise ValueError(f"noise: unknown key {key!r}; expected one of {', '.join(NOISE_KEYS)}")
+            raise InputError(f"noise: unknown key {key!r}; expected one of {', '.join(NOISE_KEYS)}")
         value = float(value)
         if not (math.isfinite(value) and value >= 0):
-            raise ValueError(f"noise.{key}: must be a finite number >= 0, got {value!r}")
+            raise InputError(f"noise.{key}: must be a finite number >= 0, got {value!r}")
         levels[key] = value
     return levels
 

@@ -36,6 +36,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from fxdsp.errors import InputError
 
 ROOM_C = 23.0
 CHAMBER_RAMP_C_PER_MIN = 1.0
@@ -180,12 +181,12 @@ MAX_ROWS = 10_000_000   # a 10 M-row CSV is about 1 GB
 def sample(segments: list[Segment], start_c: float, time_step_s: float) -> Sampled:
     """Sample a programme every ``time_step_s`` from 0 to its end (inclusive of the last sample)."""
     if not time_step_s > 0:
-        raise ValueError(f"time_step_s: must be > 0, got {time_step_s}")
+        raise InputError(f"time_step_s: must be > 0, got {time_step_s}")
     ends = np.cumsum([s.duration_s for s in segments])
     total = float(ends[-1])
     n = int(np.floor(total / time_step_s)) + 1
     if n > MAX_ROWS:   # a memory error (tens of GB) rather than a log, otherwise
-        raise ValueError(f"time_step_s: {time_step_s:g} s gives {n} rows over the programme's {total:g} s; at most "
+        raise InputError(f"time_step_s: {time_step_s:g} s gives {n} rows over the programme's {total:g} s; at most "
                          f"{MAX_ROWS} (a step of {total / (MAX_ROWS - 1):.3g} s or more)")
     t = np.arange(n) * time_step_s
     knots_t = np.concatenate([[0.0], ends])
@@ -204,8 +205,8 @@ def programme(name: str, scale: float, rng: np.random.Generator) -> tuple[list[S
     """Segments of a named scenario, the chamber temperature at power-on and how long a drive loop
     runs before the log starts."""
     if name not in PROGRAMMES:
-        raise ValueError(f"scenario: unknown name {name!r}; expected one of {', '.join(PROGRAMMES)}")
+        raise InputError(f"scenario: unknown name {name!r}; expected one of {', '.join(PROGRAMMES)}")
     if not scale > 0:
-        raise ValueError(f"duration_scale: must be > 0, got {scale}")
+        raise InputError(f"duration_scale: must be > 0, got {scale}")
     built = PROGRAMMES[name](scale, rng)
     return built.segments, built.start_c, built.loop_warmup_s

@@ -64,6 +64,7 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
+from fxdsp.errors import InputError
 
 
 @dataclass(frozen=True)
@@ -79,7 +80,7 @@ class Repeatability:
         for name in ("temp_bias_sigma", "temp_sf_sigma", "turn_on_bias_sigma", "turn_on_sf_sigma"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and v >= 0):
-                raise ValueError(f"repeatability.{name}: must be a finite number >= 0, got {v!r}")
+                raise InputError(f"repeatability.{name}: must be a finite number >= 0, got {v!r}")
 
     def draw(self, rng: np.random.Generator, n_points: int) -> dict:
         """One run's offsets for ``n_points`` temperature points. Every component is drawn (then

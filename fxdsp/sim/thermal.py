@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fxdsp.mechanisms import first_order_lag
+from fxdsp.errors import InputError
 
 NODES = ("air", "package", "die")
 
@@ -33,10 +34,10 @@ class ThermalChain:
 
     def __post_init__(self):
         if self.rtd_node not in NODES:
-            raise ValueError(f"rtd_node: expected one of {', '.join(NODES)}, got {self.rtd_node!r}")
+            raise InputError(f"rtd_node: expected one of {', '.join(NODES)}, got {self.rtd_node!r}")
         for name in ("tau_package_s", "tau_die_s"):
             if not getattr(self, name) > 0:
-                raise ValueError(f"{name}: must be > 0")
+                raise InputError(f"{name}: must be > 0")
 
     def temperatures(self, time_s, air_c) -> dict[str, np.ndarray]:
         """Node temperatures, starting in equilibrium with the air at power-on."""

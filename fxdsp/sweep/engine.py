@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from fxdsp.outputs import plain
+from fxdsp.errors import InputError
 
 JOURNAL = "journal.jsonl"
 JOURNAL_VERSION = 1
@@ -50,7 +51,7 @@ def task_seed(sweep_seed: int, index: int) -> int:
     """64-bit seed of task ``index`` of a sweep seeded ``sweep_seed``: independent streams for
     every index, the same wherever and whenever the task runs."""
     if isinstance(sweep_seed, bool) or not isinstance(sweep_seed, (int, np.integer)) or sweep_seed < 0:
-        raise ValueError(f"--seed: must be an integer >= 0, got {sweep_seed!r}")
+        raise InputError(f"--seed: must be an integer >= 0, got {sweep_seed!r}")
     a, b = np.random.SeedSequence([int(sweep_seed), int(index)]).generate_state(2)
     return int(a) | (int(b) << 32)
 
@@ -120,7 +121,7 @@ class Journal:
         except json.JSONDecodeError:
             header = None
         if header != self.header:
-            raise ValueError(f"--out: {self.path} is the journal of a different sweep (other kind, config, seed "
+            raise InputError(f"--out: {self.path} is the journal of a different sweep (other kind, config, seed "
                              f"or grid); pass --fresh to discard it, or another --out")
         kept = []
         for n, line in enumerate(complete[1:], start=2):
@@ -128,7 +129,7 @@ class Journal:
                 rec = json.loads(line)
                 index = rec["index"]
             except (json.JSONDecodeError, KeyError, TypeError):
-                raise ValueError(f"--out: {self.path} line {n} is damaged; pass --fresh to discard the journal") \
+                raise InputError(f"--out: {self.path} line {n} is damaged; pass --fresh to discard the journal") \
                     from None
             kept.append(line)
             if "result" in rec:
@@ -158,11 +159,11 @@ class Executor:
 
     def __init__(self, workers: int = 0, scheduler: str | None = None, retries: int = 2):
         if isinstance(workers, bool) or not isinstance(workers, int) or workers < 0:
-            raise ValueError(f"--workers: must be an integer >= 0, got {workers!r}")
+            raise InputError(f"--workers: must be an integer >= 0, got {workers!r}")
         if not isinstance(retries, int) or retries < 0:
-            raise ValueError(f"--retries: must be an integer >= 0, got {retries!r}")
+            raise InputError(f"--retries: must be an integer >= 0, got {retries!r}")
         if scheduler is not None and not scheduler.strip():
-            raise ValueError("--scheduler: empty address")
+            raise InputError("--scheduler: empty address")
         self.workers, self.scheduler, self.retries = workers, scheduler, retries
         self.client = None
         self._cluster = None

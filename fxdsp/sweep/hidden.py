@@ -10,6 +10,7 @@ tally are those of :mod:`fxdsp.diagnose.hidden`, whose ``make_case``, ``diagnose
 from __future__ import annotations
 
 from functools import partial
+from fxdsp.errors import InputError
 
 
 def settings(per_cause: int, first_seed: int, causes, snr_range) -> dict:
@@ -18,16 +19,16 @@ def settings(per_cause: int, first_seed: int, causes, snr_range) -> dict:
     causes = tuple(causes)
     unknown = [c for c in causes if c not in ALL_CAUSES]
     if unknown:
-        raise ValueError(f"--causes: unknown cause {unknown[0]!r}; expected some of {', '.join(ALL_CAUSES)}")
+        raise InputError(f"--causes: unknown cause {unknown[0]!r}; expected some of {', '.join(ALL_CAUSES)}")
     if not causes:
-        raise ValueError("--causes: no cause given")
+        raise InputError("--causes: no cause given")
     if per_cause < 1:
-        raise ValueError(f"--per-cause: need at least 1 case per cause, got {per_cause}")
+        raise InputError(f"--per-cause: need at least 1 case per cause, got {per_cause}")
     if first_seed < 0:
-        raise ValueError(f"--first-seed: must be >= 0, got {first_seed}")
+        raise InputError(f"--first-seed: must be >= 0, got {first_seed}")
     lo, hi = (float(x) for x in snr_range)
     if not 0 < lo <= hi:
-        raise ValueError(f"--snr: need 0 < LO <= HI, got {lo} {hi}")
+        raise InputError(f"--snr: need 0 < LO <= HI, got {lo} {hi}")
     return {"per_cause": int(per_cause), "first_seed": int(first_seed), "causes": list(causes), "snr": [lo, hi]}
 
 

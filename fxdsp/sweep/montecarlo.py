@@ -73,13 +73,13 @@ def grid(config_data: dict, temps: int = 16, freqs: int | None = None, temp_rang
     from fxdsp.budget.floor import drive_frequencies
 
     if temps < 1:
-        raise ValueError(f"--temps: need at least 1 temperature, got {temps}")
+        raise InputError(f"--temps: need at least 1 temperature, got {temps}")
     if freqs is not None and freqs < 1:
-        raise ValueError(f"--freqs: need at least 1 drive frequency, got {freqs}")
+        raise InputError(f"--freqs: need at least 1 drive frequency, got {freqs}")
     design, c = _chain(config_data, chain)
     lo, hi = (float(x) for x in (temp_range if temp_range is not None else c.sensor.CHAMBER_C))
     if not lo <= hi:
-        raise ValueError(f"--temp-range: LO must not exceed HI, got {lo} {hi}")
+        raise InputError(f"--temp-range: LO must not exceed HI, got {lo} {hi}")
     t = [lo] if temps == 1 else [float(x) for x in np.linspace(lo, hi, temps)]
     demod = _demod(c)
     if demod is None:
@@ -95,9 +95,9 @@ def grid(config_data: dict, temps: int = 16, freqs: int | None = None, temp_rang
 def settings(config_data: dict, seeds: int, temps: list, freqs: list, samples: int, chain: str = CHAIN,
              port: str | None = None) -> dict:
     if seeds < 1:
-        raise ValueError(f"--seeds: need at least 1 seed, got {seeds}")
+        raise InputError(f"--seeds: need at least 1 seed, got {seeds}")
     if samples < 16:
-        raise ValueError(f"--samples: need at least 16 measured samples per point, got {samples}")
+        raise InputError(f"--samples: need at least 16 measured samples per point, got {samples}")
     design, c = _chain(config_data, chain)
     quantities = {p.name: p for p in design.instances[chain].outputs}
     if port is None:
@@ -185,11 +185,11 @@ def quantile_ci(values, p: float, level: float = LEVEL) -> dict:
     x = np.sort(np.asarray(values, dtype=float))
     n = x.size
     if n == 0:
-        raise ValueError("values: empty")
+        raise InputError("values: empty")
     if not 0 < p < 1:
-        raise ValueError(f"p: must be within (0, 1), got {p}")
+        raise InputError(f"p: must be within (0, 1), got {p}")
     if not 0 < level < 1:
-        raise ValueError(f"level: must be within (0, 1), got {level}")
+        raise InputError(f"level: must be within (0, 1), got {level}")
     k = max(1, math.ceil(p * n - 1e-9))
     a = (1 - level) / 2
     cdf = binom.cdf(np.arange(n + 1), n, p)          # cdf[r] = P(B <= r)

@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fxdsp.errors import InputError
 from fxdsp.hdl.harness import RTL_DIR  # noqa: F401  (the default --rtl of `sweep rtl`)
 ROUNDINGS = ("floor", "half_up", "half_even", "toward_zero")
 OVERFLOWS = ("wrap", "saturate")
@@ -53,7 +54,6 @@ def unroll_params(design, name: str) -> dict | None:
 
 def check_tools(rtl_dir: Path, sim: str = "icarus") -> None:
     """InputError when this machine cannot run a shard (it is the one that checks, before work)."""
-    from fxdsp.errors import InputError
     from fxdsp.hdl.simulators import require_simulator
 
     require_simulator(sim)
@@ -71,12 +71,12 @@ def instance_names(config_data: dict) -> list[str]:
 
 def settings(config_data: dict, shards: int, blocks, rtl_dir: Path) -> dict:
     if shards < 1:
-        raise ValueError(f"--shards: need at least 1 shard, got {shards}")
+        raise InputError(f"--shards: need at least 1 shard, got {shards}")
     names = instance_names(config_data)
     blocks = list(names if blocks is None else blocks)
     unknown = [b for b in blocks if b not in names]
     if unknown or not blocks:
-        raise ValueError(f"--blocks: unknown block {unknown[0] if unknown else ''!r}; expected some of "
+        raise InputError(f"--blocks: unknown block {unknown[0] if unknown else ''!r}; expected some of "
                          f"{', '.join(names)}")
     sources = {p.name: p.read_text(encoding="utf-8") for p in sorted(Path(rtl_dir).glob("*.v"))}
     import hashlib
@@ -149,7 +149,7 @@ def draw(base: dict, seed: int):
         before = dict(_leaves(base))
         changes = {k: v for k, v in _leaves(data) if before.get(k) != v}
         return data, design, changes, attempt
-    raise ValueError(f"rtl: no parameter set that builds in {MAX_DRAWS} draws (seed {seed})")
+    raise InputError(f"rtl: no parameter set that builds in {MAX_DRAWS} draws (seed {seed})")
 
 
 # ----------------------------------------------------------------------------------------------

@@ -1,0 +1,116 @@
+"""Bad input is a type; anything else is a bug.
+
+The command line turns only :class:`fxdsp.errors.InputError` (raised by the validation of what the
+user controls), an OSError and a TOML or UTF-8 decode error into one line and exit status 2. Any
+other exception, such as a numpy shape error or a wrong argument type deep in the library, is a bug:
+its traceback is printed and the exit status is ``fxdsp.cli.BUG`` (70), so it is never reported to
+the user as their mistake. The commands are read from ``fxdsp.cli.COMMANDS``: a new command is
+covered without a new test.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+
+import numpy as np
+import pytest
+
+from fxdsp import cli
+from fxdsp.errors import InputError, InputTypeError
+
+
+def _run(argv, capsys):
+    code = cli.main(argv)
+    return code, capsys.readouterr().err
+
+
+def test_a_numpy_error_deep_in_a_command_is_a_bug_with_its_traceback(monkeypatch, capsys, tmp_path):
+    from fxdsp.blocks.rtd import Rtd
+
+    def broken(self, log, code):
+        return np.zeros(3) + np.zeros(4)    # a shape error: numpy's ValueError, not the user's input
+
+    monkeypatch.setattr(Rtd, "stream", broken)   # deep in every run of the RTD block
+    code, err = _run(["vectors", "--out", str(tmp_path / "v")], capsys)
+    assert code == cli.BUG
+    assert "Traceback (most recent call last)" in err and "operands could not be broadcast" in err
+    assert "internal error: a bug in fxdsp" in err
+
+
+def test_bad_input_deep_in_a_command_is_one_line_and_exit_2(monkeypatch, capsys, tmp_path):
+    from fxdsp.blocks.rtd import Rtd
+
+    def refused(self, log, code):
+        raise InputError("rtd.adc_format: a value the user gave")
+
+    monkeypatch.setattr(Rtd, "stream", refused)
+    code, err = _run(["vectors", "--out", str(tmp_path / "v")], capsys)
+    assert code == 2
+    assert err.strip() == "fxdsp vectors: error: rtd.adc_format: a value the user gave"
+
+
+COMMANDS = sorted(cli.COMMANDS)
+BUGS = [ValueError("operands could not be broadcast"), TypeError("unsupported operand"), KeyError("rtd"),
+        IndexError("index 3 is out of bounds"), AttributeError("'NoneType' object has no attribute 'x'"),
+        ZeroDivisionError("division by zero"), AssertionError("an invariant")]
+INPUTS = [InputError("--frob: bad"), InputTypeError("rtd.r0: expected a number"),
+          FileNotFoundError(2, "No such file or directory", "missing.csv")]
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+@pytest.mark.parametrize("exc", BUGS, ids=lambda e: type(e).__name__)
+def test_every_command_reports_any_other_exception_as_a_bug(monkeypatch, capsys, command, exc):
+    module = importlib.import_module(cli.COMMANDS[command][0])
+
+    def run(args):
+        raise exc
+
+    monkeypatch.setattr(module, "run", run)
+    monkeypatch.setattr(module, "PATHS", {}, raising=False)
+    code, err = _run([command, *_required(command)], capsys)
+    assert code == cli.BUG, err
+    assert "Traceback (most recent call last)" in err and type(exc).__name__ in err
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+@pytest.mark.parametrize("exc", INPUTS, ids=lambda e: type(e).__name__)
+def test_every_command_reports_bad_input_in_one_line(monkeypatch, capsys, command, exc):
+    module = importlib.import_module(cli.COMMANDS[command][0])
+
+    def run(args):
+        raise exc
+
+    monkeypatch.setattr(module, "run", run)
+    monkeypatch.setattr(module, "PATHS", {}, raising=False)
+    code, err = _run([command, *_required(command)], capsys)
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert err.startswith(f"fxdsp {command}: error: ")
+
+
+def _required(command: str) -> list[str]:
+    """The least argv that parses: every required option and positional, read from the command's
+    own parser (a value that parses; ``run`` is replaced, so it is never used)."""
+    parser = cli.build_parser([command])
+    return _least(_subparser(parser, command))
+
+
+def _subparser(parser, name):
+    return next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices[name]
+
+
+def _least(parser) -> list[str]:
+    argv = []
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            name = sorted(action.choices)[0]
+            return argv + [name] + _least(action.choices[name])
+        if action.dest == "help" or (action.option_strings and not action.required):
+            continue
+        value = str(sorted(action.choices)[0]) if action.choices else "1"
+        if action.option_strings:
+            argv += [action.option_strings[0], value]
+        elif action.nargs not in ("?", "*"):
+            argv += [value] * (action.nargs if isinstance(action.nargs, int) else 1)
+    return argv
