@@ -1,4 +1,4 @@
-"""The user's design, kept (issue 27): what ``fxdsp extend`` may change in ``--config``.
+"""The user's design, kept: what ``fxdsp extend`` may change in ``--config``.
 
 The extended config (``config.toml``) is the base config (``--config``, default: the built-in one)
 with three kinds of change, and no other:

@@ -18,8 +18,7 @@ def variants(design) -> dict[str, tuple[str, dict[str, str]]]:
             for n, i in design.hardware.items() if i.rtl.variant() is not None}
 
 
-# the targets per chain (half the device for paper 002, a quarter for paper 001), read
-# against the chain's serial row when it has one, else its default row
+# a chain's resource targets are read against its serial row when it has one, else its default row
 # a chain row's target (its table's ``hardware``, fxdsp.netlist.HARDWARE_KEYS) -> the row's column
 TARGET_COLUMNS = {"lut4": "LUT", "mac16": "MAC16", "bram": "BRAM"}
 

@@ -4,7 +4,7 @@
 // SHIFT bits and one fit by OVERFLOW (wrap / saturate) into OUT_W bits; ovf flags the fit.
 // Interface: in_valid / out_valid, one sample per cycle. Latency: 2 cycles: the difference is
 // registered before the rounding and the fit, so the subtractor's carry chain and the rounding
-// adder's are not one path (together with the saturation they set a generated top's Fmax at 39.7 MHz).
+// adder's are not one path (together with the saturation they would set a generated top's Fmax).
 `default_nettype none
 
 module bias_subtract #(

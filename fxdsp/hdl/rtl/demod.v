@@ -18,7 +18,7 @@
 //   cordic_vector: the CORDIC unrolled). Interface: in_valid / out_valid (in_ready tied high); the
 //   NCO and filter states advance only on in_valid, rst returns them to reset. Latency: 2 cycles (i, q delayed to align
 //   with amp, phase).
-// ARCH = 1: serial (issue 12). The quarter-wave table is read through ONE registered read port
+// ARCH = 1: serial. The quarter-wave table is read through ONE registered read port
 //   (tq <= qsin[addr]: block RAM), qsin[k] and qsin[~k] in consecutive cycles (cb's word first:
 //   qsin[k] in odd quadrants, qsin[~k] in even ones; then the complement address, mb's word); the
 //   six products of a sample (d = delta * TWO_PI, mb * d, -cb * d, x * cos, x * msin, x_K * INV_K)
@@ -37,8 +37,7 @@
 //   MAC operands: a = dr (delta, then d: DW = INTERP_BITS + TWO_PI_W + 3 bits) or cx (x, then
 //   the CORDIC x: XW = max(IN_W, DATA_W + 3) bits); b = TWO_PI, mb, -cb, cos, -sin or
 //   INV_K << ASH (MB_W = max(TWO_PI_W + 1, NCO_W, INV_K_W + ASH) bits, ASH = max(0, MIX_SHIFT -
-//   AMP_SHIFT)); every product takes N = ceil(max(DW, XW)/16) * ceil(MB_W/16) multiplier cycles
-//   (4 at the default config).
+//   AMP_SHIFT)); every product takes N = ceil(max(DW, XW)/16) * ceil(MB_W/16) multiplier cycles.
 //   The filters: M = ceil(max(LPF_ACOEF_W, LPF_OUT_SHIFT + 2)/16) * ceil(DATA_W/16) (6 at the
 //   default), F = 2 LPF_SECTIONS (7 M + 10) cycles for both channels (104 at the default).
 //   Schedule, in edges after the edge 0 that takes the sample (the ROM address is the phase's
@@ -64,8 +63,8 @@
 //     5N + 23 + F + 3 ITERATIONS: x_K * INV_K issued
 //     6N + 27 + F + 3 ITERATIONS .. + 29: amp = fit(round(...)) (fx_convert_pipe), then every
 //                     output registered, out_valid high; in_ready high again
-//   Cycles per sample: 6 N + 30 + 3 ITERATIONS + 2 LPF_SECTIONS (7 M + 10), 206 at the default
-//   config (N = 4, M = 6, 16 iterations, 1 section), against 416 at 40 MHz and 96 kS/s.
+//   Cycles per sample: 6 N + 30 + 3 ITERATIONS + 2 LPF_SECTIONS (7 M + 10) (a config's value: the
+//   hardware report's cycles column, against 416 at 40 MHz and 96 kS/s).
 //   Latency: one cycle less (out_valid in the cycle in which the next sample may be taken).
 //   The shared multiplier: max(MA_W, the filters' a) x max(MB_W, DATA_W) bits, each rounded up to
 //   whole 16-bit limbs (fx_mac_serial VAR_N = 1, whose products come back top-aligned in them); EXT_MAC = 1: none here, its requests (the demodulator's and the filters') go out on
@@ -451,7 +450,7 @@ module demod #(
             wire mac_ready, mac_valid;
             // a request is the issuing state alone (valid/ready: the multiplier takes it with its in_ready,
             // the FSM moves on with the same in_ready), not gated by in_ready: in_ready -> request ->
-            // the shared multiplier's take was the chain's 39 MHz path
+            // the shared multiplier's take would be the chain's critical path
             wire mac_in = (st == S_RD) || (st == S_PC) || (st == S_PM) || (st == S_PI) || (st == S_PQ) || (st == S_PA);
             /* verilator lint_off UNUSEDSIGNAL */  // each product is exact in its own width: its top bits copy the sign
             wire signed [MP_W-1:0] p;
@@ -462,7 +461,7 @@ module demod #(
             // product there (its x * -sin has returned before the mixers' q, S_LPF's entry; x_K * INV_K
             // is issued after). So S_LPF selects the iir's request and routes the out_valid to it
             // (every other state: the demodulator's). Each keeps its own limb counts (VAR_N = 1) and so
-            // its schedule: N = 4 and M = 6 at the default config.
+            // its schedule (N and M above).
             // the requests need no select: the iir requests only in S_LPF or the aux pass, the
             // demodulator never there, so they are ORed (lpf_own off the path into the multiplier's take)
             wire lpf_own = (st == S_LPF) || aux_busy;

@@ -51,8 +51,8 @@
 //                      out_valid, the next phase = phase + ftw'; in_ready again
 //   Cycles per sample: D + 3 N + 13 + N_PF + N_IF + N_PA + N_IA + N_ADV + N_HZ + N_DAC + 25, D the
 //   demodulator's cycles per sample and N_* each product's limb pairs (its operands' 16-bit limbs,
-//   the constants' at their own width): fxdsp.blocks.drive.DriveDatapath.serial_cycles, 413 at the
-//   default config (D = 334, N = 4; the products 29) against 416 at 40 MHz and 96 kS/s.
+//   the constants' at their own width): fxdsp.blocks.drive.DriveDatapath.serial_cycles, against
+//   416 at 40 MHz and 96 kS/s.
 //   Interface: in_valid / in_ready / out_valid; in_ready is high only when idle, out_valid a one-cycle
 //   pulse with every output (held until the next).
 `default_nettype none

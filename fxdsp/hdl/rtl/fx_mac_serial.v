@@ -1,7 +1,7 @@
 // fx_mac_serial: the exact signed product p = a * b of an A_W-bit by a B_W-bit two's-complement
 // operand, computed on ONE 16 x 16 unsigned multiplier iterated over 16-bit limb pairs, so that
-// yosys `synth_ice40 -dsp` maps it to exactly one SB_MAC16 (the resource-shared datapaths of
-// issue 12 run all their products through one of these).
+// yosys `synth_ice40 -dsp` maps it to exactly one SB_MAC16 (the serial variants of the blocks and
+// the chain tops run all their products through one of these).
 // Limbs: a and b are sign-extended to NA = ceil(A_W/16) and NB = ceil(B_W/16) limbs; the top limb
 // is signed, the lower ones unsigned. The partial product of limbs (i, j) is exact in 34 bits:
 //   a_i * b_j = au * bu - 2**16 * (sb * au + sa * bs)
@@ -226,7 +226,7 @@ module fx_mac_serial #(
         // pair is accumulated: the next pair starts a new column, or it is the product's last), the top
         // column's high half into hi. {hi, res} is NA + NB limbs and a product of nc columns lies at its
         // top: VAR_N = 0, nc = NC, the whole of it (p its low P_W bits); VAR_N = 1, whole limbs, p all of
-        // it, top-aligned. One source per flip-flop (a limb store with a limb index was ~80 LUT4)
+        // it, top-aligned. One source per flip-flop (a limb store with a limb index would put a multiplexer before each)
         localparam integer RL = NC;                              // limbs of res
         reg  [LIMB*RL-1:0] res;
         reg  [LIMB-1:0]    hi;

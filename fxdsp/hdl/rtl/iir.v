@@ -27,9 +27,8 @@
 //     7 N + 9:             fit(r) and its flag (fx_fit, OVERFLOW), error sum - (r << OUT_SHIFT)
 //     7 N + 10:            state update (e = 0 after an overflow); the output is the next
 //                          section's v; after the last section out_valid is high with y and ovf
-//   Cycles per sample: SECTIONS * (7 N + 10) + 1, e.g. 53 at the default config (24-bit data,
-//   35-bit coefficients, OUT_SHIFT 37: N = 3 * 2); 416 cycles (96 kS/s at 40 MHz) hold 7 such
-//   sections. Latency: SECTIONS * (7 N + 10) cycles from the accepting edge to out_valid.
+//   Cycles per sample: SECTIONS * (7 N + 10) + 1 (416 cycles, 96 kS/s at 40 MHz, hold
+//   floor(415 / (7 N + 10)) sections). Latency: SECTIONS * (7 N + 10) cycles from the accepting edge to out_valid.
 //   CHANNELS (ARCH = 1 only, default 1): CHANNELS independent signals through the one engine, the
 //   same coefficients for each, a state per (channel, section). x, y are CHANNELS * DATA_W bits
 //   (channel c in bits [c DATA_W +: DATA_W]), ovf CHANNELS * SECTIONS bits, channel-major (channel
@@ -490,8 +489,8 @@ module iir #(
 
             // a channel's output slice loads in the S_UPD of its last section: the enable registered in
             // S_FIT (ch and sec hold from there to S_UPD), so each slice's clock enable is a flip-flop, not
-            // a decode of the state (that decode's fan-out to the 3 x 24 enables was paper 002's slowest
-            // placed path, 37 MHz: 6.9 ns of logic, 20 ns of routing)
+            // a decode of the state (whose fan-out to every channel's enables would be a chain's slowest
+            // placed path, mostly routing)
             reg [CHANNELS-1:0] y_ld;
             integer i;
             always @(posedge clk) begin
@@ -567,7 +566,7 @@ module iir #(
             assign f_mac_in_flight = (st == S_MAC) ? k - rk : 3'd0;
             // invariants of every state reachable from rst (proven with the rest, fxdsp.hdl.formal):
             // stated so that an induction proof starts only from states a reset can reach (from an
-            // idle state with rk = 7 the seventh product was never counted and the FSM waited forever)
+            // idle state with rk = 7 the seventh product would never be counted and the FSM would wait forever)
             always @* begin
                 if (!rst) begin
                     fsm_state_is_one_of_seven: assert(st <= S_UPD);

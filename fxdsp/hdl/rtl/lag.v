@@ -37,8 +37,7 @@
 //     N + 9:   round(st >> GUARD) registered (fx_round, ROUNDING)
 //     N + 10:  te = fit(...) and its flag registered (fx_fit, OVERFLOW); out_valid high, in_ready
 //              high again
-//   Cycles per sample: N + 11 for an update (17 at the default config: d 44 bits x alpha 17 bits,
-//   N = 3 * 2), 1 for a held sample (DECIM > 1). Latency: N + 10 cycles (update), 1 (held).
+//   Cycles per sample: N + 11 for an update, 1 for a held sample (DECIM > 1). Latency: N + 10 cycles (update), 1 (held).
 `default_nettype none
 
 module lag #(

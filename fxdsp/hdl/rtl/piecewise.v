@@ -360,7 +360,7 @@ module piecewise #(
 
         // Horner sum and its rounding, one alignment per power (selected by k): the aligned product is
         // registered first, so the sum is one adder from registers (not one per power behind a
-        // multiplexer: that was the 39 MHz path of a third-order engine)
+        // multiplexer, which would be the critical path of a third-order engine)
         wire signed [SWM-1:0] pe = {{(SWM-ACC_W){p_q[ACC_W-1]}}, p_q};
         // c[seg][k] << COEF_ALIGN[k]: the word as read (coef_q holds c[seg][k] from the ROM read after
         // the address moved to it until the next power's, long past S_SUM)

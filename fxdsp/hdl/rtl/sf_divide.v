@@ -16,7 +16,7 @@
 //   sample may be accepted in the cycle out_valid is high (one sample per latency cycles).
 // The sign: the quotient bits enter nq XORed with neg, so nq holds q, or ~q for a negative
 //   result, and q_s = sign * q = {neg, nq} + neg: the + neg is the rounding adder's carry in
-//   (fx_round cin), so no negation adder of its own (it was ~79 LUT4 of the paper 002 chain).
+//   (fx_round cin), so the divider needs no negation adder of its own.
 // ARCH = 1: the same bits, the output path pipelined for 40 MHz on an iCE40UP5K (in ARCH = 0 the
 //   last division step, the rounding adder and the fit are one path): after the last step
 //   (nq and neg hold), two cycles of delay (the schedule of the earlier two-stage negation), then
