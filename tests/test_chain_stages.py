@@ -1,4 +1,4 @@
-"""The optional stages of chain_paper002 in the model (issue 14, item 2): absent = today's chain,
+"""The optional stages of chain_paper002 in the model: absent = today's chain,
 byte for byte; the lag between the RTD readout and the coefficient engines; the phase trim of the
 NCO reference, which rotates quadrature into rate (and, with a known pick-off phase error, removes
 it); float reference and budget hybrid extended the same way. The RTL side is

@@ -1,4 +1,4 @@
-"""The one description of each datapath, the instance table and the state contract (issue 10).
+"""The one description of each datapath, the instance table and the state contract.
 
 * every model is pure: ``run`` and ``reference`` twice on the same input give the same output,
   and a stream cut anywhere and continued with the returned state equals one whole run;

@@ -1,4 +1,4 @@
-"""`fxdsp extend` end to end (issue 14): a log in; the extended config, its golden vectors, Verilog
+"""`fxdsp extend` end to end: a log in; the extended config, its golden vectors, Verilog
 headers, a cocotb regression on that config and a report out. The simulated logs come from
 `fxdsp simulate` with one injected cause each (a thermal lag, a quadrature leak, both); the real
 one is the tckit 1 V transfer log. Each report's held-out gain and bit-exact status are asserted,

@@ -1,4 +1,4 @@
-"""`fxdsp extend` on a chain the project never declared (issue 28, item 4): the calibration follows
+"""`fxdsp extend` on a chain the project never declared: the calibration follows
 the chain's sensor and writes the chain's own tables, and the remedies edit its netlist.
 
 Each user config is the built-in one plus copies of block tables under new names, wired into a new

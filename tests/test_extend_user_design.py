@@ -1,4 +1,4 @@
-"""`fxdsp extend` keeps the user's design (issue 27, part 3).
+"""`fxdsp extend` keeps the user's design.
 
 * The extended config equals ``--config`` but for the calibrated coefficients and the remedies'
   keys (``fxdsp.extend.design.calibrated_keys`` / ``remedy_keys``), leaf by leaf as parsed TOML: an

@@ -1,4 +1,4 @@
-"""The library API (issue 27, parts 4 and 5): ``import fxdsp`` is cheap and exposes build, load_config,
+"""The library API: ``import fxdsp`` is cheap and exposes build, load_config,
 quantize/to_real and the blocks, each documented; real values and stored integers are never mixed
 silently; an unknown input is named with the nearest port; the log format ships with the package."""
 

@@ -1,4 +1,4 @@
-"""Chains declared in the config (issue 28, item 1): any valid netlist of the blocks is a model; every
+"""Chains declared in the config: any valid netlist of the blocks is a model; every
 wiring error names the chain, the wire and the field. The bad netlists are generated from the
 shipped chains' own lines (every wire removed, repeated, misnamed, looped), not listed by hand."""
 

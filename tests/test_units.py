@@ -1,4 +1,4 @@
-"""Physical units follow the wires (issue 28: no hand list of units). The expected units are the
+"""Physical units follow the wires (no hand list of units). The expected units are the
 papers' (a rate in deg/h, an acceleration in mg, a temperature in C), and the mismatches are
 generated from the shipped chains: every subtraction's bias rewired from every output of the chain
 in another unit must be refused, naming the chain and both wires."""

@@ -1,4 +1,4 @@
-"""The optional stages of chain_paper002 on the RTL (issue 14, item 2): the lag between the RTD
+"""The optional stages of chain_paper002 on the RTL: the lag between the RTD
 readout and the coefficient engines (the lag inserted into ``[chain.paper002]``, a member of its generated top) and the
 phase trim of the NCO reference (``[demod] phase_trim_rad`` -> demod's PHASE_TRIM), each alone and
 together. Golden vectors of each extended config are made here from the model (not committed) and

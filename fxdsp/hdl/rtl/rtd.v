@@ -24,8 +24,8 @@
 //     N + 8:   r = round(exact) registered (fx_round, ROUNDING)
 //     N + 9:   temp = fit(r) and its flag registered (fx_fit, OVERFLOW), out_valid high;
 //              in_ready high again from the next cycle
-//   Cycles per sample: N + 10, far inside the 416 cycles of a 96 kS/s sample at 40 MHz. Latency: N + 9 cycles
-//   from the accepting edge to out_valid.
+//   Cycles per sample: N + 10, far inside the 416 cycles of a 96 kS/s sample at 40 MHz.
+//   Latency: N + 9 cycles from the accepting edge to out_valid.
 //   EXT_MAC = 1: no multiplier here; the product goes out on the mac_* bundle (fx_mac_port) to a
 //   multiplier shared with other blocks (chain_paper002's), the schedule unchanged.
 `default_nettype none
