@@ -19,6 +19,7 @@ import importlib
 import sys
 import tomllib
 import traceback
+import warnings
 from collections.abc import Iterable
 
 from fxdsp.errors import InputError
@@ -97,6 +98,10 @@ def _main(argv: list[str] | None) -> int:
     # the command is the first argument (fxdsp has no options of its own but --help): load only it
     parser = build_parser(load=argv[:1] if argv and argv[0] in COMMANDS else ())
     args = parser.parse_args(argv)  # bad flags: one line and exit 2 (_Parser.error)
+    # numpy's overflow / invalid-value warnings would add lines to the one an error gives: a result
+    # that overflowed is refused where it is written (fxdsp.outputs.non_finite_value), naming it
+    warnings.filterwarnings("ignore", message="(overflow|invalid value|divide by zero) encountered",
+                            category=RuntimeWarning)
     if not getattr(args, "command", None):
         parser.print_help()
         return 2

@@ -26,8 +26,10 @@ import codecs
 import json
 import math
 import os
+import re
 import shutil
 import tempfile
+import tomllib
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -179,6 +181,55 @@ def json_text(data, what: str, **kw) -> str:
         raise InputError(f"{what}: the result holds a non-finite number (nan or inf); nothing written") from None
 
 
+_NON_FINITE = re.compile(r"^[-+]?(nan|inf|infinity)$", re.I)
+
+
+def non_finite_value(path: Path) -> str | None:
+    """Where a file that readers parse as numbers holds a non-finite one (the column and row of a CSV,
+    the key of a JSON or TOML file), None when it holds none or is of another kind. Every output goes
+    through :meth:`Stage.commit`, which refuses such a file: no command writes ``nan`` or ``inf`` text
+    into a CSV, JSON or TOML output, whichever writer made it."""
+    suffix = path.suffix.lower()
+    if suffix not in (".csv", ".json", ".toml"):
+        return None
+    text = path.read_text(encoding="utf-8", errors="replace")
+    if suffix == ".csv":
+        header = None
+        for n, line in enumerate(text.splitlines(), 1):
+            if not line.strip() or line.startswith("#"):
+                continue
+            cells = [c.strip() for c in line.split(",")]
+            if header is None:
+                header = cells
+                continue
+            for k, cell in enumerate(cells):
+                if _NON_FINITE.match(cell):
+                    return f"column {header[k] if k < len(header) else k + 1!r} at line {n}"
+        return None
+    if suffix == ".json":
+        try:
+            data = json.loads(text, parse_constant=lambda c: float("nan"))
+        except ValueError:
+            return None
+    else:
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError:
+            return None
+    return _non_finite_in(data, "")
+
+
+def _non_finite_in(data, key: str) -> str | None:
+    if isinstance(data, float) and not math.isfinite(data):
+        return f"key {key or '(the value)'!r}"
+    items = data.items() if isinstance(data, dict) else enumerate(data) if isinstance(data, list) else ()
+    for k, v in items:
+        found = _non_finite_in(v, f"{key}.{k}" if key else str(k))
+        if found:
+            return found
+    return None
+
+
 def write_tree(folder: Path, tree: dict[str, dict[str, str]], encoding: str = "ascii") -> None:
     """``{subfolder: {relative path: text}}`` written under ``folder`` (a staged folder: see
     :class:`Stage`), the folders made as needed."""
@@ -233,6 +284,10 @@ class Stage:
         moves = list(self._moves)
         for staged, final in self._trees:
             moves += [(f, final / f.relative_to(staged)) for f in sorted(staged.rglob("*")) if not f.is_dir()]
+        for staged, final in moves:   # before any move: a refused file leaves every target as it was
+            where = non_finite_value(staged)
+            if where:
+                raise InputError(f"{final}: {where} is not a finite number (nan or inf); nothing written")
         with interrupts_held():
             for staged, final in moves:
                 final.parent.mkdir(parents=True, exist_ok=True)

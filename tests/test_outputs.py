@@ -13,6 +13,7 @@ import os
 import signal
 import subprocess
 import sys
+import re
 import time
 from pathlib import Path
 from unittest import mock
@@ -23,6 +24,7 @@ from hypothesis import strategies as st
 
 from conftest import failing_writes, run_cli
 from fxdsp.cli import COMMANDS, main
+from fxdsp.errors import InputError
 from fxdsp.outputs import DIRECT_ENV
 from fxdsp.sim import generate_log, write_log
 
@@ -427,3 +429,51 @@ def test_an_input_that_is_not_text_is_named_by_every_input_option(tmp_path, monk
             assert main(argv) == 2, argv
             err = one_line_error(capsys)
             assert option in err and str(path) in err and what in err, (argv, err)
+
+
+# -- non-finite numbers are never written ------------------------------------------------------------
+NON_FINITE_FILES = {
+    "log.csv": ("# a comment\ntime_s,temp_c,output\n0,25,1.5\n10,25.1,{v}\n", "column 'output' at line 4"),
+    "report.json": ('{{"gain": {{"ratio": {v}}}, "rows": 3}}\n', "key 'gain.ratio'"),
+    "cal.toml": ("[piecewise.sf]\ncoefficients = [[1.0, {v}]]\n", "key 'piecewise.sf.coefficients.0.1'"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(NON_FINITE_FILES))
+@pytest.mark.parametrize("token", ["nan", "inf", "-inf", "NaN", "Infinity", "-Infinity"])
+def test_a_non_finite_number_in_a_numeric_output_is_refused_and_nothing_moves(tmp_path, name, token):
+    from fxdsp.outputs import staged
+
+    template, where = NON_FINITE_FILES[name]
+    if name.endswith(".json") and token.lower() in ("inf", "-inf", "nan") and token != "NaN":
+        token = {"inf": "Infinity", "-inf": "-Infinity", "nan": "NaN"}[token]   # JSON's spellings
+    if name.endswith(".toml"):
+        token = token.lower().replace("infinity", "inf")                       # TOML's spellings
+    target, other = tmp_path / name, tmp_path / "other.txt"
+    target.write_text("previous\n")
+    with pytest.raises(InputError, match=f"{re.escape(str(target))}: {re.escape(where)} is not a finite number"):
+        with staged() as stage:
+            stage.write_text(other, "a file written beside it\n")
+            stage.write_text(target, template.format(v=token))
+    assert target.read_text() == "previous\n" and not other.exists()
+
+
+@pytest.mark.parametrize("name", sorted(NON_FINITE_FILES))
+def test_finite_numbers_and_words_that_only_look_alike_pass(tmp_path, name):
+    from fxdsp.outputs import staged
+
+    template, _ = NON_FINITE_FILES[name]
+    with staged() as stage:
+        stage.write_text(tmp_path / name, template.format(v="1e300"))
+        stage.write_text(tmp_path / "notes.md", "| ratio | nan |\n")   # Markdown is read, not parsed
+    assert (tmp_path / name).exists()
+
+
+def test_a_simulation_that_overflows_is_one_line_and_no_log(tmp_path, capsys):
+    out = tmp_path / "run.csv"
+    code = main(["simulate", "--scenario", "paper002", "--effect", "warmup.a=1e308", "--effect", "warmup.tau_s=1",
+                 "--effect", "aging_drift=1e308", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and not out.exists()
+    assert err.strip().splitlines() == [f"fxdsp simulate: error: {out}: column 'output' at line 7 is not a finite "
+                                        "number (nan or inf); nothing written"]
