@@ -58,9 +58,14 @@ INPUTS = [InputError("--frob: bad"), InputTypeError("rtd.r0: expected a number")
           FileNotFoundError(2, "No such file or directory", "missing.csv")]
 
 
+CASES = [(exc, "bug") for exc in BUGS] + [(exc, "input") for exc in INPUTS]
+
+
 @pytest.mark.parametrize("command", COMMANDS)
-@pytest.mark.parametrize("exc", BUGS, ids=lambda e: type(e).__name__)
-def test_every_command_reports_any_other_exception_as_a_bug(monkeypatch, capsys, command, exc):
+@pytest.mark.parametrize("exc, kind", CASES, ids=[type(e).__name__ for e, _ in CASES])
+def test_every_command_tells_a_bug_from_bad_input(monkeypatch, capsys, command, exc, kind):
+    """Any other exception raised by a command: its traceback and the bug status; bad input: one
+    line naming it and exit 2."""
     module = importlib.import_module(cli.COMMANDS[command][0])
 
     def run(args):
@@ -69,24 +74,13 @@ def test_every_command_reports_any_other_exception_as_a_bug(monkeypatch, capsys,
     monkeypatch.setattr(module, "run", run)
     monkeypatch.setattr(module, "PATHS", {}, raising=False)
     code, err = _run([command, *_required(command)], capsys)
-    assert code == cli.BUG, err
-    assert "Traceback (most recent call last)" in err and type(exc).__name__ in err
-
-
-@pytest.mark.parametrize("command", COMMANDS)
-@pytest.mark.parametrize("exc", INPUTS, ids=lambda e: type(e).__name__)
-def test_every_command_reports_bad_input_in_one_line(monkeypatch, capsys, command, exc):
-    module = importlib.import_module(cli.COMMANDS[command][0])
-
-    def run(args):
-        raise exc
-
-    monkeypatch.setattr(module, "run", run)
-    monkeypatch.setattr(module, "PATHS", {}, raising=False)
-    code, err = _run([command, *_required(command)], capsys)
-    assert code == 2, err
-    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
-    assert err.startswith(f"fxdsp {command}: error: ")
+    if kind == "bug":
+        assert code == cli.BUG, err
+        assert "Traceback (most recent call last)" in err and type(exc).__name__ in err
+    else:
+        assert code == 2, err
+        assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+        assert err.startswith(f"fxdsp {command}: error: ")
 
 
 def _required(command: str) -> list[str]:
