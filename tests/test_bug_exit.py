@@ -108,3 +108,14 @@ def _least(parser) -> list[str]:
         elif action.nargs not in ("?", "*"):
             argv += [value] * (action.nargs if isinstance(action.nargs, int) else 1)
     return argv
+
+
+@pytest.mark.parametrize("argv", [["diagnose-hidden", "--per-cause", "1"], ["sweep", "hidden", "--per-cause", "1"]])
+@pytest.mark.parametrize("snr", [("nan", "10"), ("inf", "10"), ("1e400", "10"), ("0", "10"), (" -1", "10"), ("5", "inf"),
+                                 ("10", "5")])
+def test_an_snr_range_that_sizes_nothing_is_bad_input(tmp_path, capsys, argv, snr):
+    """Found by a probe of the numeric options: a non-finite SNR reached numpy's draw (a traceback
+    once bugs were told apart) and an SNR <= 0 drew causes too small to be in the log they label."""
+    out = ["--out", str(tmp_path / "sweep")] if argv[0] == "sweep" else []
+    code, err = _run([*argv, *out, "--snr", *snr], capsys)   # " -1": a negative value argparse takes
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "--snr: need finite 0 < LO <= HI" in err, err

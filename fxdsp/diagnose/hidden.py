@@ -37,6 +37,7 @@ confusion matrix.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -249,6 +250,15 @@ def tally(per_cause: int, causes, outcomes, seconds: float = 0.0) -> Confusion:
     return Confusion(per_cause, causes, matrix, params_ok, gain_ok, extra, failures, seconds)
 
 
+def check_snr_range(snr_range, field: str = "--snr") -> tuple[float, float]:
+    """(LO, HI) of a range of SNRs a case's size is drawn from: finite, 0 < LO <= HI (an SNR of 0 or
+    below would hide a cause in a log labelled with it; a non-finite one sizes nothing)."""
+    lo, hi = (float(x) for x in snr_range)
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
+        raise InputError(f"{field}: need finite 0 < LO <= HI, got {lo} {hi}")
+    return lo, hi
+
+
 def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, snr_range=SNR_RANGE) -> Confusion:
     """Run ``per_cause`` cases per cause and tally what the diagnosis names."""
     unknown = [c for c in causes if c not in ALL_CAUSES]
@@ -256,6 +266,9 @@ def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, snr_ran
         raise InputError(f"causes: unknown cause {unknown[0]!r}; expected some of {', '.join(ALL_CAUSES)}")
     if per_cause < 1:
         raise InputError(f"per_cause: need at least 1 case per cause, got {per_cause}")
+    if first_seed < 0:
+        raise InputError(f"first_seed: must be >= 0, got {first_seed}")
+    snr_range = check_snr_range(snr_range)
     start = time.perf_counter()
     outcomes = []
     for cause in causes:

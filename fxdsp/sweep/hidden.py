@@ -14,7 +14,7 @@ from fxdsp.errors import InputError
 
 
 def settings(per_cause: int, first_seed: int, causes, snr_range) -> dict:
-    from fxdsp.diagnose.hidden import ALL_CAUSES
+    from fxdsp.diagnose.hidden import ALL_CAUSES, check_snr_range
 
     causes = tuple(causes)
     unknown = [c for c in causes if c not in ALL_CAUSES]
@@ -26,9 +26,7 @@ def settings(per_cause: int, first_seed: int, causes, snr_range) -> dict:
         raise InputError(f"--per-cause: need at least 1 case per cause, got {per_cause}")
     if first_seed < 0:
         raise InputError(f"--first-seed: must be >= 0, got {first_seed}")
-    lo, hi = (float(x) for x in snr_range)
-    if not 0 < lo <= hi:
-        raise InputError(f"--snr: need 0 < LO <= HI, got {lo} {hi}")
+    lo, hi = check_snr_range(snr_range)
     return {"per_cause": int(per_cause), "first_seed": int(first_seed), "causes": list(causes), "snr": [lo, hi]}
 
 
