@@ -102,6 +102,7 @@ def _main(argv: list[str] | None) -> int:
     # that overflowed is refused where it is written (fxdsp.outputs.non_finite_value), naming it
     warnings.filterwarnings("ignore", message="(overflow|invalid value|divide by zero) encountered",
                             category=RuntimeWarning)
+    warnings.filterwarnings("ignore", message="The fit may be poorly conditioned")   # numpy's RankWarning
     if not getattr(args, "command", None):
         parser.print_help()
         return 2

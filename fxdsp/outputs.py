@@ -178,7 +178,8 @@ def json_text(data, what: str, **kw) -> str:
     try:
         return json.dumps(data, allow_nan=False, **kw) + "\n"
     except ValueError:
-        raise InputError(f"{what}: the result holds a non-finite number (nan or inf); nothing written") from None
+        where = _non_finite_in(data, "") or "a value"
+        raise InputError(f"{what}: {where} of the result is not a finite number (nan or inf); nothing written") from None
 
 
 _NON_FINITE = re.compile(r"^[-+]?(nan|inf|infinity)$", re.I)

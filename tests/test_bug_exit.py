@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -119,3 +120,34 @@ def test_an_snr_range_that_sizes_nothing_is_bad_input(tmp_path, capsys, argv, sn
     out = ["--out", str(tmp_path / "sweep")] if argv[0] == "sweep" else []
     code, err = _run([*argv, *out, "--snr", *snr], capsys)   # " -1": a negative value argparse takes
     assert code == 2 and len(err.strip().splitlines()) == 1 and "--snr: need finite 0 < LO <= HI" in err, err
+
+
+# -- found by probing the log commands with degenerate logs ------------------------------------------
+@pytest.fixture(scope="module")
+def nanosecond_log(tmp_path_factory) -> Path:
+    """A chamber run whose time stamps are 1 ns apart: every window of the calibrations is longer
+    than the log (a plateau search once asked scipy for a filter of 10^12 samples: MemoryError)."""
+    from fxdsp.sim import generate_log, write_log
+
+    log = generate_log("paper002", {}, seed=3, duration_scale=0.2)
+    log["time_s"] = np.arange(log["time_s"].size) * 1e-9
+    path = tmp_path_factory.mktemp("ns") / "ns.csv"
+    write_log(path, log)
+    return path
+
+
+@pytest.mark.parametrize("argv", [["calibrate", "--paper", "002"], ["calibrate", "--paper", "001"],
+                                  ["extend", "--no-rtl", "--out", "{tmp}/ext"]])
+def test_a_log_shorter_than_every_calibration_window_is_one_line(nanosecond_log, tmp_path, capsys, argv):
+    argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    code, err = _run([argv[0], str(nanosecond_log), *argv[1:]], capsys)
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1 and err.startswith(f"fxdsp {argv[0]}: error: log: "), err
+
+
+def test_a_non_finite_result_names_its_key():
+    from fxdsp.outputs import json_text
+
+    with pytest.raises(InputError, match=r"diagnose report: key 'candidates\.1\.ratio' of the result is not a "
+                                         r"finite number"):
+        json_text({"candidates": [{"ratio": 1.0}, {"ratio": float("inf")}]}, "diagnose report")

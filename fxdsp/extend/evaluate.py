@@ -101,6 +101,9 @@ def gyro_rtd_variants(columns: dict, remedies, design, roles) -> dict:
     design = _design(design)
     stages = {r.stage for r in remedies}
     held = heldout_rows_rate_table(columns)
+    if not held.any():
+        raise InputError("log: every row lies in a rate-table window the calibration reads: no held-out row to "
+                         "measure the compensated error on")
     # the remedies' own words (trim word, lag word lengths) do not depend on the calibration
     words = remedy_tables(remedies, roles, design, design.fitting())
     probe = Compensator002(config_from_text(config_text(words, design.text, add_missing=True)), roles.instance)

@@ -42,6 +42,8 @@ def find_plateaus(time_s, temp_c, window_s: float = 1200.0, tol_c: float = 0.15,
         return []
     dt = sample_interval(t)
     n = max(int(round(window_s / dt)), 1)
+    if n >= t.size:   # the window reaches past the log's start at every sample: nothing is settled
+        return []
     # trailing window [i - n, i]: a centred filter of size n+1 shifted by n/2
     shift = n // 2
     hi = maximum_filter1d(temp, size=n + 1, origin=shift, mode="nearest")
