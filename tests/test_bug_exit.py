@@ -151,3 +151,19 @@ def test_a_non_finite_result_names_its_key():
     with pytest.raises(InputError, match=r"diagnose report: key 'candidates\.1\.ratio' of the result is not a "
                                          r"finite number"):
         json_text({"candidates": [{"ratio": 1.0}, {"ratio": float("inf")}]}, "diagnose report")
+
+
+def test_a_log_whose_thermometer_is_flat_is_diagnosed(tmp_path, capsys):
+    """An isothermal run (temp_c constant, its reference varying) once gave an infinite held-out
+    ratio for the RTD curvature: nothing before and nothing after is no gain, not an infinite one."""
+    import json
+
+    from fxdsp.sim import generate_log, write_log
+
+    log = generate_log("paper002", {}, seed=5, duration_scale=0.2)
+    log["temp_c"] = np.full_like(log["temp_c"], 25.0)
+    write_log(tmp_path / "flat.csv", log)
+    code, err = _run(["diagnose", str(tmp_path / "flat.csv"), "--json", str(tmp_path / "r.json")], capsys)
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert all(np.isfinite(c["ratio"]) for c in report["candidates"] if "ratio" in c)

@@ -123,7 +123,8 @@ def evaluate(ctx: Context, state: dict, cause: str, base_held: dict) -> Candidat
         sd = ctx.norm[ch][1]
         rms_b = np.sqrt(b / w / ctx.series.n) * sd
         rms_a = np.sqrt(a / w / ctx.series.n) * sd
-        ratios[ch] = rms_b / rms_a if rms_a > 0 else np.inf
+        # a channel with nothing left before or after (a flat temp_c against its reference) gains nothing
+        ratios[ch] = rms_b / rms_a if rms_a > 0 else (1.0 if rms_b == 0 else np.inf)
         before_after[ch] = (rms_b, rms_a)
     main = max(channels, key=lambda ch: ratios[ch])
     own = CAUSES[cause].channel

@@ -54,7 +54,7 @@ def channel_gain(ctx: Context, state: dict, channel: str) -> dict:
     b = np.sqrt(before.folds()[1].sum() / before.weight / n) * sd
     a = np.sqrt(after.folds()[1].sum() / after.weight / n) * sd
     return {"channel": channel, "rms_before": float(b), "rms_after": float(a),
-            "ratio": float(b / a) if a > 0 else float("inf"), "heldout": True}
+            "ratio": float(b / a) if a > 0 else (1.0 if b == 0 else float("inf")), "heldout": True}
 
 
 def heldout_residuals(ctx: Context, state: dict, channel: str) -> np.ndarray:
