@@ -55,6 +55,15 @@ def parse_mapping(items: list[str] | None) -> dict[str, str]:
     return mapping
 
 
+def _unparsed_hint(target: str, cell: str) -> str:
+    """The likely reason a column holds no number (a date-time stamp, a decimal comma)."""
+    if target == "time_s" and re.search(r"\d[-/.:T ]\d", cell):
+        return ": date-time stamps need --time-format (e.g. '%Y-%m-%d %H:%M:%S')"
+    if re.fullmatch(r"[-+]?\d+,\d+", cell):
+        return ": a decimal comma (the reader takes a decimal point)"
+    return ""
+
+
 def _to_float(name: str, cells: list[str]) -> np.ndarray:
     """Vectorised string -> float; unparseable cells become NaN (they are then dropped and counted)."""
     try:
@@ -190,6 +199,7 @@ def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
 
     columns: dict[str, np.ndarray] = {}
     time_cells = None
+    unparsed: dict[str, str] = {}   # a column with no number at all -> its first non-empty cell
     numeric = {t: s for t, s in sources.items() if not (t == "time_s" and time_format)}
     fast = _fast_numeric(body, delimiter, [index[s] for s in numeric.values()])
     if fast is not None and not (time_format and "time_s" in sources):
@@ -209,6 +219,8 @@ def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
                 columns[target] = fast[:, list(numeric).index(target)].copy()
             else:
                 columns[target] = _to_float(source, cells)
+                if not np.any(np.isfinite(columns[target])):
+                    unparsed[target] = next((c for c in cells if c), "")
 
     notes: list[str] = []
     # an optional column with no usable value at all is an absent column, not a reason to drop every row
@@ -232,6 +244,10 @@ def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
         columns["time_s"] = time
     used = int(good.sum())
     if used == 0:
+        for target, cell in unparsed.items():   # a column that is not numbers at all: say which, and why
+            if cell and target in columns:
+                raise InputError(f"{path}: column {sources[target]!r} (mapped to {target}) holds no number, e.g. "
+                                 f"{cell!r}{_unparsed_hint(target, cell)}")
         raise InputError(f"{path}: no usable rows (all {n} rows hold non-finite or sentinel values)")
     columns = {k: np.ascontiguousarray(v[good]) for k, v in columns.items()}
     time = columns["time_s"]

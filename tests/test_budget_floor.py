@@ -16,7 +16,7 @@ import pytest
 
 from conftest import coarse_subtract, design_with
 from fxdsp.budget.attribution import SourceResult, attribute
-from fxdsp.commands.budget import format_floor
+from fxdsp.budget.report import format_floor
 from fxdsp.budget.floor import allan_chain, allan_figures, drive_band, drive_sweep, floor_of
 from fxdsp.budget.hybrid import Source
 from fxdsp.budget.static import static_error

@@ -167,3 +167,19 @@ def test_a_log_whose_thermometer_is_flat_is_diagnosed(tmp_path, capsys):
     assert code == 0, err
     report = json.loads((tmp_path / "r.json").read_text())
     assert all(np.isfinite(c["ratio"]) for c in report["candidates"] if "ratio" in c)
+
+
+@pytest.mark.parametrize("text, argv, said", [
+    ("stamp,box,out\n" + "".join(f"2024-01-01 00:00:{s:02d},{25 + s / 100},{s}\n" for s in range(60)),
+     ["--map", "time_s=stamp", "--map", "temp_c=box", "--map", "output=out"],
+     "column 'stamp' (mapped to time_s) holds no number, e.g. '2024-01-01 00:00:00': date-time stamps need "
+     "--time-format"),
+    ("t;box;out\n" + "".join(f"{10 * s};25,{s:02d};{s}\n" for s in range(60)),
+     ["--delimiter", ";", "--map", "time_s=t", "--map", "temp_c=box", "--map", "output=out"],
+     "column 'box' (mapped to temp_c) holds no number, e.g. '25,00': a decimal comma"),
+])
+def test_a_column_of_no_numbers_is_named_with_its_likely_reason(tmp_path, capsys, text, argv, said):
+    """Found by probing foreign logs: both once said only 'no usable rows'."""
+    (tmp_path / "log.csv").write_text(text)
+    code, err = _run(["diagnose", str(tmp_path / "log.csv"), *argv], capsys)
+    assert code == 2 and said in err and len(err.strip().splitlines()) == 1, err
