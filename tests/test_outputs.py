@@ -477,3 +477,48 @@ def test_a_simulation_that_overflows_is_one_line_and_no_log(tmp_path, capsys):
     assert code == 2 and not out.exists()
     assert err.strip().splitlines() == [f"fxdsp simulate: error: {out}: column 'output' at line 7 is not a finite "
                                         "number (nan or inf); nothing written"]
+
+
+# -- a folder output owns only its files --------------------------------------------------------------
+# Every deletion the package makes outside fxdsp/outputs.py (whose Stage removes only the files a set's
+# own manifest listed), each reviewed: it deletes only a folder the code itself named and made.
+DELETIONS = {
+    # the Verilator model cache: an incomplete model or run-time folder named by its content digest
+    "fxdsp/hdl/simulators.py": 4,
+    # `fxdsp rtl`'s per-stream work folder <dut>_<stream>, inside the run's own work folder
+    "fxdsp/hdl/regression.py": 1,
+    # `sweep rtl`: a shard's own folder shard_NNNN/<block> under --build-dir, or its temporary root
+    "fxdsp/sweep/rtl.py": 2,
+}
+_DELETE = re.compile(r"rmtree\(|\.unlink\(|os\.remove\(|os\.unlink\(|\.rmdir\(")
+
+
+def test_no_module_deletes_a_file_it_did_not_name_and_make():
+    """A new deletion anywhere in the package fails here until it is reviewed and listed: a command
+    writing into a folder must never remove a file it did not write (a user's file beside its outputs)."""
+    package = REPO / "fxdsp"
+    found = {}
+    for path in sorted(package.rglob("*.py")):
+        rel = str(path.relative_to(REPO))
+        if rel == "fxdsp/outputs.py":
+            continue
+        n = len(_DELETE.findall(path.read_text(encoding="utf-8")))
+        if n:
+            found[rel] = n
+    assert found == DELETIONS
+
+
+def test_a_folder_output_keeps_a_users_file_and_replaces_its_own(tmp_path):
+    from fxdsp.outputs import staged
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "mine.txt").write_text("the user's\n")
+    (out / "report.md").write_text("an old report\n")
+    with staged() as stage:
+        folder = stage.dir(out)
+        (folder / "report.md").write_text("the new report\n")
+        (folder / "plots").mkdir()
+        (folder / "plots" / "a.png").write_bytes(b"png")
+    assert (out / "mine.txt").read_text() == "the user's\n"
+    assert (out / "report.md").read_text() == "the new report\n" and (out / "plots" / "a.png").exists()
