@@ -70,7 +70,3 @@ def test_a_record_the_simulator_or_the_fit_would_ignore_is_refused(fault, messag
     broken = replace(causes.CAUSES["aging_drift"], name="made_up", **fault)
     with pytest.raises(AssertionError, match=message):
         causes.check_records([*causes.CAUSES.values(), broken])
-
-
-def test_the_registry_passes_its_own_check():
-    causes.check_records(causes.CAUSES.values())

@@ -8,7 +8,7 @@ from scipy.optimize import minimize_scalar
 
 from fxdsp.causes import CAUSES
 from fxdsp.diagnose.blockfit import jackknife_sd, parabolic_argmin
-from fxdsp.diagnose.context import MIN_GAIN, Candidate, Context
+from fxdsp.diagnose.context import MIN_GAIN, Candidate, Context, gain_ratio
 from fxdsp.diagnose.identify import judge
 from fxdsp.ramps import sample_interval
 
@@ -123,8 +123,7 @@ def evaluate(ctx: Context, state: dict, cause: str, base_held: dict) -> Candidat
         sd = ctx.norm[ch][1]
         rms_b = np.sqrt(b / w / ctx.series.n) * sd
         rms_a = np.sqrt(a / w / ctx.series.n) * sd
-        # a channel with nothing left before or after (a flat temp_c against its reference) gains nothing
-        ratios[ch] = rms_b / rms_a if rms_a > 0 else (1.0 if rms_b == 0 else np.inf)
+        ratios[ch] = gain_ratio(rms_b, rms_a)
         before_after[ch] = (rms_b, rms_a)
     main = max(channels, key=lambda ch: ratios[ch])
     own = CAUSES[cause].channel

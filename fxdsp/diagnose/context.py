@@ -114,6 +114,13 @@ class Context:
 
 
 # -- calibration of the baseline -----------------------------------------------------------------
+def gain_ratio(rms_before: float, rms_after: float) -> float:
+    """Held-out rms before / after; nothing left before or after (a flat channel) is no gain, 1."""
+    if rms_after > 0:
+        return rms_before / rms_after
+    return 1.0 if rms_before == 0 else float("inf")
+
+
 def choose_orders(ctx: Context, state: dict) -> tuple[int, int | None]:
     """Orders of B and S with the least held-out error, with the causes of ``state`` in place
     (calibration, not discovery: an unexplained drift can make a cubic look useless)."""

@@ -8,7 +8,7 @@ import numpy as np
 from fxdsp import mechanisms as mech
 from fxdsp.causes import CAUSES
 from fxdsp.diagnose.blockfit import SegmentNormals, jackknife_sd
-from fxdsp.diagnose.context import Context
+from fxdsp.diagnose.context import Context, gain_ratio
 
 def linear_parameters(ctx: Context, state: dict):
     """Linear parameters of every cause in ``state`` (contract units) and their jackknife sds."""
@@ -54,7 +54,7 @@ def channel_gain(ctx: Context, state: dict, channel: str) -> dict:
     b = np.sqrt(before.folds()[1].sum() / before.weight / n) * sd
     a = np.sqrt(after.folds()[1].sum() / after.weight / n) * sd
     return {"channel": channel, "rms_before": float(b), "rms_after": float(a),
-            "ratio": float(b / a) if a > 0 else (1.0 if b == 0 else float("inf")), "heldout": True}
+            "ratio": float(gain_ratio(b, a)), "heldout": True}
 
 
 def heldout_residuals(ctx: Context, state: dict, channel: str) -> np.ndarray:

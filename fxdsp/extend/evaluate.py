@@ -42,6 +42,15 @@ def heldout_rows_rate_table(columns: dict) -> np.ndarray:
     return held
 
 
+def heldout_error(err: np.ndarray, held: np.ndarray, fitted: str) -> dict:
+    """rms and max |error| on the rows the calibration did not read (``fitted``: what it read); a log
+    whose every row it read has no held-out error to measure: bad input, named."""
+    if not held.any():
+        raise InputError(f"log: every row lies in the calibration's {fitted}: no held-out row to measure the "
+                         "compensated error on")
+    return {"rms": float(np.sqrt(np.mean(err[held] ** 2))), "max_abs": float(np.abs(err[held]).max())}
+
+
 SWITCHABLE = {"lag", "trim", "cvd"}   # stages a variant turns off one at a time
 
 
@@ -101,9 +110,6 @@ def gyro_rtd_variants(columns: dict, remedies, design, roles) -> dict:
     design = _design(design)
     stages = {r.stage for r in remedies}
     held = heldout_rows_rate_table(columns)
-    if not held.any():
-        raise InputError("log: every row lies in a rate-table window the calibration reads: no held-out row to "
-                         "measure the compensated error on")
     # the remedies' own words (trim word, lag word lengths) do not depend on the calibration
     words = remedy_tables(remedies, roles, design, design.fitting())
     probe = Compensator002(config_from_text(config_text(words, design.text, add_missing=True)), roles.instance)
@@ -118,8 +124,7 @@ def gyro_rtd_variants(columns: dict, remedies, design, roles) -> dict:
         # the variant's own RTD table reads the log (the probe's is CVD whenever any variant's is)
         err, n_ovf = compensate002(columns, text, on, tau_of(remedies), theta, roles.instance)
         err = err * float(cal["sf_nominal"])
-        results[name] = {"stages": sorted(on), "rms": float(np.sqrt(np.mean(err[held] ** 2))),
-                         "max_abs": float(np.abs(err[held]).max()), "overflows": n_ovf,
+        results[name] = {"stages": sorted(on), **heldout_error(err, held, "rate-table windows"), "overflows": n_ovf,
                          "sf_nominal_mv_per_dps": float(cal["sf_nominal"])}
         if "cvd" in stages and "ref_temp_c" in columns:
             # the table's own effect, before the compensation's floor: the temperature the engines
@@ -174,8 +179,7 @@ def gyro_freq_variants(columns: dict, remedies, design, roles) -> dict:
     for name, on in _variants(stages).items():
         text, cal, changes[name] = gyro_freq_config(columns, [r for r in remedies if r.stage in on], design, roles)
         err, n_ovf = compensate001(columns, text, roles.instance)
-        results[name] = {"stages": sorted(on), "rms": float(np.sqrt(np.mean(err[held] ** 2))),
-                         "max_abs": float(np.abs(err[held]).max()), "overflows": n_ovf}
+        results[name] = {"stages": sorted(on), **heldout_error(err, held, "temperature plateaus"), "overflows": n_ovf}
         series[name], configs[name], cals[name] = err, text, cal
     return {"unit": "deg/h (output unit)", "heldout": "rows outside the calibration's temperature plateaus",
             "heldout_rows": int(held.sum()), "rows": int(held.size), "variants": results, "_series": series,
