@@ -246,7 +246,8 @@ def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
     if used == 0:
         for target, cell in unparsed.items():   # a column that is not numbers at all: say which, and why
             if cell and target in columns:
-                raise InputError(f"{path}: column {sources[target]!r} (mapped to {target}) holds no number, e.g. "
+                mapped = f" (mapped to {target})" if sources[target] != target else ""
+                raise InputError(f"{path}: column {sources[target]!r}{mapped} holds no number, e.g. "
                                  f"{cell!r}{_unparsed_hint(target, cell)}")
         raise InputError(f"{path}: no usable rows (all {n} rows hold non-finite or sentinel values)")
     columns = {k: np.ascontiguousarray(v[good]) for k, v in columns.items()}
