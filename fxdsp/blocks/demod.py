@@ -113,7 +113,7 @@ def _mix_kernel(x, phase0, ftw, trim, phase_mask, addr_shift, lut_bits, interp_b
     return i_out, q_out, phase
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def cordic_one(x, y, atans, half_pi, iterations):
     """CORDIC vectoring of one (x, y): pre-rotate into the right half plane, then shift-and-add
     (arithmetic right shifts: floor). Returns (K * magnitude, angle) as stored integers."""

@@ -89,7 +89,7 @@ def _clamp(v, lo, hi):
     return v, 0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _pi_update(e, st, k, kp, ki, shift, lo, hi, rnd, counts, c):
     """A PI controller's output ``R((kp e + integ) >> shift)`` limited to lo..hi, with its
     integrator ``st[k] += ki e`` (in output LSBs x 2**shift) held while the output is limited
@@ -109,7 +109,7 @@ def _pi_update(e, st, k, kp, ki, shift, lo, hi, rnd, counts, c):
     return out
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _detect(x, ph, lpf_st, p, qsin, lb, la, lc, counts, lcounts):
     """The phase detector's per-sample part on ADC code ``x`` with the NCO at ``ph``: mixers and
     low-pass; returns the filtered (I, Q)."""
@@ -128,7 +128,7 @@ def _detect(x, ph, lpf_st, p, qsin, lb, la, lc, counts, lcounts):
     return i_lp, q_lp
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _polar(i_lp, q_lp, p, atans, counts):
     """The phase detector's update part: the CORDIC's amplitude and the angle's error against the
     set point, wrapped into (-pi, pi]."""
@@ -223,7 +223,7 @@ def _detector_open(x, lpf_st, p, qsin, atans, lb, la, lc, counts, lcounts):
 FS_PHASE, FS_F, FS_INTEG_F, FS_INTEG_A, FS_GAIN, FS_COUNT, FS_AMP, FS_ERR, FS_LEN = range(9)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _pi_update_float(e, st, k, kp, ki, lo, hi):
     """:func:`_pi_update` in float, without rounding."""
     integ = st[k] + ki * e
@@ -235,7 +235,7 @@ def _pi_update_float(e, st, k, kp, ki, lo, hi):
     return min(max(out, lo), hi)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _detect_float(x, ph, lpf_st, sos):
     """:func:`_detect` in float: exact sin/cos at ``ph`` (turns), the unquantised low-pass
     (``lpf_st``: 2 x sections x 4, x1, x2, y1, y2)."""
@@ -268,7 +268,7 @@ def wrap_rad(e):
     return e
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _polar_float(i_lp, q_lp, p):
     """:func:`_polar` in float: hypot and atan2."""
     return np.hypot(i_lp, q_lp), wrap_rad(np.arctan2(q_lp, i_lp) - p[F_SET])

@@ -48,7 +48,7 @@ DESIGNS = ("butter", "cheby1", "bessel")
 BTYPES = ("lowpass", "highpass")
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def df1_step(v, x1, x2, y1, y2, e1, e2, b0, b1, b2, a1, a2, c1, c2, shift_b, shift_a, out_shift, rounding, lo, hi,
              overflow):
     """One sample of one DF-I section: (output, overflowed, rounding error e fed back next sample;
@@ -87,7 +87,7 @@ def _df1_section(x, b0, b1, b2, a1, a2, c1, c2, shift_b, shift_a, out_shift, rou
     return y, count
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def df1_cascade_step(v, b, a, c, shift_b, shift_a, out_shift, rounding, lo, hi, overflow, state, counts):
     """One sample through the whole cascade, each section's state in its row of ``state`` (the
     same words as :func:`_df1_cascade` over a stream: a section sees its predecessor's outputs)."""

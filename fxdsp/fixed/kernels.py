@@ -2,7 +2,11 @@
 
 Scalar ``@njit`` functions are called from recursive kernels (IIR, NCO, divider loops); the array
 versions below are compiled loops over the same scalars, so array code and recursive code cannot
-disagree. Codes: rounding floor=0, half_up=1, half_even=2, toward_zero=3; overflow wrap=0,
+disagree. Only these few-line scalars are inlined at Numba's IR level (``inline="always"``); the
+composites built on them (a biquad step, a CORDIC, the drive loop's detector and PIs) are plain
+``@njit`` calls that LLVM is free to inline: IR-inlining them too made every cold process compile
+12 s longer (``fxdsp budget``: 29 -> 41 s) and the chains run slower (``fxdsp bench``, chain_paper002:
+18.7 -> 12.4 MS/s). Codes: rounding floor=0, half_up=1, half_even=2, toward_zero=3; overflow wrap=0,
 saturate=1 (see :mod:`fxdsp.fixed.rules`).
 
 Range argument: every stored value is |q| < 2**62 (see format.py), so adding a rounding constant
