@@ -438,6 +438,11 @@ def build(config: Config | str | None = None, chains: bool = True) -> Design:
     output that drives it. ``chains=False`` builds the blocks alone (a stated format is taken as
     given where it disagrees with its wire), for block-level work on formats the chains could not connect."""
     cfg = config if isinstance(config, Config) else load_config(config)
+    with cfg.naming_the_file():
+        return _build(cfg, chains)
+
+
+def _build(cfg: Config, chains: bool) -> Design:
     stim = cfg.section("stimulus")
     system = cfg.section("system")
     fs = system.number("fs_hz", low=0, low_open=True)

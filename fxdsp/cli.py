@@ -6,10 +6,12 @@ others (numba and the blocks); ``fxdsp --help`` lists every command from COMMAND
 any. A module that fails to import is an error (its traceback), never a silently missing command.
 
 Every path option a command declares (its module's ``PATHS``) is checked before the command runs
-(:func:`fxdsp.outputs.check_paths`). Bad input (ValueError, TypeError, an OSError such as a missing
-or unwritable file or a full disk, a malformed TOML, undecodable text) becomes one line on stderr and
-exit status 2; an interrupt (Ctrl-C) one line and 130, with the outputs left as they were (they are
-staged, :mod:`fxdsp.outputs`). Nothing else is caught, so a real bug still shows its traceback.
+(:func:`fxdsp.outputs.check_paths`) and declared for its writes (:mod:`fxdsp.owned`: a folder output
+replaces only the files fxdsp wrote there). Bad input (:class:`~fxdsp.errors.InputError`, an OSError
+such as a missing or unwritable file or a full disk, a malformed TOML, undecodable text) becomes one
+line on stderr and exit status 2; an interrupt (Ctrl-C) one line and 130, with the outputs left as
+they were (they are staged, :mod:`fxdsp.outputs`). Any other exception is a bug: its traceback and
+exit status 70.
 """
 
 from __future__ import annotations
@@ -97,7 +99,10 @@ def _main(argv: list[str] | None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     # the command is the first argument (fxdsp has no options of its own but --help): load only it
     parser = build_parser(load=argv[:1] if argv and argv[0] in COMMANDS else ())
-    args = parser.parse_args(argv)  # bad flags: one line and exit 2 (_Parser.error)
+    try:
+        args = parser.parse_args(argv)  # bad flags and values: one line and exit 2 (_Parser.error)
+    except SystemExit as exc:           # returned, as every other status is (--help: 0)
+        return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
     # numpy's overflow / invalid-value warnings would add lines to the one an error gives: a result
     # that overflowed is refused where it is written (fxdsp.outputs.non_finite_value), naming it
     warnings.filterwarnings("ignore", message="(overflow|invalid value|divide by zero) encountered",
@@ -108,9 +113,10 @@ def _main(argv: list[str] | None) -> int:
         return 2
     try:
         from fxdsp.outputs import check_paths
+        from fxdsp.owned import declaring
 
-        check_paths(args, getattr(args._module, "PATHS", {}))
-        return int(args._module.run(args) or 0)
+        with declaring(check_paths(args, getattr(args._module, "PATHS", {}))):
+            return int(args._module.run(args) or 0)
     except KeyboardInterrupt:
         print(f"fxdsp {args.command}: interrupted; outputs left as they were", file=sys.stderr)
         return 130

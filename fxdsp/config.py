@@ -20,6 +20,7 @@ import functools
 import math
 import re
 import tomllib
+from contextlib import contextmanager
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -111,7 +112,7 @@ class Section:
             raise self._missing(key, "missing")
         return default
 
-    def _missing(self, key: str, what: str) -> ValueError:
+    def _missing(self, key: str, what: str) -> InputError:
         """The error for a required ``key`` (or sub-table) that is absent. When the table holds an
         unknown key (not read, and not one this table may hold) close to it, that key is the typo to
         name; a table the built-in default does not know is not guessed at."""
@@ -120,10 +121,10 @@ class Section:
             unknown = [k for k in self.data if k not in self._read and k not in known]
             typo = [k for k in unknown if nearest(k, [key]) is not None]
             if typo:
-                return ValueError(f"{self.field(typo[0])}: unknown key (did you mean {key!r}?)")
+                return InputError(f"{self.field(typo[0])}: unknown key (did you mean {key!r}?)")
             if unknown:
-                return ValueError(f"{self.field(key)}: {what} (the table has the unknown key {unknown[0]!r})")
-        return ValueError(f"{self.field(key)}: {what}")
+                return InputError(f"{self.field(key)}: {what} (the table has the unknown key {unknown[0]!r})")
+        return InputError(f"{self.field(key)}: {what}")
 
     def format(self, key: str, default: Any = None) -> Format:
         value = self._get(key, _REQUIRED if default is None else default)
@@ -326,6 +327,21 @@ class Config:
         """The source as written into outputs: a file's name without its folder (no absolute path in
         a written file: the same config gives the same bytes wherever it lies), or ``<default>``."""
         return self.source if self.source.startswith("<") else Path(self.source).name
+
+    @contextmanager
+    def naming_the_file(self):
+        """Any InputError raised inside names the config's file first (a user's config read from a
+        file: every fault found in it, by whichever block, chain or generator, says which file)."""
+        try:
+            yield
+        except InputError as exc:
+            if self.source.startswith("<") or self.source in str(exc):
+                raise
+            try:
+                named = type(exc)(f"{self.source}: {exc}")
+            except TypeError:
+                named = InputError(f"{self.source}: {exc}")
+            raise named from None
 
     def section(self, dotted: str) -> Section:
         node = self.root

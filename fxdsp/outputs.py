@@ -6,7 +6,9 @@ it writes into). :func:`check_paths` validates them all before the command does 
 is empty, blank or holds a NUL; an input file is UTF-8 text (not compressed, not binary: the file and
 the byte named); an output must be of the right kind (a file target is not a folder, a folder
 target not a file), the folder that holds it must exist and be writable, and no output may be an
-input or another output. A bad path is one :class:`ValueError` naming the option.
+input or another output. A bad path is one :class:`~fxdsp.errors.InputError` naming the option.
+A folder output owns only the files fxdsp wrote there (:mod:`fxdsp.owned`): any other file in it,
+and any input of the run, is never replaced or removed.
 
 Writing goes through :func:`staged`: each output is written to a staging folder created beside its
 target (same file system), and only when the whole command has succeeded are the staged files moved
@@ -35,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fxdsp import owned
 from fxdsp.errors import InputError
 from fxdsp.interrupts import interrupts_held
 
@@ -112,13 +115,15 @@ def check_text_input(path: Path, option: str) -> None:
             offset += len(chunk)
 
 
-def check_paths(args, paths) -> None:
-    """Validate every path option of a command before it runs (see the module docstring). ``paths``
-    maps the option as the user types it (``--out``, or a positional's name) to its kind; it may be a
-    function of ``args`` (``--check`` turns an output folder into an input)."""
+def check_paths(args, paths) -> owned.Declared:
+    """Validate every path option of a command before it runs (see the module docstring) and return
+    them resolved, for :func:`fxdsp.owned.declaring`. ``paths`` maps the option as the user types it
+    (``--out``, or a positional's name) to its kind; it may be a function of ``args`` (``--check``
+    turns an output folder into an input)."""
     if callable(paths):
         paths = paths(args)
     seen: dict[Path, tuple[str, str]] = {}
+    declared = owned.Declared()
     for option, kind in paths.items():
         value = getattr(args, option.lstrip("-").replace("-", "_"), None)
         if value is None or value == "-":
@@ -152,6 +157,9 @@ def check_paths(args, paths) -> None:
                 what = "an input" if kind in inputs or other_kind in inputs else "another output"
                 raise InputError(f"{option}: {path} is also {other}: an output must not overwrite {what}")
         seen[key] = (option, kind)
+        {IN: declared.inputs, IN_DIR: declared.input_dirs, OUT_DIR: declared.out_dirs}.get(kind, {})[key] = option
+    owned.guard_owned_inputs(declared)
+    return declared
 
 
 def plain(value):
@@ -275,6 +283,7 @@ class Stage:
         if _direct():
             final.parent.mkdir(parents=True, exist_ok=True)
             return final
+        owned.guard_replace(final)   # refused before the file is even written
         staged = self._staged(final)
         staged.parent.mkdir(parents=True, exist_ok=True)
         self._moves.append((staged, final))
@@ -294,24 +303,35 @@ class Stage:
     def write_text(self, final: str | Path, text: str, encoding: str = "utf-8") -> None:
         self.path(final).write_text(text, encoding=encoding)
 
-    def commit(self) -> None:
+    def moves(self) -> list[tuple[Path, Path]]:
+        """(staged file, the file it becomes) for every file written so far."""
         moves = list(self._moves)
         for staged, final in self._trees:
             moves += [(f, final / f.relative_to(staged)) for f in sorted(staged.rglob("*")) if not f.is_dir()]
+        return moves
+
+    def commit(self) -> None:
+        moves = self.moves()
         for staged, final in moves:   # before any move: a refused file leaves every target as it was
             where = non_finite_value(staged)
             if where:
                 raise InputError(f"{final}: {where} is not a finite number (nan or inf); nothing written")
+            owned.guard_replace(final)
+        declared = owned.current() is not None
+        written = {final: owned.file_sha256(staged) for staged, final in moves} if declared else {}
+        removals = [final for final in self._removals if owned.may_remove(final)]
         with interrupts_held():
             for staged, final in moves:
                 final.parent.mkdir(parents=True, exist_ok=True)
                 os.replace(staged, final)
-            for final in self._removals:
+            for final in removals:
                 final.unlink(missing_ok=True)
+            owned.update(written, removals)
         self.discard()
 
     def remove(self, final: str | Path) -> None:
-        """Delete ``final`` when the staged files are moved into place (a file the new set lacks)."""
+        """Delete ``final`` when the staged files are moved into place (a file the new set lacks);
+        in a folder output only if fxdsp wrote it there (:func:`fxdsp.owned.may_remove`)."""
         if _direct():
             Path(final).unlink(missing_ok=True)
         else:
@@ -353,4 +373,8 @@ def staged():
     except BaseException:
         stage.discard()
         raise
-    stage.commit()
+    try:
+        stage.commit()   # refuses (a non-finite number, a file it does not own) before any move
+    except BaseException:
+        stage.discard()
+        raise

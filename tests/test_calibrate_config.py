@@ -89,3 +89,36 @@ def test_repro_command_writes_the_report(tmp_path, capsys):
     assert main(["repro", "--paper", "004", "--quiet"]) == 2
     assert "--paper" in capsys.readouterr().err
     assert main(["repro", "--paper", "003", "--sweep-points", "2", "--quiet"]) == 2
+
+
+def test_a_report_of_one_paper_keeps_the_other_papers_parts(tmp_path, capsys):
+    """REPRODUCTIONS.md is made of one part per paper: a run of paper 000 into a report that holds
+    paper 003 adds its part and keeps 003's (its section, its summary rows, its figure) byte for
+    byte; a run of 003 again replaces only 003's."""
+    from fxdsp.repro.report import PARTS
+
+    def section(text, paper):
+        start = text.index(f"## Paper {paper}")
+        nxt = text.find("\n## Paper ", start + 1)
+        return text[start: nxt if nxt > 0 else None]
+
+    argv = ["repro", "--quiet", "--report", str(tmp_path)]
+    assert main([*argv, "--paper", "003", "--sweep-points", "5"]) == 0
+    first = (tmp_path / "REPRODUCTIONS.md").read_text()
+    figure = (tmp_path / "img" / "paper003.png").read_bytes()
+    assert main([*argv, "--paper", "000"]) == 0
+    both = (tmp_path / "REPRODUCTIONS.md").read_text()
+    assert section(both, "003") == section(first, "003") and "## Paper 000" in both
+    assert [ln for ln in first.splitlines() if ln.startswith("| 003 |")] == \
+        [ln for ln in both.splitlines() if ln.startswith("| 003 |")]
+    assert (tmp_path / "img" / "paper003.png").read_bytes() == figure
+    assert "--paper 003 --report" in both and "--paper 000 --report" in both
+    assert main([*argv, "--paper", "003", "--sweep-points", "3"]) == 0   # 003's part replaced, 000's kept
+    again = (tmp_path / "REPRODUCTIONS.md").read_text()
+    assert section(again, "000") == section(both, "000") and section(again, "003") != section(both, "003")
+    capsys.readouterr()
+    (tmp_path / PARTS).write_text("not json")   # edited by hand: not fxdsp's any more, so not replaced
+    assert main([*argv, "--paper", "000"]) == 2 and PARTS in capsys.readouterr().err
+    (tmp_path / PARTS).unlink()                 # gone: the report holds this run's papers only
+    assert main([*argv, "--paper", "000"]) == 0 and "## Paper 003" not in (tmp_path / "REPRODUCTIONS.md").read_text()
+    capsys.readouterr()

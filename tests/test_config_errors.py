@@ -14,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from conftest import config_leaves, default_data, edited_data, run_cli
+from fxdsp.errors import InputError
 from fxdsp.chains import build
 from fxdsp.config import Config
 
@@ -73,7 +74,7 @@ def test_library_names_the_field(edits, field, hint):
 
 
 def test_missing_required_key_is_named():
-    with pytest.raises(ValueError, match=r"^iir\.cutoff_hz: missing"):
+    with pytest.raises(InputError, match=r"^iir\.cutoff_hz: missing"):
         build(Config(_edited({}, delete=("iir.cutoff_hz",)), source="<test>"))
 
 
@@ -134,6 +135,7 @@ def test_fuzz_one_bad_leaf_is_one_line_or_a_working_config(leaf, value):
         assert rc in (0, 2), err
         if rc == 2:
             assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+            assert str(cfg) in err, err   # the file is named with the field
             assert not (Path(tmp) / "gen").exists()
 
 
@@ -180,7 +182,7 @@ def test_every_misspelt_key_is_named_with_the_right_one(path, key):
     table.clear()
     table.update((typo if k == key else k, v) for k, v in items)
     field = ".".join(path + (typo,))
-    with pytest.raises(ValueError) as info:
+    with pytest.raises(InputError) as info:
         build(Config(data, source="<test>"), chains=False)
     assert str(info.value) == f"{field}: unknown key (did you mean {key!r}?)"
 
@@ -204,7 +206,7 @@ def test_a_renamed_key_is_reported_as_a_typo_not_as_missing(edit, message):
     for part in (table_name or "").split(".") if table_name else ():
         table = table[part]
     table[typo] = table.pop(key)
-    with pytest.raises(ValueError) as info:
+    with pytest.raises(InputError) as info:
         build(Config(data, source="<test>"))
     assert str(info.value) == message
 
@@ -216,14 +218,34 @@ def test_a_valid_sibling_is_never_taken_for_a_typo():
         del data[table][key]
         if table == "rtd":   # r1_ohm has a default: make a required key missing beside a near valid one
             data[table]["temp_fromat"] = data[table].pop("temp_format")
-            with pytest.raises(ValueError, match=r"^rtd\.temp_fromat: unknown key \(did you mean 'temp_format'\?\)$"):
+            with pytest.raises(InputError, match=r"^rtd\.temp_fromat: unknown key \(did you mean 'temp_format'\?\)$"):
                 build(Config(data, source="<test>"))
             continue
-        with pytest.raises(ValueError, match=rf"^{table}\.{key}: missing( \(input '\w+' of {table} is wired by no "
+        with pytest.raises(InputError, match=rf"^{table}\.{key}: missing( \(input '\w+' of {table} is wired by no "
                                              rf"chain, so its format must be stated\))?$"):
             build(Config(data, source="<test>"))
 
 
 def test_a_stray_key_in_a_nested_table_is_an_error():
-    with pytest.raises(ValueError, match=r"^demod\.lpf\.bogus: unknown key"):
+    with pytest.raises(InputError, match=r"^demod\.lpf\.bogus: unknown key"):
         build(Config(_edited({"demod.lpf.bogus": 1}), source="<test>"))
+
+
+# ---- every key of the shipped config deleted (every chain table too): built, or InputError --------
+_DELETIONS = list(_every_key(default_data()))
+
+
+@pytest.mark.parametrize("path,key", _DELETIONS, ids=[".".join(p + (k,)) for p, k in _DELETIONS])
+def test_every_deleted_key_is_bad_input_or_a_working_config(path, key):
+    """A key the user left out is their config's fault: InputError naming it (one line, exit 2), not a
+    ValueError the command line takes for a bug. A config without some chain (a block then wired by
+    none) once failed so, with exit 70."""
+    data = copy.deepcopy(default_data())
+    table = data
+    for p in path:
+        table = table[p]
+    del table[key]
+    try:
+        build(Config(data, source="<test>"))
+    except InputError as exc:
+        assert str(exc).strip() and "\n" not in str(exc).strip()

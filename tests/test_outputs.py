@@ -22,6 +22,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from cli_walk import argv_for, path_options
 from conftest import failing_writes, run_cli
 from fxdsp.cli import COMMANDS, main
 from fxdsp.errors import InputError
@@ -38,6 +39,17 @@ def snapshot(root: Path) -> dict[str, str]:
         rel = p.relative_to(root).as_posix()
         out[rel] = "dir" if p.is_dir() else hashlib.sha256(p.read_bytes()).hexdigest()
     return out
+
+
+def record_as_written(folder: Path, names=None) -> None:
+    """List files of ``folder`` (default: every file but the record) in its ownership record, with
+    their present content: as if fxdsp had written them there."""
+    from fxdsp.owned import RECORD, file_sha256, read_record, record_text
+
+    files = [p for p in folder.rglob("*") if p.is_file() and p.name != RECORD] if names is None else \
+        [folder / n for n in names]
+    entries = read_record(folder) | {p.relative_to(folder).as_posix(): file_sha256(p) for p in files}
+    (folder / RECORD).write_text(record_text(entries))
 
 
 def one_line_error(capsys) -> str:
@@ -116,6 +128,7 @@ def _interrupted_vectors(tmp_path, monkeypatch, capsys, exc) -> tuple[int, dict,
     (out / "manifest.json").write_text((out / "manifest.json").read_text().replace('"seed"', '"seed_old"'))
     for p in out.rglob("*.hex"):
         p.write_text("0\n")
+    record_as_written(out)   # as another version of fxdsp would have written them
     before = snapshot(out)
     capsys.readouterr()
     with failing_writes(20, exc):
@@ -282,11 +295,18 @@ def test_a_generated_set_is_replaced_as_a_whole(tmp_path, capsys):
     out = tmp_path / "gen"
     assert main(["hdl-gen", "--out", str(out)]) == 0
     (out / "old_block_table.hex").write_text("0\n")   # e.g. a ROM of an NCO design since replaced
+    record_as_written(out, ["old_block_table.hex"])
     (out / "notes.txt").write_text("mine\n")
+    (out / "users_table.hex").write_text("1\n")      # the user's, of the set's kind: kept
     assert main(["hdl-gen", "--out", str(out), "--check"]) == 1
     assert main(["hdl-gen", "--out", str(out)]) == 0
-    assert main(["hdl-gen", "--out", str(out), "--check"]) == 0
     assert not (out / "old_block_table.hex").exists() and (out / "notes.txt").read_text() == "mine\n"
+    assert (out / "users_table.hex").read_text() == "1\n"
+    capsys.readouterr()
+    assert main(["hdl-gen", "--out", str(out), "--check"]) == 1   # the check still names it
+    assert "unexpected: users_table.hex" in capsys.readouterr().err
+    (out / "users_table.hex").unlink()
+    assert main(["hdl-gen", "--out", str(out), "--check"]) == 0
     capsys.readouterr()
 
 
@@ -300,6 +320,7 @@ def test_a_vector_set_removes_only_what_its_manifest_listed(tmp_path, capsys):
     (out / "manifest.json").write_text(_json.dumps(manifest))
     (out / "gone").mkdir()
     (out / "gone" / "x.hex").write_text("0\n")          # listed by the previous manifest: removed
+    record_as_written(out, ["manifest.json", "gone/x.hex"])
     (out / "stray.hex").write_text("0\n")               # not listed: someone else's, kept
     assert main(["vectors", "--out", str(out)]) == 0
     assert not (out / "gone" / "x.hex").exists() and (out / "stray.hex").exists()
@@ -307,89 +328,19 @@ def test_a_vector_set_removes_only_what_its_manifest_listed(tmp_path, capsys):
 
 
 # ---- every path option of every command, from the parsers: an empty or blank value --------------
-def _leaves(argv: list[str], parser):
-    """(command words, parser) of every runnable command below ``parser`` (``sweep rtl`` ...)."""
-    import argparse
-
-    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
-    if not subs:
-        yield argv, parser
-        return
-    for word, sp in subs[0].choices.items():
-        yield from _leaves(argv + [word], sp)
-
-
-def _paths_of(module, sp, flags: bool) -> dict:
-    """The command's PATHS (a function of its arguments: called with the parser's defaults, or with
-    every boolean flag set: --check turns an output into an input)."""
-    import argparse
-
-    paths = getattr(module, "PATHS", {})
-    if not callable(paths):
-        return paths
-    return paths(argparse.Namespace(**{a.dest: (True if flags and isinstance(a, argparse._StoreTrueAction)
-                                                 else a.default) for a in sp._actions}))
-
-
-def _path_options():
-    """(command words, option, kind, parser, module) of every path option of every command, read from
-    the parsers (every command and subcommand) and their PATHS tables."""
-    from fxdsp.cli import build_parser
-
-    import argparse
-
-    out = []
-    for name in COMMANDS:
-        top = next(a for a in build_parser(load=[name])._actions if isinstance(a, argparse._SubParsersAction))
-        module = top.choices[name].get_default("_module")   # a subcommand's too (``sweep rtl``)
-        for words, sp in _leaves([name], top.choices[name]):
-            options = {a.option_strings[0] if a.option_strings else a.dest for a in sp._actions}
-            table = {**_paths_of(module, sp, False), **_paths_of(module, sp, True)}
-            out += [(words, o, k, sp, module) for o, k in table.items() if o in options]
-    return out
-
-
-def _argv_for(words, sp, module, probe: str, value: str, tmp: Path) -> list[str]:
-    """A command line with every required argument given a value of its kind and the probed option
-    ``value``."""
-    import argparse
-
-    from fxdsp.outputs import IN, IN_DIR
-
-    paths = _paths_of(module, sp, False)
-    (tmp / "in.txt").write_text("x\n")
-    (tmp / "in_dir").mkdir(exist_ok=True)
-    argv = list(words)
-    for a in sp._actions:
-        if isinstance(a, (argparse._HelpAction, argparse._SubParsersAction)):
-            continue
-        opt = a.option_strings[0] if a.option_strings else a.dest
-        if opt != probe and not a.required and a.option_strings:
-            continue
-        if opt == probe:
-            v = value
-        elif opt in paths:
-            v = str(tmp / ("in.txt" if paths[opt] == IN else "in_dir" if paths[opt] == IN_DIR else f"out_{a.dest}"))
-        elif a.choices:
-            v = str(list(a.choices)[0])
-        else:
-            v = "1"
-        argv += ([opt] if a.option_strings else []) + [v]
-    return argv
-
-
 @pytest.mark.parametrize("value", ["", "   "])
 def test_an_empty_path_is_refused_by_every_option_of_every_command(tmp_path, monkeypatch, capsys, value):
     """Generated from the parsers (a new command or path option is covered without a new probe):
     an empty or blank path is one line naming the option, exit 2, before any work, nothing written
     (pathlib reads "" as ".": unchecked, `--out ''` wrote the vectors into the current folder)."""
-    cases = _path_options()
-    assert len({tuple(c[0]) for c in cases}) >= 12 and any(c[2] == "out-dir" for c in cases)
+    cases = path_options()
+    assert len({leaf.words for leaf, _, _ in cases}) >= 12 and any(kind == "out-dir" for _, _, kind in cases)
     monkeypatch.chdir(tmp_path)
-    for words, option, kind, sp, module in cases:
-        work = tmp_path / "_".join([*words, option.strip("-")])
+    for leaf, option, kind in cases:
+        module = leaf.module
+        work = tmp_path / "_".join([*leaf.words, option.strip("-")])
         work.mkdir()
-        argv = _argv_for(words, sp, module, option, value, work)
+        argv = argv_for(leaf, work, {option: [value]})
         before = snapshot(tmp_path)
 
         def work_started(args, argv=argv):
@@ -412,15 +363,16 @@ def test_an_input_that_is_not_text_is_named_by_every_input_option(tmp_path, monk
            "binary": b"t_s,temp_c\n" + bytes(range(256)),
            "not UTF-8": "t_s,temp_c\n0,25 \u00b0C\n".encode("latin-1"),
            "UTF-16": "t_s,temp_c\n0,25\n".encode("utf-16")}
-    cases = [c for c in _path_options() if c[2] == "in"]
-    assert len({c[1] for c in cases}) >= 5
-    for words, option, kind, sp, module in cases:
+    cases = [(leaf, option) for leaf, option, kind in path_options() if kind == "in"]
+    assert len({option for _, option in cases}) >= 5
+    for leaf, option in cases:
+        module = leaf.module
         for what, data in bad.items():
-            work = tmp_path / "_".join([*words, option.strip("-"), what.replace(" ", "_")])
+            work = tmp_path / "_".join([*leaf.words, option.strip("-"), what.replace(" ", "_")])
             work.mkdir()
             path = work / "input.file"
             path.write_bytes(data)
-            argv = _argv_for(words, sp, module, option, str(path), work)
+            argv = argv_for(leaf, work, {option: [str(path)]})
 
             def work_started(args, argv=argv):
                 raise AssertionError(f"{argv}: the work started on a file that is not text")

@@ -135,7 +135,7 @@ def test_cli_replays_a_model(tmp_path):
     (["--scenario", "ramp", "--effect", "thermal_lag"], "CAUSE.PARAM=VALUE"),
     (["--scenario", "ramp", "--seed", "one"], "--seed"),
     (["--scenario", "ramp", "--columns", "temp"], "columns"),
-    (["--scenario", "ramp", "--time-step", "-1"], "time_step_s"),
+    (["--scenario", "ramp", "--time-step=-1"], "--time-step"),
     (["--scenario", "ramp", "--model", "/nonexistent/m.json"], "model"),
 ])
 def test_cli_bad_input_exits_2_with_one_line(tmp_path, capsys, args, needle):

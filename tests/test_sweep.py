@@ -19,6 +19,7 @@ import pytest
 
 from fxdsp.cli import main
 from fxdsp.config import load_config
+from fxdsp.owned import RECORD
 from fxdsp.sweep import montecarlo as mc
 from fxdsp.sweep.engine import JOURNAL, Executor, Sweep, task_seed
 
@@ -167,7 +168,8 @@ def test_an_interrupted_sweep_resumes_from_its_journal(tmp_path, monkeypatch, ca
     monkeypatch.setattr(mc, "_task", interrupted)
     assert main([*argv, "--out", str(out)]) == 130
     monkeypatch.setattr(mc, "_task", original)
-    assert sorted(p.name for p in out.iterdir()) == [JOURNAL]      # no partial results, only the journal
+    # no partial results: only the journal, listed as fxdsp's own in the folder's record
+    assert sorted(p.name for p in out.iterdir()) == [RECORD, JOURNAL]
     journal = (out / JOURNAL).read_text().splitlines()
     assert len(journal) == 3                                       # header + the 2 finished tasks
     # a result read back is used, not recomputed: a marked value comes through

@@ -17,6 +17,7 @@ import time
 
 import numpy as np
 
+from fxdsp.commands.options import count
 from fxdsp.chains import build
 from fxdsp.errors import InputError
 from fxdsp.fixed import Format
@@ -32,10 +33,10 @@ PATHS = {"--config": IN, "--json": OUT_FILE}
 def configure(parser) -> None:
     parser.add_argument("--config", help="TOML config (default: the built-in one)")
     parser.add_argument("--json", help="also write the results as JSON to this file")
-    parser.add_argument("--samples", type=int, default=1_000_000, help="samples for fxdsp (default 1e6, >= 200k)")
-    parser.add_argument("--repeat", type=int, default=5, help="timed runs, best kept (default 5)")
-    parser.add_argument("--prefix-apytypes", type=int, default=20_000, help="samples run through apytypes")
-    parser.add_argument("--prefix-fxpmath", type=int, default=2_000, help="samples run through fxpmath")
+    parser.add_argument("--samples", type=count(200_000), default=1_000_000, help="samples for fxdsp (default 1e6, >= 200k)")
+    parser.add_argument("--repeat", type=count(), default=5, help="timed runs, best kept (default 5)")
+    parser.add_argument("--prefix-apytypes", type=count(), default=20_000, help="samples run through apytypes")
+    parser.add_argument("--prefix-fxpmath", type=count(), default=2_000, help="samples run through fxpmath")
 
 
 def _best(fn, repeat: int) -> float:
@@ -157,10 +158,6 @@ def _drive_loops(design, samples: int, repeat: int) -> dict:
 
 
 def run(args) -> int:
-    if args.samples < 200_000:
-        raise InputError(f"--samples: the benchmark needs >= 200000 samples, got {args.samples}")
-    if args.repeat < 1:
-        raise InputError(f"--repeat: at least one timed run, got {args.repeat}")
     for option, value in (("--prefix-apytypes", args.prefix_apytypes), ("--prefix-fxpmath", args.prefix_fxpmath)):
         if not 1 <= value <= args.samples:
             raise InputError(f"{option}: must be within 1..--samples ({args.samples}), got {value}")

@@ -12,6 +12,7 @@ from functools import partial
 
 from tqdm import tqdm as _tqdm
 
+from fxdsp.commands.options import FINITE
 from fxdsp.chains import build
 from fxdsp.float_vs_fixed import port_unit
 from fxdsp.config import dumps, load_config
@@ -91,7 +92,7 @@ def configure(parser) -> None:
     parser.add_argument("--cost", default="total_bits", choices=("total_bits", "register_bits"),
                         help="cost the search minimises: every bit (registers, coefficients, LUT memory; default) "
                              "or register/coefficient bits only")
-    parser.add_argument("--margin", type=float, default=0.02, help="optimise to (1 - margin) x target (default 0.02)")
+    parser.add_argument("--margin", type=FINITE, default=0.02, help="optimise to (1 - margin) x target (default 0.02)")
     parser.add_argument("--max-mean", help="with --optimise: also keep |mean| (a bias) of the --target output within "
                                            "this, <value><unit> as --target")
     parser.add_argument("--drive-ramp", action="store_true",

@@ -22,6 +22,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from fxdsp.commands.options import Number
 from fxdsp.outputs import IN, OUT_FILE, json_text, staged
 from fxdsp.sim import calibration
 from fxdsp.logfile import read_log
@@ -42,7 +43,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="write the calibration into this config instead of the built-in one; paper 002: an "
                              "extended config (fxdsp extend) keeps its lag / phase trim, is calibrated with them "
                              "in place, and --apply runs them")
-    parser.add_argument("--order", type=int, default=1, metavar="N",
+    parser.add_argument("--order", type=Number(int, 1, 3), default=1, metavar="N",
                         help="paper 002: polynomial order per segment for the config (1 = the paper's, 2)")
 
 
@@ -57,8 +58,6 @@ def run(args) -> int:
 def _run(args, stage) -> int:
     if args.paper not in FITS:
         raise InputError(f"--paper: unknown paper {args.paper!r}; expected one of {', '.join(FITS)}")
-    if args.order not in (1, 2, 3):
-        raise InputError(f"--order: must be 1, 2 or 3, got {args.order}")
     log = read_log(args.log).columns   # the contract's reader: bad rows dropped, bad logs refused
     result = FITS[args.paper](log)
     if args.config_out or args.apply:

@@ -5,21 +5,19 @@ from __future__ import annotations
 
 import tempfile
 from pathlib import Path
-from fxdsp.errors import InputError
+from fxdsp.commands.options import count
 
 WARM_UP_ROWS = 500
 
 
 def configure(parser) -> None:
-    parser.add_argument("--rows", type=int, nargs="+", default=[6000, 1_000_000], metavar="N",
+    parser.add_argument("--rows", type=count(WARM_UP_ROWS), nargs="+", default=[6000, 1_000_000], metavar="N",
                         help="rows of each simulated log (default: 6000 1000000)")
 
 
 def run(args) -> int:
     from fxdsp.diagnose.bench import bench
 
-    if min(args.rows) < WARM_UP_ROWS:
-        raise InputError(f"--rows: need at least {WARM_UP_ROWS} rows per log, got {min(args.rows)}")
     with tempfile.TemporaryDirectory() as tmp:
         bench(WARM_UP_ROWS, Path(tmp))  # numba's cache and the imports, out of the timings
         for rows in args.rows:

@@ -4,15 +4,17 @@ randomly drawn hidden cause each, diagnosed; prints the confusion matrix (see
 
 from __future__ import annotations
 
+from fxdsp.commands.options import FINITE, SEED, count
+
 
 def configure(parser) -> None:
     from fxdsp.diagnose.hidden import ALL_CAUSES, SNR_RANGE
 
-    parser.add_argument("--per-cause", type=int, default=20, metavar="N", help="cases per cause (default 20)")
-    parser.add_argument("--first-seed", type=int, default=1000, metavar="S", help="seed of the first case")
+    parser.add_argument("--per-cause", type=count(), default=20, metavar="N", help="cases per cause (default 20)")
+    parser.add_argument("--first-seed", type=SEED, default=1000, metavar="S", help="seed of the first case")
     parser.add_argument("--causes", default=",".join(ALL_CAUSES), metavar="A,B",
                         help="comma-separated causes to draw (default: all)")
-    parser.add_argument("--snr", type=float, nargs=2, default=SNR_RANGE, metavar=("LO", "HI"),
+    parser.add_argument("--snr", type=FINITE, nargs=2, default=SNR_RANGE, metavar=("LO", "HI"),
                         help="effect size range in noise units (default %(default)s)")
 
 

@@ -4,6 +4,7 @@ of each, and the cause the diagnosis names for the linear readout (see :mod:`fxd
 
 from __future__ import annotations
 
+from fxdsp.commands.options import FINITE
 from fxdsp.outputs import IN
 from fxdsp.errors import InputError
 
@@ -14,7 +15,7 @@ def configure(parser) -> None:
     parser.add_argument("table", metavar="TABLE",
                         help="CSV with a header row and columns temperature_c, resistance_ohm, e.g. "
                              "../shared/data/pt100_table/pt100_table.csv")
-    parser.add_argument("--range", nargs=2, type=float, default=None, metavar=("LO", "HI"),
+    parser.add_argument("--range", nargs=2, type=FINITE, default=None, metavar=("LO", "HI"),
                         help="keep only the rows with LO <= temperature_c <= HI")
 
 

@@ -24,11 +24,11 @@ Exit status: 0 when every proof passes, 1 when any fails or is undecided (no ans
 
 from __future__ import annotations
 
-import math
 import sys
 import tempfile
 from pathlib import Path
 
+from fxdsp.commands.options import POSITIVE, count
 from fxdsp.outputs import IN, IN_DIR, OUT_DIR
 
 PATHS = {"--config": IN, "--rtl": IN_DIR, "--out": OUT_DIR}
@@ -38,12 +38,12 @@ def configure(parser) -> None:
     parser.add_argument("--config", help="TOML config (default: the built-in one)")
     parser.add_argument("--only", default=None, metavar="NAMES",
                         help="comma-separated blocks or chains (default: every one with a serial variant)")
-    parser.add_argument("--depth", type=int, default=None, metavar="N",
+    parser.add_argument("--depth", type=count(2), default=None, metavar="N",
                         help="length of the proofs (default: the shortest at which the induction closes, C + 2 or 2 C + 4 for a "
                              "block of C cycles per sample, 24 for a top; --bounded-only: 2 C + 4)")
     parser.add_argument("--bounded-only", action="store_true",
                         help="the bounded proof from reset only (no induction: not every cycle)")
-    parser.add_argument("--timeout", type=float, default=3600, metavar="S",
+    parser.add_argument("--timeout", type=POSITIVE, default=3600, metavar="S",
                         help="seconds per solver run; a proof without an answer by then is undecided (default 3600)")
     parser.add_argument("--miter", action="store_true",
                         help="prove each smaller block's serial variant equal to its one-sample-per-clock one "
@@ -76,10 +76,6 @@ def run(args) -> int:
     from fxdsp.hdl import formal
     from fxdsp.hdl.schedule import cycles_per_sample
 
-    if not (math.isfinite(args.timeout) and args.timeout > 0):   # nan, inf and <= 0 alike
-        raise InputError(f"--timeout: need a positive, finite number of seconds, got {args.timeout}")
-    if args.depth is not None and args.depth < 2:
-        raise InputError(f"--depth: need at least 2 cycles, got {args.depth}")
     if args.rtl is not None and not sorted(Path(args.rtl).glob("*.v")):
         raise InputError(f"--rtl: no Verilog sources (*.v) in {args.rtl}")
     config = args.config or (formal.MITER_CONFIG if args.miter else None)

@@ -40,6 +40,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from fxdsp.commands.options import POSITIVE, count
 from fxdsp.chains import build
 from fxdsp.errors import InputError
 from fxdsp.outputs import IN, OUT_FILE, check_output, staged
@@ -57,9 +58,9 @@ def configure(parser) -> None:
                              "the project's own is hdl/HW_REPORT.md (`make hw-report`)")
     parser.add_argument("--only", nargs="*", help="re-run only these instances' rows (default: every block and chain); "
                         "the report's other rows are kept while they are current")
-    parser.add_argument("--freq", type=float, default=40.0, help="nextpnr target clock in MHz (default 40)")
-    parser.add_argument("--timeout", type=int, default=1200, help="seconds per tool run")
-    parser.add_argument("--xc7-timeout", type=int, default=900,
+    parser.add_argument("--freq", type=POSITIVE, default=40.0, help="nextpnr target clock in MHz (default 40)")
+    parser.add_argument("--timeout", type=count(), default=1200, help="seconds per tool run")
+    parser.add_argument("--xc7-timeout", type=count(), default=900,
                         help="seconds for the xc7 (synth_xilinx) synthesis of one block (default 900)")
     parser.add_argument("--no-xc7", action="store_true", help="skip the xc7 (synth_xilinx) columns")
     parser.add_argument("--fresh", action="store_true",

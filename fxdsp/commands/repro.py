@@ -13,6 +13,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from fxdsp.commands.options import count
 from fxdsp.errors import InputError
 from fxdsp.outputs import OUT_DIR, staged
 
@@ -25,7 +26,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--paper", default="all", metavar="ID",
                         help=f"which reproduction: {', '.join(CHOICES)} (default all)")
     parser.add_argument("--report", metavar="DIR", help="write DIR/REPRODUCTIONS.md and DIR/img/*.png")
-    parser.add_argument("--sweep-points", type=int, default=41, metavar="N",
+    parser.add_argument("--sweep-points", type=count(3), default=41, metavar="N",
                         help="paper 003 sweep frequencies (default 41)")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     parser.add_argument("--drive-loop", action="store_true",
@@ -35,12 +36,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args) -> int:
-    from fxdsp.repro.report import PAPERS, run_all, summary_rows, write_report
+    from fxdsp.repro.report import PAPERS, read_parts, run_all, summary_rows, write_report
 
     if args.paper not in CHOICES:
         raise InputError(f"--paper: unknown paper {args.paper!r}; expected one of {', '.join(CHOICES)}")
-    if args.sweep_points < 3:
-        raise InputError(f"--sweep-points: need at least 3, got {args.sweep_points}")
     papers = PAPERS if args.paper == "all" else (args.paper,)
     loop = None
     if args.drive_loop:
@@ -62,6 +61,8 @@ def run(args) -> int:
             f"fxdsp repro --paper {args.paper} --report {args.report}"
         cmd += " --drive-loop" if args.drive_loop else ""
         with staged() as stage:
-            path = Path(args.report) / write_report(res, stage.dir(args.report), command=cmd).name
+            # the papers not run now keep their part of the report (read from the report's folder)
+            previous = read_parts(args.report)
+            path = Path(args.report) / write_report(res, stage.dir(args.report), command=cmd, previous=previous).name
         sys.stdout.write(f"report: {path}\n")
     return 0

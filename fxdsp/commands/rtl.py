@@ -18,6 +18,7 @@ import os
 import sys
 from pathlib import Path
 
+from fxdsp.commands.options import SEED, count
 from fxdsp.outputs import IN, IN_DIR, OUT_DIR
 
 PATHS = {"--config": IN, "--rtl": IN_DIR, "--out": OUT_DIR, "--cache": OUT_DIR}
@@ -35,9 +36,9 @@ def configure(parser) -> None:
     parser.add_argument("--sim", default="icarus", choices=("icarus", "verilator"), help="simulator (default icarus)")
     parser.add_argument("--waves", action="store_true",
                         help="write a waveform of every DUT's golden stream too (failures always get one)")
-    parser.add_argument("--long", type=int, default=None, metavar="N",
+    parser.add_argument("--long", type=count(), default=None, metavar="N",
                         help="samples of the long stream (default: 100000 on Verilator; 20000, serial 2000, on Icarus)")
-    parser.add_argument("--seed", type=int, default=1, help="seed of the random and long streams (default 1)")
+    parser.add_argument("--seed", type=SEED, default=1, help="seed of the random and long streams (default 1)")
     parser.add_argument("--rtl", default=None, metavar="DIR", help="Verilog sources (default: the RTL in the package)")
     parser.add_argument("--cache", default=None, metavar="DIR",
                         help="Verilator model cache (default: $XDG_CACHE_HOME/fxdsp/verilator or ~/.cache/...)")
@@ -54,8 +55,6 @@ def run(args) -> int:
     only = [n.strip() for n in args.only.split(",") if n.strip()] if args.only is not None else None
     if only is not None and not only:
         raise InputError("--only: no block or chain named")
-    if args.long is not None and args.long < 1:
-        raise InputError(f"--long: need at least 1 sample, got {args.long}")
     if args.rtl is not None and not sorted(Path(args.rtl).glob("*.v")):
         raise InputError(f"--rtl: no Verilog sources (*.v) in {args.rtl}")
     design = build(args.config)

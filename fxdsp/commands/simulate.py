@@ -15,6 +15,7 @@ import json
 import math
 from pathlib import Path
 
+from fxdsp.commands.options import POSITIVE, SEED
 from fxdsp.errors import InputError
 from fxdsp.causes import PARAMETERS
 from fxdsp.outputs import IN, OUT_FILE, staged
@@ -28,13 +29,13 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help=f"chamber programme and sensor: {', '.join(SCENARIOS)}")
     parser.add_argument("--effect", action="append", default=[], metavar="CAUSE.PARAM=VALUE",
                         help="inject a contract cause (repeatable); CAUSE=VALUE for one-parameter causes")
-    parser.add_argument("--seed", default="0", metavar="N", help="random seed (default 0)")
+    parser.add_argument("--seed", type=SEED, default=0, metavar="N", help="random seed (default 0)")
     parser.add_argument("--columns", default=",".join(OPTIONAL_COLUMNS), metavar="A,B",
                         help=f"optional columns to write (default all: {','.join(OPTIONAL_COLUMNS)}; '' for none)")
     parser.add_argument("--model", metavar="M.json", help="replay a model written by fxdsp diagnose")
-    parser.add_argument("--time-step", default=str(DEFAULT_TIME_STEP_S), metavar="S",
+    parser.add_argument("--time-step", type=POSITIVE, default=DEFAULT_TIME_STEP_S, metavar="S",
                         help=f"sample interval in seconds (default {DEFAULT_TIME_STEP_S:g})")
-    parser.add_argument("--duration-scale", default="1", metavar="X",
+    parser.add_argument("--duration-scale", type=POSITIVE, default=1.0, metavar="X",
                         help="multiply dwell/hold durations (ramps keep their rate)")
     parser.add_argument("--noise", action="append", default=[], metavar="KEY=VALUE",
                         help="override a noise level (output, temp_c, ref_temp_c, freq_hz, quad, "
@@ -127,19 +128,15 @@ def _drive_loop(args):
 def run(args) -> int:
     if args.scenario not in SCENARIOS:
         raise InputError(f"--scenario: unknown name {args.scenario!r}; expected one of {', '.join(SCENARIOS)}")
-    try:
-        seed = int(args.seed)
-    except ValueError:
-        raise InputError(f"--seed: {args.seed!r} is not an integer") from None
     effects = parse_effects(args.effect)
     thermal = ThermalChain(rtd_node=args.rtd_node) if args.rtd_node else None
     drive = _drive_loop(args)
-    log = generate_log(args.scenario, effects=effects, seed=seed, columns=args.columns, rtd_element=args.rtd_element,
-                       time_step_s=_number("--time-step", args.time_step),
-                       duration_scale=_number("--duration-scale", args.duration_scale),
+    log = generate_log(args.scenario, effects=effects, seed=args.seed, columns=args.columns, rtd_element=args.rtd_element,
+                       time_step_s=args.time_step,
+                       duration_scale=args.duration_scale,
                        noise=_noise(args.noise), model=args.model, thermal=thermal, drive_loop=drive,
                        progress=drive is not None)
-    comments = {"generator": "fxdsp simulate", "scenario": args.scenario, "seed": seed,
+    comments = {"generator": "fxdsp simulate", "scenario": args.scenario, "seed": args.seed,
                 "effects": json.dumps(effects, sort_keys=True, allow_nan=False)}
     if args.model:
         comments["model"] = Path(args.model).name   # no folder in a written file

@@ -29,6 +29,7 @@ import time
 from functools import partial
 from pathlib import Path
 
+from fxdsp.commands.options import FINITE, NATURAL, SEED, count
 from fxdsp.outputs import IN, IN_DIR, OUT_DIR
 from fxdsp.errors import InputError
 
@@ -37,16 +38,16 @@ PATHS = {"--out": OUT_DIR, "--config": IN, "--rtl": IN_DIR, "--build-dir": OUT_D
 
 def _common(p, config: bool = True, seed: bool = True) -> None:
     p.add_argument("--out", required=True, metavar="DIR", help="folder of the results (and of the journal)")
-    p.add_argument("--workers", type=int, metavar="N",
+    p.add_argument("--workers", type=NATURAL, metavar="N",
                    help="local Dask worker processes (default: one per CPU; 0: serial, in this process)")
     p.add_argument("--scheduler", metavar="ADDR", help="address of a running Dask scheduler (tcp://host:8786)")
-    p.add_argument("--retries", type=int, default=2, metavar="R",
+    p.add_argument("--retries", type=NATURAL, default=2, metavar="R",
                    help="re-runs of a task that raises (default 2); a dead worker's tasks are re-run anyway")
     p.add_argument("--fresh", action="store_true", help="discard the journal of an earlier run instead of resuming")
     if config:
         p.add_argument("--config", help="TOML config (default: the built-in one)")
     if seed:
-        p.add_argument("--seed", type=int, metavar="S", help="sweep seed (default: the config's stimulus seed)")
+        p.add_argument("--seed", type=SEED, metavar="S", help="sweep seed (default: the config's stimulus seed)")
 
 
 def configure(parser) -> None:
@@ -59,17 +60,17 @@ def configure(parser) -> None:
                                     "frequencies, for a chain with a demodulator): percentiles with 95 %% "
                                     "confidence intervals, and a plot")
     _common(mc)
-    mc.add_argument("--seeds", type=int, default=1000, metavar="N", help="Monte-Carlo samples (default 1000)")
-    mc.add_argument("--temps", type=int, default=16, metavar="N", help="chamber temperatures (default 16)")
+    mc.add_argument("--seeds", type=count(), default=1000, metavar="N", help="Monte-Carlo samples (default 1000)")
+    mc.add_argument("--temps", type=count(), default=16, metavar="N", help="chamber temperatures (default 16)")
     mc.add_argument("--chain", default=CHAIN, help=f"a chain with a sensor (default: {CHAIN})")
     mc.add_argument("--port", help="the chain output to budget (default: its one output that is not a temperature)")
-    mc.add_argument("--temp-range", type=float, nargs=2, metavar=("LO", "HI"),
+    mc.add_argument("--temp-range", type=FINITE, nargs=2, metavar=("LO", "HI"),
                     help="range of the temperatures, C (default: the chain's sensor's chamber range, -20 60 "
                          "for paper 002)")
-    mc.add_argument("--freqs", type=int, metavar="N",
+    mc.add_argument("--freqs", type=count(), metavar="N",
                     help="drive frequencies evenly across the drive band, plus the demodulator's f_hz (default 2; "
                          "1: f_hz only; a chain without a demodulator has none)")
-    mc.add_argument("--samples", type=int, default=2048, metavar="M",
+    mc.add_argument("--samples", type=count(), default=2048, metavar="M",
                     help="measured samples per point after the filters' settling (default 2048)")
 
     wl = sub.add_parser("wordlength", help="word-length search with its candidates in parallel",
@@ -80,24 +81,24 @@ def configure(parser) -> None:
     wl.add_argument("--metric", default="rms", choices=("rms", "max"), help="error measure of --target")
     wl.add_argument("--cost", default="total_bits", choices=("total_bits", "register_bits"),
                     help="cost the search minimises (default total_bits)")
-    wl.add_argument("--margin", type=float, default=0.02, help="optimise to (1 - margin) x target (default 0.02)")
+    wl.add_argument("--margin", type=FINITE, default=0.02, help="optimise to (1 - margin) x target (default 0.02)")
     wl.add_argument("--max-mean", help="also keep |mean| of the --target output within this")
     wl.add_argument("--drive-band", action="store_true", help="meet the target across the drive band too")
 
     hd = sub.add_parser("hidden", help="confusion matrix of the diagnosis on simulated hidden-cause logs",
                         description="fxdsp diagnose-hidden with one task per case")
     _common(hd, config=False, seed=False)
-    hd.add_argument("--per-cause", type=int, default=20, metavar="N", help="cases per cause (default 20)")
-    hd.add_argument("--first-seed", type=int, default=1000, metavar="S", help="seed of the first case")
+    hd.add_argument("--per-cause", type=count(), default=20, metavar="N", help="cases per cause (default 20)")
+    hd.add_argument("--first-seed", type=SEED, default=1000, metavar="S", help="seed of the first case")
     hd.add_argument("--causes", default=",".join(ALL_CAUSES), metavar="A,B", help="causes to draw (default: all)")
-    hd.add_argument("--snr", type=float, nargs=2, default=SNR_RANGE, metavar=("LO", "HI"),
+    hd.add_argument("--snr", type=FINITE, nargs=2, default=SNR_RANGE, metavar=("LO", "HI"),
                     help="effect size range in noise units (default %(default)s)")
 
     rt = sub.add_parser("rtl", help="random-parameter RTL regressions (cocotb on Icarus), one set per shard",
                         description="RTL vs model on random parameter sets, one per shard, each built in its "
                                     "own folder")
     _common(rt)
-    rt.add_argument("--shards", type=int, default=8, metavar="N", help="random parameter sets (default 8)")
+    rt.add_argument("--shards", type=count(), default=8, metavar="N", help="random parameter sets (default 8)")
     rt.add_argument("--blocks", metavar="A,B", help="blocks and chains to run per shard (default: all)")
     rt.add_argument("--rtl", metavar="DIR", help="Verilog sources (default: the RTL shipped in the package)")
     rt.add_argument("--build-dir", metavar="DIR", help="keep every shard's build here (default: temporary)")

@@ -61,7 +61,8 @@ def instance(design: Design, name: str) -> Instance:
 
 def instances(design: Design) -> dict[str, Instance]:
     """Every block instance of the design (the chains are tops, not instances), by its name."""
-    return {name: instance(design, name) for name, inst in design.hardware.items() if not inst.members}
+    with design.config.naming_the_file():   # a config the RTL cannot build: its file named
+        return {name: instance(design, name) for name, inst in design.hardware.items() if not inst.members}
 
 
 def literal(inst: Instance, name: str, value) -> str:

@@ -206,7 +206,10 @@ def read_model(path) -> Model:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
         raise InputError(f"model: {path} is not valid JSON ({exc.msg}, line {exc.lineno})") from None
-    return model_from_dict(data)
+    try:
+        return model_from_dict(data)
+    except InputError as exc:   # the file is named with the field
+        raise InputError(f"model: {path}: {str(exc).removeprefix('model: ')}") from None
 
 
 def write_model(path, model: Model) -> None:

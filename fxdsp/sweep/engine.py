@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fxdsp import owned
 from fxdsp.outputs import plain
 from fxdsp.errors import InputError
 
@@ -102,6 +103,7 @@ class Journal:
         """Rewrite the journal (header + every sound line of the previous one: a torn tail goes),
         then keep it open for appending."""
         self.path.parent.mkdir(exist_ok=True)
+        owned.claim(self.path)   # a file of that name that fxdsp did not write is refused, never replaced
         tmp = self.path.with_name(self.path.name + ".tmp")
         with open(tmp, "w", encoding="utf-8") as f:
             f.write(canonical(self.header) + "\n")
