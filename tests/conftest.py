@@ -60,6 +60,16 @@ def edited_data(**edits) -> dict:
     return data
 
 
+def without(*path: str) -> dict:
+    """The default config's data with the key (or table) at ``path`` deleted."""
+    data = copy.deepcopy(default_data())
+    node = data
+    for p in path[:-1]:
+        node = node[p]
+    del node[path[-1]]
+    return data
+
+
 def lag_edits() -> dict:
     """Dotted edits that put the lag into the paper 002 chain (the netlist edit extend makes)."""
     from fxdsp.netlist import with_stage

@@ -21,8 +21,8 @@ from fxdsp import owned
 from fxdsp.outputs import OUT_DIR
 
 # the cheapest real run of each command that writes a folder ({out}: the folder under test, {log}: a
-# chamber log, {one_chain}: a user's config of paper 000's chain alone, {tmp}: a scratch folder); a new command or folder option fails
-# test_every_folder_output_is_run until it is given one here
+# chamber log, {one_chain}: a user's config of paper 000's chain alone, {tmp}: a scratch folder); a
+# new command or folder option fails test_every_folder_output_is_run until it is given one here
 RUNS = {
     ("demo", "--out"): "demo --out {out}",
     ("vectors", "--out"): "vectors --out {out}",
