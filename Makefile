@@ -49,7 +49,7 @@ bench: $(STAMP)
 clean:
 	rm -rf $(VENV) sim_build .pytest_cache .hypothesis
 
-# ---- HDL (issue 3); not part of `make test` -----------------------------------------------------
+# ---- HDL; not part of `make test` ------------------------------------------------------------------
 .PHONY: hdl-gen hdl-lint hdl-mutation hw-report formal
 
 # every formal proof of the default config (fxdsp formal): the serial blocks and the chain

@@ -51,6 +51,13 @@ def parse_mapping(items: list[str] | None) -> dict[str, str]:
             raise InputError(f"--map {item!r}: expected CANONICAL=SOURCE, e.g. temp_c=box_temp")
         if target not in CANONICAL:
             raise InputError(f"--map {item!r}: unknown target {target!r}; expected one of {', '.join(CANONICAL)}")
+        if target in mapping:
+            raise InputError(f"--map {item!r}: {target} is already mapped to {mapping[target]!r}")
+        # one column read as two quantities (time as temperature ...) would be diagnosed, and wrongly
+        twice = next((t for t, s in mapping.items() if s == source), None)
+        if twice is not None:
+            raise InputError(f"--map {item!r}: column {source!r} is already mapped to {twice}; "
+                             f"each canonical column needs its own source column")
         mapping[target] = source
     return mapping
 

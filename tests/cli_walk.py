@@ -5,6 +5,7 @@ the command line are generated from these, so a new command or option is covered
 from __future__ import annotations
 
 import argparse
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -48,13 +49,15 @@ def _below(words: list[str], parser):
         yield from _below(words + [word], sp)
 
 
-def leaves() -> list[Leaf]:
+@functools.cache
+def leaves() -> tuple[Leaf, ...]:
+    """Every runnable command (read once per process: the parsers are only read, never changed)."""
     out = []
     for name in COMMANDS:
         top = next(a for a in build_parser(load=[name])._actions if isinstance(a, argparse._SubParsersAction))
         module = top.choices[name].get_default("_module")   # a subcommand's too (``sweep rtl``)
         out += [Leaf(tuple(words), sp, module) for words, sp in _below([name], top.choices[name])]
-    return out
+    return tuple(out)
 
 
 def paths_of(module, parser, flags: bool) -> dict:

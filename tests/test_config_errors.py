@@ -194,7 +194,7 @@ def test_every_misspelt_key_is_named_with_the_right_one(path, key):
 
 
 @pytest.mark.parametrize("edit,message", [
-    # the case of the issue: a required key misspelt, which used to read "sf_divide.in_format: missing"
+    # a required key misspelt, which used to read "sf_divide.in_format: missing"
     (("sf_divide", "in_format", "in_fromat"), "sf_divide.in_fromat: unknown key (did you mean 'in_format'?)"),
     # a misspelt nested table (checked with its parent: a typo inside [demod.lpf] was ignored before)
     (("demod", "lpf", "lpff"), "demod.lpff: unknown key (did you mean 'lpf'?)"),

@@ -171,6 +171,16 @@ def test_parse_mapping_rejects_malformed_items():
     assert parse_mapping([" temp_c = box_temp "]) == {"temp_c": "box_temp"}
 
 
+@pytest.mark.parametrize("items, said", [
+    (["time_s=t", "temp_c=t"], "column 't' is already mapped to time_s"),   # time read as temperature
+    (["time_s=t", "time_s=box"], "time_s is already mapped to 't'"),      # the last would win, silently
+])
+def test_a_mapping_that_reads_one_column_twice_is_refused(items, said):
+    """Found by a probe: time mapped as temperature too was diagnosed (exit 0), a wrong answer."""
+    with pytest.raises(InputError, match=said):
+        parse_mapping(items)
+
+
 def test_equal_time_stamps_are_allowed(tmp_path, capsys):
     t, temp, out = _canonical_rows(400)
     t = t.copy()

@@ -116,7 +116,7 @@ def test_demo_vectors_and_hdl_gen_from_another_folder(installed):
 
 
 def test_rtl_of_a_users_config_with_a_faulty_rtl_from_the_installed_package(installed):
-    """The issue's case, from the installed package: a user's config (the sense ADC at 18 bits) and
+    """From the installed package: a user's config (the sense ADC at 18 bits) and
     the packaged RTL with a fault injected (a copy, --rtl): exit 1 naming the DUT and its first
     mismatch, with a waveform. (The same regression passing: the extend test below, whose RTL run is
     bit-exact; the user's config passing in process, with both variants: tests/hdl/test_rtl_command.py.)"""
