@@ -58,6 +58,9 @@ class Cause:
     channel: str                         # the log channel where it shows (its held-out gain is counted)
     explain: str = ""                    # the report's sentence, formatted with the fitted parameters
     needs: tuple[str, ...] = ()          # optional log columns without which it cannot be seen at all
+    # diagnosis: whether a log can show it at all (its column, a temperature that moves, a rate table),
+    # from the diagnosis's context (``ctx.series``, ``ctx.has_rate``, ``ctx.orders``)
+    shows: Callable[[object], bool] = field(default=lambda ctx: True)
     also_freq: bool = False              # it also moves freq_hz when the log has it (a lag of the die)
     # simulator: the stage it acts on and the new value of that stage's signal, from the parameters,
     # the signal so far and the generator's other signals (t, rtd_true, temp_clean, te, quad)
@@ -87,6 +90,20 @@ class Cause:
     def channels(self, has_freq: bool) -> list[str]:
         """Channels whose fit the cause changes (and where its held-out evidence is counted)."""
         return [self.channel] + (["freq_hz"] if self.also_freq and has_freq else [])
+
+
+def _temperature_moves(ctx) -> bool:
+    return float(np.ptp(ctx.series.temp)) > 0
+
+
+def _sf_cubic_visible(ctx) -> bool:
+    """A rate table whose rates make rate^3 no multiple of rate (a tumble's cos(theta) in {1, 0, -1}
+    does), with the scale factor estimated."""
+    s = ctx.series
+    if not (ctx.has_rate and ctx.orders[1] is not None and s.sf_estimate is not None):
+        return False
+    u = s.rate / np.max(np.abs(s.rate))
+    return np.linalg.matrix_rank(np.column_stack([u, u ** 3]), tol=1e-6) == 2
 
 
 def _lag_remedy(p: dict) -> Remedy:
@@ -176,8 +193,8 @@ def _rtd_b_per_c(c: np.ndarray, j: int, sd_y: float, sc) -> float:
 
 
 _RECORDS = (
-    Cause("none", (), "output"),
-    Cause("thermal_lag", ("tau_s",), "output", also_freq=True,
+    Cause("none", (), "output", shows=lambda ctx: False),
+    Cause("thermal_lag", ("tau_s",), "output", also_freq=True, shows=_temperature_moves,
           explain=("The sensing element lags the logged temperature through a first-order lag of "
                    "tau = {tau_s:.0f} s: heating and cooling give different outputs at the same temp_c "
                    "and the difference decays through the dwells after each ramp."),
@@ -185,14 +202,14 @@ _RECORDS = (
           search=Search("tau_s", 1.0, 36), draw=_draw_lag,
           remedies={"gyro_rtd": _lag_remedy, "thermometer": _lag_remedy},
           absorbed={"gyro_freq": "the resonant frequency reads the die itself"}),
-    Cause("ramp_rate", ("k_per_c_per_s",), "output",
+    Cause("ramp_rate", ("k_per_c_per_s",), "output", shows=_temperature_moves,
           explain=("The output carries a term proportional to d(temp_c)/dt (k = {k_per_c_per_s:.4g} per C/s): "
                    "a thermal-gradient effect that vanishes as soon as the temperature stops moving."),
           stage="output",
           inject=lambda p, out, s: out + p["k_per_c_per_s"] * mech.rate_of_change(s["t"], s["temp_clean"]),
           term=lambda series, state: series.dtdt, linear="k_per_c_per_s",
           draw=_sized("ramp_rate", "output", lambda d: mech.rate_of_change(d.t, d.truth["temp_c"]))),
-    Cause("hysteresis", ("h",), "output",
+    Cause("hysteresis", ("h",), "output", shows=lambda ctx: bool(np.any(ctx.series.hyst != 0)),
           explain=("The output differs by {h:.4g} (2h between the two branches) after heating and after "
                    "cooling ramps and keeps that offset through the dwells: hysteresis, not a lag."),
           stage="output", inject=lambda p, out, s: out + p["h"] * mech.ramp_direction(s["t"], s["temp_clean"]),
@@ -210,6 +227,7 @@ _RECORDS = (
           term=lambda series, state: series.t / 3600.0, linear="r_per_h", time_tied=True,
           draw=_sized("aging_drift", "output", lambda d: d.t / 3600.0)),
     Cause("quadrature_leak", ("c",), "output", needs=("quad",),
+          shows=lambda ctx: ctx.series.quad is not None and float(np.ptp(ctx.series.quad)) > 0,
           explain=("The quadrature channel leaks into the rate channel with coefficient c = {c:.4g} "
                    "(a demodulation phase error of about {phase_mrad:.3g} mrad)."),
           explain_extra=lambda p: {"phase_mrad": 1e3 * float(np.arctan(abs(p["c"])))},
@@ -218,13 +236,14 @@ _RECORDS = (
           term=lambda series, state: series.quad, linear="c", time_tied=True,
           draw=_sized("quadrature_leak", "output", lambda d: d.truth["quad"]),
           remedies={"gyro_rtd": _trim_remedy}),
-    Cause("sf_nonlinearity", ("k3",), "output", needs=("rate_dps",),
+    Cause("sf_nonlinearity", ("k3",), "output", needs=("rate_dps",), shows=_sf_cubic_visible,
           explain=("The scale factor depends on the rate: output = B + S (rate + k3 rate^3) with "
                    "k3 = {k3:.4g} per (rate unit)^2."),
           stage="rate", inject=lambda p, rate, s: rate + p["k3"] * rate ** 3,
           term=lambda series, state: series.sf_estimate * series.rate ** 3, linear="k3",
           draw=_sized("sf_nonlinearity", "output", _sf_cubic_shape)),
     Cause("rtd_nonlinearity", ("b_per_c",), "temp_c", needs=("ref_temp_c",),
+          shows=lambda ctx: ctx.series.ref is not None,
           explain=("temp_c is curved against the reference thermometer: b = {b_per_c:.4g} /C, i.e. "
                    "a linear RTD law misreads by b (T - 25)^2 (Callendar-Van Dusen curvature)."),
           stage="rtd", inject=lambda p, rtd, s: s["rtd_true"] + mech.rtd_curvature(s["rtd_true"], p["b_per_c"]),
@@ -233,6 +252,7 @@ _RECORDS = (
           absorbed={"thermometer": "absorbed by the cubic bias polynomial",
                     "gyro_freq": "the chamber thermometer is not in the path"}),
     Cause("frequency_nonlinearity", ("k2_hz_per_c2",), "freq_hz", needs=("freq_hz",),
+          shows=lambda ctx: ctx.series.freq is not None,
           explain=("The resonant frequency is curved in temperature: k2 = {k2_hz_per_c2:.4g} Hz/C^2 "
                    "on top of f0 + k Te (a turnover)."),
           stage="freq", inject=lambda p, f, s: f + mech.frequency_curvature(s["te"], p["k2_hz_per_c2"]),

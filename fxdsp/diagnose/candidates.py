@@ -19,27 +19,9 @@ def affected_channels(ctx: Context, cause: str) -> list[str]:
 
 
 def available(ctx: Context, cause: str) -> bool:
-    """Whether the log can show the cause at all (the column it needs, a ramp, a rate table)."""
-    s = ctx.series
-    if cause == "none":
-        return False
-    if cause == "quadrature_leak":
-        return s.quad is not None and float(np.ptp(s.quad)) > 0
-    if cause == "sf_nonlinearity":
-        # rate^3 must not be a multiple of rate (a tumble's cos(theta) in {1, 0, -1} is)
-        if not (ctx.has_rate and ctx.orders[1] is not None and s.sf_estimate is not None):
-            return False
-        u = s.rate / np.max(np.abs(s.rate))
-        return np.linalg.matrix_rank(np.column_stack([u, u ** 3]), tol=1e-6) == 2
-    if cause == "rtd_nonlinearity":
-        return s.ref is not None
-    if cause == "frequency_nonlinearity":
-        return s.freq is not None
-    if cause == "hysteresis":
-        return bool(np.any(s.hyst != 0))
-    if cause in ("thermal_lag", "ramp_rate"):
-        return float(np.ptp(s.temp)) > 0
-    return True
+    """Whether the log can show the cause at all (its record's ``shows``: the column it needs, a
+    moving temperature, a rate table)."""
+    return CAUSES[cause].shows(ctx)
 
 
 def grid(ctx: Context, cause: str) -> np.ndarray:
