@@ -317,8 +317,7 @@ class Stage:
             if where:
                 raise InputError(f"{final}: {where} is not a finite number (nan or inf); nothing written")
             owned.guard_replace(final)
-        declared = owned.current() is not None
-        written = {final: owned.file_sha256(staged) for staged, final in moves} if declared else {}
+        written = owned.digests(moves)
         removals = [final for final in self._removals if owned.may_remove(final)]
         with interrupts_held():
             for staged, final in moves:

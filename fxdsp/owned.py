@@ -151,6 +151,15 @@ def claim(final: Path) -> None:
     update({Path(final): APPENDED}, [])
 
 
+def digests(moves) -> dict[Path, str]:
+    """sha256 of each staged file (``(staged, final)`` pairs) that becomes a file of a declared
+    folder output: what :func:`update` records once it is moved."""
+    declared = current()
+    if declared is None:
+        return {}
+    return {final: file_sha256(staged) for staged, final in moves if declared.root_of(final) is not None}
+
+
 def update(written: dict[Path, str], removed: list[Path]) -> None:
     """Record files moved into declared folder outputs (final -> sha256 of what was written) and drop
     removed ones; entries whose file is gone are dropped too. Each record is replaced whole (written

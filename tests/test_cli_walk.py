@@ -108,11 +108,14 @@ def test_a_number_outside_its_domain_never_reaches_the_command(tmp_path_factory,
 
 
 # ---- paths -------------------------------------------------------------------------------------------
-def _bad_values(kind: str, tmp: Path, make: bool = True) -> dict[str, str]:
-    """class -> a value that is no usable path of ``kind`` (``make``: create the file and folder)."""
-    if make:
-        (tmp / "a_file.txt").write_text("x\n")
-        (tmp / "a_dir").mkdir(exist_ok=True)
+def _existing(tmp: Path) -> None:
+    """The file and the folder the values below point at."""
+    (tmp / "a_file.txt").write_text("x\n")
+    (tmp / "a_dir").mkdir(exist_ok=True)
+
+
+def _bad_values(kind: str, tmp: Path) -> dict[str, str]:
+    """class -> a value that is no usable path of ``kind`` (see :func:`_existing`)."""
     values = {"empty": "", "blank": "   ", "NUL": str(tmp / "a\0b")}
     if kind in (IN, OUT_FILE):
         values |= {"a folder": str(tmp / "a_dir"), "trailing separator": str(tmp / "new.txt") + "/",
@@ -125,12 +128,13 @@ def _bad_values(kind: str, tmp: Path, make: bool = True) -> dict[str, str]:
 
 
 PATH_CASES = [(leaf, option, kind, what) for leaf, option, kind in PATHS
-              for what in _bad_values(kind, Path("."), make=False)]
+              for what in _bad_values(kind, Path("."))]
 
 
 @pytest.mark.parametrize("leaf, option, kind, what", PATH_CASES,
                          ids=[f"{leaf.name} {o} {w}" for leaf, o, _, w in PATH_CASES])
 def test_a_path_that_is_no_usable_path_is_refused_before_any_work(tmp_path, monkeypatch, leaf, option, kind, what):
+    _existing(tmp_path)
     value = _bad_values(kind, tmp_path)[what]
     code, err, _ = _probe(monkeypatch, leaf, argv_for(leaf, tmp_path, {option: [value]}), tmp_path)
     assert code == 2 and option in err, (what, err)
@@ -144,8 +148,8 @@ PAIRS = [(leaf, a, b) for leaf in LEAVES for a, ka in leaf.paths().items() for b
 def test_one_path_for_two_options_where_one_writes_is_refused(tmp_path, monkeypatch, leaf, first, second):
     """An input reused as an output, or two outputs on one path (each kind: an existing file, a
     folder, a new name)."""
+    _existing(tmp_path)
     for target in ("a_file.txt", "a_dir", "new"):
-        _bad_values(IN, tmp_path)
         value = str(tmp_path / target)
         code, err, _ = _probe(monkeypatch, leaf, argv_for(leaf, tmp_path, {first: [value], second: [value]}), tmp_path)
         assert code == 2 and (first in err or second in err), (target, err)

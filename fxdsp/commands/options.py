@@ -24,10 +24,6 @@ class Number:
     hi: float | None = None
     lo_open: bool = False
 
-    @property
-    def __name__(self) -> str:   # argparse names the type by it in its own messages
-        return self.describe()
-
     def describe(self) -> str:
         what = "an integer" if self.kind is int else "a finite number"
         if self.lo is not None and self.hi is not None:

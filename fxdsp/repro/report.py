@@ -673,6 +673,11 @@ def read_parts(folder) -> dict[str, dict]:
             if p in PAPERS and isinstance(part, dict) and set(part) == keys}
 
 
+# each paper's section and figures
+_WRITERS = {"002": (_md002, _plot002), "001": (_md001, _plot001), "000": (_md000, _plot000),
+            "003": (_md003, _plot003)}
+
+
 def _part(paper: str, r: dict, command: str) -> dict:
     note = ""
     rep = r.get("repeatability") if paper == "002" else None
@@ -680,7 +685,7 @@ def _part(paper: str, r: dict, command: str) -> dict:
         note = (f"Paper 002 values: median [10th..90th percentile] over {len(rep['quick']['pairs'])} "
                 "calibration/verification run pairs of the device with its run-to-run repeatability "
                 "(`fxdsp.sim.repeatability`; see the paper 002 section).")
-    section = {"002": _md002, "001": _md001, "000": _md000, "003": _md003}[paper](r)
+    section = _WRITERS[paper][0](r)
     return {"rows": [list(row) for row in summary_rows({paper: r})], "note": note, "section": section,
             "command": command}
 
@@ -695,11 +700,10 @@ def write_report(res: dict, out_dir, command: str = "fxdsp repro --paper all --r
         img.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputError(f"--report: cannot create {img}: {exc.strerror or exc}") from None
-    plots = {"002": _plot002, "001": _plot001, "000": _plot000, "003": _plot003}
     parts = dict(previous or {})
     for p in PAPERS:
         if p in res:
-            plots[p](res[p], img)
+            _WRITERS[p][1](res[p], img)
             parts[p] = _part(p, res[p], command)
     commands = list(dict.fromkeys(parts[p]["command"] for p in PAPERS if p in parts))
     head = [
