@@ -51,13 +51,8 @@ def parse_mapping(items: list[str] | None) -> dict[str, str]:
             raise InputError(f"--map {item!r}: expected CANONICAL=SOURCE, e.g. temp_c=box_temp")
         if target not in CANONICAL:
             raise InputError(f"--map {item!r}: unknown target {target!r}; expected one of {', '.join(CANONICAL)}")
-        if target in mapping:
+        if target in mapping:   # a dict would keep the last silently
             raise InputError(f"--map {item!r}: {target} is already mapped to {mapping[target]!r}")
-        # one column read as two quantities (time as temperature ...) would be diagnosed, and wrongly
-        twice = next((t for t, s in mapping.items() if s == source), None)
-        if twice is not None:
-            raise InputError(f"--map {item!r}: column {source!r} is already mapped to {twice}; "
-                             f"each canonical column needs its own source column")
         mapping[target] = source
     return mapping
 
@@ -194,8 +189,17 @@ def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
     if not body:
         raise InputError(f"{path}: no data rows after the header")
     index = {name: i for i, name in enumerate(header) if name}
-    # canonical names present in the file are used as they are unless mapped to something else
-    sources = {c: c for c in CANONICAL if c in index}
+    # one source column is one quantity: a column --map assigns is that quantity only (a canonical
+    # column mapped elsewhere is not also read under its own name), and no column is mapped twice
+    # (time read as temperature too would be diagnosed, and wrongly)
+    claimed: dict[str, str] = {}
+    for target, source in mapping.items():
+        if source in claimed:
+            raise InputError(f"--map {target}={source}: column {source!r} is already mapped to {claimed[source]}; "
+                             f"each canonical column needs its own source column")
+        claimed[source] = target
+    # the other canonical names present in the file are used as they are
+    sources = {c: c for c in CANONICAL if c in index and c not in claimed}
     sources.update(mapping)
     for target, source in mapping.items():
         if source not in index:

@@ -171,14 +171,22 @@ def test_parse_mapping_rejects_malformed_items():
     assert parse_mapping([" temp_c = box_temp "]) == {"temp_c": "box_temp"}
 
 
-@pytest.mark.parametrize("items, said", [
-    (["time_s=t", "temp_c=t"], "column 't' is already mapped to time_s"),   # time read as temperature
-    (["time_s=t", "time_s=box"], "time_s is already mapped to 't'"),      # the last would win, silently
-])
-def test_a_mapping_that_reads_one_column_twice_is_refused(items, said):
-    """Found by a probe: time mapped as temperature too was diagnosed (exit 0), a wrong answer."""
-    with pytest.raises(InputError, match=said):
-        parse_mapping(items)
+def test_a_target_mapped_twice_is_refused():
+    with pytest.raises(InputError, match="time_s is already mapped to 't'"):   # the last would win, silently
+        parse_mapping(["time_s=t", "time_s=box"])
+
+
+def test_one_column_is_read_as_one_quantity(tmp_path):
+    """Found by a probe: time mapped as temperature too was diagnosed (exit 0), a wrong answer. A
+    column mapped twice is refused; a canonical column mapped to another quantity is read as that
+    one only, not also under its own name."""
+    t, temp, out = _canonical_rows(50)
+    path = _write(tmp_path / "log.csv", ["time_s", "temp_c", "output", "ref_temp_c"],
+                  zip(t, temp, out, temp + 0.5))
+    with pytest.raises(InputError, match="column 't' is already mapped to time_s"):
+        read_log(_write(tmp_path / "f.csv", ["t", "output"], zip(t, out)), {"time_s": "t", "temp_c": "t"})
+    log = read_log(path, {"temp_c": "ref_temp_c"})
+    assert np.allclose(log.columns["temp_c"], temp + 0.5) and not log.has("ref_temp_c")
 
 
 def test_equal_time_stamps_are_allowed(tmp_path, capsys):

@@ -53,7 +53,8 @@ def _check_rtl_limits(design: Design, name: str, dp) -> None:
 def instance(design: Design, name: str) -> Instance:
     """One block instance: its datapath spelled as Verilog parameters and ROM files."""
     dp = design.instances[name].block.datapath
-    _check_rtl_limits(design, name, dp)
+    with design.config.naming_the_file():   # a config the RTL cannot build: its file named
+        _check_rtl_limits(design, name, dp)
     params, roms, consts = dp.verilog(name)
     return Instance(dp.MODULE, params, {f: hex_words(r.words.ravel(), r.width) for f, r in roms.items()},
                     tuple(sorted(consts)))
@@ -61,8 +62,7 @@ def instance(design: Design, name: str) -> Instance:
 
 def instances(design: Design) -> dict[str, Instance]:
     """Every block instance of the design (the chains are tops, not instances), by its name."""
-    with design.config.naming_the_file():   # a config the RTL cannot build: its file named
-        return {name: instance(design, name) for name, inst in design.hardware.items() if not inst.members}
+    return {name: instance(design, name) for name, inst in design.hardware.items() if not inst.members}
 
 
 def literal(inst: Instance, name: str, value) -> str:
@@ -85,7 +85,13 @@ def header(inst: Instance, name: str) -> str:
 
 
 def generate(design: Design) -> dict[str, str]:
-    """Every generated file: name -> text."""
+    """Every generated file: name -> text. A fault of the config found here (a block the RTL cannot
+    build, a chain's generated top) names the config's file."""
+    with design.config.naming_the_file():
+        return _generate(design)
+
+
+def _generate(design: Design) -> dict[str, str]:
     files: dict[str, str] = {}
     insts = instances(design)
     for name, inst in insts.items():
