@@ -75,6 +75,9 @@ class Cause:
     curvature: Callable[[np.ndarray, int, float, object], float] | None = None
     search: Search | None = None
     time_tied: bool = False              # a function of time alone: a look-alike of slow noise wander
+    # the column or time scale whose structure it claims (the `against` of the contract's section 5):
+    # named, it must leave none there (fxdsp.diagnose.remaining)
+    signature: str = "time_s"
     transient: bool = False              # lives at the start of the log rather than throughout it
     explain_extra: Callable[[dict], dict] = field(default=lambda p: {})
     # extend: per calibration procedure, the remedy built from the fitted parameters, or why the
@@ -194,7 +197,7 @@ def _rtd_b_per_c(c: np.ndarray, j: int, sd_y: float, sc) -> float:
 
 _RECORDS = (
     Cause("none", (), "output", shows=lambda ctx: False),
-    Cause("thermal_lag", ("tau_s",), "output", also_freq=True, shows=_temperature_moves,
+    Cause("thermal_lag", ("tau_s",), "output", signature="d(temp_c)/dt", also_freq=True, shows=_temperature_moves,
           explain=("The sensing element lags the logged temperature through a first-order lag of "
                    "tau = {tau_s:.0f} s: heating and cooling give different outputs at the same temp_c "
                    "and the difference decays through the dwells after each ramp."),
@@ -202,31 +205,31 @@ _RECORDS = (
           search=Search("tau_s", 1.0, 36), draw=_draw_lag,
           remedies={"gyro_rtd": _lag_remedy, "thermometer": _lag_remedy},
           absorbed={"gyro_freq": "the resonant frequency reads the die itself"}),
-    Cause("ramp_rate", ("k_per_c_per_s",), "output", shows=_temperature_moves,
+    Cause("ramp_rate", ("k_per_c_per_s",), "output", signature="d(temp_c)/dt", shows=_temperature_moves,
           explain=("The output carries a term proportional to d(temp_c)/dt (k = {k_per_c_per_s:.4g} per C/s): "
                    "a thermal-gradient effect that vanishes as soon as the temperature stops moving."),
           stage="output",
           inject=lambda p, out, s: out + p["k_per_c_per_s"] * mech.rate_of_change(s["t"], s["temp_clean"]),
           term=lambda series, state: series.dtdt, linear="k_per_c_per_s",
           draw=_sized("ramp_rate", "output", lambda d: mech.rate_of_change(d.t, d.truth["temp_c"]))),
-    Cause("hysteresis", ("h",), "output", shows=lambda ctx: bool(np.any(ctx.series.hyst != 0)),
+    Cause("hysteresis", ("h",), "output", signature="temp_c", shows=lambda ctx: bool(np.any(ctx.series.hyst != 0)),
           explain=("The output differs by {h:.4g} (2h between the two branches) after heating and after "
                    "cooling ramps and keeps that offset through the dwells: hysteresis, not a lag."),
           stage="output", inject=lambda p, out, s: out + p["h"] * mech.ramp_direction(s["t"], s["temp_clean"]),
           term=lambda series, state: series.hyst, linear="h", time_tied=True,
           draw=_sized("hysteresis", "output")),
-    Cause("warmup", ("a", "tau_s"), "output",
+    Cause("warmup", ("a", "tau_s"), "output", signature="time_s",
           explain="A settling transient after power-on: output += {a:.4g} exp(-t / {tau_s:.0f} s).",
           stage="output", inject=lambda p, out, s: out + mech.warmup(s["t"], **p),
           term=lambda series, state: np.exp(-series.t / state["warmup"]["tau_s"]), linear="a",
           search=Search("tau_s", 0.5, 30), time_tied=True, transient=True, draw=_draw_warmup),
-    Cause("aging_drift", ("r_per_h",), "output",
+    Cause("aging_drift", ("r_per_h",), "output", signature="time_s",
           explain=("The output drifts linearly with time at {r_per_h:.4g} per hour, independent of "
                    "temperature."),
           stage="output", inject=lambda p, out, s: out + mech.aging_drift(s["t"], p["r_per_h"]),
           term=lambda series, state: series.t / 3600.0, linear="r_per_h", time_tied=True,
           draw=_sized("aging_drift", "output", lambda d: d.t / 3600.0)),
-    Cause("quadrature_leak", ("c",), "output", needs=("quad",),
+    Cause("quadrature_leak", ("c",), "output", signature="quad", needs=("quad",),
           shows=lambda ctx: ctx.series.quad is not None and float(np.ptp(ctx.series.quad)) > 0,
           explain=("The quadrature channel leaks into the rate channel with coefficient c = {c:.4g} "
                    "(a demodulation phase error of about {phase_mrad:.3g} mrad)."),
@@ -236,13 +239,13 @@ _RECORDS = (
           term=lambda series, state: series.quad, linear="c", time_tied=True,
           draw=_sized("quadrature_leak", "output", lambda d: d.truth["quad"]),
           remedies={"gyro_rtd": _trim_remedy}),
-    Cause("sf_nonlinearity", ("k3",), "output", needs=("rate_dps",), shows=_sf_cubic_visible,
+    Cause("sf_nonlinearity", ("k3",), "output", signature="rate_dps", needs=("rate_dps",), shows=_sf_cubic_visible,
           explain=("The scale factor depends on the rate: output = B + S (rate + k3 rate^3) with "
                    "k3 = {k3:.4g} per (rate unit)^2."),
           stage="rate", inject=lambda p, rate, s: rate + p["k3"] * rate ** 3,
           term=lambda series, state: series.sf_estimate * series.rate ** 3, linear="k3",
           draw=_sized("sf_nonlinearity", "output", _sf_cubic_shape)),
-    Cause("rtd_nonlinearity", ("b_per_c",), "temp_c", needs=("ref_temp_c",),
+    Cause("rtd_nonlinearity", ("b_per_c",), "temp_c", signature="temp_c", needs=("ref_temp_c",),
           shows=lambda ctx: ctx.series.ref is not None,
           explain=("temp_c is curved against the reference thermometer: b = {b_per_c:.4g} /C, i.e. "
                    "a linear RTD law misreads by b (T - 25)^2 (Callendar-Van Dusen curvature)."),
@@ -251,7 +254,7 @@ _RECORDS = (
           draw=_sized("rtd_nonlinearity", "temp_c", lambda d: (d.truth["ref_temp_c"] - 25.0) ** 2),
           absorbed={"thermometer": "absorbed by the cubic bias polynomial",
                     "gyro_freq": "the chamber thermometer is not in the path"}),
-    Cause("frequency_nonlinearity", ("k2_hz_per_c2",), "freq_hz", needs=("freq_hz",),
+    Cause("frequency_nonlinearity", ("k2_hz_per_c2",), "freq_hz", signature="temp_c", needs=("freq_hz",),
           shows=lambda ctx: ctx.series.freq is not None,
           explain=("The resonant frequency is curved in temperature: k2 = {k2_hz_per_c2:.4g} Hz/C^2 "
                    "on top of f0 + k Te (a turnover)."),

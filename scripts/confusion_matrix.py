@@ -1,9 +1,12 @@
 #!/usr/bin/env python3
 """Confusion matrix of `fxdsp diagnose` on both log generators: the independent one written from the
 contract (tests/independent/chamber_logs.py, no fxdsp imports) and the project's own simulator
-(fxdsp.diagnose.hidden). Every cause including none, and the independent generator's PAIRS.
+(fxdsp.diagnose.hidden). Every cause including none, the independent generator's PAIRS and
+(--triples) TRIPLES, (--outside) none with each effect outside the contract's list, (--short) the
+single causes in logs of 500 rows, (--flicker) the single causes under flicker-dominated noise.
 
     .venv/bin/python scripts/confusion_matrix.py --per-label 20 [--generator independent|project|both]
+        [--triples] [--outside] [--short] [--flicker]
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from tqdm import tqdm  # noqa: E402
 
-from independent.confusion import labels, score, table  # noqa: E402
+from independent.confusion import label_name, score, specs, table  # noqa: E402
 
 
 def main() -> int:
@@ -25,19 +28,24 @@ def main() -> int:
     p.add_argument("--first-seed", type=int, default=5000)
     p.add_argument("--generator", choices=("independent", "project", "both"), default="both")
     p.add_argument("--no-pairs", action="store_true")
+    for group in ("triples", "outside", "short", "flicker"):
+        p.add_argument(f"--{group}", action="store_true")
     args = p.parse_args()
     gens = ("independent", "project") if args.generator == "both" else (args.generator,)
     for gen in gens:
-        labs = labels(not args.no_pairs)
+        # the project's simulator has no flicker-dominated kind nor a row count of its own
+        todo = [(lab, kw) for lab, kw in specs(not args.no_pairs, args.triples, args.outside, args.short and gen == "independent",
+                                               args.flicker and gen == "independent")]
         outcomes = []
-        with tqdm(total=len(labs) * args.per_label, desc=gen, file=sys.stderr) as bar:
-            for lab in labs:
+        with tqdm(total=len(todo) * args.per_label, desc=gen, file=sys.stderr) as bar:
+            for lab, kw in todo:
                 for k in range(args.per_label):
-                    outcomes.append(score(lab, args.first_seed + k, gen))
+                    outcomes.append(score(lab, args.first_seed + k, gen, **kw))
+                    outcomes[-1].label = label_name(lab, kw)
                     bar.update()
         print(f"## {gen} generator, {args.per_label} logs per label\n")
         print(table(outcomes))
-        misses = [o for o in outcomes if not (o.named_exactly and o.params_ok and o.gain_ok)]
+        misses = [o for o in outcomes if not o.outside and not (o.named_exactly and o.params_ok and o.gain_ok)]
         if misses:
             print("\nMisses:\n")
             for o in misses:

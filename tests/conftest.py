@@ -205,3 +205,20 @@ def pytest_collection_modifyitems(session, config, items):
 @pytest.fixture(scope="session")
 def design():
     return build()
+
+
+def diagnose_schema() -> dict:
+    """The packaged copy of the contract's report schema plus the `remaining` object of the
+    contract's section 5, which its text requires and its schema will list once reports carry it
+    (names and meanings from measured-data.md, section 5)."""
+    from fxdsp.schemas import diagnose_report_schema
+
+    schema = copy.deepcopy(diagnose_report_schema())
+    schema["required"] = [*schema["required"], "remaining"]
+    schema["properties"]["remaining"] = {
+        "type": "object", "required": ["significant", "rms", "fraction", "against", "explanation"],
+        "properties": {"significant": {"type": "boolean"}, "rms": {"type": "number", "minimum": 0},
+                       "fraction": {"type": "number", "minimum": 0},
+                       "against": {"type": "array", "items": {"type": "string", "minLength": 1}},
+                       "explanation": {"type": "string", "minLength": 1}}}
+    return schema

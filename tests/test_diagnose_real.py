@@ -14,7 +14,7 @@ import pytest
 from fxdsp.cli import main
 from fxdsp.logfile import parse_mapping, read_log
 from fxdsp.diagnose.rtd import IEC60751, cvd_law, fit_cvd, fit_linear, linear_temperature, load_table, rtd_study
-from fxdsp.schemas import diagnose_report_schema
+from conftest import diagnose_schema
 
 TCKIT_REL = "data/tckit/hp3458abx_hp34420a_tcsweep_1vdc_nplc100_test2_oct2024.dsv"
 PT100_REL = "data/pt100_table/pt100_table.csv"
@@ -56,7 +56,7 @@ def test_tckit_vbl5_lags_the_bath(tmp_path, capsys):
     code = main(["diagnose", str(TCKIT), *TCKIT_ARGS, "--json", str(report), "--report", str(tmp_path / "rep")])
     assert code == 0, capsys.readouterr().err
     data = json.loads(report.read_text())
-    jsonschema.validate(data, diagnose_report_schema())
+    jsonschema.validate(data, diagnose_schema())
 
     log = read_log(TCKIT, parse_mapping(TCKIT_ARGS[1:6:2]), ";", "%d/%m/%Y-%H:%M:%S")
     t, box, v = log.columns["time_s"], log.columns["temp_c"], log.columns["output"]

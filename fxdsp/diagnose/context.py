@@ -62,6 +62,9 @@ class Diagnosis:
     # -> identify.described(...) (never named, never written as a plain number)
     unidentified: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)  # what the reader set aside, in words
+    # the contract's `remaining` object and each channel's verdict behind it (fxdsp.diagnose.remaining)
+    remaining: dict = field(default_factory=dict)
+    structures: list = field(default_factory=list)
 
 
 class Context:
@@ -87,6 +90,9 @@ class Context:
         self.weights = {ch: 1.0 for ch in series.channels()}
         # > 0 when the channel's noise wanders (random walk): fits then use one-step innovations
         self.innovation_gain: dict[str, float] = {}
+        # columns appended to a channel's design that belong to no cause: a structure outside the
+        # contract's list, modelled while a named cause is re-tested (fxdsp.diagnose.remaining)
+        self.nuisance: dict[str, np.ndarray] = {}
 
     @property
     def has_rate(self) -> bool:
@@ -99,10 +105,15 @@ class Context:
 
     def design(self, channel: str, state: dict, orders=None):
         if channel == "output":
-            return M.output_design(self.series, state, orders or self.orders, self.scales["output"])
-        if channel == "freq_hz":
-            return M.freq_design(self.series, state, self.scales["freq_hz"])
-        return M.temp_design(self.series, state, self.scales["temp_c"])
+            x, names = M.output_design(self.series, state, orders or self.orders, self.scales["output"])
+        elif channel == "freq_hz":
+            x, names = M.freq_design(self.series, state, self.scales["freq_hz"])
+        else:
+            x, names = M.temp_design(self.series, state, self.scales["temp_c"])
+        extra = self.nuisance.get(channel)
+        if extra is None:
+            return x, names
+        return np.column_stack([x, extra]), names + [f"nuisance{j}" for j in range(extra.shape[1])]
 
     def normals(self, channel: str, state: dict, orders=None) -> tuple[SegmentNormals, list[str]]:
         x, names = self.design(channel, state, orders)

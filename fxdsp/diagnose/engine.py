@@ -25,6 +25,12 @@
    contiguous groups, so noise correlated over minutes to an hour is accounted for), and the gain
    is the held-out rms of the cause's channel without and with the causes.
 
+5. What remains (remaining.py): the final model's residual in every channel, tested against shapes
+   no named cause has (a step, a periodic term, a curved drift, temperature, dT/dt, rate and
+   quadrature terms) at the 1 % level of the log's own noise (white plus a random walk). A named
+   cause whose claimed signature (its record's ``signature``) still shows there is re-tested with
+   that structure in the model: one that then fails only absorbed part of it and is not named.
+
 Logs above MAX_SEARCH_ROWS rows are searched on every k-th row (derivatives, ramp states and
 lags computed on the full log first); the final fit uses every row.
 """
@@ -38,6 +44,7 @@ from fxdsp.diagnose import model as M
 from fxdsp.diagnose.candidates import affected_channels, refit_nonlinear
 from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, ORDER_CHOICES, Context, Diagnosis, choose_orders, set_noise_weights, sf_estimate
 from fxdsp.diagnose.identify import described, judge, reasons
+from fxdsp.diagnose.remaining import absorbing_only, remaining
 from fxdsp.diagnose.results import baseline_coefficients, channel_gain, linear_parameters
 from fxdsp.diagnose.selection import check_against_wander, greedy_search, order_by_gain, prune
 
@@ -71,6 +78,27 @@ def diagnose_series(series: M.Series, n_segments: int = 200, n_folds: int = 5) -
 
     unidentified: dict = {}
     notes: list[str] = []
+    while True:
+        diag = _conclude(ctx, search, state, accepted, first_round, unidentified, notes)
+        # a cause is named only when it removes the signature it claims: one that passes its test
+        # only by absorbing part of a structure the list does not explain (a linear drift taking
+        # part of a step) is not named
+        absorbing = absorbing_only(ctx, diag.state, [c for c in accepted if c.cause in diag.causes],
+                                   diag.structures)
+        if not absorbing:
+            return diag
+        for cause, what in absorbing.items():
+            notes.append(f"{cause} lowered the held-out error but is not named: it only absorbs part of {what}, "
+                         "and once that is modelled it no longer passes")
+        accepted = [c for c in accepted if c.cause in diag.causes and c.cause not in absorbing]
+        state = {k: v for k, v in diag.state.items() if k not in absorbing}
+        refit_nonlinear(search, state, accepted)
+
+
+def _conclude(ctx: Context, search: Context, state: dict, accepted: list, first_round: list, unidentified: dict,
+              notes: list) -> Diagnosis:
+    """The final model of ``accepted``: orders, parameters (setting aside what the log does not
+    determine), causes in order of gain, the gain, and what remains."""
     while True:
         ctx.orders = choose_orders(search, state)
         parameters, uncertainty, verdicts = _final_parameters(ctx, state, accepted)
@@ -107,6 +135,8 @@ def diagnose_series(series: M.Series, n_segments: int = 200, n_folds: int = 5) -
                      gain=gain, candidates=first_round, orders=ctx.orders,
                      baseline=baseline_coefficients(ctx, state), context=ctx, state=state,
                      unidentified=unidentified, notes=notes)
+    # what the named causes leave (the contract's section 5), on the full log
+    diag.remaining, diag.structures = remaining(ctx, state, gain, diag.causes)
     return diag
 
 

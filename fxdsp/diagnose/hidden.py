@@ -73,6 +73,7 @@ class Case:
     log: dict
     truth: dict
     causes: tuple = ()  # every hidden cause ((cause,) for one, two for a pair, () for none)
+    outside: str | None = None  # an effect outside the contract's list added to the output (OUTSIDE)
 
 
 def _effective_noise(truth: dict, levels: dict, columns) -> dict[str, float]:
@@ -90,14 +91,19 @@ def _effective_noise(truth: dict, levels: dict, columns) -> dict[str, float]:
 
 
 def make_case(cause: str, seed: int, scenario: str | None = None, snr_range=SNR_RANGE,
-              second: str | None = None) -> Case:
-    """One simulated log with ``cause`` (and ``second``, for a pair) hidden in it."""
+              second: str | None = None, outside: str | None = None, third: str | None = None) -> Case:
+    """One simulated log with ``cause`` (and ``second``, for a pair, and ``third``, for a triple)
+    hidden in it, and the effect ``outside`` the contract's list (OUTSIDE) added to its output."""
+    if outside is not None and outside not in OUTSIDE:
+        raise InputError(f"outside: unknown effect {outside!r}; expected one of {', '.join(OUTSIDE)}")
     from fxdsp.sim import generate_log  # the colleague's simulator: the ground truth of these tests
 
-    causes = (cause,) if second is None else (cause, second)
-    if second is not None and (second == cause or "none" in causes):
-        raise InputError(f"second: a pair needs two different causes other than none, got {causes}")
-    key = [seed, ALL_CAUSES.index(cause)] + ([ALL_CAUSES.index(second)] if second else [])
+    if third is not None and second is None:
+        raise InputError("third: a triple needs a second cause")
+    causes = tuple(c for c in (cause, second, third) if c is not None)
+    if len(causes) > 1 and (len(set(causes)) < len(causes) or "none" in causes):
+        raise InputError(f"second: a pair or triple needs different causes other than none, got {causes}")
+    key = [seed] + [ALL_CAUSES.index(c) for c in causes]
     rng = np.random.default_rng(key)
     allowed = [s for s in DEFAULT_SCENARIOS if all(s in SCENARIOS_FOR.get(c, DEFAULT_SCENARIOS) for c in causes)]
     scenario = scenario or str(rng.choice(allowed))
@@ -142,7 +148,51 @@ def make_case(cause: str, seed: int, scenario: str | None = None, snr_range=SNR_
                               return_truth=True, **kw)
     case = Case(cause, seed, scenario, columns, effects, noise, snrs[0], log, truth)
     case.causes = causes if cause != "none" else ()
+    if outside is not None:
+        # drawn from its own stream: the in-contract part of the case is the same with or without it
+        orng = np.random.default_rng(key + [len(ALL_CAUSES) + list(OUTSIDE).index(outside)])
+        shape = OUTSIDE[outside](orng, log["time_s"], truth)
+        shape = shape - np.mean(shape)
+        size = float(orng.uniform(*snr_range)) * sigma["output"]
+        log["output"] = log["output"] + shape * (size / max(float(np.std(shape)), 1e-300))
+        case.outside = outside
+        case.truth = {**truth, "outside": {"effect": outside, "rms": size}}
     return case
+
+
+def _outside_step(rng, t, truth):
+    """A level change at one instant in the middle 60 % of the run (a mode hop, a connector moved)."""
+    return (t >= t[0] + rng.uniform(0.2, 0.8) * (t[-1] - t[0])).astype(float)
+
+
+def _outside_periodic(rng, t, truth):
+    """A slow periodic term unrelated to the chamber (the lab's air conditioning, a supply's cycle):
+    3 .. 12 periods per run, random phase."""
+    return np.sin(2.0 * np.pi * rng.uniform(3.0, 12.0) * (t - t[0]) / (t[-1] - t[0]) + rng.uniform(0, 2 * np.pi))
+
+
+def _outside_second_lag(rng, t, truth):
+    """A second, slower thermal path: the output also follows the temperature through a lag of
+    5 .. 20 % of the run (a lag with two time constants; one lag absorbs only part of it)."""
+    from fxdsp import mechanisms as mech
+
+    temp = truth["temp_c"]
+    return mech.first_order_lag(t, temp, rng.uniform(0.05, 0.2) * (t[-1] - t[0]), initial=float(temp[0])) - temp
+
+
+def _outside_sloped_hysteresis(rng, t, truth):
+    """A heating/cooling difference that grows with temperature (a hysteresis that is no constant
+    offset: the constant part is the contract's hysteresis, the slope is not)."""
+    from fxdsp import mechanisms as mech
+
+    temp = truth["temp_c"]
+    x = (temp - 0.5 * (temp.max() + temp.min())) / max(0.5 * float(np.ptp(temp)), 1.0)
+    return mech.ramp_direction(t, temp) * x
+
+
+# effects outside the contract's list, as shapes of the output in time (scaled to SNR x its noise)
+OUTSIDE = {"step": _outside_step, "periodic": _outside_periodic, "second_lag": _outside_second_lag,
+           "sloped_hysteresis": _outside_sloped_hysteresis}
 
 
 @dataclass

@@ -52,6 +52,22 @@ Physics
   noise-free temp_c. ``warmup`` tau_s in [10 min, duration/5]; ``thermal_lag`` tau_s in
   [max(120 s, 4 dt), max(that, min(2 h, duration/10))].
 
+Effects outside the contract's list (``outside=``), each from its own random stream (the in-contract
+part of a log is the same with or without them), sized like a cause (SNR 5..20 after the baseline's
+projection) on the output:
+
+* ``step``: the output's level changes once, at a time drawn in the middle 60 % of the log (a mode
+  hop, a moved connector).
+* ``periodic``: a sinusoid of 3..12 periods per log and random phase, unrelated to the chamber (the
+  lab's air conditioning, a supply's cycle).
+* ``two_lags``: part of the output follows the chamber through a second, slower path: B of a
+  temperature lagged by 5..20 % of the log (with ``thermal_lag``, a lag with two time constants).
+* ``sloped_hysteresis``: a heating/cooling difference proportional to (T - 25)/50: the hysteresis
+  state times temperature (the contract's hysteresis is a constant offset).
+
+``noise="flicker"`` makes the output's flicker the dominant coloured noise: its Allan-deviation floor
+1..3 sigma_w instead of 0.1..0.3 (the same draws, scaled by ten).
+
 Effect size (SNR) definition
 ----------------------------
 For each cause its contribution v to its channel is evaluated noise-free at the logged rows and
@@ -92,6 +108,18 @@ PAIRS: tuple[tuple[str, str], ...] = (
     ("hysteresis", "frequency_nonlinearity"),
     ("rtd_nonlinearity", "quadrature_leak"),
 )
+
+# three causes at once (the contract allows any number)
+TRIPLES: tuple[tuple[str, str, str], ...] = (
+    ("thermal_lag", "hysteresis", "quadrature_leak"),
+    ("hysteresis", "aging_drift", "ramp_rate"),
+    ("warmup", "sf_nonlinearity", "aging_drift"),
+    ("rtd_nonlinearity", "hysteresis", "frequency_nonlinearity"),
+    ("thermal_lag", "frequency_nonlinearity", "quadrature_leak"),
+)
+
+OUTSIDE: tuple[str, ...] = ("step", "periodic", "two_lags", "sloped_hysteresis")
+NOISE_KINDS: tuple[str, ...] = ("default", "flicker")
 
 PROGRAMME_KINDS: tuple[str, ...] = ("fast_short_ramps", "slow", "reversal", "clipped", "mixed")
 
@@ -483,7 +511,9 @@ class IndependentLog:
         """One line for failure messages."""
         d = self.description
         snr = {c: round(v[ch]["snr"], 1) for c, v in d["effects"].items() for ch in v}
-        return (f"seed={d['seed']} causes={d['causes']} programme={d['programme']['kind']} "
+        extra = f" outside={d['outside']}" if d.get("outside") else ""
+        extra += " noise=flicker" if d.get("noise_kind") == "flicker" else ""
+        return (f"seed={d['seed']} causes={d['causes']}{extra} programme={d['programme']['kind']} "
                 f"dt={d['sampling']['dt_s']:.2f}s rows={d['sampling']['rows']} snr={snr}")
 
 
@@ -496,8 +526,8 @@ def _norm_causes(causes) -> tuple[str, ...]:
             raise ValueError(f"unknown cause {c!r}; known: {CAUSES}")
     if len(set(out)) != len(out):
         raise ValueError(f"repeated cause in {causes}")
-    if len(out) > 2:
-        raise ValueError("one cause or a pair at a time")
+    if len(out) > 3:
+        raise ValueError("one cause, a pair or a triple at a time")
     return out
 
 
@@ -519,8 +549,9 @@ def _ar1(rng, n, phi, sigma):
 
 
 def generate(causes: tuple[str, ...] = (), seed: int = 0, *, programme: str | Programme | None = None,
-             rows: int | None = None) -> IndependentLog:
-    """One simulated chamber log with ``causes`` (none, one, or a pair), deterministic in ``seed``.
+             rows: int | None = None, outside: tuple[str, ...] = (), noise: str = "default") -> IndependentLog:
+    """One simulated chamber log with ``causes`` (none, one, a pair or a triple), deterministic in
+    ``seed``; ``outside``: effects outside the contract's list (OUTSIDE); ``noise``: NOISE_KINDS.
 
     ``programme``: None (kind drawn from the seed), a kind from PROGRAMME_KINDS, or a ``Programme``
     (e.g. from ``programme_from_steps``; it is extended with a dwell if the log outlasts it).
@@ -530,6 +561,10 @@ def generate(causes: tuple[str, ...] = (), seed: int = 0, *, programme: str | Pr
     programme length / ``rows``, clipped to 1..60 s) sets dt.
     """
     causes = _norm_causes(causes)
+    outside = tuple(outside)
+    unknown = [o for o in outside if o not in OUTSIDE]
+    if unknown or noise not in NOISE_KINDS:
+        raise ValueError(f"outside must be among {OUTSIDE} and noise one of {NOISE_KINDS}")
     rng = np.random.default_rng(seed)
     custom = isinstance(programme, Programme)
     if custom:
@@ -748,6 +783,29 @@ def generate(causes: tuple[str, ...] = (), seed: int = 0, *, programme: str | Pr
             hidden_effects[cause] = p * shape
             out_clean = out_clean + p * shape
 
+    # ---- effects outside the contract's list, each from its own stream
+    for i, name in enumerate(outside):
+        orng = np.random.default_rng([int(seed) if isinstance(seed, (int, np.integer)) else 0, 7919, i,
+                                      OUTSIDE.index(name)])
+        if name == "step":
+            shape = (t >= t[0] + orng.uniform(0.2, 0.8) * (duration - t[0])).astype(float)
+        elif name == "periodic":
+            shape = np.sin(2 * np.pi * orng.uniform(3.0, 12.0) * t / duration + orng.uniform(0, 2 * np.pi))
+        elif name == "two_lags":
+            te2 = chamber_response(prog, t, air_tau, orng.uniform(0.05, 0.2) * duration)[3]
+            shape = bshape(te2) - bshape(chamber)
+        else:  # sloped_hysteresis
+            shape = s_state * (chamber - 25.0) / 50.0
+        target = orng.uniform(0.0, 1.0)
+        target = SNR_RANGE[0] * (SNR_RANGE[1] / SNR_RANGE[0]) ** target
+        rr = _rms(_remaining(shape, Xo))
+        if not rr > 1e-12 * max(1.0, _rms(shape)):
+            raise ValueError(f"{name}: this programme gives the effect nothing the baseline cannot absorb")
+        v = shape * (target * sig_w / rr) * (1 if orng.random() < 0.5 else -1)
+        record(f"outside:{name}", "output", v, Xo, sig_w, target)
+        hidden_effects[f"outside:{name}"] = v
+        out_clean = out_clean + v
+
     # ---- frequency channel
     f0 = rng.uniform(3000.0, 9000.0)
     kf = -rng.uniform(0.1, 0.5)
@@ -765,7 +823,7 @@ def generate(causes: tuple[str, ...] = (), seed: int = 0, *, programme: str | Pr
     freq = freq_clean + sig_f * rng.standard_normal(n)
 
     # ---- output noise
-    bi = rng.uniform(0.1, 0.3) * sig_w
+    bi = rng.uniform(0.1, 0.3) * sig_w * (10.0 if noise == "flicker" else 1.0)
     ratio = math.sqrt(10.0)
     n_fl = max(1, int(math.floor(math.log(max(duration, 10 * dt) / (5 * dt)) / math.log(ratio))) + 1)
     fl_taus = [5 * dt * ratio ** i for i in range(n_fl)]
@@ -816,6 +874,7 @@ def generate(causes: tuple[str, ...] = (), seed: int = 0, *, programme: str | Pr
     description = {
         "seed": int(seed) if isinstance(seed, (int, np.integer)) else repr(seed),
         "causes": list(causes) or ["none"],
+        "outside": list(outside), "noise_kind": noise,
         "columns": [c for c in COLUMNS if c in columns],
         "programme": {"kind": kind, "air_tau_s": air_tau, "n_legs": len(legs_desc),
                       "n_ramps": sum(1 for d in legs_desc if d["T0_c"] != d["T1_c"]),

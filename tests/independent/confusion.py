@@ -17,9 +17,9 @@ from fxdsp.diagnose.api import diagnose_columns
 from fxdsp.diagnose.report import report_dict
 
 try:  # run as part of the tests package, or from scripts/ with tests/ on sys.path
-    from independent.chamber_logs import CAUSES, PAIRS, IndependentLog, generate
+    from independent.chamber_logs import CAUSES, OUTSIDE, PAIRS, TRIPLES, IndependentLog, generate
 except ImportError:  # pragma: no cover
-    from tests.independent.chamber_logs import CAUSES, PAIRS, IndependentLog, generate
+    from tests.independent.chamber_logs import CAUSES, OUTSIDE, PAIRS, TRIPLES, IndependentLog, generate
 
 TOLERANCE = 0.25
 MIN_RATIO = 1.3
@@ -39,6 +39,9 @@ class Outcome:
     brief: str = ""
     misses: list[str] = field(default_factory=list)
     plain_unidentified: list[str] = field(default_factory=list)  # must stay empty
+    outside: tuple[str, ...] = ()   # effects outside the contract's list in the log
+    flagged: bool = False           # the report's `remaining` is significant
+    label: str = ""
 
     @property
     def gain_ok(self) -> bool:
@@ -82,15 +85,16 @@ class ProjectLog:
     """A log of the project's own simulator (fxdsp.diagnose.hidden, a round trip: it shares
     fxdsp.mechanisms with the diagnosis) in the independent generator's shape."""
 
-    def __init__(self, causes: tuple[str, ...], seed: int):
+    def __init__(self, causes: tuple[str, ...], seed: int, outside: tuple[str, ...] = ()):
         from fxdsp.diagnose.hidden import make_case
 
         first = causes[0] if causes else "none"
-        case = make_case(first, seed, second=causes[1] if len(causes) > 1 else None)
+        case = make_case(first, seed, second=causes[1] if len(causes) > 1 else None,
+                         third=causes[2] if len(causes) > 2 else None, outside=outside[0] if outside else None)
         self.columns = case.log
         self.truth = {c: dict(case.effects[c]) for c in causes}
         self._brief = f"project seed={seed} causes={list(causes) or ['none']} scenario={case.scenario} " \
-                      f"columns={list(case.columns)} snr={case.snr:.1f}"
+                      f"columns={list(case.columns)} snr={case.snr:.1f}" + (f" outside={outside[0]}" if outside else "")
 
     def brief(self) -> str:
         return self._brief
@@ -116,50 +120,86 @@ def score(causes: tuple[str, ...], seed: int, generator: str = "independent", **
     return Outcome(truth=causes, seed=seed, found=found, named_exactly=sorted(found) == sorted(causes),
                    params_ok=not misses, gain_ratio=float(diag.gain["ratio"]), seconds=seconds,
                    rows=len(log.columns["time_s"]), report=report, brief=log.brief(), misses=misses,
-                   plain_unidentified=plain_numbers_of_unidentified(json.loads(json.dumps(report))))
+                   plain_unidentified=plain_numbers_of_unidentified(json.loads(json.dumps(report))),
+                   outside=tuple(kw.get("outside", ())), flagged=bool(report["remaining"]["significant"]))
 
 
-def labels(pairs: bool = True) -> list[tuple[str, ...]]:
+def labels(pairs: bool = True, triples: bool = False) -> list[tuple[str, ...]]:
     single = [() if c == "none" else (c,) for c in CAUSES]
-    return single + (list(PAIRS) if pairs else [])
+    return single + (list(PAIRS) if pairs else []) + (list(TRIPLES) if triples else [])
+
+
+def specs(pairs: bool = True, triples: bool = False, outside: bool = False, short: bool = False,
+          flicker: bool = False) -> list[tuple[tuple[str, ...], dict]]:
+    """(causes, generator keywords) of every label: the causes of the contract alone, in pairs and
+    triples; `none` with each effect outside the list; the single causes in logs of 500 rows; `none`
+    and the single causes under flicker-dominated noise (independent generator only)."""
+    out = [(lab, {}) for lab in labels(pairs, triples)]
+    if outside:
+        out += [((), {"outside": (kind,)}) for kind in OUTSIDE]
+    if short:
+        out += [(lab, {"rows": 500}) for lab in labels(False)]
+    if flicker:
+        out += [(lab, {"noise": "flicker"}) for lab in labels(False)]
+    return out
+
+
+def label_name(causes: tuple[str, ...], kw: dict) -> str:
+    name = " + ".join(causes) or "none"
+    if kw.get("outside"):
+        name += " + outside:" + ",".join(kw["outside"])
+    if kw.get("rows"):
+        name += f" ({kw['rows']} rows)"
+    if kw.get("noise", "default") != "default":
+        name += f" ({kw['noise']} noise)"
+    return name
 
 
 def run(per_label: int, first_seed: int = 5000, pairs: bool = True, generator: str = "independent",
-        progress=None) -> list[Outcome]:
+        progress=None, **groups) -> list[Outcome]:
     out = []
-    for lab in labels(pairs):
+    for lab, kw in specs(pairs, **groups):
         for k in range(per_label):
-            out.append(score(lab, first_seed + k, generator))
+            out.append(score(lab, first_seed + k, generator, **kw))
+            out[-1].label = label_name(lab, kw)
             if progress:
                 progress(out[-1])
     return out
 
 
 def table(outcomes: list[Outcome]) -> str:
-    """Per truth label: named exactly, false alarms ('none' only), parameters, gain; the misses."""
+    """Per label: named exactly, parameters, gain, `remaining` flagged; the summary line: the
+    in-contract labels named exactly, false alarms on none, out-of-contract logs flagged, in-contract
+    logs flagged."""
     rows = {}
     for o in outcomes:
-        rows.setdefault(o.truth, []).append(o)
+        rows.setdefault(o.label or (" + ".join(o.truth) or "none"), []).append(o)
     lines = ["| truth | logs | named exactly | params within 25 % (of those named) | held-out gain > 1.3 | "
-             "most common other answer |", "|---|---|---|---|---|---|"]
-    for lab, items in rows.items():
+             "remaining significant | most common other answer |", "|---|---|---|---|---|---|---|"]
+    for name, items in rows.items():
         wrong = [",".join(o.found) or "none" for o in items if not o.named_exactly]
         common = max(set(wrong), key=wrong.count) if wrong else ""
-        name = " + ".join(lab) or "none"
-        lines.append(f"| {name} | {len(items)} | {sum(o.named_exactly for o in items)} | "
-                     f"{sum(o.params_ok for o in items if o.named_exactly)} | {sum(o.gain_ok for o in items)} | {common} |")
-    n = len(outcomes)
-    exact = sum(o.named_exactly for o in outcomes)
+        exact = "-" if items[0].outside else sum(o.named_exactly for o in items)
+        params = "-" if items[0].outside else sum(o.params_ok for o in items if o.named_exactly)
+        lines.append(f"| {name} | {len(items)} | {exact} | {params} | {sum(o.gain_ok for o in items)} | "
+                     f"{sum(o.flagged for o in items)} | {common} |")
+    inside = [o for o in outcomes if not o.outside]
+    outside = [o for o in outcomes if o.outside]
+    n = len(inside)
+    exact = sum(o.named_exactly for o in inside)
     secs = np.median([o.seconds for o in outcomes])
     rows6k = np.median([o.rows for o in outcomes])
     lines.append("")
-    none = [o for o in outcomes if not o.truth]
+    none = [o for o in inside if not o.truth]
     alarms = sum(bool(o.found) for o in none)
-    gains = [o.gain_ratio for o in outcomes if o.truth and o.named_exactly]
-    lines.append(f"{exact}/{n} named exactly ({100 * exact / n:.1f} %); false alarms on none: {alarms}/{len(none)}; "
-                 f"parameters within 25 %: {sum(o.params_ok for o in outcomes if o.truth and o.named_exactly)}/"
-                 f"{len(gains)} of the logs named exactly; held-out gain min {min(gains, default=float('nan')):.2f}, "
-                 f"median {np.median(gains) if gains else float('nan'):.2f}; median {secs:.2f} s per log "
+    gains = [o.gain_ratio for o in inside if o.truth and o.named_exactly]
+    lines.append(f"{exact}/{n} in-contract logs named exactly ({100 * exact / max(n, 1):.1f} %); false alarms on none: "
+                 f"{alarms}/{len(none)}; parameters within 25 %: "
+                 f"{sum(o.params_ok for o in inside if o.truth and o.named_exactly)}/{len(gains)} of the logs named "
+                 f"exactly; held-out gain min {min(gains, default=float('nan')):.2f}, "
+                 f"median {np.median(gains) if gains else float('nan'):.2f}; `remaining` significant on "
+                 f"{sum(o.flagged for o in outside)}/{len(outside)} out-of-contract logs and on "
+                 f"{sum(o.flagged for o in inside)}/{n} in-contract logs; median {secs:.2f} s per log "
                  f"(median {rows6k:.0f} rows); reports with an unidentified parameter as a plain number: "
                  f"{sum(bool(o.plain_unidentified) for o in outcomes)}")
     return "\n".join(lines)
