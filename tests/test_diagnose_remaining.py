@@ -104,3 +104,13 @@ def test_a_short_log_with_noise_alone_is_not_significant():
         if rest["significant"]:
             flagged.append((log.brief(), rest["explanation"]))
     assert not flagged, flagged
+
+
+# logs of 500 rows with noise alone (white, flicker, a random walk too slight for a variogram to
+# tell at that length) where the white-noise rule named a drift (found by running
+# the test with fxdsp.diagnose.selection.check_against_noise taken out)
+@pytest.mark.parametrize("seed", (5000, 5001, 5013, 5017))
+def test_a_short_log_of_noise_alone_names_no_cause(seed):
+    log = generate((), seed, rows=500)
+    diag = diagnose_columns(log.columns, f"seed {seed}")
+    assert diag.causes == [], (log.brief(), diag.causes)

@@ -296,15 +296,18 @@ def test_hidden_confusion_on_the_cluster_is_diagnose_hiddens_matrix(tmp_path, cl
     from fxdsp.diagnose.hidden import confusion
 
     address, _ = cluster
-    argv = ["sweep", "hidden", "--per-cause", "1", "--causes", "none,hysteresis", "--first-seed", "1000"]
+    # every case with a step outside the contract's list: the report must say structure remains
+    argv = ["sweep", "hidden", "--per-cause", "1", "--causes", "none,hysteresis", "--first-seed", "1000",
+            "--outside", "step"]
     assert main([*argv, "--scheduler", address, "--out", str(tmp_path / "dask")]) == 0
     assert main([*argv, "--workers", "0", "--out", str(tmp_path / "serial")]) == 0
     assert digests(tmp_path / "dask") == digests(tmp_path / "serial")
     capsys.readouterr()
     got = json.loads((tmp_path / "dask" / "summary.json").read_text())
-    ref = confusion(1, 1000, ("none", "hysteresis"))        # the serial implementation
-    assert got["matrix"] == ref.matrix.tolist()
+    ref = confusion(1, 1000, ("none", "hysteresis"), outside="step")        # the serial implementation
+    assert got["matrix"] == ref.matrix.tolist() and got["outside"] == "step"
     assert got["params_ok"] == ref.params_ok and got["gain_ok"] == ref.gain_ok
+    assert got["remaining_significant"] == ref.flagged == {"none": 1, "hysteresis": 1}
 
 
 def test_wordlength_search_on_local_workers_finds_what_budget_optimise_finds(tmp_path, capsys):

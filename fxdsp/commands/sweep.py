@@ -51,7 +51,7 @@ def _common(p, config: bool = True, seed: bool = True) -> None:
 
 
 def configure(parser) -> None:
-    from fxdsp.diagnose.hidden import ALL_CAUSES, SNR_RANGE
+    from fxdsp.diagnose.hidden import ALL_CAUSES, OUTSIDE, SNR_RANGE
     from fxdsp.sweep.montecarlo import CHAIN
 
     sub = parser.add_subparsers(dest="kind", metavar="KIND", required=True)
@@ -93,6 +93,7 @@ def configure(parser) -> None:
     hd.add_argument("--causes", default=",".join(ALL_CAUSES), metavar="A,B", help="causes to draw (default: all)")
     hd.add_argument("--snr", type=FINITE, nargs=2, default=SNR_RANGE, metavar=("LO", "HI"),
                     help="effect size range in noise units (default %(default)s)")
+    hd.add_argument("--outside", choices=tuple(OUTSIDE), help="add this effect outside the contract's list to every case")
 
     rt = sub.add_parser("rtl", help="random-parameter RTL regressions (cocotb on Icarus), one set per shard",
                         description="RTL vs model on random parameter sets, one per shard, each built in its "
@@ -219,7 +220,8 @@ def _prepare_wordlength(args) -> dict:
 def _prepare_hidden(args) -> dict:
     from fxdsp.sweep import hidden as hd
 
-    settings = hd.settings(args.per_cause, args.first_seed, [c for c in args.causes.split(",") if c], args.snr)
+    settings = hd.settings(args.per_cause, args.first_seed, [c for c in args.causes.split(",") if c], args.snr,
+                           args.outside)
 
     def go(sweep, stage, out):
         t = time.perf_counter()

@@ -15,7 +15,9 @@
    and the rest are tried again on top, up to MAX_CAUSES; the same forward selection also starts
    from the best pair of causes (two causes can hide each other) and the better model is kept.
    Then time-like causes (aging, warm-up, hysteresis, quadrature) are re-tested against a random-
-   walk bias if the residual without them wanders, and every cause must still pass when it is the
+   walk bias if the residual without them wanders, and against draws of the residual's own noise
+   (white, flicker, random walk: noise.py) when it is coloured at all (a short log cannot show a
+   slight wander in its variogram), and every cause must still pass when it is the
    last one added. A cause whose parameters the log does not determine (identify.py) is set aside,
    not named, and reported as unidentified. Nothing left means `none`; `causes` are ordered by
    held-out gain.
@@ -46,7 +48,7 @@ from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, ORDER_CHOICES, Contex
 from fxdsp.diagnose.identify import described, judge, reasons
 from fxdsp.diagnose.remaining import absorbing_only, remaining
 from fxdsp.diagnose.results import baseline_coefficients, channel_gain, linear_parameters
-from fxdsp.diagnose.selection import check_against_wander, greedy_search, order_by_gain, prune
+from fxdsp.diagnose.selection import check_against_noise, check_against_wander, greedy_search, order_by_gain, prune
 
 MAX_SEARCH_ROWS = 100_000
 
@@ -71,6 +73,7 @@ def diagnose_series(series: M.Series, n_segments: int = 200, n_folds: int = 5) -
     state, accepted, first_round = greedy_search(search)
     set_noise_weights(search, state)
     state, accepted = check_against_wander(search, state, accepted)
+    state, accepted = check_against_noise(search, state, accepted)
     state, accepted = prune(search, state, accepted)
     refit_nonlinear(search, state, accepted)  # the causes that were removed may have biased them
     if "sf_nonlinearity" in state:

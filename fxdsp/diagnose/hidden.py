@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -265,6 +265,8 @@ class Confusion:
     extra: dict[str, int]
     failures: list[tuple]
     seconds: float
+    flagged: dict[str, int] = field(default_factory=dict)   # reports whose `remaining` is significant
+    outside: str | None = None                              # the effect outside the list every case has
 
 
 def case_outcome(case: Case, diag) -> dict:
@@ -274,6 +276,7 @@ def case_outcome(case: Case, diag) -> dict:
     got = diag.causes[0] if diag.causes else "none"
     found = diag.parameters.get(cause)
     return {"scenario": case.scenario, "columns": list(case.columns), "snr": case.snr, "found": list(diag.causes),
+            "outside": case.outside, "flagged": bool(diag.remaining["significant"]),
             "first": got,
             "params_ok": bool(got == cause and parameters_within(case, diag.parameters.get(cause, {}))),
             "gain_ok": bool(cause == "none" or diag.gain["ratio"] > 1.3), "gain_ratio": float(diag.gain["ratio"]),
@@ -288,8 +291,10 @@ def tally(per_cause: int, causes, outcomes, seconds: float = 0.0) -> Confusion:
     params_ok = {c: 0 for c in causes}
     gain_ok = {c: 0 for c in causes}
     extra = {c: 0 for c in causes}
+    flagged = {c: 0 for c in causes}
     failures = []
     for cause, seed, r in outcomes:
+        flagged[cause] += bool(r.get("flagged"))
         matrix[index[cause], index[r["first"]]] += 1
         params_ok[cause] += r["params_ok"]
         gain_ok[cause] += r["gain_ok"]
@@ -297,7 +302,8 @@ def tally(per_cause: int, causes, outcomes, seconds: float = 0.0) -> Confusion:
         if r["first"] != cause or not r["params_ok"] or not r["gain_ok"] or len(r["found"]) > 1:
             failures.append((cause, seed, r["scenario"], tuple(r["columns"]), round(r["snr"], 1), r["found"],
                              r["parameters"], r["truth"], round(r["gain_ratio"], 2)))
-    return Confusion(per_cause, causes, matrix, params_ok, gain_ok, extra, failures, seconds)
+    outside = next((r.get("outside") for _, _, r in outcomes if r.get("outside")), None)
+    return Confusion(per_cause, causes, matrix, params_ok, gain_ok, extra, failures, seconds, flagged, outside)
 
 
 def check_snr_range(snr_range, field: str = "--snr") -> tuple[float, float]:
@@ -309,8 +315,10 @@ def check_snr_range(snr_range, field: str = "--snr") -> tuple[float, float]:
     return lo, hi
 
 
-def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, snr_range=SNR_RANGE) -> Confusion:
-    """Run ``per_cause`` cases per cause and tally what the diagnosis names."""
+def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, snr_range=SNR_RANGE,
+              outside: str | None = None) -> Confusion:
+    """Run ``per_cause`` cases per cause (each with the effect ``outside`` the list, if given) and
+    tally what the diagnosis names and whether its report says structure remains."""
     unknown = [c for c in causes if c not in ALL_CAUSES]
     if unknown:
         raise InputError(f"causes: unknown cause {unknown[0]!r}; expected some of {', '.join(ALL_CAUSES)}")
@@ -323,7 +331,7 @@ def confusion(per_cause: int, first_seed: int = 1000, causes=ALL_CAUSES, snr_ran
     outcomes = []
     for cause in causes:
         for k in range(per_cause):
-            case = make_case(cause, first_seed + k, snr_range=snr_range)
+            case = make_case(cause, first_seed + k, snr_range=snr_range, outside=outside)
             outcomes.append((cause, case.seed, case_outcome(case, diagnose_case(case))))
     return tally(per_cause, causes, outcomes, time.perf_counter() - start)
 
@@ -333,10 +341,13 @@ def format_confusion(res: Confusion, timing: bool = True) -> str:
     line (unless ``timing`` is False: files keep no wall-clock time) and the misses."""
     n = res.per_cause
     lines = [f"{'truth / found':24s}" + "".join(f"{c[:6]:>7s}" for c in ALL_CAUSES)
-             + "   params<=25%  gain>1.3  extra causes"]
+             + "   params<=25%  gain>1.3  extra causes  remaining"]
     for c in res.causes:
         lines.append(f"{c:24s}" + "".join(f"{v:7d}" for v in res.matrix[ALL_CAUSES.index(c)]) +
-                     f"   {res.params_ok[c]:5d}/{n:<5d} {res.gain_ok[c]:5d}/{n:<5d} {res.extra[c]:5d}")
+                     f"   {res.params_ok[c]:5d}/{n:<5d} {res.gain_ok[c]:5d}/{n:<5d} {res.extra[c]:5d}"
+                     f"         {res.flagged.get(c, 0):5d}/{n:<5d}")
+    if res.outside:
+        lines.insert(0, f"every case also has an effect outside the contract's list: {res.outside}")
     if timing:
         lines.append(f"{len(res.causes) * n} cases in {res.seconds:.0f} s")
     lines += [" ".join(["miss:", *map(str, f)]) for f in res.failures]

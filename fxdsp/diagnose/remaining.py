@@ -55,6 +55,7 @@ from fxdsp.causes import CAUSES
 from fxdsp.diagnose.blockfit import SegmentNormals
 from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, Context, white_noise_variance
 from fxdsp.diagnose.results import channel_gain, heldout_residuals
+from fxdsp.diagnose.noise import noise_draws, noise_levels
 from fxdsp.diagnose.selection import last_added_gain
 from fxdsp.ramps import quantisation_step
 
@@ -288,77 +289,6 @@ def _ratios(y: np.ndarray, prepared: list[_Prepared], fams: list[Family]):
     return np.maximum(lr, 0.0), first
 
 
-# -- the log's own noise: white, flicker and random walk ----------------------------------------------
-FLICKER_RATIO = np.sqrt(10.0)   # correlation times of the flicker's AR(1) components, from 1 row on
-
-
-def _flicker_times(n: int) -> np.ndarray:
-    """Correlation times (rows) of the AR(1) components whose equal-variance sum is the flicker: from
-    one row to three times the series, spaced by sqrt(10) (a 1/f spectrum over the whole band)."""
-    k = int(np.ceil(np.log(3.0 * n) / np.log(FLICKER_RATIO))) + 1
-    return FLICKER_RATIO ** np.arange(k)
-
-
-def _ar1_avar(phi: np.ndarray, tau: np.ndarray) -> np.ndarray:
-    """Allan variance at ``tau`` rows of a unit-variance AR(1) of coefficient ``phi`` (closed form:
-    the variance of a tau-mean less the covariance of two adjacent ones)."""
-    phi, tau = np.asarray(phi, float)[:, None], np.asarray(tau, float)[None, :]
-    one = 1.0 - phi
-    inside = tau * (1.0 + phi) / one - 2.0 * phi * (1.0 - phi ** tau) / one ** 2
-    across = phi * (1.0 - phi ** tau) ** 2 / one ** 2
-    return (inside - across) / tau ** 2
-
-
-def _flicker_avar(n: int, tau: np.ndarray) -> np.ndarray:
-    """Allan variance of the flicker construction with unit variance per component."""
-    return _ar1_avar(np.exp(-1.0 / _flicker_times(n)), tau).sum(axis=0)
-
-
-def allan_levels(resid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(tau in rows, robust Allan variance): tau = 1, 2, 4 ... while at least 8 means fit; each from
-    the median squared difference of adjacent non-overlapping means (a step or an outlier moves a few
-    differences, not the median)."""
-    n = resid.size
-    taus, avar = [], []
-    tau = 1
-    while n // tau >= 8:
-        means = resid[:n // tau * tau].reshape(-1, tau).mean(axis=1)
-        d = np.diff(means)
-        taus.append(tau)
-        avar.append(0.5 * float(np.median(d * d)) / 0.4549)
-        tau *= 2
-    return np.array(taus, float), np.array(avar)
-
-
-def noise_levels(resid: np.ndarray) -> tuple[float, float, float]:
-    """(white variance, flicker variance per component, random-walk variance per row) of a residual:
-    its robust Allan variance fitted, by non-negative least squares weighted to equal relative errors,
-    with the three shapes (a / tau, the flicker construction's, q tau / 3)."""
-    from scipy.optimize import nnls
-
-    taus, avar = allan_levels(resid)
-    if taus.size < 2 or not np.all(avar > 0):
-        return float(np.var(resid)) or 1.0, 0.0, 0.0
-    basis = np.column_stack([1.0 / taus, _flicker_avar(resid.size, taus), taus / 3.0])
-    coef, _ = nnls(basis / avar[:, None], np.ones_like(avar))
-    return float(coef[0]) or float(avar[0]), float(coef[1]), float(coef[2])
-
-
-def noise_draws(rng: np.random.Generator, levels: tuple[float, float, float], draws: int, n: int) -> np.ndarray:
-    """``draws`` series of ``n`` rows of white noise, flicker and a random walk at ``levels``."""
-    white, flicker, walk = levels
-    out = rng.standard_normal((draws, n)) * np.sqrt(white)
-    if walk > 0:
-        out += np.cumsum(rng.standard_normal((draws, n)), axis=1) * np.sqrt(walk)
-    if flicker > 0:
-        for t in _flicker_times(n):
-            phi = np.exp(-1.0 / t)
-            e = rng.standard_normal((draws, n)) * np.sqrt(flicker * (1.0 - phi * phi))
-            start = rng.standard_normal(draws) * np.sqrt(flicker)
-            out += lfilter([1.0], [1.0, -phi], e, axis=1, zi=(phi * start)[:, None])[0]
-    return out
-
-
 def _gumbel_quantile(maxima: np.ndarray, p: float) -> float:
     """The ``p`` quantile of a Gumbel law with the mean and spread of ``maxima`` (the null's largest
     standardised ratios): a far tail that DRAWS draws alone would only rank, extrapolated smoothly."""
@@ -439,8 +369,12 @@ def channel_structure(ctx: Context, state: dict, channel: str, n_channels: int) 
         coef = fitted[offset:offset + c.shape[1]] * sd_y
         offset += c.shape[1]
         found.append((f.name, _describe(f, coef, label, channel)))
-    curve = cols @ fitted * sd_y
-    curve -= np.mean(curve)
+    # the structure as the final model leaves it: the chosen columns fitted to the model's residual
+    # (the model's own coefficients kept; refitted together, a column nearly collinear with a named
+    # cause's term, such as a short lag's dT/dt, would take the cause's share with it)
+    resid_full = y_full - x_full @ np.linalg.lstsq(x_full, y_full, rcond=None)[0]
+    centred = cols - cols.mean(axis=0)
+    curve = centred @ np.linalg.lstsq(centred, resid_full, rcond=None)[0] * sd_y
     resid = heldout_residuals(ctx, state, channel)
     rms = _heldout_rms(ctx, resid, cols)
     floor = max(resolution(ctx, channel), MIN_SIZE * np.sqrt(white_noise_variance(resid)))

@@ -200,6 +200,47 @@ def check_against_wander(ctx: Context, state: dict, accepted: list[Candidate]):
         state = {k: v for k, v in state.items() if k != weakest.cause}
 
 
+def check_against_noise(ctx: Context, state: dict, accepted: list[Candidate]):
+    """Every named time-like cause must beat what the residual's own coloured noise gives it.
+
+    A bias random walk or flicker too slight for the variogram test of :func:`check_against_wander`
+    (short logs: a few hundred rows cannot tell a small wander from white noise) still gives a line or
+    a settling a held-out evidence of tens of white-noise variances, and the white-noise rule names
+    it. So the noise of the final residual is estimated (white, flicker and random walk,
+    :func:`fxdsp.diagnose.noise.noise_levels`) and, when it is coloured, each time-like cause's
+    held-out evidence must exceed the NULL_QUANTILE of what NULL_DRAWS draws of that noise give the
+    same column (fixed seed); the weakest failure is removed until all pass."""
+    from fxdsp.diagnose.blockfit import SegmentNormals
+    from fxdsp.diagnose.noise import noise_draws, noise_levels
+
+    ch = "output"
+    while True:
+        out_causes = [c for c in accepted if c.cause in TIME_TIED]
+        if not out_causes:
+            return state, accepted
+        levels = noise_levels(residual(ctx, state, ch))
+        if not (levels[1] > 0 or levels[2] > 0):
+            return state, accepted   # white: the held-out rule's own yardstick
+        draws = noise_draws(np.random.default_rng(NULL_SEED), levels, NULL_DRAWS, ctx.series.n)
+        w = ctx.weights[ch]
+        full = ctx.normals(ch, state)[0].folds()[1].sum()
+        x_with, _ = ctx.design(ch, state)
+        margins = []
+        for cand in out_causes:
+            without = {k: v for k, v in state.items() if k != cand.cause}
+            x_without, _ = ctx.design(ch, without)
+            null = [SegmentNormals(x_without, y, ctx.blocks, w).folds()[1].sum()
+                    - SegmentNormals(x_with, y, ctx.blocks, w).folds()[1].sum() for y in draws]
+            gained = ctx.normals(ch, without)[0].folds()[1].sum() - full
+            margins.append((gained - float(np.quantile(null, NULL_QUANTILE)), cand))
+        failing = [m for m in margins if m[0] <= 0]
+        if not failing:
+            return state, accepted
+        weakest = min(failing, key=lambda m: m[0])[1]
+        accepted = [c for c in accepted if c is not weakest]
+        state = {k: v for k, v in state.items() if k != weakest.cause}
+
+
 def _innovation_evidence(ctx: Context, ch: str, state: dict, without: dict, gain: float) -> float:
     """Held-out evidence of ``state`` over ``without`` on innovations of gain ``gain``, in units of
     the innovations' white variance."""

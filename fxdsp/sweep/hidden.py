@@ -13,8 +13,8 @@ from functools import partial
 from fxdsp.errors import InputError
 
 
-def settings(per_cause: int, first_seed: int, causes, snr_range) -> dict:
-    from fxdsp.diagnose.hidden import ALL_CAUSES, check_snr_range
+def settings(per_cause: int, first_seed: int, causes, snr_range, outside: str | None = None) -> dict:
+    from fxdsp.diagnose.hidden import ALL_CAUSES, OUTSIDE, check_snr_range
 
     causes = tuple(causes)
     unknown = [c for c in causes if c not in ALL_CAUSES]
@@ -27,7 +27,10 @@ def settings(per_cause: int, first_seed: int, causes, snr_range) -> dict:
     if first_seed < 0:
         raise InputError(f"--first-seed: must be >= 0, got {first_seed}")
     lo, hi = check_snr_range(snr_range)
-    return {"per_cause": int(per_cause), "first_seed": int(first_seed), "causes": list(causes), "snr": [lo, hi]}
+    if outside is not None and outside not in OUTSIDE:
+        raise InputError(f"--outside: unknown effect {outside!r}; expected one of {', '.join(OUTSIDE)}")
+    out = {"per_cause": int(per_cause), "first_seed": int(first_seed), "causes": list(causes), "snr": [lo, hi]}
+    return {**out, "outside": outside} if outside else out
 
 
 def task_params(settings: dict) -> list[dict]:
@@ -36,15 +39,15 @@ def task_params(settings: dict) -> list[dict]:
 
 
 def task_function(settings: dict):
-    return partial(_task, tuple(settings["snr"]))
+    return partial(_task, tuple(settings["snr"]), settings.get("outside"))
 
 
-def _task(snr_range: tuple, params: dict, seed: int) -> dict:
+def _task(snr_range: tuple, outside: str | None, params: dict, seed: int) -> dict:
     """Simulate and diagnose one case (``seed``, the engine's, is unused: the case seed is the
     one ``diagnose-hidden`` would use, so both give the same case)."""
     from fxdsp.diagnose.hidden import case_outcome, diagnose_case, make_case
 
-    case = make_case(params["cause"], params["case_seed"], snr_range=snr_range)
+    case = make_case(params["cause"], params["case_seed"], snr_range=snr_range, outside=outside)
     return case_outcome(case, diagnose_case(case))
 
 
@@ -64,7 +67,8 @@ def summarise(settings: dict, records: list[dict]) -> dict:
     return {"per_cause": settings["per_cause"], "first_seed": settings["first_seed"], "snr": settings["snr"],
             "causes": list(c.causes), "matrix_labels": list(ALL_CAUSES),
             "matrix": [[int(v) for v in row] for row in c.matrix],
-            "params_ok": c.params_ok, "gain_ok": c.gain_ok, "extra_causes": c.extra,
+            "params_ok": c.params_ok, "gain_ok": c.gain_ok, "extra_causes": c.extra, "remaining_significant": c.flagged,
+            **({"outside": settings["outside"]} if settings.get("outside") else {}),
             "misses": [{"cause": f[0], "case_seed": f[1], "scenario": f[2], "found": f[5]} for f in c.failures],
             "failed": failed_records(records)}
 

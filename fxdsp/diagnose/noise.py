@@ -1,0 +1,84 @@
+"""The noise of a log's residual as white noise, flicker and a random walk: estimated from its robust
+Allan variance, and drawn again (the null the diagnosis's tests are calibrated on).
+
+Flicker is a sum of AR(1) processes of equal variance whose correlation times run from one row to
+three times the series, spaced by sqrt(10): a 1/f spectrum over the whole band. The three shapes of
+the Allan variance (white a / tau, the flicker construction's, the walk's q tau / 3) are fitted to the
+residual's Allan variance taken robustly (medians of squared differences of adjacent means: a step
+or an outlier moves a few differences, not the median), by non-negative least squares weighted to
+equal relative errors.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import lfilter
+
+FLICKER_RATIO = np.sqrt(10.0)   # correlation times of the flicker's AR(1) components, from 1 row on
+
+
+def _flicker_times(n: int) -> np.ndarray:
+    """Correlation times (rows) of the AR(1) components whose equal-variance sum is the flicker: from
+    one row to three times the series, spaced by sqrt(10) (a 1/f spectrum over the whole band)."""
+    k = int(np.ceil(np.log(3.0 * n) / np.log(FLICKER_RATIO))) + 1
+    return FLICKER_RATIO ** np.arange(k)
+
+
+def _ar1_avar(phi: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """Allan variance at ``tau`` rows of a unit-variance AR(1) of coefficient ``phi`` (closed form:
+    the variance of a tau-mean less the covariance of two adjacent ones)."""
+    phi, tau = np.asarray(phi, float)[:, None], np.asarray(tau, float)[None, :]
+    one = 1.0 - phi
+    inside = tau * (1.0 + phi) / one - 2.0 * phi * (1.0 - phi ** tau) / one ** 2
+    across = phi * (1.0 - phi ** tau) ** 2 / one ** 2
+    return (inside - across) / tau ** 2
+
+
+def _flicker_avar(n: int, tau: np.ndarray) -> np.ndarray:
+    """Allan variance of the flicker construction with unit variance per component."""
+    return _ar1_avar(np.exp(-1.0 / _flicker_times(n)), tau).sum(axis=0)
+
+
+def allan_levels(resid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(tau in rows, robust Allan variance): tau = 1, 2, 4 ... while at least 8 means fit; each from
+    the median squared difference of adjacent non-overlapping means (a step or an outlier moves a few
+    differences, not the median)."""
+    n = resid.size
+    taus, avar = [], []
+    tau = 1
+    while n // tau >= 8:
+        means = resid[:n // tau * tau].reshape(-1, tau).mean(axis=1)
+        d = np.diff(means)
+        taus.append(tau)
+        avar.append(0.5 * float(np.median(d * d)) / 0.4549)
+        tau *= 2
+    return np.array(taus, float), np.array(avar)
+
+
+def noise_levels(resid: np.ndarray) -> tuple[float, float, float]:
+    """(white variance, flicker variance per component, random-walk variance per row) of a residual:
+    its robust Allan variance fitted, by non-negative least squares weighted to equal relative errors,
+    with the three shapes (a / tau, the flicker construction's, q tau / 3)."""
+    from scipy.optimize import nnls
+
+    taus, avar = allan_levels(resid)
+    if taus.size < 2 or not np.all(avar > 0):
+        return float(np.var(resid)) or 1.0, 0.0, 0.0
+    basis = np.column_stack([1.0 / taus, _flicker_avar(resid.size, taus), taus / 3.0])
+    coef, _ = nnls(basis / avar[:, None], np.ones_like(avar))
+    return float(coef[0]) or float(avar[0]), float(coef[1]), float(coef[2])
+
+
+def noise_draws(rng: np.random.Generator, levels: tuple[float, float, float], draws: int, n: int) -> np.ndarray:
+    """``draws`` series of ``n`` rows of white noise, flicker and a random walk at ``levels``."""
+    white, flicker, walk = levels
+    out = rng.standard_normal((draws, n)) * np.sqrt(white)
+    if walk > 0:
+        out += np.cumsum(rng.standard_normal((draws, n)), axis=1) * np.sqrt(walk)
+    if flicker > 0:
+        for t in _flicker_times(n):
+            phi = np.exp(-1.0 / t)
+            e = rng.standard_normal((draws, n)) * np.sqrt(flicker * (1.0 - phi * phi))
+            start = rng.standard_normal(draws) * np.sqrt(flicker)
+            out += lfilter([1.0], [1.0, -phi], e, axis=1, zi=(phi * start)[:, None])[0]
+    return out
