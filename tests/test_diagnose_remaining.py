@@ -114,3 +114,18 @@ def test_a_short_log_of_noise_alone_names_no_cause(seed):
     log = generate((), seed, rows=500)
     diag = diagnose_columns(log.columns, f"seed {seed}")
     assert diag.causes == [], (log.brief(), diag.causes)
+
+
+@pytest.mark.parametrize("generator", ("independent", "project"))
+def test_every_effect_outside_the_list_is_reported_on_both_generators(generator):
+    """One log per effect outside the contract's list (the independent generator's names, which the
+    project's simulator draws too): its report says structure remains."""
+    from independent.chamber_logs import OUTSIDE
+    from independent.confusion import score
+
+    missed = []
+    for kind in OUTSIDE:
+        o = score((), 6100, generator, outside=(kind,))
+        if not o.flagged:
+            missed.append((kind, o.brief, o.report["remaining"]["channels"]))
+    assert not missed, missed

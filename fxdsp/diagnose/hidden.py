@@ -171,7 +171,7 @@ def _outside_periodic(rng, t, truth):
     return np.sin(2.0 * np.pi * rng.uniform(3.0, 12.0) * (t - t[0]) / (t[-1] - t[0]) + rng.uniform(0, 2 * np.pi))
 
 
-def _outside_second_lag(rng, t, truth):
+def _outside_two_lags(rng, t, truth):
     """A second, slower thermal path: the output also follows the temperature through a lag of
     5 .. 20 % of the run (a lag with two time constants; one lag absorbs only part of it)."""
     from fxdsp import mechanisms as mech
@@ -191,7 +191,7 @@ def _outside_sloped_hysteresis(rng, t, truth):
 
 
 # effects outside the contract's list, as shapes of the output in time (scaled to SNR x its noise)
-OUTSIDE = {"step": _outside_step, "periodic": _outside_periodic, "second_lag": _outside_second_lag,
+OUTSIDE = {"step": _outside_step, "periodic": _outside_periodic, "two_lags": _outside_two_lags,
            "sloped_hysteresis": _outside_sloped_hysteresis}
 
 
