@@ -184,12 +184,19 @@ def set_noise_weights(ctx: Context, state: dict | None = None) -> dict[str, floa
     return sigma2
 
 
-def innovations(values: np.ndarray, gain: float) -> np.ndarray:
+def innovations(values: np.ndarray, gain: float, axis: int = 0) -> np.ndarray:
     """One-step prediction errors of the steady-state Kalman filter of a local-level model (white
     noise plus a random walk): e_t = y_t - y_(t-1) + (1 - gain) e_(t-1). Least squares on
     innovations is generalised least squares for that noise; gain 0 leaves the data as they are
     (up to a constant), gain 1 differences them."""
-    return lfilter([1.0, -1.0], [1.0, -(1.0 - gain)], values, axis=0)
+    return lfilter([1.0, -1.0], [1.0, -(1.0 - gain)], values, axis=axis)
+
+
+def level_gain(ratio: float) -> float:
+    """The steady-state Kalman gain of a local level whose random-walk variance per row is ``ratio``
+    times its white variance (0: white, the data as they are; a walk alone: 1, differences)."""
+    p = 0.5 * (ratio + np.sqrt(ratio * ratio + 4.0 * ratio))
+    return p / (p + 1.0) if np.isfinite(p) else 1.0
 
 
 def residual(ctx: Context, state: dict, channel: str) -> np.ndarray:

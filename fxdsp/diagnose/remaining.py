@@ -53,7 +53,7 @@ from scipy.signal import lfilter
 from fxdsp import mechanisms as mech
 from fxdsp.causes import CAUSES
 from fxdsp.diagnose.blockfit import SegmentNormals
-from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, Context, white_noise_variance
+from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, Context, innovations, level_gain, white_noise_variance
 from fxdsp.diagnose.results import channel_gain, heldout_residuals
 from fxdsp.diagnose.noise import noise_draws, noise_levels
 from fxdsp.diagnose.selection import last_added_gain
@@ -117,9 +117,10 @@ class Structure:
 
 # -- the families -----------------------------------------------------------------------------------
 def _thermometer(ctx: Context, channel: str) -> np.ndarray:
+    """The temperature a channel is fitted against, as logged: temp_c for the output, the resonator's
+    thermometer for freq_hz, the reference for temp_c."""
     s = ctx.series
-    raw = {"output": s.temp, "freq_hz": s.freq_thermometer, "temp_c": s.ref}[channel]
-    return ctx.scales[channel](raw)
+    return {"output": s.temp, "freq_hz": s.freq_thermometer, "temp_c": s.ref}[channel]
 
 
 def families(ctx: Context, channel: str) -> list[Family]:
@@ -127,7 +128,8 @@ def families(ctx: Context, channel: str) -> list[Family]:
     s = ctx.series
     n = s.n
     u = (s.t - s.t[0]) / max(s.duration, 1e-300)
-    x = _thermometer(ctx, channel)
+    raw = _thermometer(ctx, channel)
+    x = ctx.scales[channel](raw)
     out = []
     if n > 2 * EDGE_ROWS + 1:
         out.append(Family("step", "time_s", np.empty((n, 0)), 1))
@@ -145,7 +147,6 @@ def families(ctx: Context, channel: str) -> list[Family]:
         if np.any(s.hyst != 0):
             cols += [s.hyst, s.hyst * x]
         out.append(Family("temperature", "temp_c", np.column_stack(cols)))
-        raw = {"output": s.temp, "freq_hz": s.freq_thermometer, "temp_c": s.ref}[channel]
         cols = [s.dtdt, s.dtdt * x, np.abs(s.dtdt)]
         cols += [mech.first_order_lag(s.t, raw, share * s.duration) - raw for share in LAG_SHARES]
         out.append(Family("temperature rate", "d(temp_c)/dt", np.column_stack(cols)))
@@ -158,16 +159,6 @@ def families(ctx: Context, channel: str) -> list[Family]:
 
 
 # -- the statistics -------------------------------------------------------------------------------
-def _gain(ratio: float) -> float:
-    """Steady-state Kalman gain of a local level with random-walk / white variance ``ratio``."""
-    p = 0.5 * (ratio + np.sqrt(ratio * ratio + 4.0 * ratio))
-    return p / (p + 1.0)
-
-
-def _filter(values: np.ndarray, gain: float, axis: int) -> np.ndarray:
-    return lfilter([1.0, -1.0], [1.0, -(1.0 - gain)], values, axis=axis)
-
-
 def _basis(a: np.ndarray, tol: float = 1e-9) -> np.ndarray:
     """An orthonormal basis of the columns of ``a`` (numerical rank: singular values above ``tol``
     of the largest)."""
@@ -208,8 +199,8 @@ class _Prepared:
 def _prepare(x: np.ndarray, fams: list[Family]) -> list[_Prepared]:
     out = []
     for ratio in WALK_RATIOS:
-        gain = _gain(ratio)
-        q = _basis(_filter(x, gain, axis=0))
+        gain = level_gain(ratio)
+        q = _basis(innovations(x, gain, axis=0))
         parts = []
         for fam in fams:
             if fam.width == 1:
@@ -225,7 +216,7 @@ def _prepare(x: np.ndarray, fams: list[Family]) -> list[_Prepared]:
                 ok = valid & (diag > 1e-9 * np.max(np.abs(diag[valid])))
                 parts.append((r, np.where(ok, 1.0 / np.where(ok, diag, 1.0), 0.0)))
                 continue
-            c = _filter(fam.columns, gain, axis=0)
+            c = innovations(fam.columns, gain, axis=0)
             if fam.width == 0:
                 parts.append(_basis(c - q @ (q.T @ c), 1e-7))
                 continue
@@ -245,7 +236,7 @@ def _prepare(x: np.ndarray, fams: list[Family]) -> list[_Prepared]:
 def _drops(y: np.ndarray, prep: _Prepared, fams: list[Family]):
     """Per series (rows of ``y``): the SSE of the model's innovations and, per family, the largest
     SSE drop its columns give (and, per series, the scanned candidate that gives it)."""
-    yt = _filter(y, prep.gain, axis=1)
+    yt = innovations(y, prep.gain, axis=1)
     q = prep.basis
     resid = yt - (yt @ q) @ q.T
     sse = np.einsum("ij,ij->i", resid, resid)
@@ -413,7 +404,7 @@ def resolution(ctx: Context, channel: str) -> float:
     against it) when they sit on a grid (quantised): q / sqrt(12) each; 0 for readings off a grid."""
     s = ctx.series
     y = s.target(channel)
-    raw = {"output": s.temp, "freq_hz": s.freq_thermometer, "temp_c": s.ref}[channel]
+    raw = _thermometer(ctx, channel)
     q_y, q_x = quantisation_step(y), quantisation_step(raw)
     slope = abs(float(np.polyfit(raw - np.mean(raw), y, 1)[0])) if q_x > 0 and np.ptp(raw) > 0 else 0.0
     return float(np.hypot(q_y, slope * q_x) / np.sqrt(12.0))
@@ -439,8 +430,14 @@ def remaining(ctx: Context, state: dict, gain: dict, named: list[str]) -> tuple[
     against = sorted({a for v in significant for a in v.against}, key=_AGAINST_ORDER.index)
     return {"significant": bool(significant), "rms": main.rms,
             "fraction": main.rms / gain["rms_before"] if gain["rms_before"] > 0 else 0.0,
-            "against": against, "explanation": _explanation(significant, named),
+            "against": against, "explanation": _explanation(significant, named, ctx.series.freq is not None),
             "channels": {v.channel: v.as_dict() for v in verdicts}}, verdicts
+
+
+def _claims(record, v: Structure, has_freq: bool) -> bool:
+    """Whether a cause claims the structure ``v`` left: it acts in that channel, and its signature
+    is among what the structure follows."""
+    return v.channel in record.channels(has_freq) and record.signature in v.against
 
 
 def absorbing_only(ctx: Context, state: dict, accepted: list, structures: list[Structure]) -> dict[str, str]:
@@ -455,7 +452,7 @@ def absorbing_only(ctx: Context, state: dict, accepted: list, structures: list[S
             continue
         for cand in accepted:
             record = CAUSES[cand.cause]
-            if v.channel not in record.channels(ctx.series.freq is not None) or record.signature not in v.against:
+            if not _claims(record, v, ctx.series.freq is not None):
                 continue
             # the structure as one shape, its size free: fitted with the cause in the model, it is
             # what the cause does not explain (the families' own columns would hold the cause's term
@@ -475,13 +472,13 @@ def absorbing_only(ctx: Context, state: dict, accepted: list, structures: list[S
     return out
 
 
-def _explanation(significant: list[Structure], named: list[str]) -> str:
+def _explanation(significant: list[Structure], named: list[str], has_freq: bool) -> str:
     if not significant:
         return ("nothing beyond the log's own noise (white, flicker and random walk, fitted to the residual) at the "
                 f"{100 * LEVEL:g} % level and at least {MIN_SIZE:g} of the white noise in size")
     parts = []
     for v in significant:
-        claimed = [c for c in named if CAUSES[c].channel == v.channel and CAUSES[c].signature in v.against]
+        claimed = [c for c in named if _claims(CAUSES[c], v, has_freq)]
         what = "; ".join(w for _, w in v.found)
         if claimed:
             # named, and still supported with this structure in the model (absorbing_only): a real

@@ -238,8 +238,7 @@ def _remaining_plots(diag: Diagnosis, out: Path, idx: np.ndarray) -> list[str]:
     for v in diag.structures:
         if not v.significant:
             continue
-        state = {c: diag.state[c] for c in diag.state}
-        res = heldout_residuals(ctx, state, v.channel)
+        res = heldout_residuals(ctx, diag.state, v.channel)
         shown = ["time_s"] + [a for a in v.against if a != "time_s"]
         fig, axes = plt.subplots(len(shown), 1, figsize=(9, 3.6 * len(shown)), squeeze=False)
         for ax, name in zip(axes[:, 0], shown):

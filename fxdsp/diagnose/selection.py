@@ -7,7 +7,7 @@ import numpy as np
 
 from fxdsp.causes import CAUSES
 from fxdsp.diagnose.candidates import affected_channels, available, evaluate, refit_nonlinear
-from fxdsp.diagnose.context import (MAX_CAUSES, MIN_EVIDENCE, MIN_GAIN, Candidate, Context, innovations,
+from fxdsp.diagnose.context import (MAX_CAUSES, MIN_EVIDENCE, MIN_GAIN, Candidate, Context, innovations, level_gain,
                                     residual, set_noise_weights, white_noise_variance)
 
 # causes whose regressor is slow in time, so a bias random walk can imitate them: a drift, a
@@ -125,9 +125,7 @@ def wander(residual: np.ndarray) -> tuple[float, float, float]:
     g1, gm, q, white = walk_levels(residual)
     ratio = gm / g1 if g1 > 0 else 1.0
     threshold = 1.0 + 4.0 * 3.2 / np.sqrt(n)
-    lam = q / max(white, 1e-300)
-    p = 0.5 * (lam + np.sqrt(lam * lam + 4.0 * lam))
-    gain = p / (p + 1.0) if np.isfinite(p) else 1.0  # a residual that is all random walk: difference it
+    gain = level_gain(q / max(white, 1e-300))  # a residual that is all random walk: 1, differenced
     return float(ratio), float(threshold), float(gain)
 
 
@@ -135,19 +133,23 @@ def null_evidence(ctx: Context, channel: str, state: dict, without: dict, resid:
     """The held-out evidence for the columns ``state`` adds to ``without`` that noise alone gives,
     at NULL_QUANTILE: white noise plus a random walk at the levels ``resid`` shows (its variogram
     at 1 and n/5 rows), drawn NULL_DRAWS times from a fixed seed (reproducible)."""
-    from fxdsp.diagnose.blockfit import SegmentNormals
-
     n = resid.size
     _, _, q, white = walk_levels(resid)
+    rng = np.random.default_rng(NULL_SEED)
+    draws = [rng.normal(0.0, np.sqrt(white), n) + np.cumsum(rng.normal(0.0, np.sqrt(q), n)) for _ in range(NULL_DRAWS)]
+    return _null_quantile(ctx, channel, state, without, draws)
+
+
+def _null_quantile(ctx: Context, channel: str, state: dict, without: dict, draws) -> float:
+    """The NULL_QUANTILE of the held-out evidence that the columns ``state`` adds to ``without``
+    gets on each of ``draws`` (series of noise alone)."""
+    from fxdsp.diagnose.blockfit import SegmentNormals
+
     x_with, _ = ctx.design(channel, state)
     x_without, _ = ctx.design(channel, without)
     w = ctx.weights[channel]
-    rng = np.random.default_rng(NULL_SEED)
-    found = []
-    for _ in range(NULL_DRAWS):
-        y = rng.normal(0.0, np.sqrt(white), n) + np.cumsum(rng.normal(0.0, np.sqrt(q), n))
-        found.append(SegmentNormals(x_without, y, ctx.blocks, w).folds()[1].sum()
-                     - SegmentNormals(x_with, y, ctx.blocks, w).folds()[1].sum())
+    found = [SegmentNormals(x_without, y, ctx.blocks, w).folds()[1].sum()
+             - SegmentNormals(x_with, y, ctx.blocks, w).folds()[1].sum() for y in draws]
     return float(np.quantile(found, NULL_QUANTILE))
 
 
@@ -210,7 +212,6 @@ def check_against_noise(ctx: Context, state: dict, accepted: list[Candidate]):
     :func:`fxdsp.diagnose.noise.noise_levels`) and, when it is coloured, each time-like cause's
     held-out evidence must exceed the NULL_QUANTILE of what NULL_DRAWS draws of that noise give the
     same column (fixed seed); the weakest failure is removed until all pass."""
-    from fxdsp.diagnose.blockfit import SegmentNormals
     from fxdsp.diagnose.noise import noise_draws, noise_levels
 
     ch = "output"
@@ -222,17 +223,12 @@ def check_against_noise(ctx: Context, state: dict, accepted: list[Candidate]):
         if not (levels[1] > 0 or levels[2] > 0):
             return state, accepted   # white: the held-out rule's own yardstick
         draws = noise_draws(np.random.default_rng(NULL_SEED), levels, NULL_DRAWS, ctx.series.n)
-        w = ctx.weights[ch]
         full = ctx.normals(ch, state)[0].folds()[1].sum()
-        x_with, _ = ctx.design(ch, state)
         margins = []
         for cand in out_causes:
             without = {k: v for k, v in state.items() if k != cand.cause}
-            x_without, _ = ctx.design(ch, without)
-            null = [SegmentNormals(x_without, y, ctx.blocks, w).folds()[1].sum()
-                    - SegmentNormals(x_with, y, ctx.blocks, w).folds()[1].sum() for y in draws]
             gained = ctx.normals(ch, without)[0].folds()[1].sum() - full
-            margins.append((gained - float(np.quantile(null, NULL_QUANTILE)), cand))
+            margins.append((gained - _null_quantile(ctx, ch, state, without, draws), cand))
         failing = [m for m in margins if m[0] <= 0]
         if not failing:
             return state, accepted
