@@ -203,13 +203,11 @@ def test_sweep_worst_values_and_bad_parameters(sweep):
 # ---------------------------------------------------------------------------------------------
 # the CLI: text, strict JSON without wall-clock time, byte-identical, report
 # ---------------------------------------------------------------------------------------------
-def test_budget_json_is_strict_and_byte_identical(tmp_path, capsys):
-    j1, j2, rep = tmp_path / "b1.json", tmp_path / "b2.json", tmp_path / "report"
+def test_budget_json_is_strict_and_complete(tmp_path, capsys):
+    """(Same config -> the same bytes, wherever the files lie: test_outputs runs the budget twice.)"""
+    j1, rep = tmp_path / "b1.json", tmp_path / "report"
     assert main(["budget", "--json", str(j1), "--report", str(rep)]) == 0
     text = capsys.readouterr().out
-    assert main(["budget", "--json", str(j2)]) == 0
-    capsys.readouterr()
-    assert j1.read_bytes() == j2.read_bytes()
     out = _strict_json(j1.read_text())
     assert "seconds" not in out
     assert {(f["chain"], f["port"]) for f in out["floor"]} == {(a["chain"], a["port"]) for a in out["attribution"]}

