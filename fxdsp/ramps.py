@@ -19,11 +19,16 @@ Rules
   move left and the confirmation. So the hysteresis state of the contract (``s``) takes the ramp's
   sign from its start, however short or fast the ramp, a reversal mid-ramp flips it where the
   temperature turned, and a dwell's wobble before the ramp does not pull the start back.
-* Derivative smoothing. d(temp_c)/dt is taken on a moving average of W seconds; the derivative's
-  noise is then sigma_eff / (sqrt(2) W). W is the shortest window (from one sample up) for which
-  that noise is at most DERIVATIVE_NOISE_FRACTION of the median |dT/dt| of the ramp rows, so a
-  ramp-rate term is not attenuated by its regressor's noise, and ramps are not smeared more than
-  that requires.
+* Derivative smoothing. A first d(temp_c)/dt is taken on a moving average of W seconds; its noise
+  is then sigma_eff / (sqrt(2) W). W is the shortest window (from one sample up) for which that
+  noise is at most DERIVATIVE_NOISE_FRACTION of the median |dT/dt| of the ramp rows. It dates the
+  phases (heating, cooling, dwell) and so the corners: where a ramp starts, ends or turns.
+* Corner-aware derivative. The d(temp_c)/dt the model uses is the slope of a straight line fitted
+  to the readings within +-h of each row, h the distance to the nearest corner (at least W / 2, at
+  most MAX_HALF_WINDOWS x W / 2): inside a ramp the line takes in far more readings than W (its
+  slope's noise falls as h^-1.5), and no window reaches across a corner. A regressor as noisy as the
+  output itself would bias a ramp-rate term low by its noise share (errors in variables) and leave
+  that share in the residual, on every ramp.
 """
 
 from __future__ import annotations
@@ -40,6 +45,8 @@ NOISE_MULTIPLE = 10.0
 SPAN_FRACTION = 0.01
 # noise of the derivative allowed, as a fraction of the typical ramp rate
 DERIVATIVE_NOISE_FRACTION = 0.1
+# the longest line a row's slope is fitted over, in half-windows W / 2 of the first derivative
+MAX_HALF_WINDOWS = 10.0
 
 
 def _distinct_steps(t: np.ndarray) -> np.ndarray:
@@ -116,9 +123,10 @@ class RampReading:
     threshold: float  # delta: the move that makes a ramp, C
     starts: np.ndarray  # row index where each ramp starts
     signs: np.ndarray  # +1 heating, -1 cooling
-    window_s: float  # derivative smoothing window
-    dtdt: np.ndarray  # smoothed d(temp)/dt per row, C/s
+    window_s: float  # the first derivative's smoothing window W
+    dtdt: np.ndarray  # corner-aware d(temp)/dt per row, C/s (what the model uses)
     state: np.ndarray  # the contract's hysteresis s per row
+    dtdt_window: np.ndarray | None = None  # the first derivative (on the W moving average), C/s
 
     @property
     def sigma_eff(self) -> float:
@@ -127,7 +135,48 @@ class RampReading:
     def phase(self) -> np.ndarray:
         """+1 heating, -1 cooling, 0 dwell per row: |dT/dt| above 5 sigmas of its own noise."""
         noise = self.sigma_eff / (np.sqrt(2.0) * self.window_s)
-        return np.where(self.dtdt > 5 * noise, 1, np.where(self.dtdt < -5 * noise, -1, 0))
+        d = self.dtdt if self.dtdt_window is None else self.dtdt_window
+        return np.where(d > 5 * noise, 1, np.where(d < -5 * noise, -1, 0))
+
+    def corners(self, t=None) -> np.ndarray:
+        """Rows where a ramp starts (its knee) or the heating / cooling / dwell phase changes and then
+        holds for at least two windows W (with the stamps ``t``; without them, every change: a phase
+        flickering about its threshold on a slow ramp or in a dwell's noise is not a corner)."""
+        phase = self.phase()
+        change = np.flatnonzero(np.diff(phase) != 0) + 1
+        if t is not None and change.size:
+            t = np.asarray(t, float)
+            bounds = np.concatenate([[0], change, [phase.size]])
+            lasting = t[np.minimum(bounds[1:], phase.size - 1)] - t[bounds[:-1]] >= 2.0 * self.window_s
+            # a run too short to be a phase takes its predecessor's value: a change is kept where
+            # the lasting phases on its two sides differ
+            value, kept, last = phase[bounds[:-1]], [], None
+            for b, v, ok in zip(bounds[:-1], value, lasting):
+                if ok:
+                    if last is not None and v != last:
+                        kept.append(b)
+                    last = v
+            change = np.array(kept, dtype=np.int64)
+        return np.union1d(self.starts, change).astype(np.int64)
+
+    def unresolved(self, t) -> np.ndarray:
+        """Rows too near a corner for the reading to say what the temperature did there: within half
+        the derivative's window (the smoothed dT/dt turns over that span, the true one at an instant)
+        plus two sampling intervals (a knee dated to a row: the true start lies between two rows, and
+        a chamber's air lag rounds the corner) of a ramp's start or end. Bool per row."""
+        t = np.asarray(t, float)
+        corners = self.corners(t)
+        out = np.zeros(t.size, dtype=bool)
+        if corners.size == 0 or t.size < 2:
+            return out
+        reach = 0.5 * self.window_s + 2.0 * sample_interval(t)
+        at = t[corners]
+        lo = np.searchsorted(t, at - reach, side="left")
+        hi = np.searchsorted(t, at + reach, side="right")
+        cover = np.zeros(t.size + 1, dtype=np.int64)
+        np.add.at(cover, lo, 1)
+        np.add.at(cover, hi, -1)
+        return np.cumsum(cover[:-1]) > 0
 
     def describe(self) -> str:
         q = f"{self.quant_step:.3g} C" if self.quant_step > 0 else "none found"
@@ -136,8 +185,10 @@ class RampReading:
                 f"step {q}; a ramp is a move of more than {self.threshold:.3g} C from the last extreme "
                 f"(max of {NOISE_MULTIPLE:g} noise sigmas + one step, and {100 * SPAN_FRACTION:g} % of the "
                 f"span), dated back to its knee (hinge fit): the state turned to heating {heat} and to "
-                f"cooling {cool} times; d(temp_c)/dt on a {self.window_s:.3g} s moving average (its noise at most "
-                f"{100 * DERIVATIVE_NOISE_FRACTION:g} % of the median ramp rate)")
+                f"cooling {cool} times; phases from d(temp_c)/dt on a {self.window_s:.3g} s moving average (its noise "
+                f"at most {100 * DERIVATIVE_NOISE_FRACTION:g} % of the median ramp rate); the model's d(temp_c)/dt is "
+                f"the slope of a line over +-{0.5 * self.window_s:.3g} to {0.5 * MAX_HALF_WINDOWS * self.window_s:.3g} s, "
+                "as far as the nearest corner")
 
 
 def read_ramps(time_s, temp_c) -> RampReading:
@@ -164,8 +215,39 @@ def read_ramps(time_s, temp_c) -> RampReading:
     state = np.zeros(y.size)
     for start, sign in zip(starts, signs):
         state[start:] = sign
-    return RampReading(sigma=sigma, quant_step=q, threshold=threshold, starts=starts, signs=signs,
-                       window_s=float((2 * k + 1) * dt), dtdt=dtdt, state=state)
+    reading = RampReading(sigma=sigma, quant_step=q, threshold=threshold, starts=starts, signs=signs,
+                          window_s=float((2 * k + 1) * dt), dtdt=dtdt, state=state, dtdt_window=dtdt)
+    if y.size > 2 and np.ptp(t) > 0:
+        reading.dtdt = corner_aware_derivative(t, y, t[reading.corners(t)], 0.5 * reading.window_s,
+                                               0.5 * MAX_HALF_WINDOWS * reading.window_s)
+    return reading
+
+
+def corner_aware_derivative(t, y, corners_t, shortest: float, longest: float) -> np.ndarray:
+    """Per row, the slope of the least-squares line through the readings within +-h of it, h its
+    distance to the nearest of ``corners_t`` clipped to [shortest, longest] (seconds): running sums,
+    one pass. A window with fewer than two distinct stamps has slope 0."""
+    t = np.asarray(t, float)
+    y = np.asarray(y, float)
+    c = np.sort(np.asarray(corners_t, float))
+    if c.size:
+        k = np.clip(np.searchsorted(c, t), 1, c.size)
+        dist = np.minimum(np.abs(t - c[k - 1]), np.abs(c[np.minimum(k, c.size - 1)] - t))
+    else:
+        dist = np.full(t.size, np.inf)
+    h = np.clip(dist, shortest, longest)
+    lo = np.searchsorted(t, t - h, side="left")
+    hi = np.searchsorted(t, t + h, side="right")
+    # centred on each window's own row (sums of (t - t0) powers from running sums, t0 the log's mean
+    # time: the differences keep ~1e-8 relative precision over a week of seconds)
+    u = t - t.mean()
+    v = y - y.mean()
+    run = [np.concatenate([[0.0], np.cumsum(a)]) for a in (np.ones_like(u), u, v, u * u, u * v)]
+    n, su, sv, suu, suv = (r[hi] - r[lo] for r in run)
+    sxx = suu - su * su / np.maximum(n, 1)
+    sxy = suv - su * sv / np.maximum(n, 1)
+    ok = (n >= 2) & (sxx > 1e-12 * np.maximum(suu, 1e-300))
+    return np.where(ok, sxy / np.where(ok, sxx, 1.0), 0.0)
 
 
 def _derivative_window(t, y, dt, sigma_eff) -> float:

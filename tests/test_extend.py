@@ -148,6 +148,19 @@ def test_extend_a_simulated_paper002_log(logs, name, tmp_path, capsys):
     manifest = json.loads((out / "vectors" / "manifest.json").read_text())
     assert ("lag" in manifest["blocks"]["chain_paper002"]["parameters"]["blocks"]) == ("lag" in stages)
     assert (out / "heldout_error.png").stat().st_size > 0 and "Held-out" in (out / "report.md").read_text()
+    # what the held-out error follows: each remedy's signature (a lag's d(temp_c)/dt, a trim's quad)
+    # is structure in the error with the stage off (before, or the other stages on); with every stage
+    # on it is gone, or what is left of the structure is a tenth of it at most
+    signature = {"lag": "d(temp_c)/dt", "trim": "quad"}
+    rem = rep["remaining"]
+    assert set(rem) == set(h["variants"])
+    for stage in stages & signature.keys():
+        off = rem["before" if stages == {stage} else f"without {stage}"]
+        assert off["significant"] and signature[stage] in off["against"], (stage, off)
+        assert signature[stage] not in rem["after"]["against"] or rem["after"]["rms"] < 0.1 * off["rms"], \
+            (stage, rem["after"], off)
+    assert rem["after"]["rms"] < rem["before"]["rms"] and rem["before"]["fraction"] <= 1.0
+    assert "What the error still follows" in (out / "report.md").read_text()
 
 
 @needs_icarus

@@ -95,3 +95,29 @@ def test_derivative_window_grows_with_the_noise_and_keeps_ramp_rates():
         mid = (t > 3600 + 300) & (t < 3600 + 1500)
         assert np.median(r.dtdt[mid]) == pytest.approx(rate, rel=0.05)
         assert np.std(r.dtdt[mid]) < 0.15 * rate
+
+
+@pytest.mark.parametrize("sigma,step,dt", [(0.02, 0.01, 5.0), (0.05, 0.1, 10.0), (0.01, 0.025, 2.0)])
+def test_the_models_derivative_is_the_ramps_rate_on_both_sides_of_every_corner(sigma, step, dt):
+    """The slope the model regresses on: unbiased and far quieter than the moving-average derivative
+    inside each ramp, and no window reaching across a corner (the rows just inside a ramp, a few
+    sampling intervals from its start or end, already have the ramp's rate; the first derivative's
+    moving average smears the turn over its window there)."""
+    legs = [(0, 20.0), (3000, 20.0), (1200, 40.0), (2400, 40.0), (900, 10.0), (600, 25.0), (3000, 25.0)]
+    t, y, t_knots, y_knots = programme(legs, dt)
+    rng = np.random.default_rng(11)
+    r = read_ramps(t, reading(y, rng, sigma, step))
+    true = np.zeros(t.size)
+    for a, b, ya, yb in zip(t_knots[:-1], t_knots[1:], y_knots[:-1], y_knots[1:]):
+        true[(t >= a) & (t < b)] = (yb - ya) / (b - a)
+    corner_dist = np.min(np.abs(t[:, None] - t_knots[None, 1:-1]), axis=1)
+    inside = corner_dist > 0.5 * r.window_s + 2 * dt        # the rows RampReading.unresolved keeps
+    err, err_first = r.dtdt - true, r.dtdt_window - true
+    assert abs(np.mean(err[inside])) < 0.01 * np.max(np.abs(true))
+    assert np.std(err[inside]) < 0.3 * np.std(err_first[inside])
+    # the rows beyond a few windows of any corner: the long line's noise, from the reading's own noise
+    deep = corner_dist > 10 * r.window_s
+    assert np.std(err[deep]) < 0.1 * np.std(err_first[deep])
+    # and no row is taken far from its ramp's rate by a corner (the first derivative is, there)
+    assert np.max(np.abs(err[inside])) < 6 * np.std(err_first[inside])
+    assert not r.unresolved(t)[inside & (corner_dist > r.window_s + 4 * dt)].any()

@@ -55,16 +55,43 @@ def allan_levels(resid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.array(taus, float), np.array(avar)
 
 
-def noise_levels(resid: np.ndarray) -> tuple[float, float, float]:
+# unit series of each kind drawn to learn its Allan variance once a model's columns are fitted out
+SHAPE_DRAWS = 8
+SHAPE_SEED = 20261128
+
+
+def _projected_shapes(x: np.ndarray, taus: np.ndarray) -> np.ndarray:
+    """[tau, kind] robust Allan variance of unit white noise, flicker and random walk after the
+    columns ``x`` are fitted out of them by least squares, as they are out of a residual (a model
+    with slow columns, a drift, a warm-up, a cubic in a temperature that moves once, takes the slow
+    part of a random walk or a flicker with it: the residual's Allan variance then falls at long tau,
+    and shapes fitted as if nothing were taken would put the noise's level too low there)."""
+    n = x.shape[0]
+    q, sv, _ = np.linalg.svd(x, full_matrices=False)
+    q = q[:, sv > 1e-9 * max(sv[0], 1e-300)] if sv.size else q
+    rng = np.random.default_rng([SHAPE_SEED, n])
+    out = np.empty((taus.size, 3))
+    for k, levels in enumerate(((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))):
+        draws = noise_draws(rng, levels, SHAPE_DRAWS, n)
+        draws -= (draws @ q) @ q.T
+        out[:, k] = np.mean([allan_levels(d)[1][:taus.size] for d in draws], axis=0)
+    return out
+
+
+def noise_levels(resid: np.ndarray, x: np.ndarray | None = None) -> tuple[float, float, float]:
     """(white variance, flicker variance per component, random-walk variance per row) of a residual:
     its robust Allan variance fitted, by non-negative least squares weighted to equal relative errors,
-    with the three shapes (a / tau, the flicker construction's, q tau / 3)."""
+    with the three shapes (a / tau, the flicker construction's, q tau / 3); with ``x``, the model
+    columns the residual was fitted on, the shapes are those of each noise with ``x`` fitted out."""
     from scipy.optimize import nnls
 
     taus, avar = allan_levels(resid)
     if taus.size < 2 or not np.all(avar > 0):
         return float(np.var(resid)) or 1.0, 0.0, 0.0
-    basis = np.column_stack([1.0 / taus, _flicker_avar(resid.size, taus), taus / 3.0])
+    if x is None:
+        basis = np.column_stack([1.0 / taus, _flicker_avar(resid.size, taus), taus / 3.0])
+    else:
+        basis = _projected_shapes(np.asarray(x, float), taus)
     coef, _ = nnls(basis / avar[:, None], np.ones_like(avar))
     return float(coef[0]) or float(avar[0]), float(coef[1]), float(coef[2])
 

@@ -35,6 +35,14 @@ ratio exceeds the 1 - LEVEL / k point (k: the channels tested) of a Gumbel law f
 maximum over the draws. The families are taken in turn (forward selection): the most significant
 one joins the model and the others are tested again on top of it, so one effect is reported once.
 
+Rows next to a ramp's start or end (within half the first derivative's window and two sampling
+intervals: fxdsp.ramps, RampReading.unresolved) are set aside: a reading cannot date a corner to
+the row, and a model right to within that leaves a spike of a row or two at each corner that a step
+would otherwise be taken for.
+
+The same test runs on a series that is itself a held-out error (series_structure: ``fxdsp extend``'s
+compensated output before and after its remedies), on top of a cubic in temp_c instead of a model.
+
 The size is held-out: the significant families' columns are fitted to the held-out residual on the
 training folds and predict the held-out folds; ``rms`` is the square root of the held-out sum of
 squares they remove, per row, in the channel's unit. Structure no larger than MIN_SIZE times the
@@ -105,13 +113,14 @@ class Structure:
     threshold: float
     p_value: float
     curve: np.ndarray | None = None          # the structure found, at every row, in the channel's unit
+    parts: np.ndarray | None = None          # [rows, found]: each family's share of ``curve``
     note: str = ""                           # why a channel was not tested
 
     def as_dict(self) -> dict:
         return {"channel": self.channel, "significant": self.significant, "rms": self.rms,
                 "fraction": self.fraction, "against": list(self.against),
                 "found": [w for _, w in self.found], "statistic": round(self.statistic, 3),
-                "threshold": round(self.threshold, 3), "p_value": round(self.p_value, 4),
+                "threshold": round(self.threshold, 3), "p_value": float(f"{self.p_value:.3g}"),
                 **({"note": self.note} if self.note else {})}
 
 
@@ -280,41 +289,81 @@ def _ratios(y: np.ndarray, prepared: list[_Prepared], fams: list[Family]):
     return np.maximum(lr, 0.0), first
 
 
-def _gumbel_quantile(maxima: np.ndarray, p: float) -> float:
-    """The ``p`` quantile of a Gumbel law with the mean and spread of ``maxima`` (the null's largest
+def _gumbel(maxima: np.ndarray) -> tuple[float, float]:
+    """Location and scale of the Gumbel law with the mean and spread of ``maxima`` (the null's largest
     standardised ratios): a far tail that DRAWS draws alone would only rank, extrapolated smoothly."""
     beta = max(float(np.std(maxima)), 1e-9) * np.sqrt(6.0) / np.pi
-    mu = float(np.mean(maxima)) - 0.5772156649 * beta
+    return float(np.mean(maxima)) - 0.5772156649 * beta, beta
+
+
+def _gumbel_quantile(maxima: np.ndarray, p: float) -> float:
+    mu, beta = _gumbel(maxima)
     return float(mu - beta * np.log(-np.log(p)))
 
 
-def _standardised(y: np.ndarray, x: np.ndarray, fams: list[Family], n_channels: int):
+def _gumbel_tail(maxima: np.ndarray, z: float) -> float:
+    """P(max > z) under the same law: the p-value the threshold is the LEVEL / k point of."""
+    mu, beta = _gumbel(maxima)
+    return float(-np.expm1(-np.exp(-(z - mu) / beta)))
+
+
+def _standardised(y: np.ndarray, x: np.ndarray, fams: list[Family], n_channels: int, levels: tuple):
     """Each family's standardised likelihood ratio on top of the model ``x``, the threshold of the
     largest at the report's level, the largest's p-value, and per family its best candidate and walk
-    ratio (index)."""
+    ratio (index); the null is noise at ``levels`` (:func:`fxdsp.diagnose.noise.noise_levels`)."""
     prepared = _prepare(x, fams)
     lr_obs, picks = _ratios(y, prepared, fams)
     n = y.shape[1]
     rng = np.random.default_rng([SEED, n, x.shape[1]])
-    resid = y[0] - x @ np.linalg.lstsq(x, y[0], rcond=None)[0]
-    null_y = noise_draws(rng, noise_levels(resid), DRAWS, n)
+    null_y = noise_draws(rng, levels, DRAWS, n)
     lr_null, _ = _ratios(null_y, prepared, fams)
     med = np.median(lr_null, axis=1)
     spread = np.maximum(np.quantile(lr_null, 0.9, axis=1) - med, 1e-9)
     z_obs = (lr_obs[:, 0] - med) / spread
     z_null = ((lr_null - med[:, None]) / spread[:, None]).max(axis=0)
     threshold = _gumbel_quantile(z_null, 1.0 - LEVEL / n_channels)
-    p_value = float((1 + np.count_nonzero(z_null >= float(z_obs.max()))) / (DRAWS + 1))
+    p_value = _gumbel_tail(z_null, float(z_obs.max()))
     return z_obs, threshold, p_value, picks
 
 
 def channel_structure(ctx: Context, state: dict, channel: str, n_channels: int) -> Structure:
     """The structure left in one channel of the final model ``state``."""
-    fams = families(ctx, channel)
     x_full, _ = ctx.design(channel, state)
-    y_full = ctx.target(channel)
-    m = -(-ctx.series.n // MAX_ROWS)
-    mean = (lambda a: _block_means(a, m)) if m > 1 else (lambda a: a)
+    before = channel_gain(ctx, {}, channel)["rms_before"]
+    return _structure(ctx, channel, x_full, ctx.target(channel), heldout_residuals(ctx, state, channel),
+                      np.ones(ctx.series.n, dtype=bool), n_channels, ctx.norm[channel][1], before)
+
+
+def series_structure(ctx: Context, series: np.ndarray, rows: np.ndarray, reference: float) -> Structure:
+    """The structure left in a series of the output's unit that is itself a held-out error (``fxdsp
+    extend``'s compensated output against the applied rate, before and after a compensation), on its
+    held-out ``rows``: the output's families on top of what a recalibration would absorb (a cubic in
+    temp_c), with the same statistics, calibration and size floor; ``fraction`` is of ``reference``."""
+    series = np.asarray(series, float)
+    x = ctx.scales["output"](ctx.series.temp)
+    model = np.column_stack([np.ones_like(x), x, x * x, x ** 3])
+    rows = np.asarray(rows, bool)
+    scale = float(np.std(series[rows])) or 1.0
+    return _structure(ctx, "output", model, series / scale, series, rows, 1, scale, reference, fitted_model=False)
+
+
+def _structure(ctx: Context, channel: str, x_full: np.ndarray, y_full: np.ndarray, resid: np.ndarray,
+               rows: np.ndarray, n_channels: int, sd_y: float, before: float, fitted_model: bool = True) -> Structure:
+    """The families of ``channel`` tested on ``y_full`` (in units of ``sd_y``) on top of the model
+    ``x_full``, on ``rows``; ``resid``: the held-out residual (the channel's unit) the size is
+    measured on; ``before``: what ``fraction`` is of; ``fitted_model``: the model is the diagnosis's
+    (the words then say what its causes do not follow, and MAX_FOUND families are reported at most),
+    not a bare cubic (every significant family is: what a compensation removed is among them)."""
+    fams = families(ctx, channel)
+    # the rows next to a ramp's corners are set aside: there the reading cannot date the corner to
+    # the row, nor follow dT/dt's turn (fxdsp.ramps: RampReading.unresolved), and a model right to
+    # within that leaves a spike of a few rows at each corner (a hysteresis state one row late is
+    # 2 h on that row) that a step or a rate shape would take for structure
+    keep = rows & ~ctx.series.ramps.unresolved(ctx.series.t)
+    if keep.sum() < max(2 * EDGE_ROWS + 10, int(rows.sum()) // 2):
+        keep = rows.copy()
+    m = -(-int(keep.sum()) // MAX_ROWS)
+    mean = (lambda a: _block_means(a[keep], m)) if m > 1 else (lambda a: a[keep])
     x = mean(x_full)
     y = mean(y_full)[None, :]
     tested = [Family(f.name, f.against, _unit(mean(f.columns)) if f.width != 1 else mean(f.columns), f.width,
@@ -327,9 +376,13 @@ def channel_structure(ctx: Context, state: dict, channel: str, n_channels: int) 
     # fits it best, and not again by every family that overlaps it
     chosen, first = [], None
     left = list(range(len(fams)))
-    while left and len(chosen) < MAX_FOUND:
+    # the noise of the residual of the model as it stands, its levels fitted with shapes that went
+    # through the same model (kept for the later rounds: a found shape's columns would take more of
+    # the slow noise with them each round)
+    levels = noise_levels(y[0] - x @ np.linalg.lstsq(x, y[0], rcond=None)[0], x)
+    while left and (len(chosen) < MAX_FOUND or not fitted_model):
         fam_left = [tested[k] for k in left]
-        z_obs, threshold, p_value, picks = _standardised(y, x, fam_left, n_channels)
+        z_obs, threshold, p_value, picks = _standardised(y, x, fam_left, n_channels, levels)
         if first is None:
             first = (float(z_obs.max()), threshold, p_value)
         best = int(np.argmax(z_obs))
@@ -337,9 +390,10 @@ def channel_structure(ctx: Context, state: dict, channel: str, n_channels: int) 
             break
         k = left.pop(best)
         f, j = fams[k], picks[best]
-        if f.width == 1:  # the step at the first row of the j-th mean
+        if f.width == 1:  # the step at the first (kept) row of the j-th mean
             t = ctx.series.t
-            full, small, label = (t >= t[j * m]).astype(float)[:, None], (np.arange(x.shape[0]) >= j)[:, None], float(t[j * m])
+            at = float(t[keep][j * m])
+            full, small, label = (t >= at).astype(float)[:, None], (np.arange(x.shape[0]) >= j)[:, None], at
         elif f.width == 2:
             full, small, label = f.columns[:, 2 * j:2 * j + 2], tested[k].columns[:, 2 * j:2 * j + 2], f.labels[j]
         else:
@@ -353,43 +407,50 @@ def channel_structure(ctx: Context, state: dict, channel: str, n_channels: int) 
     cols = np.column_stack([c for _, c, _ in chosen])
     # the size, on every row, by least squares with the model: the level before and after a step
     # (a fit weighted for a wander would give the jump between two neighbouring rows instead)
-    fitted = np.linalg.lstsq(np.column_stack([x_full, cols]), y_full, rcond=None)[0][x_full.shape[1]:]
-    sd_y = ctx.norm[channel][1]
+    fitted = np.linalg.lstsq(np.column_stack([x_full, cols])[keep], y_full[keep], rcond=None)[0][x_full.shape[1]:]
     found, offset = [], 0
     for f, c, label in chosen:
         coef = fitted[offset:offset + c.shape[1]] * sd_y
         offset += c.shape[1]
-        found.append((f.name, _describe(f, coef, label, channel)))
+        found.append((f.name, _describe(f, coef, label, channel, fitted_model)))
     # the structure as the final model leaves it: the chosen columns fitted to the model's residual
     # (the model's own coefficients kept; refitted together, a column nearly collinear with a named
     # cause's term, such as a short lag's dT/dt, would take the cause's share with it)
-    resid_full = y_full - x_full @ np.linalg.lstsq(x_full, y_full, rcond=None)[0]
-    centred = cols - cols.mean(axis=0)
-    curve = centred @ np.linalg.lstsq(centred, resid_full, rcond=None)[0] * sd_y
-    resid = heldout_residuals(ctx, state, channel)
-    rms = _heldout_rms(ctx, resid, cols)
-    floor = max(resolution(ctx, channel), MIN_SIZE * np.sqrt(white_noise_variance(resid)))
+    resid_full = y_full - x_full @ np.linalg.lstsq(x_full[keep], y_full[keep], rcond=None)[0]
+    centred = cols - cols[keep].mean(axis=0)
+    coef = np.linalg.lstsq(centred[keep], resid_full[keep], rcond=None)[0] * sd_y
+    widths = np.cumsum([0] + [c.shape[1] for _, c, _ in chosen])
+    parts = np.column_stack([centred[:, a:b] @ coef[a:b] for a, b in zip(widths[:-1], widths[1:])])
+    curve = parts.sum(axis=1)
+    rms = _heldout_rms(ctx, resid, cols, keep)
+    floor = max(resolution(ctx, channel), MIN_SIZE * np.sqrt(white_noise_variance(resid[keep])))
     if rms <= floor:
         # smaller than half the white noise of one reading: a named cause's parameter a little off,
         # a reading on a grid coarser than its noise erring by a fixed amount through each dwell; a
         # pattern, but not an effect a calibration would change for
         return Structure(channel, False, 0.0, 0.0, [], [], statistic, threshold, p_value,
                          note=f"structure of held-out rms {rms:.3g} found, at or below the size floor {floor:.3g}")
-    before = channel_gain(ctx, {}, channel)["rms_before"]
     against = sorted({f.against for f, _, _ in chosen}, key=_AGAINST_ORDER.index)
     return Structure(channel, True, rms, rms / before if before > 0 else 0.0, against, found,
-                     statistic, threshold, p_value, curve)
+                     statistic, threshold, p_value, curve, parts)
 
 
 _AGAINST_ORDER = ["time_s", "temp_c", "d(temp_c)/dt", "rate_dps", "quad"]
 
 
-def _describe(f: Family, coef: np.ndarray, label, channel: str) -> str:
+def _describe(f: Family, coef: np.ndarray, label, channel: str, fitted_model: bool = True) -> str:
     if f.name == "step":
         return f"a step of about {coef[0]:+.3g} in {channel} at t = {label / 3600.0:.3g} h"
     if f.name == "periodic":
         return (f"a periodic term in {channel} of about {float(np.hypot(*coef)):.3g} amplitude and "
                 f"{label / 3600.0:.3g} h period")
+    if not fitted_model:   # on top of a cubic in temp_c alone
+        return {"trend": f"a drift of {channel} in time",
+                "temperature": f"structure of {channel} against temp_c beyond a cubic (a heating/cooling offset, "
+                               "a higher power)",
+                "temperature rate": f"structure of {channel} against d(temp_c)/dt (a ramp-rate term, a thermal lag)",
+                "rate": f"structure of {channel} against rate_dps (rate^2, |rate|)",
+                "quadrature": f"structure of {channel} against quad (a leak)"}[f.name]
     return {"trend": f"a drift of {channel} in time that is not a straight line",
             "temperature": f"structure of {channel} against temp_c beyond the baseline's polynomial and a "
                            "constant heating/cooling offset",
@@ -410,13 +471,15 @@ def resolution(ctx: Context, channel: str) -> float:
     return float(np.hypot(q_y, slope * q_x) / np.sqrt(12.0))
 
 
-def _heldout_rms(ctx: Context, r: np.ndarray, cols: np.ndarray) -> float:
+def _heldout_rms(ctx: Context, r: np.ndarray, cols: np.ndarray, keep: np.ndarray) -> float:
     """Root mean square, per row, of the held-out sum of squares that ``cols`` remove from the final
-    model's held-out residual ``r`` (fitted on the training folds), in the channel's unit."""
-    ones = np.ones((r.size, 1))
-    without = SegmentNormals(ones, r, ctx.blocks).folds()[1].sum()
-    with_ = SegmentNormals(np.column_stack([ones, cols]), r, ctx.blocks).folds()[1].sum()
-    return float(np.sqrt(max(without - with_, 0.0) / r.size))
+    model's held-out residual ``r`` (fitted on the training folds), in the channel's unit, over the
+    rows ``keep`` (the others weigh nothing: zero rows)."""
+    w = keep.astype(float)
+    ones = w[:, None]
+    without = SegmentNormals(ones, r * w, ctx.blocks).folds()[1].sum()
+    with_ = SegmentNormals(np.column_stack([ones, cols * w[:, None]]), r * w, ctx.blocks).folds()[1].sum()
+    return float(np.sqrt(max(without - with_, 0.0) / max(int(keep.sum()), 1)))
 
 
 # -- the report's object ----------------------------------------------------------------------------
@@ -454,11 +517,12 @@ def absorbing_only(ctx: Context, state: dict, accepted: list, structures: list[S
             record = CAUSES[cand.cause]
             if not _claims(record, v, ctx.series.freq is not None):
                 continue
-            # the structure as one shape, its size free: fitted with the cause in the model, it is
-            # what the cause does not explain (the families' own columns would hold the cause's term
-            # itself: dT/dt, time, the heating/cooling state)
+            # the structure as one shape per family found, each its size free: fitted with the cause
+            # in the model, it is what the cause does not explain (the families' own columns would
+            # hold the cause's term itself: dT/dt, time, the heating/cooling state; one shape for all
+            # of them would tie a step's size to a small periodic term's found beside it)
             without = {k: x for k, x in state.items() if k != cand.cause}
-            ctx.nuisance[v.channel] = v.curve[:, None]
+            ctx.nuisance[v.channel] = v.parts
             try:
                 evidence, ratio = last_added_gain(ctx, state, cand)
                 shape_alone = ctx.normals(v.channel, without)[0].folds()[1].sum()

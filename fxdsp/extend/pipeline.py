@@ -66,6 +66,23 @@ def columns_of(series) -> dict:
     return cols
 
 
+def remaining_structure(diag, errors: dict) -> dict:
+    """What structure the compensated output's held-out error keeps in every variant: before and after
+    the extension, and without each stage (:func:`fxdsp.diagnose.remaining.series_structure`: the
+    diagnosis's families and statistics on the error itself); ``fraction`` is of the error before.
+    A stage's signature shows where it is off, and not where it is on."""
+    from fxdsp.diagnose.remaining import series_structure
+
+    reference = errors["variants"]["before"]["rms"]
+    out = {}
+    for name in errors["variants"]:
+        v = series_structure(diag.context, errors["_series"][name], errors["_held"], reference)
+        out[name] = {k: x for k, x in v.as_dict().items() if k != "channel"}
+        out[name]["explanation"] = ("; ".join(w for _, w in v.found) if v.significant else
+                                    "nothing beyond the error's own noise at the 1 % level")
+    return out
+
+
 def extend_log(path, mapping=None, delimiter=",", time_format=None, chain="auto", base_text=None,
                rtl: bool = True, build_root=None, widen: bool = False, strict: bool = False,
                base_name: str | None = None) -> Extension:
@@ -136,7 +153,8 @@ def extend_diagnosis(diag, log_name: str, chain="auto", base_text=None, rtl: boo
               "design": {"calibrated_keys": list(calibrated),
                          "remedy_keys": sorted(allowed_keys(roles, stages) - set(calibrated)),
                          "widen": bool(widen), "changes": changes},
-              "heldout": rp.public(errors), "summary": rp.summary(errors), **extra,
+              "heldout": rp.public(errors), "summary": rp.summary(errors),
+              "remaining": remaining_structure(diag, errors), **extra,
               "regression": hardware.regression(design_built, roles, "lag" in stages, build_root) if rtl else None,
               "cost": hardware.cost(design_built, roles.chain, "lag" in stages)}
     from fxdsp.diagnose.report import replay_model

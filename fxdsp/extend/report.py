@@ -61,6 +61,16 @@ def markdown(rep: dict) -> str:
               "effect): " + ", ".join(f"{k} {v:.3g} C" for k, v in curv.items()) + "."]
     L += ["", f"Gain (rms before / after): **{s['gain']:.3g}**" +
           "".join(f"; with {k} turned off: {g:.3g}" for k, g in s["gain_without"].items()), ""]
+    if rep.get("remaining"):
+        L += ["### What the error still follows", "",
+              "The diagnosis's test of what remains (the families of shapes, the log's own noise as the null, 1 % "
+              "level) on the held-out error itself, beyond a cubic in temp_c (what a recalibration absorbs); "
+              "fraction of the error before.", "",
+              "| variant | structure | rms | fraction | against | what |", "|---|---|---:|---:|---|---|"]
+        for name, r in rep["remaining"].items():
+            L.append(f"| {name} | {'yes' if r['significant'] else 'no'} | {r['rms']:.4g} | {r['fraction']:.3g} | "
+                     f"{', '.join(r['against']) or '-'} | {r['explanation']} |")
+        L.append("")
     if rep.get("applied"):
         a = rep["applied"]
         L += [f"Applied to a second run, `{a['log']}` (nothing of it fitted, {a['rows']} rows): rms "
