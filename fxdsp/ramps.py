@@ -124,9 +124,9 @@ class RampReading:
     starts: np.ndarray  # row index where each ramp starts
     signs: np.ndarray  # +1 heating, -1 cooling
     window_s: float  # the first derivative's smoothing window W
+    dtdt_window: np.ndarray  # the first derivative (on the W moving average), C/s: dates the phases
     dtdt: np.ndarray  # corner-aware d(temp)/dt per row, C/s (what the model uses)
     state: np.ndarray  # the contract's hysteresis s per row
-    dtdt_window: np.ndarray | None = None  # the first derivative (on the W moving average), C/s
 
     @property
     def sigma_eff(self) -> float:
@@ -135,16 +135,16 @@ class RampReading:
     def phase(self) -> np.ndarray:
         """+1 heating, -1 cooling, 0 dwell per row: |dT/dt| above 5 sigmas of its own noise."""
         noise = self.sigma_eff / (np.sqrt(2.0) * self.window_s)
-        d = self.dtdt if self.dtdt_window is None else self.dtdt_window
+        d = self.dtdt_window
         return np.where(d > 5 * noise, 1, np.where(d < -5 * noise, -1, 0))
 
-    def corners(self, t=None) -> np.ndarray:
+    def corners(self, t) -> np.ndarray:
         """Rows where a ramp starts (its knee) or the heating / cooling / dwell phase changes and then
-        holds for at least two windows W (with the stamps ``t``; without them, every change: a phase
-        flickering about its threshold on a slow ramp or in a dwell's noise is not a corner)."""
+        holds for at least two windows W over the stamps ``t`` (a phase flickering about its threshold
+        on a slow ramp or in a dwell's noise is not a corner)."""
         phase = self.phase()
         change = np.flatnonzero(np.diff(phase) != 0) + 1
-        if t is not None and change.size:
+        if change.size:
             t = np.asarray(t, float)
             bounds = np.concatenate([[0], change, [phase.size]])
             lasting = t[np.minimum(bounds[1:], phase.size - 1)] - t[bounds[:-1]] >= 2.0 * self.window_s
@@ -216,7 +216,7 @@ def read_ramps(time_s, temp_c) -> RampReading:
     for start, sign in zip(starts, signs):
         state[start:] = sign
     reading = RampReading(sigma=sigma, quant_step=q, threshold=threshold, starts=starts, signs=signs,
-                          window_s=float((2 * k + 1) * dt), dtdt=dtdt, state=state, dtdt_window=dtdt)
+                          window_s=float((2 * k + 1) * dt), dtdt_window=dtdt, dtdt=dtdt, state=state)
     if y.size > 2 and np.ptp(t) > 0:
         reading.dtdt = corner_aware_derivative(t, y, t[reading.corners(t)], 0.5 * reading.window_s,
                                                0.5 * MAX_HALF_WINDOWS * reading.window_s)
