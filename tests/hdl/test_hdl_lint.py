@@ -66,13 +66,13 @@ VARIANTS = [
     ("demod", {"ARCH": 1, "INTERP_BITS": 0, "IN_W": 30, "ITERATIONS": 5}),  # plain table, x wider than the CORDIC
     ("fx_convert", {"SHIFT": -3, "OUT_SIGNED": 0, "OVERFLOW": 0}),
     ("fx_round", {"SHIFT": 40, "ROUNDING": 3}),
-    ("lag", {"GUARD": 0, "STATE_W": 19, "ROUNDING": 3, "OVERFLOW": 0}),
+    ("lag", {"TEMP_W": 18, "GUARD": 0, "STATE_W": 19, "ROUNDING": 3, "OVERFLOW": 0}),
     ("lag", {"TEMP_W": 14, "GUARD": 2, "STATE_W": 17, "ALPHA_W": 24, "ALPHA_M": 16777215, "ALPHA_S": 24,
              "ROUNDING": 2}),
     ("lag", {"ALPHA_W": 4, "ALPHA_M": 8, "ALPHA_S": 70, "ROUNDING": 0}),
     # serial lag (ARCH = 1)
     ("lag", {"ARCH": 1}),
-    ("lag", {"ARCH": 1, "DECIM": 5, "GUARD": 0, "STATE_W": 19, "ROUNDING": 3, "OVERFLOW": 0}),
+    ("lag", {"ARCH": 1, "DECIM": 5, "TEMP_W": 18, "GUARD": 0, "STATE_W": 19, "ROUNDING": 3, "OVERFLOW": 0}),
     ("lag", {"ARCH": 1, "TEMP_W": 14, "GUARD": 0, "STATE_W": 15, "ALPHA_W": 4, "ALPHA_M": 8, "ALPHA_S": 70,
              "ROUNDING": 2}),  # one-limb operands (d 16 bits, alpha 5), a shift beyond the product
     # serial rtd (ARCH = 1)

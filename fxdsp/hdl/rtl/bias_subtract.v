@@ -9,11 +9,11 @@
 
 module bias_subtract #(
     parameter integer IN_W     = 24,
-    parameter integer BIAS_W   = 24,
+    parameter integer BIAS_W   = 28,
     parameter integer OUT_W    = 24,
-    parameter integer X_ALIGN  = 0,
+    parameter integer X_ALIGN  = 4,
     parameter integer B_ALIGN  = 0,
-    parameter integer SHIFT    = 0,
+    parameter integer SHIFT    = 4,
     parameter integer ROUNDING = 1,
     parameter integer OVERFLOW = 1
 ) (

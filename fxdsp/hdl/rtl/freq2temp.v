@@ -17,10 +17,10 @@
 module freq2temp #(
     parameter integer FREQ_W   = 32,
     parameter integer KINV_W   = 24,
-    parameter integer TEMP_W   = 18,
+    parameter integer TEMP_W   = 24,
     parameter [63:0]  F0       = 64'd1005969998,
     parameter [63:0]  KINV     = 64'd4890746,
-    parameter integer SHIFT    = 27,
+    parameter integer SHIFT    = 21,
     parameter integer ROUNDING = 1,
     parameter integer OVERFLOW = 1,
     parameter integer ARCH     = 0        // 0: one sample per cycle; 1: serial, one shared multiplier

@@ -60,12 +60,12 @@
 module iir #(
     parameter integer DATA_W    = 24,
     parameter integer SECTIONS  = 1,
-    parameter integer COEF_W    = 28,
-    parameter integer ACOEF_W   = 33,    // ARCH = 1: the word of ACOEF_FILE (b << SHIFT_B, -(a << SHIFT_A), c)
+    parameter integer COEF_W    = 35,
+    parameter integer ACOEF_W   = 39,    // ARCH = 1: the word of ACOEF_FILE (b << SHIFT_B, -(a << SHIFT_A), c)
     parameter integer SHIFT_B   = 0,
-    parameter integer SHIFT_A   = 6,
-    parameter integer OUT_SHIFT = 32,
-    parameter integer ACC_W     = 59,
+    parameter integer SHIFT_A   = 4,
+    parameter integer OUT_SHIFT = 37,
+    parameter integer ACC_W     = 64,
     parameter integer ROUNDING  = 1,
     parameter integer OVERFLOW  = 1,
     parameter integer ARCH      = 0,     // 0: one sample per cycle; 1: serial, one shared multiplier

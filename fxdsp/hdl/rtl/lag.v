@@ -41,8 +41,8 @@
 `default_nettype none
 
 module lag #(
-    parameter integer TEMP_W   = 18,       // bits of the temperature code temp / te (signed)
-    parameter integer GUARD    = 24,       // extra fraction bits of the state st beyond the code
+    parameter integer TEMP_W   = 22,       // bits of the temperature code temp / te (signed)
+    parameter integer GUARD    = 20,       // extra fraction bits of the state st beyond the code
     parameter integer STATE_W  = 43,       // bits of the state st (TEMP_W + GUARD + 1)
     parameter integer ALPHA_W  = 16,       // bits of the unsigned alpha mantissa
     parameter integer ALPHA_M  = 55877,    // alpha mantissa: alpha = ALPHA_M * 2**-ALPHA_S

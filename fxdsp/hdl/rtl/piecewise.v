@@ -49,20 +49,20 @@
 `default_nettype none
 
 module piecewise #(
-    parameter integer T_W        = 18,
+    parameter integer T_W        = 22,
     parameter integer ORDER      = 1,
     parameter integer SEGMENTS   = 4,
-    parameter integer COEF_W     = 20,
-    parameter integer ACOEF_W    = 24,    // ARCH = 1: the word of ACOEF_FILE (c_k << COEF_ALIGN[k], c_ORDER)
+    parameter integer COEF_W     = 24,
+    parameter integer ACOEF_W    = 30,    // ARCH = 1: the word of ACOEF_FILE (c_k << COEF_ALIGN[k], c_ORDER)
     parameter integer ACC_W      = 32,
-    parameter integer OUT_W      = 18,
+    parameter integer OUT_W      = 24,
     parameter integer OUT_SIGNED = 0,
     parameter [63:0]  T0         = 64'd0,
-    parameter integer TOP_SHIFT  = 1,
-    parameter integer PROD_SHIFT = 9,
-    parameter [63:0]  ACC_ALIGN  = 64'h100,
-    parameter [63:0]  COEF_ALIGN = 64'h00a,
-    parameter integer OUT_SHIFT  = 12,
+    parameter integer TOP_SHIFT  = 0,
+    parameter integer PROD_SHIFT = 13,
+    parameter [63:0]  ACC_ALIGN  = 64'h0,
+    parameter [63:0]  COEF_ALIGN = 64'h7,
+    parameter integer OUT_SHIFT  = 7,
     parameter integer ROUNDING   = 1,
     parameter integer OVERFLOW   = 1,
     parameter integer ARCH       = 0,     // 0: one sample per cycle; 1: serial, one shared multiplier

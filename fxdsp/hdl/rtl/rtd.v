@@ -32,10 +32,10 @@
 
 module rtd #(
     parameter integer ADC_W          = 16,             // ADC code bits (signed, read as offset binary)
-    parameter integer LUT_INDEX_BITS = 5,              // K: segment index bits; the LUT has 2**K + 1 words
+    parameter integer LUT_INDEX_BITS = 9,              // K: segment index bits; the LUT has 2**K + 1 words
     parameter integer LUT_W          = 26,             // LUT word bits (signed temperature)
-    parameter integer TEMP_W         = 18,             // output temperature bits (signed)
-    parameter integer SHIFT          = 18,             // rounding shift: exact -> temp (lut.fl + S - temp.fl)
+    parameter integer TEMP_W         = 22,             // output temperature bits (signed)
+    parameter integer SHIFT          = 10,             // rounding shift: exact -> temp (lut.fl + S - temp.fl)
     parameter integer ROUNDING       = 1,              // 0 floor, 1 half_up, 2 half_even, 3 toward_zero
     parameter integer OVERFLOW       = 1,              // 0 wrap, 1 saturate
     parameter integer ARCH           = 0,              // 0: one sample per cycle; 1: serial, one shared multiplier

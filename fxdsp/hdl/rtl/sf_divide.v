@@ -27,10 +27,10 @@
 
 module sf_divide #(
     parameter integer IN_W      = 16,
-    parameter integer SF_W      = 18,
+    parameter integer SF_W      = 24,
     parameter integer SF_SIGNED = 0,
     parameter integer OUT_W     = 24,
-    parameter integer NUM_SHIFT = 26,
+    parameter integer NUM_SHIFT = 32,
     parameter integer OUT_SHIFT = 3,
     parameter integer ROUNDING  = 0,
     parameter integer OVERFLOW  = 1,
