@@ -305,12 +305,13 @@ def _md002(r: dict) -> str:
         npairs = len(rep["quick"]["pairs"])
         plr = rep["paper_length_repeatable"]
         ton = rep["turn_on_only"]["stats"][integ]
+        der = paper002.REPEATABILITY
 
         def cell(stats, name, key):
             return _med(stats[name][key]) if name in stats else "-"
 
         lines += [
-            "**Run-to-run repeatability** (`fxdsp.sim.repeatability.PAPER002_REPEATABILITY`, the only "
+            "**Run-to-run repeatability** (`fxdsp.repro.paper002.PAPER002_REPEATABILITY`, the only "
             "assumption added for the paper's compensated figures). The paper calibrates on one temperature "
             "run and tests the compensation on another; a real device does not repeat between them. Each "
             "simulated run draws (from its own seeded stream): a turn-on bias and SF offset, constant over the "
@@ -318,15 +319,21 @@ def _md002(r: dict) -> str:
             f"(hysteresis of packaging stress and front-end phase). 1 sigma: bias {mod['temp_bias_sigma']:.2f} deg/s "
             f"({mod['temp_bias_sigma'] * 3600:.0f} deg/h), SF {mod['temp_sf_sigma'] * 100:.3f} % per point; turn-on "
             f"{mod['turn_on_bias_sigma']:.2f} deg/s and {mod['turn_on_sf_sigma'] * 100:.3f} %. **Where they come "
-            "from:** a tempco is (max - min) / 80 C of five points, so the paper's compensated figures are ranges "
-            f"of {P002['bias_after']:.2f} x 80 = {P002['bias_after'] * 80:.0f} deg/h and {P002['sf_after_ppm']:.2f} x 80 = "
-            f"{P002['sf_after_ppm'] * 80:.0f} ppm; after compensation each point keeps the "
-            "difference of two runs' offsets, N(0, 2 sigma^2), and the range of five normal draws has median "
-            "2.254; taking the paper's run as a median one, sigma = range / (2.254 sqrt 2): 2892 deg/h = 0.80 "
-            "deg/s and 1748 ppm = 0.175 %. On this device 0.80 deg/s is a demodulation phase that repeats "
-            "within 0.78 deg (0.80 deg/s of its 58.6 deg/s quadrature) and 0.175 % a 10 Hz mode split "
-            "repeating within 17.5 mHz; 0.175 % lies inside the 0.1..1 % SF accuracy of rate-grade MEMS gyros, "
-            "and 0.80 deg/s is 10 % of the device's own 8.1 deg/s bias swing over -20..60 C, several times "
+            f"from** (`paper002.repeatability_derivation`): a tempco is (max - min) / {der.span_c:.0f} C of "
+            f"{der.points} points, so the paper's compensated figures are ranges of {P002['bias_after']:.2f} x "
+            f"{der.span_c:.0f} = {der.bias_range_deg_h:.0f} deg/h and {P002['sf_after_ppm']:.2f} x {der.span_c:.0f} = "
+            f"{der.sf_range_ppm:.0f} ppm; after compensation each point keeps the difference of two runs' offsets, "
+            f"N(0, 2 sigma^2), and the range of {der.points} normal draws has median {der.range_median:.3f}; taking "
+            f"the paper's run as a median one, sigma = range / ({der.range_median:.3f} sqrt 2): "
+            f"{der.sigma_bias_deg_h:.0f} deg/h = {der.sigma_bias_dps:.2f} deg/s and {der.sigma_sf_ppm:.0f} ppm = "
+            f"{der.sigma_sf * 100:.3f} %. On this device {der.sigma_bias_dps:.2f} deg/s is a demodulation phase that "
+            f"repeats within {der.phase_mrad:.1f} mrad ({der.sigma_bias_dps:.2f} deg/s of its "
+            f"{der.quadrature_dps:.1f} deg/s quadrature) and {der.sigma_sf * 100:.3f} % a {der.split_hz:.0f} Hz mode "
+            f"split repeating within {der.split_mhz:.1f} mHz (about {der.split_mhz / der.split_drift_mhz_per_c:.0f} C "
+            f"of its {der.split_drift_mhz_per_c:.1f} mHz/C drift); {der.sigma_sf * 100:.3f} % lies inside the "
+            f"0.1..1 % SF accuracy of rate-grade MEMS gyros, and {der.sigma_bias_dps:.2f} deg/s is "
+            f"{der.sigma_bias_dps / der.bias_swing_dps * 100:.0f} % of the device's own {der.bias_swing_dps:.1f} "
+            f"deg/s bias swing over {paper002.TEST_SPAN_C[0]:.0f}..{paper002.TEST_SPAN_C[1]:.0f} C, several times "
             "the ~0.1 deg/s hysteresis of factory-trimmed IMUs whose quadrature is nulled. The paper gives no "
             "turn-on figure; the same sigmas are used, and they are inert for every figure here: a constant "
             "per run cancels in max - min (turn-on component alone, integrated RTD: "

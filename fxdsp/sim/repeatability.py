@@ -25,29 +25,8 @@ figure the paper reports. What survives compensation is the temperature-point co
 of the five test temperatures the compensated residual is b_verify,i - b_cal,i, a N(0, 2 sigma^2)
 draw.
 
-:data:`PAPER002_REPEATABILITY`: the magnitudes, and how they are obtained (the only assumption the
-reproduction of paper 002's compensated figures adds):
-
-* paper 002's compensated figures are ranges over its 80 C test span: bias 115.25 deg/h/C x 80 C =
-  9220 deg/h, SF 69.67 ppm/C x 80 C = 5574 ppm;
-* the range of five N(0, 1) draws has median 2.254 (mean 2.326, standard deviation 0.864); taking the
-  paper's single run as a median one, the per-point difference between the two runs has a standard
-  deviation of range / 2.254, and each run's sigma is that divided by sqrt(2):
-  bias 9220 / (2.254 sqrt 2) = 2892 deg/h = 0.80 deg/s; SF 5574 / 3.188 = 1748 ppm = 0.175 %;
-* physical reading on the paper 002 device (:mod:`fxdsp.sim.gyro`): its bias drift is 58.6 deg/s of
-  quadrature leaking through the demodulation phase, so 0.80 deg/s is a run-to-run demodulation phase
-  repeatability of 0.80 / 58.6 = 13.7 mrad = 0.78 deg; the SF follows the 10 Hz mode split, so
-  0.175 % is a split that repeats within 17.5 mHz (about 5 C of its 3.3 mHz/C drift), or a drive
-  amplitude regulation repeating within 0.175 %;
-* against published figures: 0.175 % sits inside the 0.1..1 % scale-factor accuracy given for
-  rate-grade MEMS gyros (e.g. the grade table of the IEEE Sensors 2013 tutorial "Interface circuits
-  and systems for inertial sensors", Georgia Tech); 0.80 deg/s is about 10 % of this device's own
-  8.1 deg/s bias swing over -20..60 C and several times the ~0.1 deg/s bias hysteresis Analog
-  Devices quotes for individual units of a factory-trimmed IMU (ADIS16460, EngineerZone), whose
-  quadrature is nulled electrically, unlike this lab device's 58.6 deg/s;
-* turn-on: the paper gives no separate figure; the same sigmas are used (one mechanism, the stress
-  and phase state re-established at power-on). They are inert for the paper's figures (see above;
-  ``tests/test_repro_repeatability.py`` checks it).
+The magnitudes for paper 002's device are not chosen here: they follow from the paper's compensated
+figures (:func:`fxdsp.repro.paper002.repeatability_derivation`, :data:`fxdsp.repro.paper002.PAPER002_REPEATABILITY`).
 
 Why attached to the programme's points and not a random function of die temperature: that would
 need a correlation length in temperature that no paper gives, and this project's quick
@@ -116,7 +95,3 @@ class Repeatability:
     def as_dict(self) -> dict:
         return asdict(self)
 
-
-# paper 002's device: derivation in the module docstring (range of 5 normals, sqrt 2 for two runs)
-PAPER002_REPEATABILITY = Repeatability(temp_bias_sigma=0.80, temp_sf_sigma=1.75e-3,
-                                       turn_on_bias_sigma=0.80, turn_on_sf_sigma=1.75e-3)
