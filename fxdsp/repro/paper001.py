@@ -33,7 +33,7 @@ from fxdsp.errors import InputError
 
 PAPER = {"k_hz_per_c": 0.0536, "f0_hz": 3837.47, "f0_printed_hz": 3837.4, "f_at_m10_hz": 3836.9354,
          "max_residual_hz": 0.01, "linearity": 3.4e-6, "bias_poly": (1469.5, -36.92, -0.25),
-         "drift_before": 3.0, "drift_after": 1.0, "rounding_error_c": 1.33}
+         "drift_before": 3.0, "drift_after": 1.0, "drift_change": -0.65, "rounding_error_c": 1.33}
 TAU_PACKAGE_S = 600.0
 TAU_DIE_S = 60.0
 WANDER_C = 0.3
@@ -125,7 +125,7 @@ def reproduce(seed_cal: int = 1, seed_verify: int = 2, duration_scale: float = 1
                      - np.polynomial.polynomial.polyval(t, PAPER["bias_poly"])).max()
     return {"paper": PAPER, "cal": cal, "config_text": text,
             "params": {"tau_package_s": TAU_PACKAGE_S, "tau_die_s": TAU_DIE_S, "wander_c": WANDER_C,
-                       "static_noise_deg_h": STATIC_NOISE_DEG_H,
+                       "static_noise_deg_h": STATIC_NOISE_DEG_H, "static_freq_noise_hz": STATIC_FREQ_NOISE_HZ,
                        "drive_loop": None if drive_loop is None else drive_loop.name},
             "fit_vs_paper_max_deg_h": float(fit_dev),
             "thermometer_check": check, "thermometer_check_rounded": check_rounded,

@@ -39,6 +39,7 @@ from fxdsp.sim.gyro import PAPER002_GYRO, fit_coupling
 from fxdsp.errors import InputError
 
 PAPER = {"lambda_yx": -0.000374, "cxy": -6.96e-8, "kxy": 0.103, "err_cxy": 0.0609,
+         "err_lambda_yx": 0.542e-6, "err_kxy": 0.205e-6,
          "err_raw_cxy": 10.0, "err_filtered_cxy": 0.09, "r2": 0.99}
 PHASE_NOISE_RAD = 0.01
 ADDITIVE_NOISE_FS = 1e-3

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import re
 import time
 from pathlib import Path
 
@@ -16,6 +15,7 @@ from tqdm import tqdm  # noqa: E402
 
 from fxdsp.chains import build  # noqa: E402
 from fxdsp.repro import paper000, paper001, paper002, paper003  # noqa: E402
+from fxdsp.sim.gyro import PAPER002_GYRO  # noqa: E402
 from fxdsp.errors import InputError
 
 PAPERS = ("002", "001", "000", "003")
@@ -26,8 +26,8 @@ F0_IMPLIED = P001["f_at_m10_hz"] + 10.0 * P001["k_hz_per_c"]
 
 
 def _sci(x: float) -> str:
-    """A figure as the papers print it: 5e-5, -6.96e-8 (no padded exponent)."""
-    return re.sub(r"e([+-])0*(\d)", r"e\1\2", f"{x:g}")
+    """A small figure as the papers print it: 5e-5, 8e-4, -6.96e-8 (no padded exponent)."""
+    return np.format_float_scientific(x, trim="-", exp_digits=1)
 
 
 def run_all(papers=PAPERS, n_freqs: int = 41, progress: bool = True, drive_loop=None) -> dict:
@@ -49,6 +49,19 @@ def run_all(papers=PAPERS, n_freqs: int = 41, progress: bool = True, drive_loop=
             out[p] = paper003.reproduce(n_freqs=n_freqs, progress=progress)
         out[p]["seconds"] = time.perf_counter() - t0
     return out
+
+
+def _poly2(c) -> str:
+    """A quadratic in T as the paper prints it, from ascending coefficients: -0.25 T^2 - 36.92 T + 1469.5."""
+    sign = lambda v: "-" if v < 0 else "+"  # noqa: E731
+    return f"{c[2]:g} T^2 {sign(c[1])} {abs(c[1]):g} T {sign(c[0])} {abs(c[0]):g}"
+
+
+def _damping_share() -> float:
+    """The damping coupling against the stiffness one at the drive frequency, |w eta| / alpha, of the
+    device paper 003's sweep runs on (its couplings at 25 C)."""
+    alpha, eta, _ = PAPER002_GYRO.couplings(25.0)
+    return float(abs(2 * np.pi * PAPER002_GYRO.fx_hz * eta) / alpha)
 
 
 def _med(stat: dict) -> str:
@@ -464,7 +477,10 @@ def _md002(r: dict) -> str:
 def _md001(r: dict) -> str:
     c = r["cal"]
     ck, ckr = r["thermometer_check"], r["thermometer_check_rounded"]
-    q = c["bias_poly"]
+    q, qp = c["bias_poly"], P001["bias_poly"]
+    f0p, shift = P001["f0_printed_hz"], P001["rounding_error_c"]
+    # the bias slope at the static run's 25 C, through which the frequency word's noise reaches the bias
+    slope25 = abs(q[1] + 2 * q[2] * 25.0)
     lines = [
         "## Paper 001 - the resonator as thermometer, quadratic bias, random drift",
         "",
@@ -485,35 +501,39 @@ def _md001(r: dict) -> str:
         "|---|---|---|",
         f"| k (Hz/C) | {P001['k_hz_per_c']:g} | {c['k_hz_per_c']:.5f} |",
         f"| f0 (Hz) | {P001['f0_printed_hz']:g} printed, {F0_IMPLIED:.3f} implied | {c['f0_hz']:.4f} |",
-        f"| max fit residual (Hz) | 0.01 | {c['max_freq_residual_hz']:.4f} |",
-        f"| linearity (max residual / f) | 3.4e-6 | {c['max_freq_residual_hz'] / c['f0_hz']:.2e} |",
-        f"| bias fit q(T) (deg/h) | -0.25 T^2 - 36.92 T + 1469.5 | {q[2]:.3f} T^2 {q[1]:+.2f} T {q[0]:+.1f} |",
+        f"| max fit residual (Hz) | {P001['max_residual_hz']:g} | {c['max_freq_residual_hz']:.4f} |",
+        f"| linearity (max residual / f) | {_sci(P001['linearity'])} | {c['max_freq_residual_hz'] / c['f0_hz']:.2e} |",
+        f"| bias fit q(T) (deg/h) | {_poly2(qp)} | {q[2]:.3f} T^2 {q[1]:+.2f} T {q[0]:+.1f} |",
         f"| max abs(q_fit - q_paper) over -10..50 C (deg/h) | (fit error < 1) | {r['fit_vs_paper_max_deg_h']:.1f} |",
-        f"| random drift 10 s, before -> after (deg/h) | ~3 -> ~1 (-65 %) | {r['drift_before']:.2f} -> {r['drift_after']:.2f} "
+        f"| random drift 10 s, before -> after (deg/h) | ~{P001['drift_before']:g} -> ~{P001['drift_after']:g} "
+        f"({100 * P001['drift_change']:.0f} %) | {r['drift_before']:.2f} -> {r['drift_after']:.2f} "
         f"({100 * (r['drift_after'] / r['drift_before'] - 1):.0f} %) |",
         f"| random drift 100 s, before -> after (deg/h) | | {r['drift100_before']:.2f} -> {r['drift100_after']:.2f} |",
         f"| verification: worst compensated bias during the logs (deg/h) | | {r['verify_residual_max_deg_h']:.1f} "
         f"(raw span {r['verify_raw_span_deg_h']:.0f}) |",
-        f"| temperature error of the printed f0 = 3837.4 Hz (C) | -1.33 (DOMAIN's sign) | "
+        f"| temperature error of the printed f0 = {f0p:g} Hz (C) | {-shift:+g} (DOMAIN's sign) | "
         f"{ckr['mean_error_c']:+.3f} (estimate - reference) |",
-        f"| same, at the printed point f(-10 C) = 3836.9354 Hz (C) | | {r['data_point_error_rounded_c']:+.3f} "
+        f"| same, at the printed point f(-10 C) = {P001['f_at_m10_hz']} Hz (C) | | {r['data_point_error_rounded_c']:+.3f} "
         f"(calibrated f0: {r['data_point_error_c']:+.3f}) |",
         f"| verification: worst bias with the rounded f0 (deg/h) | | {r['verify_residual_rounded_max_deg_h']:.1f} |",
         "",
         "**The rounded intercept is caught.** `fxdsp.repro.paper001.check_thermometer` runs the config's "
         "`freq2temp` bit-exactly on the calibration points and compares with the chamber probe: the "
         f"calibrated config passes (mean error {ck['mean_error_c']:+.4f} C), the config with the printed "
-        f"f0 = 3837.4 Hz fails (mean error {ckr['mean_error_c']:+.2f} C > {paper001.THERMO_TOL_C} C); "
+        f"f0 = {f0p:g} Hz fails (mean error {ckr['mean_error_c']:+.2f} C > {paper001.THERMO_TOL_C} C); "
         "`fxdsp calibrate --paper 001 --config-out` runs the same check and refuses to write a config "
-        "that fails it. The sign: with f0 too low every temperature estimate is 1.33 C too warm "
-        "(DOMAIN.md quotes the shift as -1.33 C, i.e. reference minus estimate).",
+        f"that fails it. The sign: with f0 too low every temperature estimate is {ckr['mean_error_c']:.2f} C too warm "
+        f"(DOMAIN.md quotes the shift as {-shift:g} C, i.e. reference minus estimate).",
         "",
-        "**Modelling notes.** The fitted k is 0.35 % low and the fit residual 0.009 Hz because the die "
-        "still lags the chamber probe on each plateau (600 s package constant); in an isothermal "
+        f"**Modelling notes.** The fitted k is {100 * abs(1 - c['k_hz_per_c'] / P001['k_hz_per_c']):.2f} % "
+        f"{'low' if c['k_hz_per_c'] < P001['k_hz_per_c'] else 'high'} and the fit residual "
+        f"{c['max_freq_residual_hz']:.3f} Hz because the die still lags the chamber probe on each plateau "
+        f"({r['params']['tau_package_s']:.0f} s package constant); in an isothermal "
         "simulation both are exact. The paper's drift improvement needs the temperature to move during "
-        "the static run (the chamber holds the air exactly constant otherwise); the compensated 1 deg/h is "
-        "dominated by the frequency-word noise carried through the bias slope (0.001 Hz / 0.0536 Hz/C "
-        "x 49 deg/h/C = 0.9 deg/h), which 100-s averaging reduces.",
+        "the static run (the chamber holds the air exactly constant otherwise); the compensated "
+        f"{r['drift_after']:.1f} deg/h is dominated by the frequency-word noise carried through the bias slope "
+        f"({r['params']['static_freq_noise_hz']:g} Hz / {c['k_hz_per_c']:.4f} Hz/C x {slope25:.0f} deg/h/C = "
+        f"{r['params']['static_freq_noise_hz'] / c['k_hz_per_c'] * slope25:.1f} deg/h), which 100-s averaging reduces.",
         "",
         "![paper 001](img/paper001.png)",
         "",
@@ -547,8 +567,8 @@ def _md000(r: dict) -> str:
         "",
         "| figure | paper | reproduced |",
         "|---|---|---|",
-        f"| K0 variation before (mg) | 10..35 | {r['k0_before_mg']:.1f} |",
-        f"| K1 variation before (relative) | 8e-4..1.6e-3 | {r['k1_before']:.2e} |",
+        f"| K0 variation before (mg) | {'..'.join(f'{v:g}' for v in P000['k0_before_mg'])} | {r['k0_before_mg']:.1f} |",
+        f"| K1 variation before (relative) | {'..'.join(_sci(v) for v in P000['k1_before'])} | {r['k1_before']:.2e} |",
         f"| max abs(K0') after, run-1 coefficients on run 2 (mg) | < {P000['k0_after_mg']:g} | {r['k0_after_mg']:.4f} |",
         f"| max abs(K1' - 1) after | < {_sci(P000['k1_after'])} | {r['k1_after']:.2e} |",
     ]
@@ -561,7 +581,8 @@ def _md000(r: dict) -> str:
         f"K1 = {', '.join(f'{v:.6g}' for v in cal['k1_poly'])} (Hz/g).",
         "",
         "**Reading.** The simulated pair is repeatable between runs, so the residual is the tumble noise "
-        "and fixed-point rounding: far inside the paper's limits. The paper's 1 mg / 5e-5 describe its "
+        f"and fixed-point rounding: far inside the paper's limits. The paper's {P000['k0_after_mg']:g} mg / "
+        f"{_sci(P000['k1_after'])} describe its "
         "device's run-to-run repeatability, which the chamber simulation does not contain.",
         "",
         "![paper 000](img/paper000.png)",
@@ -577,7 +598,7 @@ def _md003(r: dict) -> str:
         "## Paper 003 - coupling identification from a swept sine through the fixed-point demodulator",
         "",
         f"**Simulated test.** {pr['n_freqs']} sweep frequencies {pr['span_hz'][0]:.0f}..{pr['span_hz'][1]:.0f} Hz "
-        "around the 8014.3 Hz drive and 8024.3 Hz sense modes of `fxdsp.sim.gyro.PAPER002_GYRO` "
+        f"around the {PAPER002_GYRO.fx_hz:g} Hz drive and {PAPER002_GYRO.fy_hz:g} Hz sense modes of `fxdsp.sim.gyro.PAPER002_GYRO` "
         "(paper 003's couplings, m = 1 ug). At each frequency the drive and sense pick-offs are "
         f"synthesised at 96 kHz for {pr['dwell_s'] * 1e3:.0f} ms with {pr['phase_noise_rad']} rad white phase noise "
         f"and {pr['noise_fs']} FS additive noise per sample, quantised to the 16-bit sense ADC and "
@@ -592,20 +613,23 @@ def _md003(r: dict) -> str:
     for key, label, fmt in (("kxy", "kxy (N/m)", ".5f"), ("cxy", "cxy (N s/m)", ".4g"), ("lambda_yx", "lambda_yx", ".4g")):
         vals = [f"{r[v][key]:{fmt}} ({100 * r[v]['err'][key]:.2f} %)" for v in ("raw", "filtered", "averaged")]
         lines.append(f"| {label} | {p[key]} | " + " | ".join(vals) + " |")
-    lines.append(f"| goodness of fit R^2 | 0.99 | {r['raw']['r2']:.3f} | {r['filtered']['r2']:.5f} | {r['averaged']['r2']:.6f} |")
+    lines.append(f"| goodness of fit R^2 | {p['r2']:g} | {r['raw']['r2']:.3f} | {r['filtered']['r2']:.5f} | {r['averaged']['r2']:.6f} |")
     lines += [
         "",
-        "Paper's stated accuracy: relative errors 0.542 ppm (lambda_yx), 6.09 % (cxy), 0.205 ppm (kxy) "
-        "theoretical; damping-coupling error > 1000 % on raw data, about 9 % after low-pass filtering.",
+        f"Paper's stated accuracy: relative errors {p['err_lambda_yx'] * 1e6:g} ppm (lambda_yx), {100 * p['err_cxy']:g} % "
+        f"(cxy), {p['err_kxy'] * 1e6:g} ppm (kxy) theoretical; damping-coupling error > {100 * p['err_raw_cxy']:g} % "
+        f"on raw data, about {100 * p['err_filtered_cxy']:g} % after low-pass filtering.",
         "",
         "**Reading.** Without the low-pass filter the snapshot carries the 2w mixing product and the "
-        "unaveraged phase noise, and the damping coupling - 3 % of the stiffness term and in quadrature "
-        "with it, so any phase error moves the stiffness term into it - is lost (wrong sign here; the "
-        "paper's > 1000 %). Through the filter it is recovered within the paper's 6.09 %; averaging the "
-        "filtered I/Q over half the dwell brings it well below. kxy is within 0.1 % through the filter "
-        "(2 % even without it). The "
+        f"unaveraged phase noise, and the damping coupling - {100 * _damping_share():.1f} % of the stiffness "
+        "term and in quadrature with it, so any phase error moves the stiffness term into it - is lost "
+        f"({100 * r['raw']['err']['cxy']:.0f} % here; the paper's > {100 * p['err_raw_cxy']:g} %). Through the "
+        f"filter it is recovered ({100 * r['filtered']['err']['cxy']:.2f} %, the paper's {100 * p['err_cxy']:g} %); "
+        f"averaging the filtered I/Q over half the dwell brings it to {100 * r['averaged']['err']['cxy']:.2f} %. "
+        f"kxy is within {100 * abs(r['filtered']['err']['kxy']):.2f} % through the filter "
+        f"({100 * abs(r['raw']['err']['kxy']):.1f} % without it). The "
         "paper's ppm-level figures for kxy and lambda_yx are theoretical bounds we do not reach with "
-        "0.01 rad of phase noise per sample; lambda_yx, which only shows near the drive resonance, is "
+        f"{pr['phase_noise_rad']:g} rad of phase noise per sample; lambda_yx, which only shows near the drive resonance, is "
         "the most noise-sensitive of the three here. The table above is for matched channels (one NCO, no "
         "phase-offset or gain mismatch between the drive and sense pick-off channels).",
         "",
