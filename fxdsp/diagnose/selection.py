@@ -15,7 +15,8 @@ from fxdsp.diagnose.context import (MAX_CAUSES, MIN_EVIDENCE, MIN_GAIN, Candidat
 TIME_TIED = tuple(c.name for c in CAUSES.values() if c.time_tied)
 # the re-test of a time-like cause in a wandering log: its held-out evidence must exceed the
 # NULL_QUANTILE of NULL_DRAWS random walks at the residual's level (fixed seed: reproducible), and
-# pass on innovations unless its held-out rms ratio is at least WANDER_GAIN
+# pass on innovations unless its held-out rms ratio is at least WANDER_GAIN; as the last cause added
+# it needs WANDER_GAIN in every log (prune, _min_gain)
 WANDER_GAIN = 1.3
 NULL_DRAWS = 40
 NULL_QUANTILE = 0.99
@@ -270,13 +271,24 @@ def order_by_gain(ctx: Context, state: dict, accepted: list[Candidate]) -> list[
     return sorted(accepted, key=lambda c: (-gains[id(c)][1], -gains[id(c)][0]))
 
 
+def _min_gain(cause: str) -> float:
+    """The held-out rms ratio a cause must reach as the last one added. A time-like cause needs
+    WANDER_GAIN: a line (or a settling, a level change) fitted to a bias random walk of end std s
+    takes about a tenth of s^2 per row (the slope of a Brownian path on [0, 1] has variance 6 s^2 / 5),
+    a ratio near sqrt(1 + (s / sigma)^2 / 10), 1.4 for a walk of three white sigmas, and it does so
+    in logs too short for the residual to show the walk (a few hundred rows: the wander and noise
+    re-tests see white noise there), where its held-out evidence is far above MIN_EVIDENCE."""
+    return WANDER_GAIN if cause in TIME_TIED else MIN_GAIN
+
+
 def prune(ctx: Context, state: dict, accepted: list[Candidate]):
     """Backward check of the final model: every cause must still pass the acceptance rule when it
     is the last one added (a cause accepted early can become redundant after a later one, or after
-    a time-like cause was removed by the wander check). The weakest failure goes first."""
+    a time-like cause was removed by the wander check), a time-like one with the larger gain of
+    :func:`_min_gain`. The weakest failure goes first."""
     while accepted:
         verdicts = [(*last_added_gain(ctx, state, cand), cand) for cand in accepted]
-        failing = [v for v in verdicts if v[1] < MIN_GAIN or v[0] < MIN_EVIDENCE]
+        failing = [v for v in verdicts if v[1] < _min_gain(v[2].cause) or v[0] < MIN_EVIDENCE]
         if not failing:
             break
         weakest = min(failing, key=lambda v: v[0])[2]
