@@ -30,10 +30,12 @@ Two devices. The *repeatable* device (every run of it identical up to noise) iso
 own error: :func:`reproduce`'s ``methods`` and the ramp run. The paper's figures are a run-to-run
 matter: its calibration run and its test run are two temperature runs of a device that does not
 repeat exactly, so they are also computed with the device's repeatability
-(:data:`PAPER002_REPEATABILITY`, derived from the paper's figures by :func:`repeatability_derivation`) over ``N_PAIRS`` calibration/verification run pairs (:func:`seed_pairs`: seeds (1, 2),
-(3, 4), ...), and reported as the median with the 10th..90th percentiles - on the quick
-verification run above (every method) and on a paper-length one (``verify_scale=1``: the paper's
-"after stabilisation" test, where the repeatability arithmetic holds as derived).
+(:data:`PAPER002_REPEATABILITY`, derived from the paper's figures by
+:func:`repeatability_derivation`) over ``N_PAIRS`` calibration/verification run pairs
+(:func:`seed_pairs`: seeds (1, 2), (3, 4), ...), and reported as the median with the 10th..90th
+percentiles - on the quick verification run above (every method) and on a paper-length one
+(``verify_scale=1``: the paper's "after stabilisation" test, where the repeatability arithmetic
+holds as derived).
 """
 
 from __future__ import annotations
@@ -142,8 +144,10 @@ REPEATABILITY = repeatability_derivation()
 # the device with it: the same sigmas at each point and at turn-on (the paper gives no turn-on figure;
 # one mechanism, the stress and phase state re-established at power-on). A turn-on offset is constant
 # over a run and cancels in max - min, so it moves no figure the paper reports.
-PAPER002_REPEATABILITY = Repeatability(temp_bias_sigma=REPEATABILITY.sigma_bias_dps, temp_sf_sigma=REPEATABILITY.sigma_sf,
-                                       turn_on_bias_sigma=REPEATABILITY.sigma_bias_dps, turn_on_sf_sigma=REPEATABILITY.sigma_sf)
+PAPER002_REPEATABILITY = Repeatability(
+    temp_bias_sigma=REPEATABILITY.sigma_bias_dps, temp_sf_sigma=REPEATABILITY.sigma_sf,
+    turn_on_bias_sigma=REPEATABILITY.sigma_bias_dps, turn_on_sf_sigma=REPEATABILITY.sigma_sf)
+
 TAU_PACKAGE_S = 2700.0
 TAU_DIE_S = 60.0
 VERIFY_SCALE = 1.0 / 3.0
