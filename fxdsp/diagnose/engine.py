@@ -19,8 +19,8 @@
    (white, flicker, random walk: noise.py) when it is coloured at all (a short log cannot show a
    slight wander in its variogram), and every cause must still pass when it is the
    last one added, a time-like one with a held-out rms ratio >= WANDER_GAIN (a line fitted to an
-   unseen bias random walk reaches 1.05 easily). A cause whose parameters the log does not determine (identify.py) is set aside,
-   not named, and reported as unidentified. Nothing left means `none`; `causes` are ordered by
+   unseen bias random walk reaches 1.05 easily). A cause whose parameters the log does not
+   determine (identify.py) is set aside, not named, and reported as unidentified. Nothing left means `none`; `causes` are ordered by
    held-out gain.
 4. Calibration and numbers (results.py): the orders of B and S (0..3) are chosen by held-out
    error with the causes in place; parameters come from the full-data fit (nonlinear ones refined

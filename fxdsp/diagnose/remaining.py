@@ -536,10 +536,19 @@ def absorbing_only(ctx: Context, state: dict, accepted: list, structures: list[S
     return out
 
 
+def _nothing(noise: str) -> str:
+    return (f"nothing beyond {noise} (white, flicker and random walk, fitted to the residual) at the "
+            f"{100 * LEVEL:g} % level and at least {MIN_SIZE:g} of the white noise in size")
+
+
+def series_explanation(v: Structure) -> str:
+    """The words for the verdict of :func:`series_structure`: what the series follows, or nothing."""
+    return "; ".join(w for _, w in v.found) if v.significant else _nothing("the error's own noise")
+
+
 def _explanation(significant: list[Structure], named: list[str], has_freq: bool) -> str:
     if not significant:
-        return ("nothing beyond the log's own noise (white, flicker and random walk, fitted to the residual) at the "
-                f"{100 * LEVEL:g} % level and at least {MIN_SIZE:g} of the white noise in size")
+        return _nothing("the log's own noise")
     parts = []
     for v in significant:
         claimed = [c for c in named if _claims(CAUSES[c], v, has_freq)]

@@ -71,15 +71,14 @@ def remaining_structure(diag, errors: dict) -> dict:
     the extension, and without each stage (:func:`fxdsp.diagnose.remaining.series_structure`: the
     diagnosis's families and statistics on the error itself); ``fraction`` is of the error before.
     A stage's signature shows where it is off, and not where it is on."""
-    from fxdsp.diagnose.remaining import series_structure
+    from fxdsp.diagnose.remaining import series_explanation, series_structure
 
     reference = errors["variants"]["before"]["rms"]
     out = {}
     for name in errors["variants"]:
         v = series_structure(diag.context, errors["_series"][name], errors["_held"], reference)
         out[name] = {k: x for k, x in v.as_dict().items() if k != "channel"}
-        out[name]["explanation"] = ("; ".join(w for _, w in v.found) if v.significant else
-                                    "nothing beyond the error's own noise at the 1 % level")
+        out[name]["explanation"] = series_explanation(v)
     return out
 
 

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from fxdsp.diagnose.remaining import LEVEL
+
 
 def public(d):
     """A result without its private (underscore) entries: arrays kept for the plot only."""
@@ -63,8 +65,8 @@ def markdown(rep: dict) -> str:
           "".join(f"; with {k} turned off: {g:.3g}" for k, g in s["gain_without"].items()), ""]
     if rep.get("remaining"):
         L += ["### What the error still follows", "",
-              "The diagnosis's test of what remains (the families of shapes, the log's own noise as the null, 1 % "
-              "level) on the held-out error itself, beyond a cubic in temp_c (what a recalibration absorbs); "
+              "The diagnosis's test of what remains (the families of shapes, the log's own noise as the null, "
+              f"{100 * LEVEL:g} % level) on the held-out error itself, beyond a cubic in temp_c (what a recalibration absorbs); "
               "fraction of the error before.", "",
               "| variant | structure | rms | fraction | against | what |", "|---|---|---:|---:|---|---|"]
         for name, r in rep["remaining"].items():

@@ -54,7 +54,7 @@ from fxdsp.repro.calconfig import config_from_text, config_text, lag_table, pape
 from fxdsp.repro.calibrate import calibrate002, frequency_thermometer
 from fxdsp.repro.points import rate_table_points, tempco
 from fxdsp.sim import ThermalChain, generate_log
-from fxdsp.sim.gyro import PAPER002_GYRO, TwoModeGyro
+from fxdsp.sim.gyro import PAPER002_GYRO, T0_C, TwoModeGyro
 from fxdsp.sim.repeatability import Repeatability
 from fxdsp.errors import InputError
 
@@ -128,8 +128,8 @@ def repeatability_derivation(paper: dict | None = None, gyro: TwoModeGyro = PAPE
     k = median_range(TEST_POINTS)
     bias_range, sf_range = paper["bias_after"] * span, paper["sf_after_ppm"] * span
     sigma_bias, sigma_sf = bias_range / (k * math.sqrt(2)), sf_range / (k * math.sqrt(2))
-    quad = abs(float(gyro.channels(25.0, 0.0)[1])) / gyro.sf0_mv_per_dps
-    wx, wy = gyro.omega(np.array([24.0, 25.0, 26.0]))
+    quad = abs(float(gyro.channels(T0_C, 0.0)[1])) / gyro.sf0_mv_per_dps
+    wx, wy = gyro.omega(T0_C + np.array([-1.0, 0.0, 1.0]))
     split = (wy - wx) / (2 * np.pi)
     bias = gyro.bias_deg_h(np.linspace(*TEST_SPAN_C, 801)) / 3600.0
     return RepeatabilityDerivation(

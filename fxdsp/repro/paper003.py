@@ -35,7 +35,7 @@ from tqdm import tqdm
 from fxdsp.blocks.demod import Demod, Nco
 from fxdsp.chains import build
 from fxdsp.fixed import OverflowLog, Rules, quantize, resize, to_float
-from fxdsp.sim.gyro import PAPER002_GYRO, fit_coupling
+from fxdsp.sim.gyro import PAPER002_GYRO, T0_C, fit_coupling
 from fxdsp.errors import InputError
 
 PAPER = {"lambda_yx": -0.000374, "cxy": -6.96e-8, "kxy": 0.103, "err_cxy": 0.0609,
@@ -217,6 +217,15 @@ def mismatch_case(freqs_hz, phase_offset_rad: float = MISMATCH_PHASE_RAD, sense_
     return out
 
 
+def device(gyro=PAPER002_GYRO) -> dict:
+    """What the report says of the swept device: its drive and sense modes, and its damping coupling
+    against its stiffness coupling at the drive frequency, |w eta| / alpha, at 25 C (why the damping
+    term is the one phase noise hides: small and in quadrature with the stiffness term)."""
+    alpha, eta, _ = gyro.couplings(T0_C)
+    return {"drive_hz": gyro.fx_hz, "sense_hz": gyro.fy_hz,
+            "damping_share": float(abs(2 * np.pi * gyro.fx_hz * eta) / alpha)}
+
+
 def reproduce(n_freqs: int = 41, seed: int = 1, progress: bool = False) -> dict:
     if n_freqs < 3:
         raise InputError(f"n_freqs: need at least 3, got {n_freqs}")
@@ -225,7 +234,8 @@ def reproduce(n_freqs: int = 41, seed: int = 1, progress: bool = False) -> dict:
     out = {"paper": PAPER, "measure": meas, "params": {"phase_noise_rad": PHASE_NOISE_RAD,
                                                        "noise_fs": ADDITIVE_NOISE_FS, "dwell_s": DWELL_S,
                                                        "n_freqs": n_freqs, "span_hz": SPAN_HZ,
-                                                       "excitation_ratio": SENSE_EXCITATION_RATIO}}
+                                                       "excitation_ratio": SENSE_EXCITATION_RATIO},
+           "device": device()}
     for key in ("truth", "filtered", "raw", "averaged"):
         ident = identify(freqs, meas[key])
         out[key] = {**ident, "err": errors(ident)}

@@ -15,7 +15,6 @@ from tqdm import tqdm  # noqa: E402
 
 from fxdsp.chains import build  # noqa: E402
 from fxdsp.repro import paper000, paper001, paper002, paper003  # noqa: E402
-from fxdsp.sim.gyro import PAPER002_GYRO  # noqa: E402
 from fxdsp.errors import InputError
 
 PAPERS = ("002", "001", "000", "003")
@@ -55,13 +54,6 @@ def _poly2(c) -> str:
     """A quadratic in T as the paper prints it, from ascending coefficients: -0.25 T^2 - 36.92 T + 1469.5."""
     sign = lambda v: "-" if v < 0 else "+"  # noqa: E731
     return f"{c[2]:g} T^2 {sign(c[1])} {abs(c[1]):g} T {sign(c[0])} {abs(c[0]):g}"
-
-
-def _damping_share() -> float:
-    """The damping coupling against the stiffness one at the drive frequency, |w eta| / alpha, of the
-    device paper 003's sweep runs on (its couplings at 25 C)."""
-    alpha, eta, _ = PAPER002_GYRO.couplings(25.0)
-    return float(abs(2 * np.pi * PAPER002_GYRO.fx_hz * eta) / alpha)
 
 
 def _med(stat: dict) -> str:
@@ -594,11 +586,12 @@ def _md000(r: dict) -> str:
 def _md003(r: dict) -> str:
     p = r["paper"]
     pr = r["params"]
+    dev = r["device"]
     lines = [
         "## Paper 003 - coupling identification from a swept sine through the fixed-point demodulator",
         "",
         f"**Simulated test.** {pr['n_freqs']} sweep frequencies {pr['span_hz'][0]:.0f}..{pr['span_hz'][1]:.0f} Hz "
-        f"around the {PAPER002_GYRO.fx_hz:g} Hz drive and {PAPER002_GYRO.fy_hz:g} Hz sense modes of `fxdsp.sim.gyro.PAPER002_GYRO` "
+        f"around the {dev['drive_hz']:g} Hz drive and {dev['sense_hz']:g} Hz sense modes of `fxdsp.sim.gyro.PAPER002_GYRO` "
         "(paper 003's couplings, m = 1 ug). At each frequency the drive and sense pick-offs are "
         f"synthesised at 96 kHz for {pr['dwell_s'] * 1e3:.0f} ms with {pr['phase_noise_rad']} rad white phase noise "
         f"and {pr['noise_fs']} FS additive noise per sample, quantised to the 16-bit sense ADC and "
@@ -621,7 +614,7 @@ def _md003(r: dict) -> str:
         f"on raw data, about {100 * p['err_filtered_cxy']:g} % after low-pass filtering.",
         "",
         "**Reading.** Without the low-pass filter the snapshot carries the 2w mixing product and the "
-        f"unaveraged phase noise, and the damping coupling - {100 * _damping_share():.1f} % of the stiffness "
+        f"unaveraged phase noise, and the damping coupling - {100 * dev['damping_share']:.1f} % of the stiffness "
         "term and in quadrature with it, so any phase error moves the stiffness term into it - is lost "
         f"({100 * r['raw']['err']['cxy']:.0f} % here; the paper's > {100 * p['err_raw_cxy']:g} %). Through the "
         f"filter it is recovered ({100 * r['filtered']['err']['cxy']:.2f} %, the paper's {100 * p['err_cxy']:g} %); "

@@ -33,30 +33,6 @@ class Default:
     file: str
     name: str
     text: str        # the default as written (a literal, a string in quotes, or an expression)
-    start: int       # the default's character span in the file
-    end: int
-
-
-def _strip_comments_keep_strings(text: str) -> str:
-    """Comments blanked to spaces (so character offsets are kept), strings left as written."""
-    out, i, n = list(text), 0, len(text)
-    while i < n:
-        if text.startswith("//", i):
-            j = text.find("\n", i)
-            j = n if j < 0 else j
-            out[i:j] = " " * (j - i)
-            i = j
-        elif text.startswith("/*", i):
-            j = text.find("*/", i + 2)
-            j = n if j < 0 else j + 2
-            out[i:j] = [c if c == "\n" else " " for c in text[i:j]]
-            i = j
-        elif text[i] == '"':
-            j = text.find('"', i + 1)
-            i = n if j < 0 else j + 1
-        else:
-            i += 1
-    return "".join(out)
 
 
 _HEADER = re.compile(r"\bmodule\s+(\w+)\s*#\s*\(")
@@ -94,16 +70,13 @@ def defaults(rtl: Path) -> dict[str, dict[str, Default]]:
     """Module -> parameter -> its default, for every ``module name #( parameter ... )`` header."""
     out: dict[str, dict[str, Default]] = {}
     for path in sorted(rtl.glob("*.v")):
-        code = _strip_comments_keep_strings(path.read_text(encoding="utf-8"))
+        code = rtl_rules.strip_comments(path.read_text(encoding="utf-8"), strings=True)
         for h in _HEADER.finditer(code):
             stop = _group_end(code, h.end() - 1)
             params = out.setdefault(h.group(1), {})
             for p in _PARAM.finditer(code, h.end(), stop):
-                end = _value_end(code, p.end(), stop)
-                raw = code[p.end():end]
-                text = raw.strip()
-                start = p.end() + (len(raw) - len(raw.lstrip()))
-                params[p.group(1)] = Default(h.group(1), path.name, p.group(1), text, start, start + len(text))
+                text = code[p.end():_value_end(code, p.end(), stop)].strip()
+                params[p.group(1)] = Default(h.group(1), path.name, p.group(1), text)
     return out
 
 

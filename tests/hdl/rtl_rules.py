@@ -98,8 +98,9 @@ class Module:
     tokens: list[Tok]
 
 
-def strip_comments(text: str) -> str:
-    """Remove // and /* */ comments and string contents (kept as "" so token positions stay sane)."""
+def strip_comments(text: str, strings: bool = False) -> str:
+    """Remove // and /* */ comments and string contents (kept as "" so token positions stay sane;
+    ``strings``: kept as written)."""
     out, i, n = [], 0, len(text)
     while i < n:
         c = text[i]
@@ -114,7 +115,7 @@ def strip_comments(text: str) -> str:
             j = i + 1
             while j < n and text[j] != '"':
                 j += 2 if text[j] == "\\" else 1
-            out.append('""')
+            out.append(text[i:j + 1] if strings else '""')
             i = j + 1
         else:
             out.append(c)
