@@ -353,7 +353,8 @@ def _structure(ctx: Context, channel: str, x_full: np.ndarray, y_full: np.ndarra
     ``x_full``, on ``rows``; ``resid``: the held-out residual (the channel's unit) the size is
     measured on; ``before``: what ``fraction`` is of; ``fitted_model``: the model is the diagnosis's
     (the words then say what its causes do not follow, and MAX_FOUND families are reported at most),
-    not a bare cubic (every significant family is: what a compensation removed is among them)."""
+    not a bare cubic (every significant family is: what a compensation removed is among them, and
+    the size is measured on ``rows`` alone, :func:`_heldout_rms`)."""
     fams = families(ctx, channel)
     # the rows next to a ramp's corners are set aside: there the reading cannot date the corner to
     # the row, nor follow dT/dt's turn (fxdsp.ramps: RampReading.unresolved), and a model right to
@@ -422,7 +423,7 @@ def _structure(ctx: Context, channel: str, x_full: np.ndarray, y_full: np.ndarra
     widths = np.cumsum([0] + [c.shape[1] for _, c, _ in chosen])
     parts = np.column_stack([centred[:, a:b] @ coef[a:b] for a, b in zip(widths[:-1], widths[1:])])
     curve = parts.sum(axis=1)
-    rms = _heldout_rms(ctx, resid, cols, keep)
+    rms = _heldout_rms(ctx, resid, cols, keep, own_folds=not fitted_model)
     floor = max(resolution(ctx, channel), MIN_SIZE * np.sqrt(white_noise_variance(resid[keep])))
     if rms <= floor:
         # smaller than half the white noise of one reading: a named cause's parameter a little off,
@@ -471,10 +472,22 @@ def resolution(ctx: Context, channel: str) -> float:
     return float(np.hypot(q_y, slope * q_x) / np.sqrt(12.0))
 
 
-def _heldout_rms(ctx: Context, r: np.ndarray, cols: np.ndarray, keep: np.ndarray) -> float:
+def _heldout_rms(ctx: Context, r: np.ndarray, cols: np.ndarray, keep: np.ndarray, own_folds: bool = False) -> float:
     """Root mean square, per row, of the held-out sum of squares that ``cols`` remove from the final
     model's held-out residual ``r`` (fitted on the training folds), in the channel's unit, over the
-    rows ``keep`` (the others weigh nothing: zero rows)."""
+    rows ``keep`` (the others weigh nothing: zero rows). ``own_folds``: ``r`` is itself a held-out
+    error measured on a few stretches of the log (``fxdsp extend``'s rows outside the rate tables),
+    where folds leave whole stretches with no training row near them and a column fitted elsewhere
+    is extrapolated there (one fold's error a hundred times the others'); the size is then the
+    in-sample sum of squares the columns remove less what p columns take from noise alone
+    (p sigma^2, sigma^2 from the fit's own residual)."""
+    if own_folds:
+        y = r[keep] - r[keep].mean()
+        x = cols[keep] - cols[keep].mean(axis=0)
+        coef, _, p, _ = np.linalg.lstsq(x, y, rcond=None)
+        sse1 = float(np.sum((y - x @ coef) ** 2))
+        removed = float(np.sum(y * y)) - sse1 - p * sse1 / max(y.size - p - 1, 1)
+        return float(np.sqrt(max(removed, 0.0) / max(y.size, 1)))
     w = keep.astype(float)
     ones = w[:, None]
     without = SegmentNormals(ones, r * w, ctx.blocks).folds()[1].sum()
