@@ -28,8 +28,8 @@ from fxdsp.netlist import with_stage
 
 ROOT = Path(__file__).parents[1]
 TCKIT_REL = "data/tckit/hp3458abx_hp34420a_tcsweep_1vdc_nplc100_test2_oct2024.dsv"
-# vbl6: the channel the diagnosis names thermal_lag alone (vbl5 adds a warm-up, which has no remedy:
-# tests/test_extend_user_design.py extends it and checks the warm-up is reported uncompensated)
+# vbl6: a channel the diagnosis names thermal_lag on (tests/test_extend_user_design.py extends vbl5,
+# and a simulated lag beside a cause without a remedy)
 TCKIT_ARGS = ["--map", "time_s=date", "--map", "temp_c=box_temp", "--map", "output=vbl6", "--delimiter", ";",
               "--time-format", "%d/%m/%Y-%H:%M:%S"]
 needs_icarus = pytest.mark.skipif(shutil.which("iverilog") is None, reason="iverilog is not installed")

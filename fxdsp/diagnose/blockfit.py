@@ -154,6 +154,34 @@ class SegmentNormals:
         return resid
 
 
+def fold_errors_many(design: np.ndarray, targets: np.ndarray, blocks: Blocks, weight: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """(training SSE, held-out SSE) per target and fold, [targets, folds], weighted: what
+    ``SegmentNormals(design, y, blocks, weight).folds()`` gives for each row ``y`` of ``targets``,
+    with the design's normals formed once (the noise draws of a null all share one design)."""
+    targets = np.atleast_2d(np.asarray(targets, dtype=float))
+    one = SegmentNormals(design, targets[0], blocks, weight)
+    xs = np.asarray(design, dtype=float)[:, one.alive] / one.scale[one.alive]
+    starts = blocks.edges[:-1]
+    y = targets.T                                                          # [rows, targets]
+    xty = np.stack([np.add.reduceat(xs[:, [i]] * y, starts, axis=0) for i in range(one.p)], axis=1)
+    yty = np.add.reduceat(y * y, starts, axis=0)                           # [segments, targets]
+    member = (blocks.fold[None, :] == np.arange(blocks.n_folds)[:, None]).astype(float)
+    h_xtx = np.einsum("fs,sij->fij", member, one.xtx)
+    h_xty = np.einsum("fs,sid->fid", member, xty)
+    h_yty = member @ yty
+    t_xtx = one.xtx.sum(0)[None] - h_xtx
+    t_xty = xty.sum(0)[None] - h_xty
+    t_yty = yty.sum(0)[None] - h_yty
+    ridge = 1e-10 * np.maximum(np.trace(t_xtx, axis1=1, axis2=2) / max(one.p, 1), 1e-300)
+    beta = np.linalg.solve(t_xtx + ridge[:, None, None] * np.eye(one.p), t_xty)   # [folds, p, targets]
+
+    def sse(xtx, xty_, yty_):
+        quad = np.einsum("fid,fij,fjd->fd", beta, xtx, beta)
+        return np.maximum(yty_ - 2.0 * np.einsum("fid,fid->fd", beta, xty_) + quad, 0.0).T * weight
+
+    return sse(t_xtx, t_xty, t_yty), sse(h_xtx, h_xty, h_yty)
+
+
 def jackknife_sd(values: np.ndarray) -> float:
     """Delete-one-group jackknife standard deviation of an estimate."""
     values = np.asarray(values, dtype=float)

@@ -39,7 +39,7 @@ def _log_axis(cause: str) -> bool:
     return CAUSES[cause].search is not None   # time constants: searched on a log axis
 
 
-def _searched(cause: str) -> str | None:
+def searched_parameter(cause: str) -> str | None:
     """The parameter of ``cause`` searched on a grid (None: the cause is linear)."""
     search = CAUSES[cause].search
     return None if search is None else search.parameter
@@ -59,13 +59,13 @@ def _evaluate_state(ctx: Context, state: dict, channels: list[str]):
 def evaluate(ctx: Context, state: dict, cause: str, base_held: dict) -> Candidate:
     """Fit one candidate on top of ``state``; score it on held-out folds against ``state``."""
     channels = affected_channels(ctx, cause)
-    if _searched(cause) is None:
+    if searched_parameter(cause) is None:
         res = _evaluate_state(ctx, {**state, cause: {}}, channels)
         held = {ch: res[ch][1] for ch in channels}
         nonlinear, nonlinear_sd = {}, {}
         at_bound = False
     else:
-        pname = _searched(cause)
+        pname = searched_parameter(cause)
         values = grid(ctx, cause)
         train = np.zeros((values.size, ctx.blocks.n_folds))
         full = np.zeros(values.size)
@@ -120,7 +120,7 @@ def evaluate(ctx: Context, state: dict, cause: str, base_held: dict) -> Candidat
 
 def _refine(ctx, state, cause, channels, values, full, axis) -> float:
     """Full-data minimum of the weighted SSE between the grid neighbours of the grid minimum."""
-    pname = _searched(cause)
+    pname = searched_parameter(cause)
     i = int(np.argmin(full))
     lo, hi = axis[max(i - 1, 0)], axis[min(i + 1, values.size - 1)]
     if lo == hi:
@@ -144,7 +144,7 @@ def refit_nonlinear(ctx: Context, state: dict, accepted: list[Candidate]) -> Non
     """Re-estimate the nonlinear parameters of earlier causes with the later ones in the model:
     a lag time constant fitted while a quadrature leak was still unexplained is biased."""
     for cand in accepted:
-        pname = _searched(cand.cause)
+        pname = searched_parameter(cand.cause)
         if pname is None:
             continue
         channels = affected_channels(ctx, cand.cause)

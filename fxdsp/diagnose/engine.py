@@ -15,11 +15,12 @@
    and the rest are tried again on top, up to MAX_CAUSES; the same forward selection also starts
    from the best pair of causes (two causes can hide each other) and the better model is kept.
    Then time-like causes (aging, warm-up, hysteresis, quadrature) are re-tested against a random-
-   walk bias if the residual without them wanders, and against draws of the residual's own noise
-   (white, flicker, random walk: noise.py) when it is coloured at all (a short log cannot show a
-   slight wander in its variogram), and every cause must still pass when it is the
+   walk bias if the residual without them wanders; every cause on the output against draws of the
+   residual's own noise (white, flicker, random walk: noise.py) when it is coloured at all (a short
+   log cannot show a slight wander in its variogram, and flicker makes lags and ramp-rate terms
+   too), its time constant searched on every draw; and every cause must still pass when it is the
    last one added, a time-like one with a held-out rms ratio >= WANDER_GAIN (a line fitted to an
-   unseen bias random walk reaches 1.05 easily). A cause whose parameters the log does not
+   unseen bias random walk reaches 1.05 easily). The last two run until neither removes a cause. A cause whose parameters the log does not
    determine (identify.py) is set aside, not named, and reported as unidentified. Nothing left means `none`; `causes` are ordered by
    held-out gain.
 4. Calibration and numbers (results.py): the orders of B and S (0..3) are chosen by held-out
@@ -49,7 +50,7 @@ from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, ORDER_CHOICES, Contex
 from fxdsp.diagnose.identify import described, judge, reasons
 from fxdsp.diagnose.remaining import absorbing_only, remaining
 from fxdsp.diagnose.results import baseline_coefficients, channel_gain, linear_parameters
-from fxdsp.diagnose.selection import check_against_noise, check_against_wander, greedy_search, order_by_gain, prune
+from fxdsp.diagnose.selection import check_against_wander, check_final, greedy_search, order_by_gain
 
 MAX_SEARCH_ROWS = 100_000
 
@@ -74,8 +75,7 @@ def diagnose_series(series: M.Series, n_segments: int = 200, n_folds: int = 5) -
     state, accepted, first_round = greedy_search(search)
     set_noise_weights(search, state)
     state, accepted = check_against_wander(search, state, accepted)
-    state, accepted = check_against_noise(search, state, accepted)
-    state, accepted = prune(search, state, accepted)
+    state, accepted = check_final(search, state, accepted)
     refit_nonlinear(search, state, accepted)  # the causes that were removed may have biased them
     if "sf_nonlinearity" in state:
         _converge_scale_factor(ctx, search, state, step)

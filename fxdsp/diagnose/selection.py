@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from fxdsp.causes import CAUSES
-from fxdsp.diagnose.candidates import affected_channels, available, evaluate, refit_nonlinear
+from fxdsp.diagnose.blockfit import fold_errors_many
+from fxdsp.diagnose.candidates import affected_channels, available, evaluate, grid, refit_nonlinear, searched_parameter
 from fxdsp.diagnose.context import (MAX_CAUSES, MIN_EVIDENCE, MIN_GAIN, Candidate, Context, innovations, level_gain,
                                     residual, set_noise_weights, white_noise_variance)
 
@@ -143,15 +144,31 @@ def null_evidence(ctx: Context, channel: str, state: dict, without: dict, resid:
 
 def _null_quantile(ctx: Context, channel: str, state: dict, without: dict, draws) -> float:
     """The NULL_QUANTILE of the held-out evidence that the columns ``state`` adds to ``without``
-    gets on each of ``draws`` (series of noise alone)."""
-    from fxdsp.diagnose.blockfit import SegmentNormals
-
-    x_with, _ = ctx.design(channel, state)
-    x_without, _ = ctx.design(channel, without)
+    gets on each of ``draws`` (series of noise alone). A cause with a searched parameter (a time
+    constant) is searched on each draw as on the log (its grid, each fold's value the one its
+    training data prefer): noise fitted at the value the log chose would give it less than noise
+    gives a cause that may choose its value (on flicker a lag's held-out evidence is several times
+    what it gets at a fixed time constant)."""
+    draws = np.asarray(draws, dtype=float)
     w = ctx.weights[channel]
-    found = [SegmentNormals(x_without, y, ctx.blocks, w).folds()[1].sum()
-             - SegmentNormals(x_with, y, ctx.blocks, w).folds()[1].sum() for y in draws]
-    return float(np.quantile(found, NULL_QUANTILE))
+    x_without, _ = ctx.design(channel, without)
+    base = fold_errors_many(x_without, draws, ctx.blocks, w)[1].sum(axis=1)
+    added = [c for c in state if c not in without]
+    pname = searched_parameter(added[0]) if len(added) == 1 else None
+    if pname is None:
+        x_with, _ = ctx.design(channel, state)
+        held = fold_errors_many(x_with, draws, ctx.blocks, w)[1].sum(axis=1)
+    else:
+        trains, helds = [], []
+        for v in grid(ctx, added[0]):
+            x_with, _ = ctx.design(channel, {**state, added[0]: {**state[added[0]], pname: float(v)}})
+            train, held_v = fold_errors_many(x_with, draws, ctx.blocks, w)
+            trains.append(train)
+            helds.append(held_v)
+        trains, helds = np.array(trains), np.array(helds)          # [values, draws, folds]
+        pick = np.argmin(trains, axis=0)                            # [draws, folds]
+        held = np.take_along_axis(helds, pick[None], axis=0)[0].sum(axis=1)
+    return float(np.quantile(base - held, NULL_QUANTILE))
 
 
 def check_against_wander(ctx: Context, state: dict, accepted: list[Candidate]):
@@ -204,23 +221,26 @@ def check_against_wander(ctx: Context, state: dict, accepted: list[Candidate]):
 
 
 def check_against_noise(ctx: Context, state: dict, accepted: list[Candidate]):
-    """Every named time-like cause must beat what the residual's own coloured noise gives it.
+    """Every named cause on the output must beat what the residual's own coloured noise gives it.
 
     A bias random walk or flicker too slight for the variogram test of :func:`check_against_wander`
     (short logs: a few hundred rows cannot tell a small wander from white noise) still gives a line or
     a settling a held-out evidence of tens of white-noise variances, and the white-noise rule names
-    it. So the noise of the final residual is estimated (white, flicker and random walk,
-    :func:`fxdsp.diagnose.noise.noise_levels`) and, when it is coloured, each time-like cause's
-    held-out evidence must exceed the NULL_QUANTILE of what NULL_DRAWS draws of that noise give the
-    same column (fixed seed); the weakest failure is removed until all pass."""
+    it; flicker-dominated noise does the same for a lag or a ramp-rate term, whose columns follow the
+    slow programme. So the noise of the final residual is estimated (white, flicker and random walk,
+    :func:`fxdsp.diagnose.noise.noise_levels`, with the model's columns projected out of each shape,
+    as they are out of the residual) and, when it is coloured, each output cause's held-out evidence
+    must exceed the NULL_QUANTILE of what NULL_DRAWS draws of that noise give the same column (fixed
+    seed; a time constant searched on every draw, :func:`_null_quantile`); the weakest failure is
+    removed until all pass."""
     from fxdsp.diagnose.noise import noise_draws, noise_levels
 
     ch = "output"
     while True:
-        out_causes = [c for c in accepted if c.cause in TIME_TIED]
+        out_causes = [c for c in accepted if ch in affected_channels(ctx, c.cause)]
         if not out_causes:
             return state, accepted
-        levels = noise_levels(residual(ctx, state, ch))
+        levels = noise_levels(residual(ctx, state, ch), ctx.design(ch, state)[0])
         if not (levels[1] > 0 or levels[2] > 0):
             return state, accepted   # white: the held-out rule's own yardstick
         draws = noise_draws(np.random.default_rng(NULL_SEED), levels, NULL_DRAWS, ctx.series.n)
@@ -295,3 +315,17 @@ def prune(ctx: Context, state: dict, accepted: list[Candidate]):
         accepted = [c for c in accepted if c is not weakest]
         state = {k: v for k, v in state.items() if k != weakest.cause}
     return state, accepted
+
+
+def check_final(ctx: Context, state: dict, accepted: list[Candidate]):
+    """:func:`check_against_noise` and :func:`prune` until neither removes a cause: a cause that
+    passed the noise re-test beside another (each judged as the last one added) is judged again once
+    prune has removed the other, on its own (a warm-up and a lag that share a flicker's slow part
+    each pass beside the other; the lag alone does not)."""
+    while True:
+        before = set(state)
+        state, accepted = check_against_noise(ctx, state, accepted)
+        state, accepted = prune(ctx, state, accepted)
+        if set(state) == before:
+            return state, accepted
+
