@@ -1,5 +1,5 @@
-"""Pieces of the diagnosis's selection checked on their own: the batched held-out errors the noise
-nulls are drawn with, and the order of the final checks."""
+"""Pieces of the diagnosis's selection checked on their own: the held-out errors of many targets on
+one design (the noise nulls' draws), and the order of the final checks."""
 
 from __future__ import annotations
 
@@ -9,24 +9,24 @@ import numpy as np
 import pytest
 
 from fxdsp.diagnose import selection as S
-from fxdsp.diagnose.blockfit import Blocks, SegmentNormals, fold_errors_many
+from fxdsp.diagnose.blockfit import Blocks, SegmentNormals
 
 
 @pytest.mark.parametrize("n,weight", [(1000, 2.0), (333, 0.5)])
 def test_fold_errors_of_many_targets_are_each_targets_own(n, weight):
-    """One design, many targets (the draws of a null): each row equals SegmentNormals(...).folds() of
-    that target alone, a dead (all-zero) column included."""
+    """One design, many targets (the draws of a null): each target's column equals SegmentNormals(...)
+    .folds() of that target alone, a dead (all-zero) column included."""
     rng = np.random.default_rng(n)
     x = np.column_stack([np.ones(n), np.linspace(-1, 1, n), rng.normal(size=n), np.zeros(n),
                          np.cumsum(rng.normal(size=n))])
     y = rng.normal(size=(7, n)) + np.cumsum(rng.normal(size=(7, n)), axis=1) * 0.1
     blocks = Blocks.contiguous(n)
-    train, held = fold_errors_many(x, y, blocks, weight)
-    assert train.shape == held.shape == (7, blocks.n_folds)
+    train, held = SegmentNormals(x, y.T, blocks, weight).folds()
+    assert train.shape == held.shape == (blocks.n_folds, 7)
     for k in range(7):
         t, h = SegmentNormals(x, y[k], blocks, weight).folds()
-        np.testing.assert_allclose(train[k], t, rtol=1e-9)
-        np.testing.assert_allclose(held[k], h, rtol=1e-9)
+        np.testing.assert_allclose(train[:, k], t, rtol=1e-9)
+        np.testing.assert_allclose(held[:, k], h, rtol=1e-9)
 
 
 def test_the_noise_check_runs_again_after_prune_removes_a_cause(monkeypatch):

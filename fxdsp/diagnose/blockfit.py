@@ -60,7 +60,10 @@ class Blocks:
 
 
 class SegmentNormals:
-    """Per-segment X^T X, X^T y, y^T y of a design (columns scaled to unit rms for conditioning)."""
+    """Per-segment X^T X, X^T y, y^T y of a design (columns scaled to unit rms for conditioning).
+
+    ``target`` is one series [n] or several sharing the design [n, k] (the draws of a noise null):
+    ``folds`` then gives each error per fold and target, [folds, k]; the rest takes one series."""
 
     def __init__(self, design: np.ndarray, target: np.ndarray, blocks: Blocks, weight: float = 1.0):
         design = np.asarray(design, dtype=float)
@@ -79,34 +82,41 @@ class SegmentNormals:
         for i in range(self.p):
             for j in range(i, self.p):
                 self.xtx[:, i, j] = self.xtx[:, j, i] = np.add.reduceat(xs[:, i] * xs[:, j], starts)
-        self.xty = np.add.reduceat(xs * target[:, None], starts, axis=0)
-        self.yty = np.add.reduceat(target * target, starts)
+        target = np.asarray(target, dtype=float)
+        if target.ndim == 1:
+            self.xty = np.add.reduceat(xs * target[:, None], starts, axis=0)              # [segments, p]
+        else:   # [segments, p, k], a column at a time (n p k at once would be the memory of the draws x p)
+            self.xty = np.stack([np.add.reduceat(xs[:, [i]] * target, starts, axis=0) for i in range(self.p)], axis=1)
+        self.yty = np.add.reduceat(target * target, starts, axis=0)
         self.counts = np.diff(blocks.edges)
         self.blocks = blocks
-        self.tot = (self.xtx.sum(0), self.xty.sum(0), self.yty.sum())
+        self.tot = (self.xtx.sum(0), self.xty.sum(0), self.yty.sum(0))
 
     # -- solving -----------------------------------------------------------------------------
     def _solve(self, xtx: np.ndarray, xty: np.ndarray) -> np.ndarray:
-        """The ridge-stabilised solution of each of a stack of systems (xtx [s, p, p], xty [s, p]) in
-        one call; a singular one by least squares."""
+        """The ridge-stabilised solution of each of a stack of systems (xtx [s, p, p], xty [s, p], or
+        [s, p, k] for k targets) in one call; a singular one by least squares."""
         ridge = 1e-10 * np.maximum(np.trace(xtx, axis1=1, axis2=2) / max(self.p, 1), 1e-300)
+        one = xty.ndim == 2
+        rhs = xty[..., None] if one else xty
         try:
-            return np.linalg.solve(xtx + ridge[:, None, None] * np.eye(self.p), xty[..., None])[..., 0]
+            beta = np.linalg.solve(xtx + ridge[:, None, None] * np.eye(self.p), rhs)
         except np.linalg.LinAlgError:
-            return np.array([np.linalg.lstsq(a, b, rcond=None)[0] for a, b in zip(xtx, xty)])
+            beta = np.array([np.linalg.lstsq(a, b, rcond=None)[0] for a, b in zip(xtx, rhs)])
+        return beta[..., 0] if one else beta
 
     @staticmethod
     def _sse(beta, xtx, xty, yty) -> np.ndarray:
-        """The residual sum of squares of each of a stack (beta [s, p])."""
-        quad = np.einsum("si,sij,sj->s", beta, xtx, beta)
-        return np.maximum(yty - 2.0 * np.einsum("si,si->s", beta, xty) + quad, 0.0)
+        """The residual sum of squares of each of a stack (beta [s, p], or [s, p, k]: [s, k])."""
+        quad = np.einsum("si...,sij,sj...->s...", beta, xtx, beta)
+        return np.maximum(yty - 2.0 * np.einsum("si...,si...->s...", beta, xty) + quad, 0.0)
 
     def _sums_by(self, group: np.ndarray, s: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Per-group sums of the segments' normals (group: one label 0..s-1 per segment)."""
         member = (np.asarray(group)[None, :] == np.arange(s)[:, None]).astype(float)   # [s, segments]
         n = self.xtx.shape[0]
-        return ((member @ self.xtx.reshape(n, -1)).reshape(s, self.p, self.p), member @ self.xty,
-                member @ self.yty)
+        return ((member @ self.xtx.reshape(n, -1)).reshape(s, self.p, self.p), np.tensordot(member, self.xty, axes=1),
+                np.tensordot(member, self.yty, axes=1))
 
     def coefficients(self, beta_scaled: np.ndarray) -> np.ndarray:
         """Coefficients of the unscaled design columns (dead columns get 0), of one fit or a stack."""
@@ -152,34 +162,6 @@ class SegmentNormals:
             rows = row_fold == f
             resid[rows] = target[rows] - xs[rows] @ beta[f]
         return resid
-
-
-def fold_errors_many(design: np.ndarray, targets: np.ndarray, blocks: Blocks, weight: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-    """(training SSE, held-out SSE) per target and fold, [targets, folds], weighted: what
-    ``SegmentNormals(design, y, blocks, weight).folds()`` gives for each row ``y`` of ``targets``,
-    with the design's normals formed once (the noise draws of a null all share one design)."""
-    targets = np.atleast_2d(np.asarray(targets, dtype=float))
-    one = SegmentNormals(design, targets[0], blocks, weight)
-    xs = np.asarray(design, dtype=float)[:, one.alive] / one.scale[one.alive]
-    starts = blocks.edges[:-1]
-    y = targets.T                                                          # [rows, targets]
-    xty = np.stack([np.add.reduceat(xs[:, [i]] * y, starts, axis=0) for i in range(one.p)], axis=1)
-    yty = np.add.reduceat(y * y, starts, axis=0)                           # [segments, targets]
-    member = (blocks.fold[None, :] == np.arange(blocks.n_folds)[:, None]).astype(float)
-    h_xtx = np.einsum("fs,sij->fij", member, one.xtx)
-    h_xty = np.einsum("fs,sid->fid", member, xty)
-    h_yty = member @ yty
-    t_xtx = one.xtx.sum(0)[None] - h_xtx
-    t_xty = xty.sum(0)[None] - h_xty
-    t_yty = yty.sum(0)[None] - h_yty
-    ridge = 1e-10 * np.maximum(np.trace(t_xtx, axis1=1, axis2=2) / max(one.p, 1), 1e-300)
-    beta = np.linalg.solve(t_xtx + ridge[:, None, None] * np.eye(one.p), t_xty)   # [folds, p, targets]
-
-    def sse(xtx, xty_, yty_):
-        quad = np.einsum("fid,fij,fjd->fd", beta, xtx, beta)
-        return np.maximum(yty_ - 2.0 * np.einsum("fid,fid->fd", beta, xty_) + quad, 0.0).T * weight
-
-    return sse(t_xtx, t_xty, t_yty), sse(h_xtx, h_xty, h_yty)
 
 
 def jackknife_sd(values: np.ndarray) -> float:

@@ -20,9 +20,9 @@
    log cannot show a slight wander in its variogram, and flicker makes lags and ramp-rate terms
    too), its time constant searched on every draw; and every cause must still pass when it is the
    last one added, a time-like one with a held-out rms ratio >= WANDER_GAIN (a line fitted to an
-   unseen bias random walk reaches 1.05 easily). The last two run until neither removes a cause. A cause whose parameters the log does not
-   determine (identify.py) is set aside, not named, and reported as unidentified. Nothing left means `none`; `causes` are ordered by
-   held-out gain.
+   unseen bias random walk reaches 1.05 easily). The last two run until neither removes a cause.
+   A cause whose parameters the log does not determine (identify.py) is set aside, not named, and
+   reported as unidentified. Nothing left means `none`; `causes` are ordered by held-out gain.
 4. Calibration and numbers (results.py): the orders of B and S (0..3) are chosen by held-out
    error with the causes in place; parameters come from the full-data fit (nonlinear ones refined
    by Brent's method), uncertainties are delete-one-group jackknife standard deviations (20

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from fxdsp.causes import CAUSES
-from fxdsp.diagnose.blockfit import fold_errors_many
+from fxdsp.diagnose.blockfit import SegmentNormals
 from fxdsp.diagnose.candidates import affected_channels, available, evaluate, grid, refit_nonlinear, searched_parameter
 from fxdsp.diagnose.context import (MAX_CAUSES, MIN_EVIDENCE, MIN_GAIN, Candidate, Context, innovations, level_gain,
                                     residual, set_noise_weights, white_noise_variance)
@@ -149,25 +149,25 @@ def _null_quantile(ctx: Context, channel: str, state: dict, without: dict, draws
     training data prefer): noise fitted at the value the log chose would give it less than noise
     gives a cause that may choose its value (on flicker a lag's held-out evidence is several times
     what it gets at a fixed time constant)."""
-    draws = np.asarray(draws, dtype=float)
+    draws = np.asarray(draws, dtype=float).T                       # [rows, draws]: one design, every draw
     w = ctx.weights[channel]
-    x_without, _ = ctx.design(channel, without)
-    base = fold_errors_many(x_without, draws, ctx.blocks, w)[1].sum(axis=1)
+
+    def folds(x):                                                   # (train, held) per fold and draw
+        return SegmentNormals(x, draws, ctx.blocks, w).folds()
+
+    base = folds(ctx.design(channel, without)[0])[1].sum(axis=0)
     added = [c for c in state if c not in without]
     pname = searched_parameter(added[0]) if len(added) == 1 else None
     if pname is None:
-        x_with, _ = ctx.design(channel, state)
-        held = fold_errors_many(x_with, draws, ctx.blocks, w)[1].sum(axis=1)
+        held = folds(ctx.design(channel, state)[0])[1].sum(axis=0)
     else:
-        trains, helds = [], []
-        for v in grid(ctx, added[0]):
-            x_with, _ = ctx.design(channel, {**state, added[0]: {**state[added[0]], pname: float(v)}})
-            train, held_v = fold_errors_many(x_with, draws, ctx.blocks, w)
-            trains.append(train)
-            helds.append(held_v)
-        trains, helds = np.array(trains), np.array(helds)          # [values, draws, folds]
-        pick = np.argmin(trains, axis=0)                            # [draws, folds]
-        held = np.take_along_axis(helds, pick[None], axis=0)[0].sum(axis=1)
+        cause = added[0]
+        runs = [folds(ctx.design(channel, {**state, cause: {**state[cause], pname: float(v)}})[0])
+                for v in grid(ctx, cause)]
+        trains = np.array([r[0] for r in runs])                    # [values, folds, draws]
+        helds = np.array([r[1] for r in runs])
+        pick = np.argmin(trains, axis=0)                            # each fold's value, per draw
+        held = np.take_along_axis(helds, pick[None], axis=0)[0].sum(axis=0)
     return float(np.quantile(base - held, NULL_QUANTILE))
 
 
@@ -328,4 +328,3 @@ def check_final(ctx: Context, state: dict, accepted: list[Candidate]):
         state, accepted = prune(ctx, state, accepted)
         if set(state) == before:
             return state, accepted
-
