@@ -24,7 +24,8 @@ def hex_words(values, wl: int) -> str:
     mask = (1 << wl) - 1
     lo, hi = -(1 << (wl - 1)), 1 << wl
     lines = []
-    for v in values:
+    # an array's words as Python ints at once (int() of each numpy scalar was most of the time)
+    for v in values.tolist() if isinstance(values, np.ndarray) else values:
         v = int(v)
         if not lo <= v < hi:
             raise InputError(f"values: word {v} does not fit {wl} bits")

@@ -50,14 +50,26 @@ def _check_rtl_limits(design: Design, name: str, dp) -> None:
         raise InputError(f"hdl: {name}: alpha shift {dp.alpha_s} must be > 0")
 
 
-def instance(design: Design, name: str) -> Instance:
-    """One block instance: its datapath spelled as Verilog parameters and ROM files."""
+def _datapath_verilog(design: Design, name: str):
     dp = design.instances[name].block.datapath
     with design.config.naming_the_file():   # a config the RTL cannot build: its file named
         _check_rtl_limits(design, name, dp)
-    params, roms, consts = dp.verilog(name)
+    return dp, dp.verilog(name)
+
+
+def instance(design: Design, name: str) -> Instance:
+    """One block instance: its datapath spelled as Verilog parameters and ROM files."""
+    dp, (params, roms, consts) = _datapath_verilog(design, name)
     return Instance(dp.MODULE, params, {f: hex_words(r.words.ravel(), r.width) for f, r in roms.items()},
                     tuple(sorted(consts)))
+
+
+def parameters(design: Design, name: str) -> dict[str, int | str]:
+    """The parameters of :func:`instance` alone, its ROM files not rendered: what a schedule and an
+    operand width read (a chain top's schedule asks for every member's several times per generated
+    file set; rendering each member's ROM text, 1k-word sine tables among them, every time was
+    two thirds of :func:`generate`)."""
+    return _datapath_verilog(design, name)[1][0]
 
 
 def instances(design: Design) -> dict[str, Instance]:

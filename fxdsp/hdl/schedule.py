@@ -35,18 +35,18 @@ def on_shared_multiplier(design, name: str) -> list[str]:
 def mac_operands(design, name: str) -> tuple[int, int]:
     """The widest (a, b) operands instance ``name`` issues on its multiplier bundle at the design's
     parameters (its datapath's :meth:`~fxdsp.blocks.datapath.Datapath.mac_operands`)."""
-    from fxdsp.hdl.params import instance
+    from fxdsp.hdl.params import parameters
 
-    return design.instances[name].block.datapath.mac_operands(instance(design, name).params)
+    return design.instances[name].block.datapath.mac_operands(parameters(design, name))
 
 
 def member_cycles(design, name: str, arch: int = 1, unroll: int = 1) -> int:
     """A block instance's cycles from its accepting edge to its successor's at the design's parameters:
     ARCH = 1 its serial cycles per sample, ARCH = 0 its latency (``unroll``: the divider's UNROLL),
     each its datapath's (:class:`fxdsp.blocks.datapath.Datapath`)."""
-    from fxdsp.hdl.params import instance
+    from fxdsp.hdl.params import parameters
 
-    dp, p = design.instances[name].block.datapath, instance(design, name).params
+    dp, p = design.instances[name].block.datapath, parameters(design, name)
     return dp.serial_cycles(p, unroll) if arch else dp.latency(p, unroll)
 
 
