@@ -439,8 +439,21 @@ PER_CLOCK_WINDOW = {"demod": 1200, "drive": 3000}
 FIRST_WINDOW = 600
 
 
+_designs: dict[str, object] = {}
+
+
+def _design(overrides):
+    """The design of ``overrides``, built once per process: most of the ~80 checks share a handful of
+    override sets (None above all), and each build was ~0.1 s. Nothing here changes a design (a
+    mutant is in its RTL copy, a generated top's by mutated_top at generation)."""
+    key = repr(overrides)
+    if key not in _designs:
+        _designs[key] = design_of(overrides)
+    return _designs[key]
+
+
 def _check(rtl: Path, overrides, name: str, gapped: bool, tag: str, extra: dict | None = None) -> tuple[bool, str]:
-    d = design_of(overrides)
+    d = _design(overrides)
     golden = overrides is None and (VECTORS / name).is_dir()
     if golden:
         ins, outs, entry = load(VECTORS, name)
@@ -523,7 +536,7 @@ def run(mutations=MUTATIONS, baseline: bool = True, tag: str = "mut") -> list[di
         # every mutant must compile before any check may count it as caught
         broken = []
         headers = build_dir(f"{tag}_headers")
-        generate_into(design_of(), headers)
+        generate_into(_design(None), headers)
         for m, rtl in todo:
             try:
                 precompile(rtl, m.key if m else "baseline", headers)
