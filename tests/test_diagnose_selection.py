@@ -46,3 +46,52 @@ def test_the_noise_check_runs_again_after_prune_removes_a_cause(monkeypatch):
     accepted = [SimpleNamespace(cause="warmup"), SimpleNamespace(cause="lag"), SimpleNamespace(cause="hyst")]
     state, kept = S.check_final(None, {c.cause: {} for c in accepted}, accepted)
     assert set(state) == {"hyst"} and [c.cause for c in kept] == ["hyst"]
+
+
+@pytest.mark.parametrize("n", [500, 4000])
+def test_a_walk_below_unseen_walk_is_seldom_seen_and_one_above_it_mostly(n):
+    """unseen_walk is the walk level at which the variogram test of `wander` starts to see a walk in
+    white noise: at half of it the test flags few logs, at four times it nearly all."""
+    rng = np.random.default_rng(n)
+    white = 2.0
+    q = S.unseen_walk(white, n)
+    assert q > 0
+
+    def flagged(level):
+        hits = 0
+        for _ in range(200):
+            r = rng.normal(0.0, np.sqrt(white), n) + np.cumsum(rng.normal(0.0, np.sqrt(level), n))
+            ratio, threshold, _ = S.wander(r)
+            hits += ratio > threshold
+        return hits / 200
+
+    assert flagged(0.5 * q) < 0.2
+    assert flagged(4.0 * q) > 0.8
+
+
+def test_the_null_with_rivals_is_the_best_of_them_on_each_draw(monkeypatch):
+    """With rivals, each draw of the null counts the largest held-out evidence of the added cause or
+    of any rival; the quantile is taken of those maxima (here three causes whose per-draw gains are
+    known: the quantile of the maxima, not of the added cause's own)."""
+    gains = {"a": np.array([1.0, 5.0, 2.0, 0.0]), "b": np.array([3.0, 1.0, 1.0, 6.0]),
+             "c": np.array([0.0, 0.0, 4.0, 1.0])}
+
+    def held(ctx, channel, state, added, folds):
+        return 10.0 - gains[added[0]]
+
+    class FakeNormals:
+        def __init__(self, x, y, blocks, weight):
+            self.y = y
+
+        def folds(self):
+            return np.zeros((1, self.y.shape[1])), np.full((1, self.y.shape[1]), 10.0)
+
+    ctx = SimpleNamespace(weights={"output": 1.0}, blocks=None, design=lambda ch, st: (np.zeros((3, 1)), []))
+    monkeypatch.setattr(S, "_null_held", held)
+    monkeypatch.setattr(S, "SegmentNormals", FakeNormals)
+    monkeypatch.setattr(S, "NULL_QUANTILE", 1.0)
+    draws = np.zeros((4, 3))
+    assert S._null_quantile(ctx, "output", {"a": {}}, {}, draws) == 5.0
+    assert S._null_quantile(ctx, "output", {"a": {}}, {}, draws, ["b", "c"]) == 6.0
+    monkeypatch.setattr(S, "NULL_QUANTILE", 0.0)
+    assert S._null_quantile(ctx, "output", {"a": {}}, {}, draws, ["b", "c"]) == 3.0   # min of (3, 5, 4, 6)

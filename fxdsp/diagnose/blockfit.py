@@ -85,8 +85,10 @@ class SegmentNormals:
         target = np.asarray(target, dtype=float)
         if target.ndim == 1:
             self.xty = np.add.reduceat(xs * target[:, None], starts, axis=0)              # [segments, p]
-        else:   # [segments, p, k], a column at a time (n p k at once would be the memory of the draws x p)
-            self.xty = np.stack([np.add.reduceat(xs[:, [i]] * target, starts, axis=0) for i in range(self.p)], axis=1)
+        else:   # [segments, p, k]: one matmul per segment (a few hundred small BLAS calls were a fifth
+            # of a column-at-a-time reduceat over n x k products; n p k at once is the draws' memory x p)
+            edges = blocks.edges
+            self.xty = np.stack([xs[a:b].T @ target[a:b] for a, b in zip(edges[:-1], edges[1:])])
         self.yty = np.add.reduceat(target * target, starts, axis=0)
         self.counts = np.diff(blocks.edges)
         self.blocks = blocks

@@ -16,9 +16,10 @@
    from the best pair of causes (two causes can hide each other) and the better model is kept.
    Then time-like causes (aging, warm-up, hysteresis, quadrature) are re-tested against a random-
    walk bias if the residual without them wanders; every cause on the output against draws of the
-   residual's own noise (white, flicker, random walk: noise.py) when it is coloured at all (a short
+   residual's own noise (white, flicker, random walk no smaller than a short log's variogram can
+   miss: noise.py), which must not give the best of the causes the log could show as much (a short
    log cannot show a slight wander in its variogram, and flicker makes lags and ramp-rate terms
-   too), its time constant searched on every draw; and every cause must still pass when it is the
+   too), a time constant searched on every draw; and every cause must still pass when it is the
    last one added, a time-like one with a held-out rms ratio >= WANDER_GAIN (a line fitted to an
    unseen bias random walk reaches 1.05 easily). The last two run until neither removes a cause.
    A cause whose parameters the log does not determine (identify.py) is set aside, not named, and
