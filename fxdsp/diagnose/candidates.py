@@ -24,6 +24,18 @@ def available(ctx: Context, cause: str) -> bool:
     return CAUSES[cause].shows(ctx)
 
 
+def tried(ctx: Context) -> list[str]:
+    """The causes the selection tries on a log: every one it can show (none never is)."""
+    return [c for c in CAUSES if available(ctx, c)]
+
+
+def nested_held(train: np.ndarray, held: np.ndarray) -> np.ndarray:
+    """The held-out error of each fold at the grid value its own training data prefer (nested
+    cross-validation of a searched parameter): ``train`` and ``held`` are [values, folds, ...]
+    (more axes: several targets, e.g. the draws of a noise null); the result is [folds, ...]."""
+    return np.take_along_axis(held, np.argmin(train, axis=0)[None], axis=0)[0]
+
+
 def grid(ctx: Context, cause: str) -> np.ndarray:
     """Search grid of a nonlinear parameter: time constants from two samples to the log's length."""
     s = ctx.series
@@ -79,8 +91,7 @@ def evaluate(ctx: Context, state: dict, cause: str, base_held: dict) -> Candidat
                 full[i] += res[ch][2]
                 jk[i] += res[ch][3]
         # nested: each fold's parameter is the one its own training data prefer
-        pick = np.argmin(train, axis=0)
-        held = {ch: held_g[ch][pick, np.arange(pick.size)] for ch in channels}
+        held = {ch: nested_held(train, held_g[ch]) for ch in channels}
         axis = np.log(values) if _log_axis(cause) else values
         best = _refine(ctx, state, cause, channels, values, full, axis)
         if CAUSES[cause].transient:

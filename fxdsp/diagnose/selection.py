@@ -7,7 +7,8 @@ import numpy as np
 
 from fxdsp.causes import CAUSES
 from fxdsp.diagnose.blockfit import SegmentNormals
-from fxdsp.diagnose.candidates import affected_channels, available, evaluate, grid, refit_nonlinear, searched_parameter
+from fxdsp.diagnose.candidates import (affected_channels, evaluate, grid, nested_held, refit_nonlinear, searched_parameter,
+                                       tried)
 from fxdsp.diagnose.context import (MAX_CAUSES, MIN_EVIDENCE, MIN_GAIN, Candidate, Context, innovations, level_gain,
                                     residual, set_noise_weights, white_noise_variance)
 
@@ -32,7 +33,7 @@ def greedy_search(ctx: Context) -> tuple[dict, list[Candidate], list[Candidate]]
     alone explains little, together nearly everything), which one-at-a-time selection never
     finds. So every pair of candidates is also scored together, and the forward selection is run
     again from the best pair that passes; the model with the lower held-out error wins."""
-    causes = [c for c in CAUSES if available(ctx, c)]
+    causes = tried(ctx)
     state, accepted, first_round = _forward(ctx, causes, {}, [])
     pair = _best_pair(ctx, causes, first_round)
     if pair is not None and {c.cause for c in pair} != set(state):
@@ -195,10 +196,7 @@ def _null_held(ctx: Context, channel: str, state: dict, added: list[str], folds)
     cause = added[0]
     runs = [folds(ctx.design(channel, {**state, cause: {**state[cause], pname: float(v)}})[0])
             for v in grid(ctx, cause)]
-    trains = np.array([r[0] for r in runs])                        # [values, folds, draws]
-    helds = np.array([r[1] for r in runs])
-    pick = np.argmin(trains, axis=0)                                # each fold's value, per draw
-    return np.take_along_axis(helds, pick[None], axis=0)[0].sum(axis=0)
+    return nested_held(np.array([r[0] for r in runs]), np.array([r[1] for r in runs])).sum(axis=0)
 
 
 def check_against_wander(ctx: Context, state: dict, accepted: list[Candidate]):
@@ -275,7 +273,7 @@ def check_against_noise(ctx: Context, state: dict, accepted: list[Candidate]):
         levels = (white, flicker, max(walk, unseen_walk(white, ctx.series.n)))
         draws = noise_draws(np.random.default_rng(NULL_SEED), levels, NULL_DRAWS, ctx.series.n)
         full = ctx.normals(ch, state)[0].folds()[1].sum()
-        rivals = [c for c in CAUSES if c != "none" and ch in affected_channels(ctx, c) and available(ctx, c)]
+        rivals = [c for c in tried(ctx) if ch in affected_channels(ctx, c)]
         margins = []
         for cand in out_causes:
             without = {k: v for k, v in state.items() if k != cand.cause}
