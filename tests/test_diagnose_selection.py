@@ -95,3 +95,40 @@ def test_the_null_with_rivals_is_the_best_of_them_on_each_draw(monkeypatch):
     assert S._null_quantile(ctx, "output", {"a": {}}, {}, draws, ["b", "c"]) == 6.0
     monkeypatch.setattr(S, "NULL_QUANTILE", 0.0)
     assert S._null_quantile(ctx, "output", {"a": {}}, {}, draws, ["b", "c"]) == 3.0   # min of (3, 5, 4, 6)
+
+
+def test_a_time_constant_far_from_its_optimum_is_refitted_to_it():
+    """refit_nonlinear moves its local grid when the minimum lies at the grid's edge: a warm-up's time
+    constant chosen before an aging drift joined the model can be off by more than the grid's 1.5x.
+    A log of the independent generator (warm-up, scale-factor cubic and aging drift), the refit started
+    at a third of the warm-up's true time constant, must end at the full-data minimum that a fine
+    search of the whole range finds (a grid that stays where it starts stops near 1.5x its start)."""
+    from independent.chamber_logs import generate
+
+    from fxdsp.diagnose.api import series_from_log
+    from fxdsp.diagnose.candidates import grid, refit_nonlinear
+    from fxdsp.diagnose.context import ORDER_CHOICES, Context, set_noise_weights, sf_estimate
+    from fxdsp.logfile import Log
+
+    log = generate(("warmup", "sf_nonlinearity", "aging_drift"), 5028)
+    series, _ = series_from_log(Log(columns={k: np.asarray(v, float) for k, v in log.columns.items()}, source="t"))
+    ctx = Context(series, 200, 5)
+    ctx.orders = (max(ORDER_CHOICES), max(ORDER_CHOICES) if ctx.has_rate else None)
+    set_noise_weights(ctx)
+    series.sf_estimate = sf_estimate(ctx)          # as diagnose_series does before any fit
+    tau_true = log.truth["warmup"]["tau_s"]
+    others = {"sf_nonlinearity": {}, "aging_drift": {}}
+
+    def sse(tau):
+        normals, _ = ctx.normals("output", {**others, "warmup": {"tau_s": float(tau)}})
+        return normals.fit_all()[1]
+
+    taus = np.geomspace(*grid(ctx, "warmup")[[0, -1]], 200)
+    best = taus[int(np.argmin([sse(t) for t in taus]))]
+    start = tau_true / 3.0
+    assert best / start > 2.0                      # beyond what one local grid reaches
+    state = {**others, "warmup": {"tau_s": start}}
+    cand = SimpleNamespace(cause="warmup", nonlinear={})
+    refit_nonlinear(ctx, state, [cand])
+    assert state["warmup"]["tau_s"] == pytest.approx(best, rel=0.05)
+    assert cand.nonlinear == state["warmup"]

@@ -151,6 +151,9 @@ def _refine(ctx, state, cause, channels, values, full, axis) -> float:
     return float(np.exp(a)) if _log_axis(cause) else float(a)
 
 
+RECENTRE_STEPS = 8   # moves of refit_nonlinear's local grid (0.4 in log each): up to a factor of ~25
+
+
 def refit_nonlinear(ctx: Context, state: dict, accepted: list[Candidate]) -> None:
     """Re-estimate the nonlinear parameters of earlier causes with the later ones in the model:
     a lag time constant fitted while a quadrature leak was still unexplained is biased."""
@@ -168,13 +171,26 @@ def refit_nonlinear(ctx: Context, state: dict, accepted: list[Candidate]) -> Non
                 total += normals.fit_all()[1] * normals.weight
             return total
 
-        # a local grid first (real logs can have shallow secondary minima), then Brent
+        # a local grid first (real logs can have shallow secondary minima), then Brent; a minimum at
+        # the grid's edge moves the grid there (a warm-up's time constant fitted before an aging
+        # drift joined is often off by more than the grid's factor of 1.5 either way), within the
+        # search range
         a0 = np.log(state[cand.cause][pname])
-        local = a0 + np.linspace(-0.4, 0.4, 17)
-        values = [sse(a) for a in local]
-        i = int(np.argmin(values))
+        bounds = np.log(grid(ctx, cand.cause)[[0, -1]])
+        centre = a0
+        for _ in range(RECENTRE_STEPS):
+            local = centre + np.linspace(-0.4, 0.4, 17)
+            values = [sse(a) for a in local]
+            i = int(np.argmin(values))
+            edge = local[i] if i in (0, local.size - 1) else None
+            if edge is None or not bounds[0] < edge < bounds[1]:
+                break
+            centre = edge
         lo, hi = local[max(i - 1, 0)], local[min(i + 1, local.size - 1)]
         res = minimize_scalar(sse, bounds=(lo, hi), method="bounded", options={"xatol": 1e-7, "maxiter": 200})
-        if res.fun <= min(values[i], sse(a0)):
-            state[cand.cause][pname] = float(np.exp(res.x))
+        # the better of Brent's point and the grid's best (Brent's tolerance can leave it a hair
+        # above a minimum at the grid's edge), unless the value it started from is better still
+        a, fa = (res.x, res.fun) if res.fun <= values[i] else (local[i], values[i])
+        if fa <= sse(a0):
+            state[cand.cause][pname] = float(np.exp(a))
             cand.nonlinear = dict(state[cand.cause])
