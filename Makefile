@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test install hdl-tools bench clean
+.PHONY: demo test install hdl-tools warm-vectors warm-budget bench clean
 
 # --no-compile: byte-compiling every file of scipy, matplotlib, numba ... was half of the install
 # (53 -> 28 s on this 2-core box); the first import compiles what is used, and with
@@ -35,12 +35,26 @@ hdl-tools:
 demo: $(STAMP)
 	PYTHONDONTWRITEBYTECODE= $(VENV)/bin/fxdsp demo
 
+# numba compiles each kernel (@njit(cache=True)) on its first call and caches it beside its source;
+# on a fresh clone each pytest worker compiled the same ~40 kernels for itself (13-16 s of CPU each,
+# at the start of every worker). Compiled once here instead, beside hdl-tools (apt-get on a fresh
+# machine), by two commands that write nothing: `vectors --check` (the blocks' kernels, with the
+# signatures the models call) and `budget` (its report to stdout, dropped: the float and hybrid
+# kernels). A kernel they miss is still compiled where it is first called, as before; their exit status
+# is ignored (a vector that no longer matches is test_vectors' to report, with the tests run).
+warm-vectors: $(STAMP)
+	@PYTHONDONTWRITEBYTECODE= $(VENV)/bin/fxdsp vectors --check --out vectors >/dev/null 2>&1 || true
+
+warm-budget: $(STAMP)
+	@PYTHONDONTWRITEBYTECODE= $(VENV)/bin/fxdsp budget >/dev/null 2>&1 || true
+
 # PYTHONDONTWRITEBYTECODE emptied: with it set (as in some CI images) no .pyc is ever written, so every
 # process of the run (two workers, each simulator's cocotb, each CLI and Dask subprocess) compiled
 # fxdsp and the tests from source again, and pytest rewrote every test module on each collection.
-# The Python install (pip, one core) and the system tools (apt-get on a fresh machine) side by side.
+# The Python install (pip, one core) and the system tools (apt-get on a fresh machine) side by side,
+# then the kernels' warm-up.
 test:
-	@$(MAKE) --no-print-directory -j2 $(STAMP) hdl-tools
+	@$(MAKE) --no-print-directory -j2 $(STAMP) hdl-tools warm-vectors warm-budget
 	PYTHONDONTWRITEBYTECODE= $(VENV)/bin/python -m pytest -q -n 2 --dist loadfile
 
 bench: $(STAMP)
