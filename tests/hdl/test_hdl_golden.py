@@ -1,7 +1,7 @@
 """(a) The committed golden vectors, bit for bit, through every RTL block and every chain top, with
 the model's overflow count matched by the RTL's overflow flags; the serial (resource-shared) variants
-likewise. Every DUT through cocotb (Python-driven) on Icarus; the chain tops and the serial variants
-on Verilator as well, whole, through the file-driven harness (inputs by $readmemh, no Python in the
+likewise. Every DUT through cocotb (Python-driven) on Icarus; the chain tops, the serial variants and
+the blocks Icarus simulates slowly (WHOLE_ON_VERILATOR) on Verilator as well, whole, through the file-driven harness (inputs by $readmemh, no Python in the
 per-cycle loop: paper 002's serial top streams its 8.7k golden samples, 3 M cycles, in a few seconds
 where cocotb's clock callbacks took 18 s). A top holds every block of its chain, with the same
 parameters, in the same variant, so a block's own Verilator run would repeat a C++ model build for
@@ -23,11 +23,17 @@ from long_common import file_stream
 # every instance of the design with an RTL module; the manifest lists them all (and the others)
 NAMES = sorted(set(json.loads((VECTORS / "manifest.json").read_text())["blocks"]) & set(design_of().hardware))
 _TOPS = {n for n, inst in design_of().instances.items() if inst.members}
+# blocks whose whole golden set Icarus simulates slowly (a drive loop's 6.8k samples: 7-10 s of vvp; the
+# demodulator's and the low-pass's 2-3 s) streamed whole on Verilator instead, file-driven, a window on
+# Icarus. drive, demod and iir by the very model their long stream builds (test_hdl_long_blocks,
+# test_hdl_long_chains: the same harness text), drive001 by a model of its own (~2 s of C++)
+WHOLE_ON_VERILATOR = {"drive", "drive001", "demod", "iir"}
 
 
-def cases(names) -> list:
-    """(name, simulator): every DUT on Icarus, the chain tops on every simulator."""
-    return [pytest.param(n, s, id=f"{n}-{s}") for n in names for s in SIMULATORS if s == "icarus" or n in _TOPS]
+def cases(names, whole=frozenset()) -> list:
+    """(name, simulator): every DUT on Icarus, the chain tops (and ``whole``) on every simulator."""
+    return [pytest.param(n, s, id=f"{n}-{s}") for n in names for s in SIMULATORS
+            if s == "icarus" or n in _TOPS or n in whole]
 # the sequential divider one quotient bit per cycle is the hardware setting; the Python-driven runs
 # of the dividers and the chains with one take 7 bits per cycle to stay fast (at 1 bit, 100k cycles
 # of Icarus for each divider's golden set: 4-5 s); the file-driven runs on Verilator (here, and the
@@ -49,7 +55,7 @@ def design():
 
 
 @pytest.mark.hdl
-@pytest.mark.parametrize("name, sim", cases(NAMES))
+@pytest.mark.parametrize("name, sim", cases(NAMES, WHOLE_ON_VERILATOR))
 def test_golden_vectors(design, name, sim):
     ins, outs, entry = load(VECTORS, name)
     total = sum(entry["overflows"].values())
@@ -57,9 +63,9 @@ def test_golden_vectors(design, name, sim):
         cycles, seconds = file_stream(design, name, ins, outs, total, f"golden_{name}", sim)
         record_throughput("file", name, cycles, seconds, sim=sim)
         return
-    if name in _TOPS and "verilator" in SIMULATORS:
-        # a chain top streams every golden sample on Verilator (below); on Icarus (~30 s for paper
-        # 002's whole set) a window of them, the model run on it
+    if (name in _TOPS or name in WHOLE_ON_VERILATOR) and "verilator" in SIMULATORS:
+        # a chain top (and WHOLE_ON_VERILATOR) streams every golden sample on Verilator (above); on
+        # Icarus (~30 s for paper 002's whole set) a window of them, the model run on it
         seg = segment(design, name, icarus_window(ins, ICARUS_TOP_WINDOW))
     else:
         # the committed vectors are the model's: the design built here must reproduce them
