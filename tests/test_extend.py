@@ -67,25 +67,38 @@ def extend(args, capsys) -> tuple[int, str, str]:
 
 
 @pytest.fixture(scope="module")
-def both_extended(logs, tmp_path_factory):
-    """`fxdsp extend BOTH --no-rtl` once for the module (two tests read its model and its config):
-    (exit status, stdout, stderr, the --out folder). Nothing writes into the folder afterwards."""
-    out = tmp_path_factory.mktemp("both_extended") / "ext"
-    so, se = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(so), contextlib.redirect_stderr(se):
-        code = main(["extend", str(logs["both"]), "--out", str(out), "--no-rtl"])
-    return code, so.getvalue(), se.getvalue(), out
+def extended(logs, tmp_path_factory):
+    """`fxdsp extend LOG` of a simulated log once per log for the module (several tests read the same
+    extension: its report, model and config): name -> (exit status, stdout, stderr, the --out folder).
+    Nothing writes into the folder afterwards. BOTH with its RTL regression (when Icarus is installed:
+    test_extend_a_simulated_paper002_log checks it), the others --no-rtl."""
+    done = {}
+
+    def get(name: str):
+        if name not in done:
+            out = tmp_path_factory.mktemp(f"{name}_extended") / "ext"
+            rtl = name == "both" and shutil.which("iverilog") is not None
+            so, se = io.StringIO(), io.StringIO()
+            with contextlib.redirect_stdout(so), contextlib.redirect_stderr(se):
+                code = main(["extend", str(logs[name]), "--out", str(out), *([] if rtl else ["--no-rtl"])])
+            done[name] = (code, so.getvalue(), se.getvalue(), out)
+        return done[name]
+    return get
+
+
+@pytest.fixture(scope="module")
+def both_extended(extended):
+    return extended("both")
 
 
 @needs_icarus
 @pytest.mark.parametrize("name", ["lag", "quad", "both", "rtd"])
-def test_extend_a_simulated_paper002_log(logs, name, tmp_path, capsys):
-    out = tmp_path / "ext"
+def test_extend_a_simulated_paper002_log(logs, extended, name):
     # the RTL regression of the extended config on the log whose remedies change the RTL's parameters
     # in the most ways (both: the lag and the phase trim); the single lag and trim remedies are the
     # same stages, each a subset of both's; the RTD table (rtd) is checked on its own block below
     rtl = name == "both"
-    code, stdout, err = extend([logs[name], "--out", out, *([] if rtl else ["--no-rtl"])], capsys)
+    code, stdout, err, out = extended(name)
     assert code == 0, err
     rep = json.loads((out / "report.json").read_text())
     stages = LOGS[name][2]
@@ -213,11 +226,13 @@ def test_fit_on_one_run_apply_on_another(logs, both_extended, tmp_path, capsys):
     assert "applied to" in stdout
 
 
-def test_same_log_same_bytes(logs, tmp_path, capsys):
-    for k in (1, 2):
-        assert extend([logs["quad"], "--out", tmp_path / f"o{k}", "--no-rtl"], capsys)[0] == 0
+def test_same_log_same_bytes(logs, extended, tmp_path, capsys):
+    """A second extension of the quad log (the first: the module's, in another folder) writes the same bytes."""
+    code, _, err, first = extended("quad")
+    assert code == 0, err
+    assert extend([logs["quad"], "--out", tmp_path / "o2", "--no-rtl"], capsys)[0] == 0
     for name in ("report.json", "config.toml", "vectors/manifest.json", "hdl/demod_params.vh"):
-        assert (tmp_path / "o1" / name).read_bytes() == (tmp_path / "o2" / name).read_bytes(), name
+        assert (first / name).read_bytes() == (tmp_path / "o2" / name).read_bytes(), name
 
 
 @needs_icarus
