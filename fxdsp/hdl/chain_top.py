@@ -557,6 +557,11 @@ def has_divider(design, name: str) -> bool:
     return any(design.instances[_v(m)].module == "sf_divide" for m in design.chains[name].netlist.instances)
 
 
+def generated_top_chains(design: Design) -> list[str]:
+    """The chains of the design whose members all have RTL (``design.hardware``): each has a generated top."""
+    return [name for name in design.chains if design.instances[name].hardware]
+
+
 def generated_tops(design: Design) -> dict[str, str]:
-    """``<chain>.v`` of every chain of the design whose members all have RTL (``design.hardware``)."""
-    return {f"{name}.v": chain_top(design, name) for name in design.chains if design.instances[name].hardware}
+    """``<chain>.v`` of every chain of :func:`generated_top_chains`."""
+    return {f"{name}.v": chain_top(design, name) for name in generated_top_chains(design)}
