@@ -1,9 +1,10 @@
 """(a) The committed golden vectors, bit for bit, through every RTL block and every chain top, with
 the model's overflow count matched by the RTL's overflow flags; the serial (resource-shared) variants
 likewise. Every DUT through cocotb (Python-driven) on Icarus; the chain tops, the serial variants and
-the blocks Icarus simulates slowly (WHOLE_ON_VERILATOR) on Verilator as well, whole, through the file-driven harness (inputs by $readmemh, no Python in the
-per-cycle loop: paper 002's serial top streams its 8.7k golden samples, 3 M cycles, in a few seconds
-where cocotb's clock callbacks took 18 s). A top holds every block of its chain, with the same
+the blocks Icarus simulates slowly (WHOLE_ON_VERILATOR) on Verilator as well, whole, through the
+file-driven harness (inputs by $readmemh, no Python in the per-cycle loop: paper 002's serial top
+streams its 8.7k golden samples, 3 M cycles, in a few seconds where cocotb's clock callbacks took
+18 s). Icarus, 4-state, still sees an x on a port in every DUT's first samples. A top holds every block of its chain, with the same
 parameters, in the same variant, so a block's own Verilator run would repeat a C++ model build for
 RTL that Verilator already compiles and runs in the top; cocotb on Verilator runs the serial
 variants' corner streams (gaps and resets anywhere, test_hdl_corners)."""
