@@ -131,24 +131,38 @@ def evaluate(ctx: Context, state: dict, cause: str, base_held: dict) -> Candidat
 
 def _refine(ctx, state, cause, channels, values, full, axis) -> float:
     """Full-data minimum of the weighted SSE between the grid neighbours of the grid minimum."""
-    pname = searched_parameter(cause)
-    i = int(np.argmin(full))
-    lo, hi = axis[max(i - 1, 0)], axis[min(i + 1, values.size - 1)]
-    if lo == hi:
-        return float(values[i])
+    if values.size == 1:
+        return float(values[0])
+    a, _ = _brent_near_best(_full_sse(ctx, state, cause, channels), axis, full)
+    return _from_axis(cause, a)
 
-    def sse(a):
-        v = float(np.exp(a)) if _log_axis(cause) else float(a)
+
+def _from_axis(cause: str, a: float) -> float:
+    return float(np.exp(a)) if _log_axis(cause) else float(a)
+
+
+def _full_sse(ctx: Context, others: dict, cause: str, channels: list[str]):
+    """The weighted full-data SSE of ``others`` plus ``cause`` at its searched parameter's value on
+    the search axis (log for a time constant), summed over ``channels``."""
+    pname = searched_parameter(cause)
+
+    def sse(a: float) -> float:
         total = 0.0
         for ch in channels:
-            normals, _ = ctx.normals(ch, {**state, cause: {pname: v}})
+            normals, _ = ctx.normals(ch, {**others, cause: {pname: _from_axis(cause, a)}})
             total += normals.fit_all()[1] * normals.weight
         return total
+    return sse
 
-    # a lag 1000 x above the noise needs tau to 1e-4 or its misfit looks like another cause
+
+def _brent_near_best(sse, axis, values) -> tuple[float, float]:
+    """(point, SSE) of Brent's minimum between the grid neighbours of the grid's best, or the grid's
+    best when Brent's point is not below it (its tolerance can leave it a hair above a minimum at the
+    grid's edge). A lag 1000 x above the noise needs tau to 1e-4 or its misfit looks like another cause."""
+    i = int(np.argmin(values))
+    lo, hi = axis[max(i - 1, 0)], axis[min(i + 1, len(axis) - 1)]
     res = minimize_scalar(sse, bounds=(lo, hi), method="bounded", options={"xatol": 1e-7, "maxiter": 200})
-    a = res.x if res.fun <= full[i] else axis[i]
-    return float(np.exp(a)) if _log_axis(cause) else float(a)
+    return (res.x, res.fun) if res.fun <= values[i] else (axis[i], values[i])
 
 
 RECENTRE_STEPS = 8   # moves of refit_nonlinear's local grid (0.4 in log each): up to a factor of ~25
@@ -161,16 +175,8 @@ def refit_nonlinear(ctx: Context, state: dict, accepted: list[Candidate]) -> Non
         pname = searched_parameter(cand.cause)
         if pname is None:
             continue
-        channels = affected_channels(ctx, cand.cause)
         others = {k: v for k, v in state.items() if k != cand.cause}
-
-        def sse(a, cause=cand.cause, pname=pname, channels=channels, others=others):
-            total = 0.0
-            for ch in channels:
-                normals, _ = ctx.normals(ch, {**others, cause: {pname: float(np.exp(a))}})
-                total += normals.fit_all()[1] * normals.weight
-            return total
-
+        sse = _full_sse(ctx, others, cand.cause, affected_channels(ctx, cand.cause))
         # a local grid first (real logs can have shallow secondary minima), then Brent; a minimum at
         # the grid's edge moves the grid there (a warm-up's time constant fitted before an aging
         # drift joined is often off by more than the grid's factor of 1.5 either way), within the
@@ -186,11 +192,7 @@ def refit_nonlinear(ctx: Context, state: dict, accepted: list[Candidate]) -> Non
             if edge is None or not bounds[0] < edge < bounds[1]:
                 break
             centre = edge
-        lo, hi = local[max(i - 1, 0)], local[min(i + 1, local.size - 1)]
-        res = minimize_scalar(sse, bounds=(lo, hi), method="bounded", options={"xatol": 1e-7, "maxiter": 200})
-        # the better of Brent's point and the grid's best (Brent's tolerance can leave it a hair
-        # above a minimum at the grid's edge), unless the value it started from is better still
-        a, fa = (res.x, res.fun) if res.fun <= values[i] else (local[i], values[i])
-        if fa <= sse(a0):
+        a, fa = _brent_near_best(sse, local, values)
+        if fa <= sse(a0):   # unless the value it started from is better still
             state[cand.cause][pname] = float(np.exp(a))
             cand.nonlinear = dict(state[cand.cause])

