@@ -79,6 +79,9 @@ class Cause:
     # named, it must leave none there (fxdsp.diagnose.remaining)
     signature: str = "time_s"
     transient: bool = False              # lives at the start of the log rather than throughout it
+    # it bends the thermometer's reading, not the element's temperature: named, the output is fitted
+    # against temp_c with that bend taken out (fxdsp.diagnose.model.element_temperature)
+    misreads_thermometer: bool = False
     explain_extra: Callable[[dict], dict] = field(default=lambda p: {})
     # extend: per calibration procedure, the remedy built from the fitted parameters, or why the
     # chain needs none
@@ -250,7 +253,7 @@ _RECORDS = (
           explain=("temp_c is curved against the reference thermometer: b = {b_per_c:.4g} /C, i.e. "
                    "a linear RTD law misreads by b (T - 25)^2 (Callendar-Van Dusen curvature)."),
           stage="rtd", inject=lambda p, rtd, s: s["rtd_true"] + mech.rtd_curvature(s["rtd_true"], p["b_per_c"]),
-          curvature=_rtd_b_per_c, remedies={"gyro_rtd": _cvd_remedy},
+          curvature=_rtd_b_per_c, misreads_thermometer=True, remedies={"gyro_rtd": _cvd_remedy},
           draw=_sized("rtd_nonlinearity", "temp_c", lambda d: (d.truth["ref_temp_c"] - 25.0) ** 2),
           absorbed={"thermometer": "absorbed by the cubic bias polynomial",
                     "gyro_freq": "the chamber thermometer is not in the path"}),

@@ -23,6 +23,12 @@ Rules
   is then sigma_eff / (sqrt(2) W). W is the shortest window (from one sample up) for which that
   noise is at most DERIVATIVE_NOISE_FRACTION of the median |dT/dt| of the ramp rows. It dates the
   phases (heating, cooling, dwell) and so the corners: where a ramp starts, ends or turns.
+* Corner rounding. A chamber's air lags its setpoint, so a corner of the reading is rounded over
+  a few time constants, and where the ramp "really" turned (the setpoint's corner, or the knee of
+  the rounded reading) is uncertain by about one. The rounding's time constant is fitted to all the
+  corners at once: each corner's readings (out to half the way to its neighbours) against a
+  first-order lag of a sharp corner (a line, and from an instant ts on a change of slope through the
+  lag), ts free per corner, one time constant for the log (least squares; 0: sharp corners).
 * Corner-aware derivative. The d(temp_c)/dt the model uses is the slope of a straight line fitted
   to the readings within +-h of each row, h the distance to the nearest corner (at least W / 2, at
   most MAX_HALF_WINDOWS x W / 2): inside a ramp the line takes in far more readings than W (its
@@ -33,7 +39,8 @@ Rules
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from numba import njit
@@ -47,6 +54,17 @@ SPAN_FRACTION = 0.01
 DERIVATIVE_NOISE_FRACTION = 0.1
 # the longest line a row's slope is fitted over, in half-windows W / 2 of the first derivative
 MAX_HALF_WINDOWS = 10.0
+# a corner is unresolved for this many rounding time constants either side of its knee (the knee
+# of a rounded reading is dated about one after the chamber turned, and the lag settles to 14 % of a
+# change of slope in two more; three either side set aside most of a five-minute ramp, and what is
+# left of a log of short ramps is its dwells, where a temperature shape is a dwell's level)
+ROUNDING_SPANS = 2.0
+# the rounding's time constants tried (between half a sampling interval and a third of the typical
+# corner's half-window), the instants tried for each corner's sharp corner, and the rows a corner's
+# fit reads at most (a longer window is read every k-th row)
+ROUNDING_TAUS = 24
+ROUNDING_STARTS = 48
+ROUNDING_ROWS = 600
 
 
 def _distinct_steps(t: np.ndarray) -> np.ndarray:
@@ -127,6 +145,16 @@ class RampReading:
     dtdt_window: np.ndarray  # the first derivative (on the W moving average), C/s: dates the phases
     dtdt: np.ndarray  # corner-aware d(temp)/dt per row, C/s (what the model uses)
     state: np.ndarray  # the contract's hysteresis s per row
+    # the log the reading was taken from (the corners' rounding is fitted to it when asked for)
+    times: np.ndarray | None = field(default=None, repr=False)
+    readings: np.ndarray | None = field(default=None, repr=False)
+
+    @cached_property
+    def rounding_s(self) -> float:
+        """Time constant of the corners' rounding (module docstring), s; 0 without the log."""
+        if self.times is None or self.readings is None or self.readings.size < 3:
+            return 0.0
+        return corner_rounding(self.times, self.readings, self.corners(self.times))
 
     @property
     def sigma_eff(self) -> float:
@@ -162,14 +190,15 @@ class RampReading:
     def unresolved(self, t) -> np.ndarray:
         """Rows too near a corner for the reading to say what the temperature did there: within half
         the derivative's window (the smoothed dT/dt turns over that span, the true one at an instant)
-        plus two sampling intervals (a knee dated to a row: the true start lies between two rows, and
-        a chamber's air lag rounds the corner) of a ramp's start or end. Bool per row."""
+        plus two sampling intervals (a knee dated to a row: the true start lies between two rows) and
+        ROUNDING_SPANS of the corners' rounding time constant (a chamber's air lag: the ramp turned
+        somewhere in the rounded stretch) of a ramp's start or end. Bool per row."""
         t = np.asarray(t, float)
         corners = self.corners(t)
         out = np.zeros(t.size, dtype=bool)
         if corners.size == 0 or t.size < 2:
             return out
-        reach = 0.5 * self.window_s + 2.0 * sample_interval(t)
+        reach = 0.5 * self.window_s + 2.0 * sample_interval(t) + ROUNDING_SPANS * self.rounding_s
         at = t[corners]
         lo = np.searchsorted(t, at - reach, side="left")
         hi = np.searchsorted(t, at + reach, side="right")
@@ -188,7 +217,8 @@ class RampReading:
                 f"cooling {cool} times; phases from d(temp_c)/dt on a {self.window_s:.3g} s moving average (its noise "
                 f"at most {100 * DERIVATIVE_NOISE_FRACTION:g} % of the median ramp rate); the model's d(temp_c)/dt is "
                 f"the slope of a line over +-{0.5 * self.window_s:.3g} to {0.5 * MAX_HALF_WINDOWS * self.window_s:.3g} s, "
-                "as far as the nearest corner")
+                f"as far as the nearest corner; the corners are rounded as by a lag of {self.rounding_s:.3g} s (a "
+                "first-order lag of a sharp corner fitted to all of them)")
 
 
 def read_ramps(time_s, temp_c) -> RampReading:
@@ -216,11 +246,78 @@ def read_ramps(time_s, temp_c) -> RampReading:
     for start, sign in zip(starts, signs):
         state[start:] = sign
     reading = RampReading(sigma=sigma, quant_step=q, threshold=threshold, starts=starts, signs=signs,
-                          window_s=float((2 * k + 1) * dt), dtdt_window=dtdt, dtdt=dtdt, state=state)
+                          window_s=float((2 * k + 1) * dt), dtdt_window=dtdt, dtdt=dtdt, state=state,
+                          times=t, readings=y)
     if y.size > 2 and np.ptp(t) > 0:
         reading.dtdt = corner_aware_derivative(t, y, t[reading.corners(t)], 0.5 * reading.window_s,
                                                0.5 * MAX_HALF_WINDOWS * reading.window_s)
     return reading
+
+
+def corner_rounding(t, y, corner_rows) -> float:
+    """The time constant of a first-order lag that rounds every corner of the reading ``y`` (rows
+    ``corner_rows``), by least squares over all corners at once (module docstring), s."""
+    t = np.asarray(t, float)
+    y = np.asarray(y, float)
+    at = np.unique(np.asarray(corner_rows, np.int64))
+    if at.size == 0 or t.size < 8:
+        return 0.0
+    dt = sample_interval(t)
+    # each corner's half-window: half the way to its neighbours (the log's ends count as neighbours)
+    edges = np.concatenate([[t[0]], t[at], [t[-1]]])
+    half = 0.5 * np.minimum(edges[1:-1] - edges[:-2], edges[2:] - edges[1:-1])
+    usable = half >= 4.0 * dt
+    if not usable.any():
+        return 0.0
+    longest = np.median(half[usable]) / 3.0
+    if not longest > 0.5 * dt:
+        return 0.0
+    taus = np.concatenate([[0.0], np.geomspace(0.5 * dt, longest, ROUNDING_TAUS)])
+    total = np.zeros(taus.size)
+    for row, h in zip(at[usable], half[usable]):
+        tc = t[row]
+        inside = np.flatnonzero((t >= tc - h) & (t <= tc + h))
+        inside = inside[::max(1, -(-inside.size // ROUNDING_ROWS))]
+        u, v = t[inside] - tc, y[inside]
+        # the readings and every lagged corner less their straight line (what [1, t] absorbs)
+        base = np.column_stack([np.ones_like(u), u])
+        proj = np.linalg.pinv(base)
+        rv = v - base @ (proj @ v)
+        coarse = np.linspace(-min(3.0 * longest, 0.8 * h), min(dt, 0.2 * h), ROUNDING_STARTS)
+        step = coarse[1] - coarse[0]
+        best = np.full(taus.size, np.sum(rv * rv))
+        for i, tau in enumerate(taus):
+            # the corner's instant on the coarse grid, then on a grid twelve times finer around it
+            drop, at_start = _best_lagged_corner(u, rv, base, proj, coarse, tau)
+            fine = np.linspace(at_start - step, at_start + step, 25)
+            drop = max(drop, _best_lagged_corner(u, rv, base, proj, fine, tau)[0])
+            best[i] -= drop
+        total += best
+    i = int(np.argmin(total))
+    if 1 < i < taus.size - 1:
+        # between grid points: the vertex of the parabola through the minimum and its neighbours
+        # (in log tau, the grid's own axis)
+        x, f = np.log(taus[i - 1:i + 2]), total[i - 1:i + 2]
+        curvature = f[0] - 2.0 * f[1] + f[2]
+        if curvature > 0:
+            return float(np.exp(x[1] + 0.5 * (x[1] - x[0]) * (f[0] - f[2]) / curvature))
+    return float(taus[i])
+
+
+def _best_lagged_corner(u, rv, base, proj, starts, tau) -> tuple[float, float]:
+    """The largest drop of the sum of squares ``rv`` (readings less their line) that a lagged change
+    of slope from one of ``starts`` gives, and that start."""
+    w = np.maximum(u[None, :] - starts[:, None], 0.0)
+    bend = w - tau * -np.expm1(-w / tau) if tau > 0 else w
+    rb = bend - (bend @ proj.T) @ base.T
+    norm = np.einsum("ij,ij->i", rb, rb)
+    ok = norm > 1e-12 * max(float(np.max(norm)), 1e-300)
+    if not ok.any():
+        return 0.0, float(starts[0])
+    dot = rb @ rv
+    drops = np.where(ok, dot * dot / np.where(ok, norm, 1.0), 0.0)
+    k = int(np.argmax(drops))
+    return float(drops[k]), float(starts[k])
 
 
 def corner_aware_derivative(t, y, corners_t, shortest: float, longest: float) -> np.ndarray:

@@ -14,6 +14,7 @@ import pytest
 
 from fxdsp.diagnose.api import diagnose_columns
 from fxdsp.diagnose.report import report_dict, write_report
+from fxdsp.diagnose.results import channel_gain
 
 from independent.chamber_logs import generate
 
@@ -142,14 +143,53 @@ def test_every_effect_outside_the_list_is_reported_on_both_generators(generator)
     assert not missed, missed
 
 
-@pytest.mark.parametrize("causes, seed", [(("ramp_rate",), 5002), (("hysteresis",), 5017), (("hysteresis",), 5010)])
+@pytest.mark.parametrize("causes, seed", [(("ramp_rate",), 5002), (("hysteresis",), 5017), (("hysteresis",), 5010),
+                                         (("hysteresis",), 8423)])
 def test_a_cause_of_the_list_read_to_its_ramps_corners_leaves_nothing(causes, seed):
     """In-contract logs that showed structure where the reading cannot follow the chamber: a ramp-rate
     term fitted on a derivative as noisy as the output (biased low by errors in variables: its share
     left on every ramp), a hysteresis state dated one row after the programme's turn (2 h on that
-    row: a "step")."""
+    row: a "step"), or, in a chamber whose air lags its setpoint by 47 s (8423), dated from the
+    rounded reading about a time constant after the setpoint turned (the generator's state turns
+    with the setpoint: 2 h on each row between)."""
     log = generate(causes, seed)
     diag = diagnose_columns(log.columns, source="in contract")
+    assert sorted(diag.causes) == sorted(causes)
+    rest = _check_remaining(report_dict(diag))
+    assert not rest["significant"], rest
+
+
+def test_an_rtd_curvature_leaves_no_structure_in_the_output():
+    """The contract: the output follows the element's temperature Te (B(Te), section 2), and an RTD
+    curvature bends what temp_c reads of it, not the element (temp_c = Tref + b (Tref - 25)^2,
+    section 3). Once rtd_nonlinearity is named, the output must be fitted against temp_c with the
+    curvature taken out: a cubic in the bent reading leaves degree-4..6 structure at the extremes,
+    which the remaining test then (rightly) reports. The log is written here from those two lines."""
+    rng = np.random.default_rng(2)
+    t = np.arange(0.0, 36000.0, 10.0)
+    tref = np.interp(t, [0, 3600, 9600, 13200, 19800, 23400, 28800, 36000], [25, 25, -30, -30, 80, 80, 25, 25])
+    x, b, sigma = (tref - 25.0) / 50.0, 0.001, 0.05
+    cols = {"time_s": t, "temp_c": tref + b * (tref - 25.0) ** 2 + rng.normal(0, 0.01, t.size),
+            "ref_temp_c": tref + rng.normal(0, 0.005, t.size),
+            "output": 100 * x + 40 * x * x - 30 * x ** 3 + rng.normal(0, sigma, t.size)}
+    diag = diagnose_columns(cols, source="rtd curvature")
+    assert diag.causes == ["rtd_nonlinearity"]
+    assert abs(diag.parameters["rtd_nonlinearity"]["b_per_c"] - b) < 0.05 * b
+    after = channel_gain(diag.context, diag.state, "output")["rms_after"]
+    assert after < 1.2 * sigma, after             # the output at its noise (a cubic in temp_c: 13 x)
+    rest = _check_remaining(report_dict(diag))
+    assert not rest["channels"]["output"]["significant"], rest["channels"]["output"]
+
+
+@pytest.mark.parametrize("causes, seed", [(("warmup",), 8514), (("ramp_rate",), 8514)])
+def test_a_random_walk_taken_for_flicker_is_not_a_drift(causes, seed):
+    """The log's noise has a random walk (its std 1.6 x the white noise by the log's end) and a little
+    flicker; fitted to one log's few long-tau Allan points, the slow noise was split mostly into
+    flicker, the null then wandered too little, and the walk came out as "a drift of output in time
+    that is not a straight line" (p < 1e-3). A shape must now be significant against the residual's
+    noise fitted as white and a walk alone too."""
+    log = generate(causes, seed)
+    diag = diagnose_columns(log.columns, source="walk")
     assert sorted(diag.causes) == sorted(causes)
     rest = _check_remaining(report_dict(diag))
     assert not rest["significant"], rest

@@ -121,3 +121,43 @@ def test_the_models_derivative_is_the_ramps_rate_on_both_sides_of_every_corner(s
     # and no row is taken far from its ramp's rate by a corner (the first derivative is, there)
     assert np.max(np.abs(err[inside])) < 6 * np.std(err_first[inside])
     assert not r.unresolved(t)[inside & (corner_dist > r.window_s + 4 * dt)].any()
+
+
+def lagged(t, y, tau):
+    """The first-order lag of a reading (dT/dt = (y - T)/tau), from rest on its first value: exact
+    for a piecewise-linear input between samples (the input is linear over each step)."""
+    if tau == 0:
+        return y.copy()
+    out = np.empty_like(y)
+    out[0] = y[0]
+    for i in range(1, y.size):
+        h = t[i] - t[i - 1]
+        a = np.exp(-h / tau)
+        slope = (y[i] - y[i - 1]) / h
+        # the lag of y[i-1] + slope * s over one step: the exact solution of the ODE
+        out[i] = y[i] - slope * tau + (out[i - 1] - y[i - 1] + slope * tau) * a
+    return out
+
+
+@pytest.mark.parametrize("tau", [0.0, 15.0, 45.0])
+def test_the_corners_rounding_is_the_chambers_air_lag(tau):
+    """A chamber whose air lags its setpoint by tau rounds every corner over a few tau: the
+    rounding's time constant is read off the corners, and the rows where the setpoint turned and the
+    rounded stretch after it are the ones set aside as unresolved (a hysteresis state dated from the
+    setpoint or from the rounded reading differs there by up to two tau)."""
+    legs = [(0, 25.0), (3000, 25.0), (900, 55.0), (1200, 55.0), (600, 30.0), (900, 45.0), (2400, 45.0),
+            (1500, 5.0), (3000, 5.0)]
+    dt = 2.0
+    t, setpoint, tk, yk = programme(legs, dt / 20.0)
+    air = lagged(t, setpoint, tau)[::20]
+    t = t[::20]
+    r = read_ramps(t, reading(air, np.random.default_rng(21), 0.01, 0.01))
+    assert abs(r.rounding_s - tau) <= max(0.2 * tau, 2 * dt), (r.rounding_s, tau)
+    corners = tk[1:-1]
+    near = np.min(np.abs(t[:, None] - corners[None, :]), axis=1)
+    after = np.any((t[:, None] >= corners[None, :]) & (t[:, None] <= corners[None, :] + 2 * tau), axis=1)
+    unresolved = r.unresolved(t)
+    assert unresolved[after].all()
+    # and no more than the corner's own span (a knee read off the rounded reading is dated up to
+    # about 1.5 tau after the setpoint's corner): rows well inside a leg are kept
+    assert not unresolved[near > 0.5 * r.window_s + 2 * dt + 5 * max(tau, dt) + 3 * r.window_s].any()

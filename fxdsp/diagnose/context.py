@@ -62,6 +62,9 @@ class Diagnosis:
     # -> identify.described(...) (never named, never written as a plain number)
     unidentified: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)  # what the reader set aside, in words
+    # causes that lowered the held-out error but were removed by the wander re-test
+    # (fxdsp.diagnose.selection.check_against_wander): a random walk of the bias gives as much
+    wandering: list = field(default_factory=list)
     # the contract's `remaining` object and each channel's verdict behind it (fxdsp.diagnose.remaining)
     remaining: dict = field(default_factory=dict)
     structures: list = field(default_factory=list)
@@ -154,7 +157,7 @@ def sf_estimate(ctx: Context, state: dict | None = None) -> np.ndarray | None:
         return None
     normals, names = ctx.normals("output", state or {})
     coef, _ = normals.fit_all()
-    x = ctx.scales["output"](ctx.series.temp)
+    x = ctx.scales["output"](M.element_temperature(ctx.series, state or {}))
     sd = ctx.norm["output"][1]
     return sd * np.polynomial.polynomial.polyval(x, [coef[names.index(f"s{j}")] for j in range(ps + 1)])
 

@@ -75,16 +75,20 @@ def diagnose_series(series: M.Series, n_segments: int = 200, n_folds: int = 5) -
         search = ctx
     state, accepted, first_round = greedy_search(search)
     set_noise_weights(search, state)
-    state, accepted = check_against_wander(search, state, accepted)
+    state, accepted, wandering = check_against_wander(search, state, accepted)
     state, accepted = check_final(search, state, accepted)
     refit_nonlinear(search, state, accepted)  # the causes that were removed may have biased them
     if "sf_nonlinearity" in state:
         _converge_scale_factor(ctx, search, state, step)
 
     unidentified: dict = {}
-    notes: list[str] = []
+    notes: list[str] = [f"{cause} passed the first tests (held-out rms ratio on the output {ratio:.3g}) but is not "
+                        "named: the residual without it wanders, and a random walk of the bias at that level gives "
+                        "as much"
+                        for cause, ratio in wandering.items()]
     while True:
         diag = _conclude(ctx, search, state, accepted, first_round, unidentified, notes)
+        diag.wandering = list(wandering)
         # a cause is named only when it removes the signature it claims: one that passes its test
         # only by absorbing part of a structure the list does not explain (a linear drift taking
         # part of a step) is not named

@@ -45,6 +45,7 @@ class Series:
         self.dtdt = self.ramps.dtdt
         self.hyst = self.ramps.state
         self._freq_thermometer = None
+        self._linear_temp = None
         # S(Te) of the calibrated baseline (output unit per rate unit), set by the engine: with it
         # the cubic rate term S k3 rate^3 is one linear column whose coefficient is k3 itself
         self.sf_estimate: np.ndarray | None = None
@@ -58,6 +59,7 @@ class Series:
             if value is not None:
                 setattr(new, name, np.ascontiguousarray(value[::step]))
         new._freq_thermometer = None
+        new._linear_temp = None
         return new
 
     @property
@@ -79,6 +81,18 @@ class Series:
             gain, offset = np.polyfit(self.ref - T_REF_C, self.temp, 1)
             self._freq_thermometer = offset + gain * (self.ref - T_REF_C)
         return self._freq_thermometer
+
+    @property
+    def linear_temp(self) -> np.ndarray:
+        """temp_c with its curvature against the reference taken out (a least-squares quadratic in
+        ref_temp_c - 25, its square term removed): temp_c's timing and noise on the reference's
+        linear scale; temp_c itself without a reference."""
+        if self.ref is None:
+            return self.temp
+        if self._linear_temp is None:
+            u = self.ref - T_REF_C
+            self._linear_temp = self.temp - np.polyfit(u, self.temp, 2)[0] * u * u
+        return self._linear_temp
 
     def target(self, channel: str) -> np.ndarray:
         return {"output": self.out, "freq_hz": self.freq, "temp_c": self.temp}[channel]
@@ -152,11 +166,20 @@ def lagged(series: Series, values: np.ndarray, tau_s: float) -> np.ndarray:
     return mech.first_order_lag(t, values, tau_s, initial=start)
 
 
+def element_temperature(series: Series, state: dict) -> np.ndarray:
+    """The element's temperature as the output is fitted against it (before a thermal lag): what
+    temp_c reads, or, once a cause of ``state`` is a misreading of the thermometer (the RTD's
+    curvature: the element itself is not curved), temp_c with that misreading taken out."""
+    if any(CAUSES[name].misreads_thermometer for name in state if name in CAUSES):
+        return series.linear_temp
+    return series.temp
+
+
 def output_design(series: Series, state: dict, orders: tuple[int, int | None], scale: Scaling
                   ) -> tuple[np.ndarray, list[str]]:
     """output = B(Te) + S(Te) * rate_eff [+ cause columns]."""
     pb, ps = orders
-    te = series.temp
+    te = element_temperature(series, state)
     if "thermal_lag" in state:
         te = lagged(series, te, state["thermal_lag"]["tau_s"])
     x = scale(te)

@@ -78,11 +78,12 @@ def _projected_shapes(x: np.ndarray, taus: np.ndarray) -> np.ndarray:
     return out
 
 
-def noise_levels(resid: np.ndarray, x: np.ndarray | None = None) -> tuple[float, float, float]:
+def noise_levels(resid: np.ndarray, x: np.ndarray | None = None, flicker: bool = True) -> tuple[float, float, float]:
     """(white variance, flicker variance per component, random-walk variance per row) of a residual:
     its robust Allan variance fitted, by non-negative least squares weighted to equal relative errors,
     with the three shapes (a / tau, the flicker construction's, q tau / 3); with ``x``, the model
-    columns the residual was fitted on, the shapes are those of each noise with ``x`` fitted out."""
+    columns the residual was fitted on, the shapes are those of each noise with ``x`` fitted out;
+    ``flicker`` False: white and a walk alone (all the slow noise taken for a walk)."""
     from scipy.optimize import nnls
 
     taus, avar = allan_levels(resid)
@@ -92,7 +93,9 @@ def noise_levels(resid: np.ndarray, x: np.ndarray | None = None) -> tuple[float,
         basis = np.column_stack([1.0 / taus, _flicker_avar(resid.size, taus), taus / 3.0])
     else:
         basis = _projected_shapes(np.asarray(x, float), taus)
-    coef, _ = nnls(basis / avar[:, None], np.ones_like(avar))
+    use = np.array([True, flicker, True])
+    coef = np.zeros(3)
+    coef[use], _ = nnls((basis / avar[:, None])[:, use], np.ones_like(avar))
     return float(coef[0]) or float(avar[0]), float(coef[1]), float(coef[2])
 
 

@@ -32,13 +32,19 @@ them, not the median). DRAWS series of that noise (fixed seed: the same log give
 go through the same statistics; each family's ratio is standardised by its null median and spread
 (90 % point minus median), and a channel's structure is significant when the largest standardised
 ratio exceeds the 1 - LEVEL / k point (k: the channels tested) of a Gumbel law fitted to the same
-maximum over the draws. The families are taken in turn (forward selection): the most significant
-one joins the model and the others are tested again on top of it, so one effect is reported once.
+maximum over the draws. The split of the slow noise between flicker and a walk rests on the few
+long-tau Allan points of one log, and a walk taken for flicker would make the log's own wander look
+like a drift: a family is significant only when it is against two nulls, the fitted noise and the
+residual's noise fitted as white and a walk alone, and its p-value is the larger of the two. The
+families are taken in turn (forward selection): the most significant one joins the model and the
+others are tested again on top of it, so one effect is reported once.
 
-Rows next to a ramp's start or end (within half the first derivative's window and two sampling
-intervals: fxdsp.ramps, RampReading.unresolved) are set aside: a reading cannot date a corner to
-the row, and a model right to within that leaves a spike of a row or two at each corner that a step
-would otherwise be taken for.
+Rows next to a ramp's start or end (within half the first derivative's window, two sampling
+intervals and two time constants of the corners' rounding by the chamber's air lag: fxdsp.ramps,
+RampReading.unresolved) are set aside: a reading cannot date a corner to the row, nor say where in
+its rounded stretch the chamber turned (a hysteresis state dated from the setpoint or from the
+reading differs there), and a model right to within that leaves a spike of a few rows at each
+corner that a step would otherwise be taken for.
 
 The same test runs on a series that is itself a held-out error (series_structure: ``fxdsp extend``'s
 compensated output before and after its remedies), on top of a cubic in temp_c instead of a model.
@@ -309,8 +315,10 @@ def _gumbel_tail(maxima: np.ndarray, z: float) -> float:
 
 def _standardised(y: np.ndarray, x: np.ndarray, fams: list[Family], n_channels: int, levels: tuple):
     """Each family's standardised likelihood ratio on top of the model ``x``, the threshold of the
-    largest at the report's level, the largest's p-value, and per family its best candidate and walk
-    ratio (index); the null is noise at ``levels`` (:func:`fxdsp.diagnose.noise.noise_levels`)."""
+    largest at the report's level, the null's largest standardised ratios (the law of that threshold
+    and of a p-value, :func:`_gumbel_tail`), and per family its best candidate; the null is noise at
+    ``levels`` (:func:`fxdsp.diagnose.noise.noise_levels`, per tested row: fitted to the tested rows
+    put end to end, as the null is drawn)."""
     prepared = _prepare(x, fams)
     lr_obs, picks = _ratios(y, prepared, fams)
     n = y.shape[1]
@@ -322,8 +330,7 @@ def _standardised(y: np.ndarray, x: np.ndarray, fams: list[Family], n_channels: 
     z_obs = (lr_obs[:, 0] - med) / spread
     z_null = ((lr_null - med[:, None]) / spread[:, None]).max(axis=0)
     threshold = _gumbel_quantile(z_null, 1.0 - LEVEL / n_channels)
-    p_value = _gumbel_tail(z_null, float(z_obs.max()))
-    return z_obs, threshold, p_value, picks
+    return z_obs, threshold, z_null, picks
 
 
 def channel_structure(ctx: Context, state: dict, channel: str, n_channels: int) -> Structure:
@@ -380,14 +387,26 @@ def _structure(ctx: Context, channel: str, x_full: np.ndarray, y_full: np.ndarra
     # the noise of the residual of the model as it stands, its levels fitted with shapes that went
     # through the same model (kept for the later rounds: a found shape's columns would take more of
     # the slow noise with them each round)
-    levels = noise_levels(y[0] - x @ np.linalg.lstsq(x, y[0], rcond=None)[0], x)
+    r0 = y[0] - x @ np.linalg.lstsq(x, y[0], rcond=None)[0]
+    # two nulls: one log's few long-tau Allan points set the slow noise's split between flicker and
+    # a random walk poorly, and a walk taken for flicker makes the log's wander look like a drift or
+    # a periodic term; a shape is significant only against both the fitted noise and the same
+    # residual's noise fitted as white and a walk alone (the same null when no flicker is fitted)
+    levels = noise_levels(r0, x)
+    nulls = [levels] + ([noise_levels(r0, x, flicker=False)] if levels[1] > 0 else [])
     while left and (len(chosen) < MAX_FOUND or not fitted_model):
         fam_left = [tested[k] for k in left]
-        z_obs, threshold, p_value, picks = _standardised(y, x, fam_left, n_channels, levels)
+        verdicts = [_standardised(y, x, fam_left, n_channels, lv) for lv in nulls]
+        picks = verdicts[0][3]
+        # the family furthest over its threshold against the null that holds it back most, and that
+        # null's verdict on it (its p-value is the larger: significant against one null alone is not)
+        margin = np.min([z - thr for z, thr, _, _ in verdicts], axis=0)
+        best = int(np.argmax(margin))
+        z_obs, threshold, p_value = max(((z[best], thr, _gumbel_tail(zn, float(z[best])))
+                                         for z, thr, zn, _ in verdicts), key=lambda v: v[2])
         if first is None:
-            first = (float(z_obs.max()), threshold, p_value)
-        best = int(np.argmax(z_obs))
-        if not z_obs[best] > threshold:
+            first = (float(z_obs), threshold, p_value)
+        if not margin[best] > 0:
             break
         k = left.pop(best)
         f, j = fams[k], picks[best]

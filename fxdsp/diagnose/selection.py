@@ -216,17 +216,19 @@ def check_against_wander(ctx: Context, state: dict, accepted: list[Candidate]):
     too): a cause that fails on innovations is kept when it is large (ratio >= WANDER_GAIN) and
     its evidence is beyond what random walks give at the level the residual *without* it shows
     (null_evidence; the walk as large as the data allow without the cause). The weakest failure
-    is removed, until all pass.
+    is removed, until all pass. Returns the state, the accepted causes and the ones removed (cause ->
+    the held-out rms ratio it had on the data as logged).
     """
     ch = "output"
+    dropped: dict[str, float] = {}
     while True:
         out_causes = [c for c in accepted if c.cause in TIME_TIED]
         if not out_causes:
-            return state, accepted
+            return state, accepted, dropped
         others = {k: x for k, x in state.items() if k not in TIME_TIED}
         ratio, threshold, _ = wander(residual(ctx, others, ch))
         if ratio <= threshold:
-            return state, accepted
+            return state, accepted, dropped
         resid = residual(ctx, state, ch)
         gain = wander(resid)[2]
         full_raw = ctx.normals(ch, state)[0].folds()[1].sum()
@@ -242,8 +244,9 @@ def check_against_wander(ctx: Context, state: dict, accepted: list[Candidate]):
             verdicts.append((evidence, ratio_raw, cand))
         failing = [v for v in verdicts if v[1] < MIN_GAIN or v[0] < MIN_EVIDENCE]
         if not failing:
-            return state, accepted
-        weakest = min(failing, key=lambda v: v[0])[2]
+            return state, accepted, dropped
+        _, ratio_raw, weakest = min(failing, key=lambda v: v[0])
+        dropped[weakest.cause] = ratio_raw
         accepted = [c for c in accepted if c is not weakest]
         state = {k: v for k, v in state.items() if k != weakest.cause}
 
