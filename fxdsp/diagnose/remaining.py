@@ -313,24 +313,27 @@ def _gumbel_tail(maxima: np.ndarray, z: float) -> float:
     return float(-np.expm1(-np.exp(-(z - mu) / beta)))
 
 
-def _standardised(y: np.ndarray, x: np.ndarray, fams: list[Family], n_channels: int, levels: tuple):
-    """Each family's standardised likelihood ratio on top of the model ``x``, the threshold of the
-    largest at the report's level, the null's largest standardised ratios (the law of that threshold
-    and of a p-value, :func:`_gumbel_tail`), and per family its best candidate; the null is noise at
-    ``levels`` (:func:`fxdsp.diagnose.noise.noise_levels`, per tested row: fitted to the tested rows
-    put end to end, as the null is drawn)."""
+def _standardised(y: np.ndarray, x: np.ndarray, fams: list[Family], n_channels: int, nulls: list[tuple]):
+    """Each family's standardised likelihood ratio on top of the model ``x`` against each null, the
+    threshold of the largest at the report's level, the null's largest standardised ratios (the law
+    of that threshold and of a p-value, :func:`_gumbel_tail`), and per family its best candidate;
+    a null is noise at its levels (:func:`fxdsp.diagnose.noise.noise_levels`, per tested row: fitted
+    to the tested rows put end to end, as the null is drawn). The model's and the families' filtered
+    columns and the observed ratios do not depend on the null: computed once."""
     prepared = _prepare(x, fams)
     lr_obs, picks = _ratios(y, prepared, fams)
     n = y.shape[1]
-    rng = np.random.default_rng([SEED, n, x.shape[1]])
-    null_y = noise_draws(rng, levels, DRAWS, n)
-    lr_null, _ = _ratios(null_y, prepared, fams)
-    med = np.median(lr_null, axis=1)
-    spread = np.maximum(np.quantile(lr_null, 0.9, axis=1) - med, 1e-9)
-    z_obs = (lr_obs[:, 0] - med) / spread
-    z_null = ((lr_null - med[:, None]) / spread[:, None]).max(axis=0)
-    threshold = _gumbel_quantile(z_null, 1.0 - LEVEL / n_channels)
-    return z_obs, threshold, z_null, picks
+    out = []
+    for levels in nulls:
+        rng = np.random.default_rng([SEED, n, x.shape[1]])
+        null_y = noise_draws(rng, levels, DRAWS, n)
+        lr_null, _ = _ratios(null_y, prepared, fams)
+        med = np.median(lr_null, axis=1)
+        spread = np.maximum(np.quantile(lr_null, 0.9, axis=1) - med, 1e-9)
+        z_obs = (lr_obs[:, 0] - med) / spread
+        z_null = ((lr_null - med[:, None]) / spread[:, None]).max(axis=0)
+        out.append((z_obs, _gumbel_quantile(z_null, 1.0 - LEVEL / n_channels), z_null))
+    return out, picks
 
 
 def channel_structure(ctx: Context, state: dict, channel: str, n_channels: int) -> Structure:
@@ -396,14 +399,13 @@ def _structure(ctx: Context, channel: str, x_full: np.ndarray, y_full: np.ndarra
     nulls = [levels] + ([noise_levels(r0, x, flicker=False)] if levels[1] > 0 else [])
     while left and (len(chosen) < MAX_FOUND or not fitted_model):
         fam_left = [tested[k] for k in left]
-        verdicts = [_standardised(y, x, fam_left, n_channels, lv) for lv in nulls]
-        picks = verdicts[0][3]
+        verdicts, picks = _standardised(y, x, fam_left, n_channels, nulls)
         # the family furthest over its threshold against the null that holds it back most, and that
         # null's verdict on it (its p-value is the larger: significant against one null alone is not)
-        margin = np.min([z - thr for z, thr, _, _ in verdicts], axis=0)
+        margin = np.min([z - thr for z, thr, _ in verdicts], axis=0)
         best = int(np.argmax(margin))
         z_obs, threshold, p_value = max(((z[best], thr, _gumbel_tail(zn, float(z[best])))
-                                         for z, thr, zn, _ in verdicts), key=lambda v: v[2])
+                                         for z, thr, zn in verdicts), key=lambda v: v[2])
         if first is None:
             first = (float(z_obs), threshold, p_value)
         if not margin[best] > 0:
