@@ -44,6 +44,7 @@ from functools import cached_property
 
 import numpy as np
 from numba import njit
+from fxdsp.diagnose.blockfit import parabolic_argmin
 from fxdsp.errors import InputError
 
 # a move this many noise sigmas (plus a quantisation step) beyond the last extreme is a ramp
@@ -293,15 +294,10 @@ def corner_rounding(t, y, corner_rows) -> float:
             drop = max(drop, _best_lagged_corner(u, rv, base, proj, fine, tau)[0])
             best[i] -= drop
         total += best
-    i = int(np.argmin(total))
-    if 1 < i < taus.size - 1:
-        # between grid points: the vertex of the parabola through the minimum and its neighbours
-        # (in log tau, the grid's own axis)
-        x, f = np.log(taus[i - 1:i + 2]), total[i - 1:i + 2]
-        curvature = f[0] - 2.0 * f[1] + f[2]
-        if curvature > 0:
-            return float(np.exp(x[1] + 0.5 * (x[1] - x[0]) * (f[0] - f[2]) / curvature))
-    return float(taus[i])
+    if int(np.argmin(total)) == 0:
+        return 0.0
+    # between grid points: the minimum refined on the grid's own axis, log tau
+    return float(np.exp(parabolic_argmin(np.log(taus[1:]), total[1:])))
 
 
 def _best_lagged_corner(u, rv, base, proj, starts, tau) -> tuple[float, float]:
