@@ -228,3 +228,32 @@ def test_isolated_spikes_are_flagged_but_steps_and_ramps_are_not():
     y[500] -= 0.5
     flags = spike_rows(y)
     assert sorted(np.flatnonzero(flags)) == [0, 500]
+
+
+def _degenerate(kind: str):
+    """A canonical log with a reference and a resonator (section 1), one column degenerate in a way
+    the contract allows."""
+    t, temp, out = _canonical_rows(400)
+    t, temp = t.copy(), temp.copy()
+    ref = temp - 0.1
+    freq = 5000.0 - 0.3 * temp + 0.001 * np.random.default_rng(1).standard_normal(t.size)
+    if kind == "reference never moves":
+        ref[:] = 25.0
+    elif kind == "nothing moves":
+        temp[:], ref[:] = 25.0, 25.0
+    elif kind == "first rows share a stamp":
+        t[:6] = 0.0
+    return ["time_s", "temp_c", "output", "ref_temp_c", "freq_hz"], zip(t, temp, out, ref, freq)
+
+
+@pytest.mark.parametrize("kind", ["reference never moves", "nothing moves", "first rows share a stamp"])
+def test_degenerate_columns_within_the_contract_are_diagnosed(kind, tmp_path, capsys):
+    """A stability run at one temperature, a reference thermometer held in a bath, a logger that
+    stamps its first readings at once: valid logs. A straight line or a quadratic fitted to a column
+    with one distinct value (np.polyfit's SVD fails on it) was an internal error (exit 70)."""
+    header, rows = _degenerate(kind)
+    path = _write(tmp_path / "log.csv", header, rows)
+    code, _, err = _run(capsys, path, "--json", tmp_path / "r.json")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["rows"]["used"] == 400 and "remaining" in report

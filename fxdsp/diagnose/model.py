@@ -78,7 +78,7 @@ class Series:
         if self.ref is None:
             return self.temp
         if self._freq_thermometer is None:
-            gain, offset = np.polyfit(self.ref - T_REF_C, self.temp, 1)
+            gain, offset = polyfit(self.ref - T_REF_C, self.temp, 1)
             self._freq_thermometer = offset + gain * (self.ref - T_REF_C)
         return self._freq_thermometer
 
@@ -91,7 +91,7 @@ class Series:
             return self.temp
         if self._linear_temp is None:
             u = self.ref - T_REF_C
-            self._linear_temp = self.temp - np.polyfit(u, self.temp, 2)[0] * u * u
+            self._linear_temp = self.temp - polyfit(u, self.temp, 2)[0] * u * u
         return self._linear_temp
 
     def target(self, channel: str) -> np.ndarray:
@@ -104,6 +104,20 @@ class Series:
         if self.ref is not None:
             out.append("temp_c")
         return out
+
+
+def polyfit(x: np.ndarray, y: np.ndarray, degree: int) -> np.ndarray:
+    """np.polyfit's coefficients (highest power first), for any x a log can hold: x with fewer
+    distinct values than the degree needs (a reference that never moves, a head of rows sharing one
+    stamp) is fitted to the degree its values allow, the higher powers 0 (np.polyfit's scaling
+    divides by a zero column there, and its SVD fails)."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    usable = min(degree, np.unique(x).size - 1)
+    coef = np.zeros(degree + 1)
+    if usable < 0:
+        return coef
+    coef[degree - usable:] = np.polyfit(x, y, usable) if usable > 0 else [float(np.mean(y))]
+    return coef
 
 
 def spike_rows(values: np.ndarray, threshold: float = 25.0) -> np.ndarray:
@@ -159,7 +173,7 @@ def lagged(series: Series, values: np.ndarray, tau_s: float) -> np.ndarray:
     t = series.t
     head = t <= t[0] + min(0.1 * tau_s, 600.0)
     if head.sum() >= 3:
-        slope, intercept = np.polyfit(t[head] - t[0], values[head], 1)
+        slope, intercept = polyfit(t[head] - t[0], values[head], 1)
         start = float(intercept)
     else:
         start = float(values[0])
