@@ -44,8 +44,8 @@ from functools import cached_property
 
 import numpy as np
 from numba import njit
-from fxdsp.diagnose.blockfit import parabolic_argmin
 from fxdsp.errors import InputError
+from fxdsp.numeric import parabolic_argmin
 
 # a move this many noise sigmas (plus a quantisation step) beyond the last extreme is a ramp
 NOISE_MULTIPLE = 10.0

@@ -174,18 +174,3 @@ def jackknife_sd(values: np.ndarray) -> float:
     if g < 2:
         return float("nan")
     return float(np.sqrt((g - 1) / g * np.sum((values - values.mean()) ** 2)))
-
-
-def parabolic_argmin(grid: np.ndarray, values: np.ndarray) -> float:
-    """Minimum of a sampled curve: the grid minimum refined by a parabola through its neighbours."""
-    i = int(np.argmin(values))
-    if i == 0 or i == grid.size - 1:
-        return float(grid[i])
-    x0, x1, x2 = grid[i - 1:i + 2]
-    y0, y1, y2 = values[i - 1:i + 2]
-    denom = (x0 - x1) * (x0 - x2) * (x1 - x2)
-    a = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / denom
-    b = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / denom
-    if a <= 0:
-        return float(x1)
-    return float(np.clip(-b / (2 * a), x0, x2))

@@ -7,7 +7,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from fxdsp.causes import CAUSES
-from fxdsp.diagnose.blockfit import jackknife_sd, parabolic_argmin
+from fxdsp.diagnose.blockfit import jackknife_sd
+from fxdsp.numeric import parabolic_argmin
 from fxdsp.diagnose.context import MIN_GAIN, Candidate, Context, gain_ratio
 from fxdsp.diagnose.identify import judge
 from fxdsp.ramps import sample_interval
