@@ -9,24 +9,31 @@ import numpy as np
 import pytest
 
 from fxdsp.diagnose import selection as S
-from fxdsp.diagnose.blockfit import Blocks, SegmentNormals
+from fxdsp.diagnose.blockfit import Blocks, FoldTargets, SegmentNormals
 
 
 @pytest.mark.parametrize("n,weight", [(1000, 2.0), (333, 0.5)])
 def test_fold_errors_of_many_targets_are_each_targets_own(n, weight):
-    """One design, many targets (the draws of a null): each target's column equals SegmentNormals(...)
-    .folds() of that target alone, a dead (all-zero) column included."""
+    """One design, many targets (the draws of a null, as FoldTargets: summed per fold, not per
+    segment): each target's column equals SegmentNormals(...).folds() of that target alone, a dead
+    (all-zero) column included; what needs the segments refuses them."""
     rng = np.random.default_rng(n)
     x = np.column_stack([np.ones(n), np.linspace(-1, 1, n), rng.normal(size=n), np.zeros(n),
                          np.cumsum(rng.normal(size=n))])
     y = rng.normal(size=(7, n)) + np.cumsum(rng.normal(size=(7, n)), axis=1) * 0.1
     blocks = Blocks.contiguous(n)
-    train, held = SegmentNormals(x, y.T, blocks, weight).folds()
+    many = SegmentNormals(x, FoldTargets(y.T, blocks), blocks, weight)
+    train, held = many.folds()
     assert train.shape == held.shape == (blocks.n_folds, 7)
     for k in range(7):
         t, h = SegmentNormals(x, y[k], blocks, weight).folds()
         np.testing.assert_allclose(train[:, k], t, rtol=1e-9)
         np.testing.assert_allclose(held[:, k], h, rtol=1e-9)
+    for ask in (many.jackknife, lambda: many.heldout_rows(x, y[0])):
+        with pytest.raises(TypeError, match="per fold"):
+            ask()
+    with pytest.raises(TypeError, match="FoldTargets"):
+        SegmentNormals(x, y.T, blocks, weight)
 
 
 def test_the_noise_check_runs_again_after_prune_removes_a_cause(monkeypatch):
@@ -89,6 +96,7 @@ def test_the_null_with_rivals_is_the_best_of_them_on_each_draw(monkeypatch):
     ctx = SimpleNamespace(weights={"output": 1.0}, blocks=None, design=lambda ch, st: (np.zeros((3, 1)), []))
     monkeypatch.setattr(S, "_null_held", held)
     monkeypatch.setattr(S, "SegmentNormals", FakeNormals)
+    monkeypatch.setattr(S, "FoldTargets", lambda y, blocks: y)
     monkeypatch.setattr(S, "NULL_QUANTILE", 1.0)
     draws = np.zeros((4, 3))
     assert S._null_quantile(ctx, "output", {"a": {}}, {}, draws) == 5.0

@@ -59,13 +59,32 @@ class Blocks:
         return np.repeat(self.fold, np.diff(self.edges))
 
 
+class FoldTargets:
+    """Many series fitted with one design after another (the draws of a noise null, [n, k]), their
+    rows put in fold order once: each design's per-fold normals are then one matmul per fold over
+    contiguous rows, and y^T y per fold is computed once for every design (a matmul per segment over
+    hundreds of segments, and the draws copied in each design's fold order, were most of a null)."""
+
+    def __init__(self, target: np.ndarray, blocks: Blocks):
+        row_fold = blocks.row_fold()
+        self.blocks = blocks
+        self.order = np.argsort(row_fold, kind="stable")
+        self.edges = np.concatenate([[0], np.cumsum(np.bincount(row_fold, minlength=blocks.n_folds))])
+        self.rows = np.ascontiguousarray(np.asarray(target, dtype=float)[self.order])
+        self.yty = np.stack([np.einsum("ij,ij->j", self.rows[a:b], self.rows[a:b]) for a, b in self.spans()])
+
+    def spans(self) -> list[tuple[int, int]]:
+        return list(zip(self.edges[:-1], self.edges[1:]))
+
+
 class SegmentNormals:
     """Per-segment X^T X, X^T y, y^T y of a design (columns scaled to unit rms for conditioning).
 
-    ``target`` is one series [n] or several sharing the design [n, k] (the draws of a noise null):
-    ``folds`` then gives each error per fold and target, [folds, k]; the rest takes one series."""
+    ``target`` is one series [n], or several sharing the design as :class:`FoldTargets` (the draws of a
+    noise null): the sums are then kept per fold, and only ``folds`` may be asked, each error per
+    fold and target [folds, k]."""
 
-    def __init__(self, design: np.ndarray, target: np.ndarray, blocks: Blocks, weight: float = 1.0):
+    def __init__(self, design: np.ndarray, target, blocks: Blocks, weight: float = 1.0):
         design = np.asarray(design, dtype=float)
         rms = np.sqrt(np.mean(design * design, axis=0))
         self.alive = rms > 0  # an all-zero column (e.g. no ramp yet) carries no information
@@ -73,6 +92,11 @@ class SegmentNormals:
         xs = design[:, self.alive] / self.scale[self.alive]
         self.p = xs.shape[1]
         self.weight = float(weight)  # 1/noise variance: makes channels comparable
+        self.blocks = blocks
+        self.per_fold = isinstance(target, FoldTargets)
+        if self.per_fold:
+            self._fold_sums(xs, target)
+            return
         # per-segment sums: outer products per row would be n*p*p memory, and a matmul per segment a
         # Python loop over hundreds of segments; each of the p(p+1)/2 column products is summed per
         # segment in one reduceat instead (the same sums)
@@ -83,16 +107,26 @@ class SegmentNormals:
             for j in range(i, self.p):
                 self.xtx[:, i, j] = self.xtx[:, j, i] = np.add.reduceat(xs[:, i] * xs[:, j], starts)
         target = np.asarray(target, dtype=float)
-        if target.ndim == 1:
-            self.xty = np.add.reduceat(xs * target[:, None], starts, axis=0)              # [segments, p]
-        else:   # [segments, p, k]: one matmul per segment (a few hundred small BLAS calls were a fifth
-            # of a column-at-a-time reduceat over n x k products; n p k at once is the draws' memory x p)
-            edges = blocks.edges
-            self.xty = np.stack([xs[a:b].T @ target[a:b] for a, b in zip(edges[:-1], edges[1:])])
+        if target.ndim != 1:
+            raise TypeError("target: one series, or several as FoldTargets")
+        self.xty = np.add.reduceat(xs * target[:, None], starts, axis=0)                  # [segments, p]
         self.yty = np.add.reduceat(target * target, starts, axis=0)
         self.counts = np.diff(blocks.edges)
-        self.blocks = blocks
         self.tot = (self.xtx.sum(0), self.xty.sum(0), self.yty.sum(0))
+
+    def _fold_sums(self, xs: np.ndarray, targets: FoldTargets) -> None:
+        """The sums per fold (xtx [folds, p, p], xty [folds, p, k], yty [folds, k]) in place of per segment."""
+        xo = xs[targets.order]
+        spans = targets.spans()
+        self.xtx = np.stack([xo[a:b].T @ xo[a:b] for a, b in spans])
+        self.xty = np.stack([xo[a:b].T @ targets.rows[a:b] for a, b in spans])
+        self.yty = targets.yty
+        self.counts = np.diff(targets.edges)
+        self.tot = (self.xtx.sum(0), self.xty.sum(0), self.yty.sum(0))
+
+    def _per_segment(self, what: str) -> None:
+        if self.per_fold:   # a caller's mistake, not the user's input
+            raise TypeError(f"{what}: normals of FoldTargets are kept per fold; only folds() is available")
 
     # -- solving -----------------------------------------------------------------------------
     def _solve(self, xtx: np.ndarray, xty: np.ndarray) -> np.ndarray:
@@ -139,12 +173,14 @@ class SegmentNormals:
 
     def folds(self) -> tuple[np.ndarray, np.ndarray]:
         """(training SSE, held-out SSE) per fold, both weighted."""
-        t, h, beta = self._left_out(self.blocks.fold, self.blocks.n_folds)
+        fold = np.arange(self.blocks.n_folds) if self.per_fold else self.blocks.fold   # per fold already: each its own
+        t, h, beta = self._left_out(fold, self.blocks.n_folds)
         return self._sse(beta, *t) * self.weight, self._sse(beta, *h) * self.weight
 
     def jackknife(self, by: str = "group") -> tuple[np.ndarray, np.ndarray]:
         """Delete-one-group fits: (coefficients [n_groups, p_all], training SSE [n_groups]); with
         ``by="fold"`` the groups are the cross-validation folds (interleaved, not contiguous)."""
+        self._per_segment("jackknife")
         if by == "fold":
             group, s = self.blocks.fold, self.blocks.n_folds
         elif by == "group":
@@ -156,6 +192,7 @@ class SegmentNormals:
 
     def heldout_rows(self, design: np.ndarray, target: np.ndarray) -> np.ndarray:
         """Held-out residual of every row (each row predicted by the fit without its fold)."""
+        self._per_segment("heldout_rows")
         resid = np.empty(target.size)
         row_fold = self.blocks.row_fold()
         xs = design[:, self.alive] / self.scale[self.alive]

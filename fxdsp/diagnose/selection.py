@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from fxdsp.causes import CAUSES
-from fxdsp.diagnose.blockfit import SegmentNormals
+from fxdsp.diagnose.blockfit import FoldTargets, SegmentNormals
 from fxdsp.diagnose.candidates import (affected_channels, evaluate, grid, nested_held, refit_nonlinear, searched_parameter,
                                        tried)
 from fxdsp.diagnose.context import (MAX_CAUSES, MIN_EVIDENCE, MIN_GAIN, Candidate, Context, innovations, level_gain,
@@ -172,7 +172,7 @@ def _null_quantile(ctx: Context, channel: str, state: dict, without: dict, draws
     of the causes it tried, so the noise is given the same choice (the best of eight is up to eight
     times as likely as one to pass a 1 % test of one; logs of 500 rows of noise alone named a cause
     in 6 of 130 seeds before, 2 after)."""
-    draws = np.asarray(draws, dtype=float).T                       # [rows, draws]: one design, every draw
+    draws = FoldTargets(np.asarray(draws, dtype=float).T, ctx.blocks)   # [rows, draws]: one design, every draw
     w = ctx.weights[channel]
 
     def folds(x):                                                   # (train, held) per fold and draw
