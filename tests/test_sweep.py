@@ -29,11 +29,17 @@ FILES = ("results.jsonl", "summary.json", "report.md")
 
 @pytest.fixture(scope="module")
 def cluster():
-    """One real LocalCluster for the module: 2 worker processes of 1 thread each."""
+    """One real LocalCluster for the module: 2 worker processes of 1 thread each. Its connect timeout
+    is 10 s, not Dask's 30: the killed-worker test fetches a result the killed worker held, and on a
+    loaded machine that fetch can, it seems, retry connecting to the dead address for the whole
+    timeout before the scheduler recomputes the key (that test took 30-34 s in one of 8 `make test`
+    runs and in 1 of 3 runs beside two busy processes, against 2-7 s otherwise)."""
+    import dask
     from distributed import LocalCluster
 
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
-                      silence_logs=logging.ERROR) as lc:
+    with dask.config.set({"distributed.comm.timeouts.connect": "10s"}), \
+            LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+                         silence_logs=logging.ERROR) as lc:
         lc.wait_for_workers(2, timeout=120)
         yield lc.scheduler_address, lc
 
