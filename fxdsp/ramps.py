@@ -193,14 +193,17 @@ class RampReading:
         the derivative's window (the smoothed dT/dt turns over that span, the true one at an instant)
         plus two sampling intervals (a knee dated to a row: the true start lies between two rows) and
         ROUNDING_SPANS of the corners' rounding time constant (a chamber's air lag: the ramp turned
-        somewhere in the rounded stretch) of a ramp's start or end. Bool per row."""
+        somewhere in the rounded stretch) of a ramp's start or end. Bool per row of ``t``: the
+        reading's own stamps or any others over the same log (every few rows of it: the corners are
+        found on the reading's own rows, and set aside by time)."""
         t = np.asarray(t, float)
-        corners = self.corners(t)
+        own = self.times if self.times is not None else t
+        corners = self.corners(own)
         out = np.zeros(t.size, dtype=bool)
-        if corners.size == 0 or t.size < 2:
+        if corners.size == 0 or t.size < 2 or own.size < 2:
             return out
-        reach = 0.5 * self.window_s + 2.0 * sample_interval(t) + ROUNDING_SPANS * self.rounding_s
-        at = t[corners]
+        reach = 0.5 * self.window_s + 2.0 * sample_interval(own) + ROUNDING_SPANS * self.rounding_s
+        at = own[corners]
         lo = np.searchsorted(t, at - reach, side="left")
         hi = np.searchsorted(t, at + reach, side="right")
         cover = np.zeros(t.size + 1, dtype=np.int64)

@@ -161,3 +161,5 @@ def test_the_corners_rounding_is_the_chambers_air_lag(tau):
     # and no more than the corner's own span (a knee read off the rounded reading is dated up to
     # about 1.5 tau after the setpoint's corner): rows well inside a leg are kept
     assert not unresolved[near > 0.5 * r.window_s + 2 * dt + 5 * max(tau, dt) + 3 * r.window_s].any()
+    # asked for every third row (a decimated series), the same rows by time, not rows by index
+    np.testing.assert_array_equal(r.unresolved(t[::3]), unresolved[::3])
