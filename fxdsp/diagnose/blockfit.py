@@ -95,6 +95,8 @@ class SegmentNormals:
         self.blocks = blocks
         self.per_fold = isinstance(target, FoldTargets)
         if self.per_fold:
+            if target.blocks is not blocks:
+                raise TypeError("target: FoldTargets ordered for other blocks")
             self._fold_sums(xs, target)
             return
         # per-segment sums: outer products per row would be n*p*p memory, and a matmul per segment a
