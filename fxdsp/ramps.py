@@ -147,14 +147,12 @@ class RampReading:
     dtdt: np.ndarray  # corner-aware d(temp)/dt per row, C/s (what the model uses)
     state: np.ndarray  # the contract's hysteresis s per row
     # the log the reading was taken from (the corners' rounding is fitted to it when asked for)
-    times: np.ndarray | None = field(default=None, repr=False)
-    readings: np.ndarray | None = field(default=None, repr=False)
+    times: np.ndarray = field(repr=False)
+    readings: np.ndarray = field(repr=False)
 
     @cached_property
     def rounding_s(self) -> float:
-        """Time constant of the corners' rounding (module docstring), s; 0 without the log."""
-        if self.times is None or self.readings is None or self.readings.size < 3:
-            return 0.0
+        """Time constant of the corners' rounding (module docstring), s."""
         return corner_rounding(self.times, self.readings, self.corners(self.times))
 
     @property
@@ -197,13 +195,12 @@ class RampReading:
         reading's own stamps or any others over the same log (every few rows of it: the corners are
         found on the reading's own rows, and set aside by time)."""
         t = np.asarray(t, float)
-        own = self.times if self.times is not None else t
-        corners = self.corners(own)
+        corners = self.corners(self.times)
         out = np.zeros(t.size, dtype=bool)
-        if corners.size == 0 or t.size < 2 or own.size < 2:
+        if corners.size == 0 or t.size < 2:
             return out
-        reach = 0.5 * self.window_s + 2.0 * sample_interval(own) + ROUNDING_SPANS * self.rounding_s
-        at = own[corners]
+        reach = 0.5 * self.window_s + 2.0 * sample_interval(self.times) + ROUNDING_SPANS * self.rounding_s
+        at = self.times[corners]
         lo = np.searchsorted(t, at - reach, side="left")
         hi = np.searchsorted(t, at + reach, side="right")
         cover = np.zeros(t.size + 1, dtype=np.int64)
