@@ -101,6 +101,36 @@ def test_rtd_table_reader_refuses_a_log(tmp_path, capsys):
     assert len(err) == 1 and "temperature_c,resistance_ohm" in err[0]
 
 
+def _pt100(temps):
+    """A Pt100 table at ``temps`` (IEC 60751's constants, the standard's own numbers)."""
+    a, b, c = 3.9083e-3, -5.775e-7, -4.183e-12
+    return [(t, 100.0 * (1 + a * t + b * t * t + (c * (t - 100.0) * t ** 3 if t < 0 else 0.0))) for t in temps]
+
+
+# tables a least-squares fit returns numbers for that mean nothing: fewer distinct temperatures than
+# the Callendar-Van Dusen constants (R0, A, B; C too with rows below 0 C), or a resistance that does
+# not rise with temperature (a linear law of beta <= 0 reads no temperature)
+_DEGENERATE_TABLES = {
+    "one temperature": ([25.0] * 60, None),
+    "two temperatures": ([20.0, 80.0] * 30, None),
+    "three temperatures, some below 0 C": ([-30.0, 20.0, 80.0] * 20, None),
+    "resistance never moves": (list(range(-20, 40)), lambda r: 110.0),
+    "resistance falls": (list(range(-20, 40)), lambda r: 250.0 - r),
+}
+
+
+@pytest.mark.parametrize("case", sorted(_DEGENERATE_TABLES))
+def test_a_table_the_laws_cannot_be_fitted_to_is_one_line(tmp_path, capsys, case):
+    temps, bend = _DEGENERATE_TABLES[case]
+    rows = [(t, bend(r) if bend else r) for t, r in _pt100(temps)]
+    path = _csv(tmp_path / "table.csv", "temperature_c,resistance_ohm", rows)
+    assert main(["diagnose-rtd", path]) == 2
+    out, err = capsys.readouterr()
+    err = err.strip().splitlines()
+    assert len(err) == 1 and ("temperature_c" in err[0] or "resistance_ohm" in err[0]), err
+    assert out == ""
+
+
 @pytest.mark.parametrize("argv", [["budget", "--target", "-1deg/h"], ["budget", "--bogus"], ["simulate"],
                                   ["vectors", "--out"]])
 def test_argument_errors_are_one_line(argv, capsys):

@@ -86,11 +86,29 @@ def fit_cvd(temp_c, resistance) -> dict[str, float]:
             "C": float(coef[3] / r0) if has_cold else 0.0}
 
 
+def _check_table(t: np.ndarray, r: np.ndarray) -> None:
+    """A table the laws can be fitted to: as many distinct temperatures as the Callendar-Van Dusen
+    fit has constants (R0, A, B, and C with rows below 0 C), and a resistance that rises with them
+    (a flat or falling one gives a linear law with beta <= 0, which reads no temperature; flat: a
+    rise of no more than round-off, 1e-9 of R, over the table's span). Fewer, and
+    the least-squares fits return numbers that mean nothing."""
+    need = 4 if np.any(t < 0) else 3
+    distinct = np.unique(t).size
+    if distinct < need:
+        raise InputError(f"temperature_c: {distinct} distinct temperature{'s' * (distinct != 1)}; the "
+                         f"Callendar-Van Dusen fit{' with rows below 0 C' * (need == 4)} needs at least {need}")
+    slope = np.polyfit(t, r, 1)[0]
+    if not slope * np.ptp(t) > 1e-9 * np.max(np.abs(r)):   # more than round-off over the table's span
+        raise InputError(f"resistance_ohm: does not rise with temperature_c (least-squares slope {slope:.4g} "
+                         "ohm/C): not a platinum RTD table")
+
+
 def rtd_study(temp_c, resistance) -> dict:
     """Errors (in C) of the linear law, the fitted CVD law and the IEC 60751 law on a table, and the
     cause the diagnosis engine names for a linear readout of it."""
     t = np.asarray(temp_c, float)
     r = np.asarray(resistance, float)
+    _check_table(t, r)
     r0, beta = fit_linear(t, r)
     linear_error = linear_temperature(r, r0, beta) - t
     cvd = fit_cvd(t, r)
