@@ -23,6 +23,10 @@ CANONICAL = REQUIRED + OPTIONAL
 
 # instruments write +-1e38-like placeholders for "no reading"; nothing physical in a log is that big
 SENTINEL_ABS = 1e30
+# a reference whose span is below this share of temp_c's cannot be temp_c's reference: the contract has
+# temp_c equal to ref_temp_c up to an offset and a gain, and a readout in degC of a thermometer in degC
+# has a gain near one, not a hundred (a probe left in a bath, stuck or disconnected: its one reading)
+STILL_REFERENCE_SHARE = 0.01
 
 
 @dataclass
@@ -34,11 +38,29 @@ class Log:
     source: str = ""
     notes: list[str] = field(default_factory=list)
 
+    def __post_init__(self) -> None:
+        _ignore_a_still_reference(self)
+
     def __len__(self) -> int:
         return int(self.columns["time_s"].size)
 
     def has(self, name: str) -> bool:
         return name in self.columns
+
+
+def _ignore_a_still_reference(log: Log) -> None:
+    """A ref_temp_c that does not move while temp_c does is not read as the reference (with a note):
+    fitted as one, it made the temperature channel's residual the whole of temp_c's programme, and a
+    diagnosis named a ramp-rate term for it. Every reader and in-memory log goes through here."""
+    ref, temp = log.columns.get("ref_temp_c"), log.columns.get("temp_c")
+    if ref is None or temp is None or ref.size < 2:
+        return
+    ref_span, temp_span = float(np.ptp(ref)), float(np.ptp(temp))
+    if np.isfinite(ref_span) and temp_span > 0 and ref_span <= STILL_REFERENCE_SHARE * temp_span:
+        del log.columns["ref_temp_c"]
+        log.notes.append(f"optional column 'ref_temp_c' spans {ref_span:.4g} degC while temp_c spans "
+                         f"{temp_span:.4g} degC: it cannot be temp_c's reference (an offset and a gain apart) "
+                         "and was ignored")
 
 
 def parse_mapping(items: list[str] | None) -> dict[str, str]:

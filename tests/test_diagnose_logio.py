@@ -257,3 +257,46 @@ def test_degenerate_columns_within_the_contract_are_diagnosed(kind, tmp_path, ca
     assert code == 0, err
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["rows"]["used"] == 400 and "remaining" in report
+    ignored = [n for n in report["notes"] if "'ref_temp_c'" in n and "was ignored" in n]
+    assert bool(ignored) == (kind == "reference never moves"), report["notes"]   # below: why ignored
+
+
+# -- a reference that does not move ---------------------------------------------------------------
+# The contract has temp_c equal to ref_temp_c up to an offset and a gain. A probe left in a bath,
+# stuck or disconnected, logs one reading (or a few hundredths of a degree of noise) while temp_c
+# follows the chamber: read as the reference, the temperature channel's residual was temp_c's whole
+# programme and a diagnosis named a ramp-rate term (a paper001 simulation with a 400 s lag). Such a
+# column is ignored with a note, so the log gets the diagnosis it would get without it.
+def _logged_reference_log():
+    """The first 500-row lag log of the independent generator (written from the contract) whose
+    draw logs a reference thermometer."""
+    import sys
+    from pathlib import Path
+    sys.path.insert(0, str(Path(__file__).parent))
+    from independent.chamber_logs import generate
+    for seed in range(5000, 5050):
+        log = generate(("thermal_lag",), seed, rows=500)
+        if "ref_temp_c" in log.columns:
+            return {k: np.asarray(v, float) for k, v in log.columns.items()}
+    raise AssertionError("no seed of 5000..5049 logs a reference")
+
+
+def _without_notes(diag):
+    from fxdsp.diagnose.report import report_dict
+    report = report_dict(diag)
+    report.pop("notes")
+    return json.dumps(report, sort_keys=True, default=str)
+
+
+@pytest.mark.parametrize("still", ["one reading", "a probe's noise"])
+def test_a_reference_that_does_not_move_is_ignored_with_a_note(still):
+    from fxdsp.diagnose.api import diagnose_columns
+    cols = _logged_reference_log()
+    ref = np.full(cols["temp_c"].size, 23.4)
+    if still == "a probe's noise":
+        ref += 0.01 * np.random.default_rng(3).standard_normal(ref.size)
+    absent = {k: v for k, v in cols.items() if k != "ref_temp_c"}
+    stuck = diagnose_columns({**cols, "ref_temp_c": ref}, "stuck")
+    assert _without_notes(stuck) == _without_notes(diagnose_columns(absent, "stuck"))
+    assert any("'ref_temp_c'" in n and "was ignored" in n for n in stuck.notes), stuck.notes
+    assert not any("ref_temp_c" in n for n in diagnose_columns(cols, "moving").notes)   # a real one is read
