@@ -270,9 +270,6 @@ def test_degenerate_columns_within_the_contract_are_diagnosed(kind, tmp_path, ca
 def _logged_reference_log():
     """The first 500-row lag log of the independent generator (written from the contract) whose
     draw logs a reference thermometer."""
-    import sys
-    from pathlib import Path
-    sys.path.insert(0, str(Path(__file__).parent))
     from independent.chamber_logs import generate
     for seed in range(5000, 5050):
         log = generate(("thermal_lag",), seed, rows=500)
