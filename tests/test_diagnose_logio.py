@@ -297,3 +297,23 @@ def test_a_reference_that_does_not_move_is_ignored_with_a_note(still):
     assert _without_notes(stuck) == _without_notes(diagnose_columns(absent, "stuck"))
     assert any("'ref_temp_c'" in n and "was ignored" in n for n in stuck.notes), stuck.notes
     assert not any("ref_temp_c" in n for n in diagnose_columns(cols, "moving").notes)   # a real one is read
+
+
+def test_calibrate_says_it_ignored_a_reference_that_does_not_move(tmp_path, capsys):
+    """`fxdsp calibrate` fits against ref_temp_c when the log has one; a still one is ignored (the
+    fit is the one without the column) and the result says so instead of fitting around it silently."""
+    from fxdsp.sim import generate_log, write_log
+
+    log = generate_log("paper001", effects={}, seed=1)
+    stuck = {**log, "ref_temp_c": np.full(len(log["temp_c"]), 23.4)}
+    absent = {k: v for k, v in log.items() if k != "ref_temp_c"}
+    results = {}
+    for name, cols in (("stuck", stuck), ("absent", absent)):
+        write_log(tmp_path / f"{name}.csv", cols)
+        assert main(["calibrate", "--paper", "001", str(tmp_path / f"{name}.csv"),
+                     "--json", str(tmp_path / f"{name}.json")]) == 0
+        results[name] = json.loads((tmp_path / f"{name}.json").read_text())
+    capsys.readouterr()
+    notes = results["stuck"].pop("notes")
+    assert any("'ref_temp_c'" in n and "was ignored" in n for n in notes), notes
+    assert "notes" not in results["absent"] and results["stuck"] == results["absent"]

@@ -58,8 +58,11 @@ def run(args) -> int:
 def _run(args, stage) -> int:
     if args.paper not in FITS:
         raise InputError(f"--paper: unknown paper {args.paper!r}; expected one of {', '.join(FITS)}")
-    log = read_log(args.log).columns   # the contract's reader: bad rows dropped, bad logs refused
+    read = read_log(args.log)   # the contract's reader: bad rows dropped, bad logs refused
+    log = read.columns
     result = FITS[args.paper](log)
+    if read.notes:   # what the reader set aside (a column ignored) is said, not silently fitted around
+        result["notes"] = list(read.notes)
     if args.config_out or args.apply:
         from fxdsp.repro.apply import apply_config, calibrated_config
 
