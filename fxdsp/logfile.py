@@ -57,7 +57,7 @@ def _ignore_a_still_reference(log: Log) -> None:
         return
     ref_span, temp_span = float(np.ptp(ref)), float(np.ptp(temp))
     if np.isfinite(ref_span) and temp_span > 0 and ref_span <= STILL_REFERENCE_SHARE * temp_span:
-        del log.columns["ref_temp_c"]
+        log.columns = {k: v for k, v in log.columns.items() if k != "ref_temp_c"}   # the caller's dict kept
         log.notes.append(f"optional column 'ref_temp_c' spans {ref_span:.4g} degC while temp_c spans "
                          f"{temp_span:.4g} degC: it cannot be temp_c's reference (an offset and a gain apart) "
                          "and was ignored")
