@@ -145,7 +145,7 @@ def extend_diagnosis(diag, log_name: str, chain="auto", base_text=None, rtl: boo
     report = {"log": log_name, "chain": roles.chain, "procedure": roles.procedure,
               "base_config": design.name,
               "diagnosis": {"causes": list(diag.causes), "parameters": diag.parameters,
-                            "gain": float(diag.gain["ratio"])},
+                            "gain": float(diag.gain["ratio"]), "notes": list(diag.notes)},
               "remedies": [{"cause": r.cause, "stage": r.stage, "what": r.what, "parameters": r.parameters}
                            for r in remedies],
               "uncompensated": evaluate.uncompensated_sizes(diag, missing),

@@ -30,7 +30,11 @@ def markdown(rep: dict) -> str:
     e, s = rep["heldout"], rep["summary"]
     L = [f"# fxdsp extend: {rep['log']}", "",
          f"Chain: **{rep['chain']}**. Diagnosis: causes **{', '.join(rep['diagnosis']['causes']) or 'none'}** "
-         f"(held-out gain of the model {rep['diagnosis']['gain']:.3g}).", "", "## Remedies", ""]
+         f"(held-out gain of the model {rep['diagnosis']['gain']:.3g}).", ""]
+    notes = rep["diagnosis"].get("notes", [])   # what the reader and the diagnosis set aside, in their words
+    if notes:
+        L += ["Set aside or not named (the diagnosis's notes):", ""] + [f"* {n}" for n in notes] + [""]
+    L += ["## Remedies", ""]
     L += [f"* {r['cause']}: {r['what']}" for r in rep["remedies"]] or ["* none: the calibrated chain as it is"]
     if rep.get("uncompensated"):
         L += ["", "## Uncompensated", "",
