@@ -341,15 +341,22 @@ def test_a_short_logs_held_out_error_still_shows_its_lag(seed, tmp_path, capsys)
 def test_the_reports_say_what_the_reader_set_aside(tmp_path, capsys):
     """A reference thermometer that never moves is ignored by the log reader (fxdsp.logfile); the
     extension's report (JSON and markdown) carries the reader's and the diagnosis's notes, as
-    `fxdsp diagnose`'s does, instead of extending around the column silently."""
+    `fxdsp diagnose`'s does, and those of the second run it is applied to (--apply), instead of
+    extending and applying around the column silently."""
     from fxdsp.sim import generate_log, write_log
 
-    cols = generate_log("paper002", effects={"thermal_lag": {"tau_s": 900.0}}, seed=3, duration_scale=0.3)
-    log = tmp_path / "stuck.csv"
-    write_log(log, {**cols, "ref_temp_c": np.full(len(cols["temp_c"]), 23.4)})
-    code, _, err = extend([log, "--no-rtl", "--out", tmp_path / "ext"], capsys)
+    logs = []
+    for seed in (3, 4):   # the log extended, and a second run the extension is applied to (--apply)
+        cols = generate_log("paper002", effects={"thermal_lag": {"tau_s": 900.0}}, seed=seed, duration_scale=0.3)
+        logs.append(tmp_path / f"stuck{seed}.csv")
+        write_log(logs[-1], {**cols, "ref_temp_c": np.full(len(cols["temp_c"]), 23.4)})
+    code, _, err = extend([logs[0], "--apply", logs[1], "--no-rtl", "--out", tmp_path / "ext"], capsys)
     assert code == 0, err
-    notes = json.loads((tmp_path / "ext" / "report.json").read_text())["diagnosis"]["notes"]
-    ignored = [n for n in notes if "'ref_temp_c'" in n and "was ignored" in n]
-    assert ignored, notes
-    assert f"* {ignored[0]}" in (tmp_path / "ext" / "report.md").read_text()
+    report = json.loads((tmp_path / "ext" / "report.json").read_text())
+    md = (tmp_path / "ext" / "report.md").read_text()
+    said = []
+    for notes in (report["diagnosis"]["notes"], report["applied"].get("notes", [])):
+        ignored = [n for n in notes if "'ref_temp_c'" in n and "was ignored" in n]
+        assert ignored, notes
+        said.append(f"* {ignored[0]}")
+    assert all(md.count(line) == said.count(line) for line in said), md

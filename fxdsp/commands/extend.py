@@ -71,7 +71,7 @@ def run(args) -> int:
                         base_name=f"--config {args.config}" if args.config else None)
     if args.apply:
         second = read_log(args.apply, parse_mapping(args.map), delimiter, args.time_format)
-        result.apply(second.columns, Path(args.apply).name)
+        result.apply(second.columns, Path(args.apply).name, second.notes)
     with staged() as stage:
         result.write(stage.dir(args.out))
     rep = result.report

@@ -30,8 +30,9 @@ class Extension:
     remedies: list = field(default_factory=list)
     roles: Roles | None = None                     # the extended chain (fxdsp.extend.roles)
 
-    def apply(self, columns: dict, log_name: str) -> dict:
-        """Run the configs fitted on this log on a second run's log; the result joins the report."""
+    def apply(self, columns: dict, log_name: str, notes=()) -> dict:
+        """Run the configs fitted on this log on a second run's log; the result joins the report, with
+        ``notes``: what the reader set aside of the second log (a column ignored, rows dropped)."""
         roles = self.roles
         needs_column(roles, columns, f"--apply {log_name}")
         if roles.procedure == "gyro_freq":
@@ -41,7 +42,7 @@ class Extension:
         else:
             res = evaluate.thermometer_applied(columns, {"before": self.base_config_text, "after": self.config_text},
                                                self.remedies, roles)
-        self.report["applied"] = {"log": log_name, **res}
+        self.report["applied"] = {"log": log_name, **res, **({"notes": list(notes)} if notes else {})}
         return self.report["applied"]
 
     def write(self, folder: Path) -> None:

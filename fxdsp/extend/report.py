@@ -81,6 +81,7 @@ def markdown(rep: dict) -> str:
         a = rep["applied"]
         L += [f"Applied to a second run, `{a['log']}` (nothing of it fitted, {a['rows']} rows): rms "
               f"{a['variants']['before']['rms']:.4g} -> {a['variants']['after']['rms']:.4g}, gain **{a['gain']:.3g}**.", ""]
+        L += [f"* {n}" for n in a.get("notes", [])] + ([""] if a.get("notes") else [])
     if rep.get("bitexact_chain"):
         b = rep["bitexact_chain"]
         L += [f"Bit-exact chain of the final config on the log: rms of the compensated output {b['rms_compensated']:.4g}, "
