@@ -154,9 +154,10 @@ def unseen_walk(white: float, n: int) -> float:
     return 2.0 * white * (wander_threshold(n) - 1.0) / (m - 1)
 
 
-def beats_walks(ctx: Context, channel: str, state: dict, without: dict, gained: float) -> bool:
+def beats_walks(ctx: Context, channel: str, state: dict, without: dict, gained: float, resid: np.ndarray) -> bool:
     """Whether the held-out evidence ``gained`` that the columns ``state`` adds to ``without`` is more,
-    relative to the wander left after them, than random walks give: beyond the NULL_QUANTILE of
+    relative to the wander left after them (``resid``: the residual of ``state``), than random walks
+    give: beyond the NULL_QUANTILE of
     NULL_DRAWS draws of white noise plus a random walk at the levels the residual *without* them
     shows (its variogram at 1 and n/5 rows; fixed seed: reproducible).
 
@@ -167,13 +168,12 @@ def beats_walks(ctx: Context, channel: str, state: dict, without: dict, gained: 
     inflates, does not decide the test. A real drift under flicker leaves the flicker's bounded
     wander: counted in raw held-out variance against walks that large, aging drifts of 6 to 16 white
     sigmas under flicker were dropped in 15 of 20 logs (issue 32 notes)."""
-    resid_without, resid = residual(ctx, without, channel), residual(ctx, state, channel)
+    from fxdsp.diagnose.noise import noise_draws
+
     n = resid.size
     lag = max(2, n // 5)
-    _, _, q, white = walk_levels(resid_without)
-    rng = np.random.default_rng(NULL_SEED)
-    draws = np.array([rng.normal(0.0, np.sqrt(white), n) + np.cumsum(rng.normal(0.0, np.sqrt(q), n))
-                      for _ in range(NULL_DRAWS)])
+    _, _, q, white = walk_levels(residual(ctx, without, channel))
+    draws = noise_draws(np.random.default_rng(NULL_SEED), (white, 0.0, q), NULL_DRAWS, n)
     gains = _null_gains(ctx, channel, state, without, draws)
     x = ctx.design(channel, state)[0]
     left = draws.T - x @ np.linalg.lstsq(x, draws.T, rcond=None)[0]      # each draw's residual, as the log's
@@ -267,7 +267,7 @@ def check_against_wander(ctx: Context, state: dict, accepted: list[Candidate]):
             ratio_raw = float(np.sqrt(held_raw / full_raw)) if full_raw > 0 else np.inf
             evidence = _innovation_evidence(ctx, ch, state, without, gain)
             if (evidence < MIN_EVIDENCE and ratio_raw >= WANDER_GAIN
-                    and beats_walks(ctx, ch, state, without, held_raw - full_raw)):
+                    and beats_walks(ctx, ch, state, without, held_raw - full_raw, resid)):
                 evidence = MIN_EVIDENCE
             verdicts.append((evidence, ratio_raw, cand))
         failing = [v for v in verdicts if v[1] < MIN_GAIN or v[0] < MIN_EVIDENCE]
