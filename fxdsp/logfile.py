@@ -39,7 +39,7 @@ class Log:
     notes: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        _ignore_a_still_reference(self)
+        self.columns = _ignore_a_still_reference(self.columns, self.notes)
 
     def __len__(self) -> int:
         return int(self.columns["time_s"].size)
@@ -48,19 +48,27 @@ class Log:
         return name in self.columns
 
 
-def _ignore_a_still_reference(log: Log) -> None:
-    """A ref_temp_c that does not move while temp_c does is not read as the reference (with a note):
-    fitted as one, it made the temperature channel's residual the whole of temp_c's programme, and a
-    diagnosis named a ramp-rate term for it. Every reader and in-memory log goes through here."""
-    ref, temp = log.columns.get("ref_temp_c"), log.columns.get("temp_c")
-    if ref is None or temp is None or ref.size < 2:
-        return
-    ref_span, temp_span = float(np.ptp(ref)), float(np.ptp(temp))
-    if np.isfinite(ref_span) and temp_span > 0 and ref_span <= STILL_REFERENCE_SHARE * temp_span:
-        log.columns = {k: v for k, v in log.columns.items() if k != "ref_temp_c"}   # the caller's dict kept
-        log.notes.append(f"optional column 'ref_temp_c' spans {ref_span:.4g} degC while temp_c spans "
-                         f"{temp_span:.4g} degC: it cannot be temp_c's reference (an offset and a gain apart) "
-                         "and was ignored")
+def _usable_span(values: np.ndarray) -> float:
+    """Peak-to-peak of the usable values (finite, not a sentinel); nan with fewer than two."""
+    usable = values[np.isfinite(values) & (np.abs(values) < SENTINEL_ABS)]
+    return float(np.ptp(usable)) if usable.size > 1 else float("nan")
+
+
+def _ignore_a_still_reference(columns: dict, notes: list) -> dict:
+    """The columns without a ref_temp_c that does not move while temp_c does (with a note): fitted as
+    the reference, it made the temperature channel's residual the whole of temp_c's programme, and a
+    diagnosis named a ramp-rate term for it. The reader asks before it drops rows (an ignored column's
+    empty or sentinel cells cost no row), and every other log on being made (Log); a new dict either
+    way, the caller's kept."""
+    ref, temp = columns.get("ref_temp_c"), columns.get("temp_c")
+    if ref is None or temp is None:
+        return columns
+    ref_span, temp_span = _usable_span(ref), _usable_span(temp)
+    if not (temp_span > 0 and ref_span <= STILL_REFERENCE_SHARE * temp_span):
+        return columns
+    notes.append(f"optional column 'ref_temp_c' spans {ref_span:.4g} degC while temp_c spans {temp_span:.4g} degC: "
+                 "it cannot be temp_c's reference (an offset and a gain apart) and was ignored")
+    return {k: v for k, v in columns.items() if k != "ref_temp_c"}
 
 
 def parse_mapping(items: list[str] | None) -> dict[str, str]:
@@ -263,6 +271,7 @@ def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
             if not np.any(np.isfinite(values) & (np.abs(values) < SENTINEL_ABS)):
                 del columns[name]
                 notes.append(f"optional column {name!r} has no usable value and was ignored")
+    columns = _ignore_a_still_reference(columns, notes)
 
     n = len(body)
     good = np.ones(n, dtype=bool)

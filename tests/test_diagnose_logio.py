@@ -317,3 +317,17 @@ def test_calibrate_says_it_ignored_a_reference_that_does_not_move(tmp_path, caps
     notes = results["stuck"].pop("notes")
     assert any("'ref_temp_c'" in n and "was ignored" in n for n in notes), notes
     assert "notes" not in results["absent"] and results["stuck"] == results["absent"]
+
+
+def test_an_ignored_reference_costs_no_row(tmp_path, capsys):
+    """A stuck probe whose logger also writes "no reading" placeholders or empty cells: the column is
+    ignored, so its bad cells must not drop rows that every read column holds well (they did: the
+    reader dropped rows first and the column was ignored after)."""
+    t, temp, out = _canonical_rows(400)
+    ref = ["9.9e37" if i % 40 == 0 else ("" if i % 40 == 7 else "21.5") for i in range(t.size)]
+    path = _write(tmp_path / "log.csv", ["time_s", "temp_c", "output", "ref_temp_c"], zip(t, temp, out, ref))
+    code, _, err = _run(capsys, path, "--json", tmp_path / "r.json")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["rows"] == {"used": 400, "dropped": 0, "dropped_invalid": 0, "dropped_spikes": 0}, report["rows"]
+    assert any("'ref_temp_c'" in n and "was ignored" in n for n in report["notes"]), report["notes"]
