@@ -84,7 +84,7 @@ def diagnose_series(series: M.Series, n_segments: int = 200, n_folds: int = 5) -
     unidentified: dict = {}
     notes: list[str] = [f"{cause} passed the first tests (held-out rms ratio on the output {ratio:.3g}) but is not "
                         "named: the residual without it wanders, and a random walk of the bias at that level gives "
-                        "as much"
+                        "as much, for the wander it leaves"
                         for cause, ratio in wandering.items()]
     while True:
         diag = _conclude(ctx, search, state, accepted, first_round, unidentified, notes)

@@ -26,7 +26,7 @@ def explanation(diag: Diagnosis) -> str:
             return (f"No cause named: {', '.join(diag.wandering)} passed the first tests on the output "
                     f"(held-out rms {g['rms_before']:.4g} before), but the residual without "
                     f"{'it' if len(diag.wandering) == 1 else 'them'} wanders, and a random walk of the bias at "
-                    "that level gives as much (see notes)." + unnamed)
+                    "that level gives as much, for the wander it leaves (see notes)." + unnamed)
         head = ("No cause in the list" if rest.get("significant") else
                 "Nothing beyond the baseline (B and S polynomials in temp_c, linear thermometers) and the noise:"
                 " no candidate cause")
