@@ -26,14 +26,18 @@ def summary(errors: dict) -> dict:
     return {"rms_before": v["before"]["rms"], "rms_after": after, "gain": gain, "gain_without": without}
 
 
+def _bullets(notes: list) -> list[str]:
+    """A markdown list of notes and the blank line after it; nothing without notes."""
+    return [f"* {n}" for n in notes] + [""] if notes else []
+
+
 def markdown(rep: dict) -> str:
     e, s = rep["heldout"], rep["summary"]
     L = [f"# fxdsp extend: {rep['log']}", "",
          f"Chain: **{rep['chain']}**. Diagnosis: causes **{', '.join(rep['diagnosis']['causes']) or 'none'}** "
          f"(held-out gain of the model {rep['diagnosis']['gain']:.3g}).", ""]
     notes = rep["diagnosis"].get("notes", [])   # what the reader and the diagnosis set aside, in their words
-    if notes:
-        L += ["Set aside or not named (the diagnosis's notes):", ""] + [f"* {n}" for n in notes] + [""]
+    L += (["Set aside or not named (the diagnosis's notes):", ""] if notes else []) + _bullets(notes)
     L += ["## Remedies", ""]
     L += [f"* {r['cause']}: {r['what']}" for r in rep["remedies"]] or ["* none: the calibrated chain as it is"]
     if rep.get("uncompensated"):
@@ -81,7 +85,7 @@ def markdown(rep: dict) -> str:
         a = rep["applied"]
         L += [f"Applied to a second run, `{a['log']}` (nothing of it fitted, {a['rows']} rows): rms "
               f"{a['variants']['before']['rms']:.4g} -> {a['variants']['after']['rms']:.4g}, gain **{a['gain']:.3g}**.", ""]
-        L += [f"* {n}" for n in a.get("notes", [])] + ([""] if a.get("notes") else [])
+        L += _bullets(a.get("notes", []))
     if rep.get("bitexact_chain"):
         b = rep["bitexact_chain"]
         L += [f"Bit-exact chain of the final config on the log: rms of the compensated output {b['rms_compensated']:.4g}, "
