@@ -9,7 +9,7 @@ import numpy as np
 from fxdsp.causes import CAUSES
 from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, Diagnosis
 from fxdsp.diagnose.identify import TAU_LENGTHS, Verdict, described, reasons
-from fxdsp.diagnose.selection import NULL_DRAWS, NULL_QUANTILE, WANDER_GAIN
+from fxdsp.diagnose.selection import MAX_NULL_SETS, NULL_DRAWS, NULL_QUANTILE, NULL_ROWS, WANDER_GAIN
 from fxdsp.diagnose.remaining import LEVEL, MIN_SIZE
 from fxdsp.diagnose.results import heldout_residuals
 
@@ -102,7 +102,8 @@ def report_dict(diag: Diagnosis) -> dict:
                    f"the {100 * NULL_QUANTILE:g} % point of {NULL_DRAWS} random walks (at the level of the "
                    "residual without them) counted the same way, and beyond the same point of draws of the "
                    "residual's own noise (white, flicker, random walk fitted to its Allan variance) when that "
-                   "noise is coloured; "
+                   f"noise is coloured (a short log: up to {MAX_NULL_SETS} sets of {NULL_DRAWS} draws, as many "
+                   f"as {NULL_ROWS:,} simulated rows buy, and the 1 - {100 * (1 - NULL_QUANTILE):g} %/sets point); "
                    "uncertainties: delete-one-group jackknife (20 contiguous groups; a warm-up: the 5 "
                    "interleaved folds); a parameter is identified when finite, not at the end of its search "
                    f"range, its uncertainty below its value, and (a time constant) at most 1/{TAU_LENGTHS:g} of "

@@ -20,14 +20,20 @@ TIME_TIED = tuple(c.name for c in CAUSES.values() if c.time_tied)
 # NULL_QUANTILE of NULL_DRAWS random walks (beats_walks; fixed seed: reproducible); as the last cause added
 # it needs WANDER_GAIN in every log (prune, _min_gain)
 WANDER_GAIN = 1.3
-# The 0.99 quantile of 40 draws lies between their two largest: a new draw of the same null exceeds
-# it 3.0 % of the time (simulated), so these re-tests run at about 3 %, not 1 %, and where a log's
-# threshold falls in that range depends on the draws. 400 draws at a true 1 % would drop `none`
-# false alarms such as a 500-row walk taken for a warm-up (p = 3.2 % against 400 fresh draws) but
-# also true causes under flicker-dominated noise (6 of 122 named ones at p = 1.2..9.7 %): the issue
-# 32 notes of 2026-11-28 give the numbers
+# The draws come in sets of NULL_DRAWS, as many sets as NULL_ROWS simulated rows buy (at most
+# MAX_NULL_SETS), and a cause must beat the 1 - (1 - NULL_QUANTILE)/sets quantile of them: always a
+# point between the two largest draws. The 0.99 quantile of one set of 40 lies there, and a new draw
+# of the same null exceeds it 3.0 % of the time (simulated), so on logs of 5,000 rows or more these
+# re-tests run at about 3 %, not 1 %; a log of 500 rows buys 10 sets and a test at about 0.3 %. A short
+# log needs it: over a few hundred rows a random walk's excursion imitates a warm-up or a drift, and
+# at 40 draws logs of 500 rows of noise alone named a cause in 2 of 130 seeds (the 1 % point of 40
+# draws is itself uncertain by tens of percent: the tail is heavy). One set on long logs, where more
+# would cost a draw per row: 400 draws at a true 1 % also dropped true causes under flicker-dominated
+# noise (6 of 122 named ones at p = 1.2..9.7 %). The issue 32 notes of 2026-11-28 and -29 give the numbers
 NULL_DRAWS = 40
 NULL_QUANTILE = 0.99
+NULL_ROWS = 200_000
+MAX_NULL_SETS = 10
 NULL_SEED = 20261123
 
 
@@ -154,11 +160,27 @@ def unseen_walk(white: float, n: int) -> float:
     return 2.0 * white * (wander_threshold(n) - 1.0) / (m - 1)
 
 
+def null_draws(levels: tuple[float, float, float], n: int) -> np.ndarray:
+    """The re-tests' draws of noise at ``levels`` (white, flicker, walk) over ``n`` rows: sets of
+    NULL_DRAWS, each from its own fixed seed (the first set is the same on every log length)."""
+    from fxdsp.diagnose.noise import noise_draws
+
+    sets = int(np.clip(NULL_ROWS // (NULL_DRAWS * n), 1, MAX_NULL_SETS))
+    return np.concatenate([noise_draws(np.random.default_rng(NULL_SEED + k), levels, NULL_DRAWS, n)
+                           for k in range(sets)])
+
+
+def null_threshold(values: np.ndarray) -> float:
+    """The point of the re-tests' null ``values`` a cause must exceed: between the two largest,
+    as NULL_QUANTILE is in one set of NULL_DRAWS, whatever the number of sets."""
+    return float(np.quantile(values, max(0.0, 1.0 - (1.0 - NULL_QUANTILE) * NULL_DRAWS / len(values))))
+
+
 def beats_walks(ctx: Context, channel: str, state: dict, without: dict, gained: float, resid: np.ndarray) -> bool:
     """Whether the held-out evidence ``gained`` that the columns ``state`` adds to ``without`` is more,
     relative to the wander left after them (``resid``: the residual of ``state``), than random walks
-    give: beyond the NULL_QUANTILE of
-    NULL_DRAWS draws of white noise plus a random walk at the levels the residual *without* them
+    give: beyond the :func:`null_threshold` of
+    :func:`null_draws` of white noise plus a random walk at the levels the residual *without* them
     shows (its variogram at 1 and n/5 rows; fixed seed: reproducible).
 
     The evidence is counted in units of the residual's variogram at n/5 rows once the columns are
@@ -168,22 +190,20 @@ def beats_walks(ctx: Context, channel: str, state: dict, without: dict, gained: 
     inflates, does not decide the test. A real drift under flicker leaves the flicker's bounded
     wander: counted in raw held-out variance against walks that large, aging drifts of 6 to 16 white
     sigmas under flicker were dropped in 15 of 20 logs (issue 32 notes)."""
-    from fxdsp.diagnose.noise import noise_draws
-
     n = resid.size
     lag = max(2, n // 5)
     _, _, q, white = walk_levels(residual(ctx, without, channel))
-    draws = noise_draws(np.random.default_rng(NULL_SEED), (white, 0.0, q), NULL_DRAWS, n)
+    draws = null_draws((white, 0.0, q), n)
     gains = _null_gains(ctx, channel, state, without, draws)
     x = ctx.design(channel, state)[0]
     left = draws.T - x @ np.linalg.lstsq(x, draws.T, rcond=None)[0]      # each draw's residual, as the log's
-    wander_left = np.array([variogram(left[:, k], lag) for k in range(NULL_DRAWS)])
-    return gained / max(variogram(resid, lag), 1e-300) > np.quantile(gains / wander_left, NULL_QUANTILE)
+    wander_left = np.array([variogram(left[:, k], lag) for k in range(len(draws))])
+    return gained / max(variogram(resid, lag), 1e-300) > null_threshold(gains / wander_left)
 
 
 def _null_quantile(ctx: Context, channel: str, state: dict, without: dict, draws, rivals=()) -> float:
-    """The NULL_QUANTILE of :func:`_null_gains`."""
-    return float(np.quantile(_null_gains(ctx, channel, state, without, draws, rivals), NULL_QUANTILE))
+    """The :func:`null_threshold` of :func:`_null_gains`."""
+    return null_threshold(_null_gains(ctx, channel, state, without, draws, rivals))
 
 
 def _null_gains(ctx: Context, channel: str, state: dict, without: dict, draws, rivals=()) -> np.ndarray:
@@ -290,10 +310,10 @@ def check_against_noise(ctx: Context, state: dict, accepted: list[Candidate]):
     :func:`fxdsp.diagnose.noise.noise_levels`, with the model's columns projected out of each shape,
     as they are out of the residual), its walk no smaller than :func:`unseen_walk` (a line or a
     settling can take the whole of a walk in a short log, and the fit then finds none), and each
-    output cause's held-out evidence must exceed the NULL_QUANTILE of the best that NULL_DRAWS draws
-    of that noise give it or any other cause the log could show (fixed seed; a time constant searched
-    on every draw, :func:`_null_quantile`); the weakest failure is removed until all pass."""
-    from fxdsp.diagnose.noise import noise_draws, noise_levels
+    output cause's held-out evidence must exceed the :func:`null_threshold` of the best that
+    :func:`null_draws` of that noise give it or any other cause the log could show (fixed seeds; a time
+    constant searched on every draw, :func:`_null_quantile`); the weakest failure is removed until all pass."""
+    from fxdsp.diagnose.noise import noise_levels
 
     ch = "output"
     while True:
@@ -302,7 +322,7 @@ def check_against_noise(ctx: Context, state: dict, accepted: list[Candidate]):
             return state, accepted
         white, flicker, walk = noise_levels(residual(ctx, state, ch), ctx.design(ch, state)[0])
         levels = (white, flicker, max(walk, unseen_walk(white, ctx.series.n)))
-        draws = noise_draws(np.random.default_rng(NULL_SEED), levels, NULL_DRAWS, ctx.series.n)
+        draws = null_draws(levels, ctx.series.n)
         full = ctx.normals(ch, state)[0].folds()[1].sum()
         rivals = [c for c in tried(ctx) if ch in affected_channels(ctx, c)]
         margins = []
