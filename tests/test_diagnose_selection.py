@@ -149,7 +149,7 @@ def test_a_short_log_buys_more_sets_of_draws_and_the_first_is_every_logs(n, sets
     from fxdsp.diagnose.noise import noise_draws
 
     levels = (1.0, 0.2, 1e-3)
-    draws = S.null_draws(levels, n)
+    draws = S._noise_draws(levels, n)
     assert draws.shape == (sets * S.NULL_DRAWS, n)
     first = noise_draws(np.random.default_rng(S.NULL_SEED), levels, S.NULL_DRAWS, n)
     assert np.array_equal(draws[:S.NULL_DRAWS], first)

@@ -112,3 +112,12 @@ def noise_draws(rng: np.random.Generator, levels: tuple[float, float, float], dr
             start = rng.standard_normal(draws) * np.sqrt(flicker)
             out += lfilter([1.0], [1.0, -phi], e, axis=1, zi=(phi * start)[:, None])[0]
     return out
+
+
+def readout_draws(rng: np.random.Generator, fitted: np.ndarray, step: float, draws: int) -> np.ndarray:
+    """``draws`` series of the error of a readout of quantisation ``step`` that reads ``fitted`` (the
+    channel's model) exactly, at a grid offset drawn uniformly within one step: its reading error,
+    each row's distance to the grid. Only what ``fitted`` carries (the reference thermometer's own
+    noise) dithers it: the least favourable case, where a dwell's error is one constant."""
+    x = fitted[None, :] + rng.uniform(0.0, step, (draws, 1))
+    return step * np.floor(x / step + 0.5) - x

@@ -104,6 +104,8 @@ def report_dict(diag: Diagnosis) -> dict:
                    "residual's own noise (white, flicker, random walk fitted to its Allan variance) when that "
                    f"noise is coloured (a short log: up to {MAX_NULL_SETS} sets of {NULL_DRAWS} draws, as many "
                    f"as {NULL_ROWS:,} simulated rows buy, and the 1 - {100 * (1 - NULL_QUANTILE):g} %/sets point); "
+                   "a cause seen only on a quantised readout (temp_c or freq_hz on a grid) beyond the same point "
+                   "of draws of the readout's own error (its step at a random offset, no noise to dither it); "
                    "uncertainties: delete-one-group jackknife (20 contiguous groups; a warm-up: the 5 "
                    "interleaved folds); a parameter is identified when finite, not at the end of its search "
                    f"range, its uncertainty below its value, and (a time constant) at most 1/{TAU_LENGTHS:g} of "

@@ -160,14 +160,18 @@ def unseen_walk(white: float, n: int) -> float:
     return 2.0 * white * (wander_threshold(n) - 1.0) / (m - 1)
 
 
-def null_draws(levels: tuple[float, float, float], n: int) -> np.ndarray:
-    """The re-tests' draws of noise at ``levels`` (white, flicker, walk) over ``n`` rows: sets of
+def null_draws(n: int, draw) -> np.ndarray:
+    """The re-tests' draws of noise over ``n`` rows, ``draw(rng, count)`` making one set: sets of
     NULL_DRAWS, each from its own fixed seed (the first set is the same on every log length)."""
+    sets = int(np.clip(NULL_ROWS // (NULL_DRAWS * n), 1, MAX_NULL_SETS))
+    return np.concatenate([draw(np.random.default_rng(NULL_SEED + k), NULL_DRAWS) for k in range(sets)])
+
+
+def _noise_draws(levels: tuple[float, float, float], n: int) -> np.ndarray:
+    """:func:`null_draws` of white noise, flicker and a random walk at ``levels``."""
     from fxdsp.diagnose.noise import noise_draws
 
-    sets = int(np.clip(NULL_ROWS // (NULL_DRAWS * n), 1, MAX_NULL_SETS))
-    return np.concatenate([noise_draws(np.random.default_rng(NULL_SEED + k), levels, NULL_DRAWS, n)
-                           for k in range(sets)])
+    return null_draws(n, lambda rng, count: noise_draws(rng, levels, count, n))
 
 
 def null_threshold(values: np.ndarray) -> float:
@@ -193,7 +197,7 @@ def beats_walks(ctx: Context, channel: str, state: dict, without: dict, gained: 
     n = resid.size
     lag = max(2, n // 5)
     _, _, q, white = walk_levels(residual(ctx, without, channel))
-    draws = null_draws((white, 0.0, q), n)
+    draws = _noise_draws((white, 0.0, q), n)
     gains = _null_gains(ctx, channel, state, without, draws)
     x = ctx.design(channel, state)[0]
     left = draws.T - x @ np.linalg.lstsq(x, draws.T, rcond=None)[0]      # each draw's residual, as the log's
@@ -322,7 +326,7 @@ def check_against_noise(ctx: Context, state: dict, accepted: list[Candidate]):
             return state, accepted
         white, flicker, walk = noise_levels(residual(ctx, state, ch), ctx.design(ch, state)[0])
         levels = (white, flicker, max(walk, unseen_walk(white, ctx.series.n)))
-        draws = null_draws(levels, ctx.series.n)
+        draws = _noise_draws(levels, ctx.series.n)
         full = ctx.normals(ch, state)[0].folds()[1].sum()
         rivals = [c for c in tried(ctx) if ch in affected_channels(ctx, c)]
         margins = []
@@ -330,6 +334,48 @@ def check_against_noise(ctx: Context, state: dict, accepted: list[Candidate]):
             without = {k: v for k, v in state.items() if k != cand.cause}
             gained = ctx.normals(ch, without)[0].folds()[1].sum() - full
             margins.append((gained - _null_quantile(ctx, ch, state, without, draws, rivals), cand))
+        failing = [m for m in margins if m[0] <= 0]
+        if not failing:
+            return state, accepted
+        weakest = min(failing, key=lambda m: m[0])[1]
+        accepted = [c for c in accepted if c is not weakest]
+        state = {k: v for k, v in state.items() if k != weakest.cause}
+
+
+def check_against_readout(ctx: Context, state: dict, accepted: list[Candidate]):
+    """A cause seen only on a quantised readout (``temp_c`` or ``freq_hz`` logged to a fixed step) must
+    beat what the readout's step gives it.
+
+    A thermometer logged to 0.1 C reads one value through a dwell: its error there is one constant
+    per dwell, up to half a step, not white noise that averages down, and a programme with three
+    dwell temperatures offers a quadratic three constants to fit (a 500-row `none` log named an RTD
+    curvature of 0.015 C rms on a 0.1 C step, 4.8 jackknife sigmas). So each such cause's held-out
+    evidence on its channel must exceed the :func:`null_threshold` of :func:`null_draws` of the
+    readout's error alone: the model without the cause read through the step at a random grid offset
+    and no white noise to dither it, the least favourable case (:func:`fxdsp.diagnose.noise.readout_draws`;
+    with the residual's white noise less the step's q^2/12 added, that log still named the curvature
+    at p < 1/400); the weakest failure is removed until all pass. A channel not on a grid
+    (:func:`fxdsp.ramps.quantisation_step`, the step the ramp reader finds) keeps the white-noise
+    test alone."""
+    from fxdsp.diagnose.noise import readout_draws
+    from fxdsp.ramps import quantisation_step
+
+    while True:
+        margins = []
+        for cand in accepted:
+            channels = affected_channels(ctx, cand.cause)
+            if "output" in channels:
+                continue
+            without = {k: v for k, v in state.items() if k != cand.cause}
+            for ch in channels:
+                step = quantisation_step(ctx.series.target(ch)) / ctx.norm[ch][1]
+                if step == 0.0:
+                    continue
+                x = ctx.design(ch, without)[0]
+                fitted = x @ np.linalg.lstsq(x, ctx.target(ch), rcond=None)[0]
+                draws = null_draws(ctx.series.n, lambda rng, count: readout_draws(rng, fitted, step, count))
+                gained = ctx.normals(ch, without)[0].folds()[1].sum() - ctx.normals(ch, state)[0].folds()[1].sum()
+                margins.append((gained - _null_quantile(ctx, ch, state, without, draws), cand))
         failing = [m for m in margins if m[0] <= 0]
         if not failing:
             return state, accepted
@@ -405,6 +451,7 @@ def check_final(ctx: Context, state: dict, accepted: list[Candidate]):
     while True:
         before = set(state)
         state, accepted = check_against_noise(ctx, state, accepted)
+        state, accepted = check_against_readout(ctx, state, accepted)
         state, accepted = prune(ctx, state, accepted)
         if set(state) == before:
             return state, accepted
