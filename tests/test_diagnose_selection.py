@@ -49,6 +49,7 @@ def test_the_noise_check_runs_again_after_prune_removes_a_cause(monkeypatch):
         return {c.cause: {} for c in keep}, keep
 
     monkeypatch.setattr(S, "check_against_noise", noise)
+    monkeypatch.setattr(S, "check_against_readout", lambda ctx, state, accepted: (state, accepted))
     monkeypatch.setattr(S, "prune", prune)
     accepted = [SimpleNamespace(cause="warmup"), SimpleNamespace(cause="lag"), SimpleNamespace(cause="hyst")]
     state, kept = S.check_final(None, {c.cause: {} for c in accepted}, accepted)
