@@ -334,12 +334,10 @@ def check_against_noise(ctx: Context, state: dict, accepted: list[Candidate]):
             without = {k: v for k, v in state.items() if k != cand.cause}
             gained = ctx.normals(ch, without)[0].folds()[1].sum() - full
             margins.append((gained - _null_quantile(ctx, ch, state, without, draws, rivals), cand))
-        failing = [m for m in margins if m[0] <= 0]
-        if not failing:
+        dropped = _without_weakest(margins, state, accepted)
+        if dropped is None:
             return state, accepted
-        weakest = min(failing, key=lambda m: m[0])[1]
-        accepted = [c for c in accepted if c is not weakest]
-        state = {k: v for k, v in state.items() if k != weakest.cause}
+        state, accepted = dropped
 
 
 def check_against_readout(ctx: Context, state: dict, accepted: list[Candidate]):
@@ -376,12 +374,20 @@ def check_against_readout(ctx: Context, state: dict, accepted: list[Candidate]):
                 draws = null_draws(ctx.series.n, lambda rng, count: readout_draws(rng, fitted, step, count))
                 gained = ctx.normals(ch, without)[0].folds()[1].sum() - ctx.normals(ch, state)[0].folds()[1].sum()
                 margins.append((gained - _null_quantile(ctx, ch, state, without, draws), cand))
-        failing = [m for m in margins if m[0] <= 0]
-        if not failing:
+        dropped = _without_weakest(margins, state, accepted)
+        if dropped is None:
             return state, accepted
-        weakest = min(failing, key=lambda m: m[0])[1]
-        accepted = [c for c in accepted if c is not weakest]
-        state = {k: v for k, v in state.items() if k != weakest.cause}
+        state, accepted = dropped
+
+
+def _without_weakest(margins: list, state: dict, accepted: list[Candidate]):
+    """The state and causes without the failing cause (margin <= 0) of least margin; None when none
+    fails. ``margins``: (margin, candidate) pairs."""
+    failing = [m for m in margins if m[0] <= 0]
+    if not failing:
+        return None
+    weakest = min(failing, key=lambda m: m[0])[1]
+    return {k: v for k, v in state.items() if k != weakest.cause}, [c for c in accepted if c is not weakest]
 
 
 def _innovation_evidence(ctx: Context, ch: str, state: dict, without: dict, gain: float) -> float:
