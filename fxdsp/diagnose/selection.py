@@ -22,14 +22,15 @@ TIME_TIED = tuple(c.name for c in CAUSES.values() if c.time_tied)
 WANDER_GAIN = 1.3
 # The draws come in sets of NULL_DRAWS, as many sets as NULL_ROWS simulated rows buy (at most
 # MAX_NULL_SETS), and a cause must beat the 1 - (1 - NULL_QUANTILE)/sets quantile of them: always a
-# point between the two largest draws. The 0.99 quantile of one set of 40 lies there, and a new draw
-# of the same null exceeds it 3.0 % of the time (simulated), so on logs of 5,000 rows or more these
-# re-tests run at about 3 %, not 1 %; a log of 500 rows buys 10 sets and a test at about 0.3 %. A short
-# log needs it: over a few hundred rows a random walk's excursion imitates a warm-up or a drift, and
-# at 40 draws logs of 500 rows of noise alone named a cause in 2 of 130 seeds (the 1 % point of 40
-# draws is itself uncertain by tens of percent: the tail is heavy). One set on long logs, where more
-# would cost a draw per row: 400 draws at a true 1 % also dropped true causes under flicker-dominated
-# noise (6 of 122 named ones at p = 1.2..9.7 %). The issue 32 notes of 2026-11-28 and -29 give the numbers
+# point between the two largest draws. A new draw of the same null exceeds it about 1.4/(draws + 1)
+# of the time (order statistics): one set of 40, on logs of more than 2,500 rows, tests at about
+# 3.4 %, not 1 %; a log of 500 rows buys 10 sets and a test at about 0.35 %. A short log needs it:
+# over a few hundred rows a random walk's excursion imitates a warm-up or a drift (500-row logs of
+# noise alone named a cause in 2 of 200 sweep seeds at one set, p = 1.7 % for a held-out one), and
+# its true causes stand at twice the largest of 240 draws or more. One set on long logs, where more
+# would cost a draw per row, and where under flicker-dominated noise true causes stand at p = 0.4 to
+# 1.7 %: a true 1 % would drop 10 of 145 of them. The issue 32 notes of 2026-11-28 and -29 give the
+# numbers
 NULL_DRAWS = 40
 NULL_QUANTILE = 0.99
 NULL_ROWS = 200_000
@@ -349,12 +350,12 @@ def check_against_readout(ctx: Context, state: dict, accepted: list[Candidate]):
     dwell temperatures offers a quadratic three constants to fit (a 500-row `none` log named an RTD
     curvature of 0.015 C rms on a 0.1 C step, 4.8 jackknife sigmas). So each such cause's held-out
     evidence on its channel must exceed the :func:`null_threshold` of :func:`null_draws` of the
-    readout's error alone: the model without the cause read through the step at a random grid offset
-    and no white noise to dither it, the least favourable case (:func:`fxdsp.diagnose.noise.readout_draws`;
-    with the residual's white noise less the step's q^2/12 added, that log still named the curvature
-    at p < 1/400); the weakest failure is removed until all pass. A channel not on a grid
-    (:func:`fxdsp.ramps.quantisation_step`, the step the ramp reader finds) keeps the white-noise
-    test alone."""
+    readout's error alone: the model without the cause read through the step at a random grid
+    offset, with no white noise to dither it, the least favourable case
+    (:func:`fxdsp.diagnose.noise.readout_draws`; with the residual's white noise less the step's
+    q^2/12 added, that log still named the curvature at p < 1/400). The weakest failure is removed
+    until all pass. A channel not on a grid (:func:`fxdsp.ramps.quantisation_step`, the step the
+    ramp reader finds) keeps the white-noise test alone."""
     from fxdsp.diagnose.noise import readout_draws
     from fxdsp.ramps import quantisation_step
 
