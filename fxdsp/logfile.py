@@ -48,9 +48,14 @@ class Log:
         return name in self.columns
 
 
+def _usable(values: np.ndarray) -> np.ndarray:
+    """Which values are usable readings: finite and not a logger's sentinel."""
+    return np.isfinite(values) & (np.abs(values) < SENTINEL_ABS)
+
+
 def _usable_span(values: np.ndarray) -> float:
-    """Peak-to-peak of the usable values (finite, not a sentinel); nan with fewer than two."""
-    usable = values[np.isfinite(values) & (np.abs(values) < SENTINEL_ABS)]
+    """Peak-to-peak of the usable values; nan with fewer than two."""
+    usable = values[_usable(values)]
     return float(np.ptp(usable)) if usable.size > 1 else float("nan")
 
 
@@ -268,7 +273,7 @@ def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
     for name in list(columns):
         if name in OPTIONAL:
             values = columns[name]
-            if not np.any(np.isfinite(values) & (np.abs(values) < SENTINEL_ABS)):
+            if not np.any(_usable(values)):
                 del columns[name]
                 notes.append(f"optional column {name!r} has no usable value and was ignored")
     columns = _ignore_a_still_reference(columns, notes)
@@ -276,7 +281,7 @@ def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
     n = len(body)
     good = np.ones(n, dtype=bool)
     for values in columns.values():
-        good &= np.isfinite(values) & (np.abs(values) < SENTINEL_ABS)
+        good &= _usable(values)
     if time_cells is not None:
         # date stamps of dropped rows are not parsed: a sentinel row often has a placeholder stamp too
         keep_idx = np.flatnonzero(good)
