@@ -11,6 +11,8 @@ from fxdsp.diagnose.candidates import (affected_channels, evaluate, grid, nested
                                        tried)
 from fxdsp.diagnose.context import (MAX_CAUSES, MIN_EVIDENCE, MIN_GAIN, Candidate, Context, innovations, level_gain,
                                     residual, set_noise_weights, white_noise_variance)
+from fxdsp.diagnose.noise import noise_draws, noise_levels, readout_draws
+from fxdsp.ramps import quantisation_step
 
 # causes whose regressor is slow in time, so a bias random walk can imitate them: a drift, a
 # settling, a level that changes a few times, a quadrature level wandering over hours
@@ -113,11 +115,13 @@ def _best_pair(ctx: Context, causes: list[str], first_round: list[Candidate]):
     return sorted(pair, key=lambda c: -c.evidence)
 
 
-def variogram(residual: np.ndarray, lag: int) -> float:
+def variogram(residual: np.ndarray, lag: int):
     """Robust variogram: median of squared lag differences, scaled to a variance for Gaussian noise
-    (a few samples of model mismatch at a ramp corner must not look like a wandering bias)."""
+    (a few samples of model mismatch at a ramp corner must not look like a wandering bias); of each
+    column of a 2-D ``residual`` (rows down), one per column."""
     d = residual[lag:] - residual[:-lag]
-    return float(np.median(d * d)) / 0.4549
+    v = np.median(d * d, axis=0) / 0.4549
+    return float(v) if np.ndim(v) == 0 else v
 
 
 def walk_levels(residual: np.ndarray) -> tuple[float, float, float, float]:
@@ -170,8 +174,6 @@ def null_draws(n: int, draw) -> np.ndarray:
 
 def _noise_draws(levels: tuple[float, float, float], n: int) -> np.ndarray:
     """:func:`null_draws` of white noise, flicker and a random walk at ``levels``."""
-    from fxdsp.diagnose.noise import noise_draws
-
     return null_draws(n, lambda rng, count: noise_draws(rng, levels, count, n))
 
 
@@ -202,7 +204,7 @@ def beats_walks(ctx: Context, channel: str, state: dict, without: dict, gained: 
     gains = _null_gains(ctx, channel, state, without, draws)
     x = ctx.design(channel, state)[0]
     left = draws.T - x @ np.linalg.lstsq(x, draws.T, rcond=None)[0]      # each draw's residual, as the log's
-    wander_left = np.array([variogram(left[:, k], lag) for k in range(len(draws))])
+    wander_left = variogram(left, lag)                                   # per draw (column)
     return gained / max(variogram(resid, lag), 1e-300) > null_threshold(gains / wander_left)
 
 
@@ -318,8 +320,6 @@ def check_against_noise(ctx: Context, state: dict, accepted: list[Candidate]):
     output cause's held-out evidence must exceed the :func:`null_threshold` of the best that
     :func:`null_draws` of that noise give it or any other cause the log could show (fixed seeds; a time
     constant searched on every draw, :func:`_null_quantile`); the weakest failure is removed until all pass."""
-    from fxdsp.diagnose.noise import noise_levels
-
     ch = "output"
     while True:
         out_causes = [c for c in accepted if ch in affected_channels(ctx, c.cause)]
@@ -356,8 +356,6 @@ def check_against_readout(ctx: Context, state: dict, accepted: list[Candidate]):
     q^2/12 added, that log still named the curvature at p < 1/400). The weakest failure is removed
     until all pass. A channel not on a grid (:func:`fxdsp.ramps.quantisation_step`, the step the
     ramp reader finds) keeps the white-noise test alone."""
-    from fxdsp.diagnose.noise import readout_draws
-    from fxdsp.ramps import quantisation_step
 
     while True:
         margins = []
@@ -370,8 +368,7 @@ def check_against_readout(ctx: Context, state: dict, accepted: list[Candidate]):
                 step = quantisation_step(ctx.series.target(ch)) / ctx.norm[ch][1]
                 if step == 0.0:
                     continue
-                x = ctx.design(ch, without)[0]
-                fitted = x @ np.linalg.lstsq(x, ctx.target(ch), rcond=None)[0]
+                fitted = ctx.target(ch) - residual(ctx, without, ch)
                 draws = null_draws(ctx.series.n, lambda rng, count: readout_draws(rng, fitted, step, count))
                 gained = ctx.normals(ch, without)[0].folds()[1].sum() - ctx.normals(ch, state)[0].folds()[1].sum()
                 margins.append((gained - _null_quantile(ctx, ch, state, without, draws), cand))
