@@ -18,3 +18,12 @@ def parabolic_argmin(grid: np.ndarray, values: np.ndarray) -> float:
     if a <= 0:
         return float(x1)
     return float(np.clip(-b / (2 * a), x0, x2))
+
+
+def orthonormal_basis(a: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    """An orthonormal basis of the columns of ``a`` (numerical rank: singular values above ``tol``
+    of the largest): a design with a dead or repeated column still projects onto its span only."""
+    if a.shape[1] == 0:
+        return a
+    q, sv, _ = np.linalg.svd(a, full_matrices=False)
+    return q[:, sv > tol * max(sv[0], 1e-300)] if sv.size else q

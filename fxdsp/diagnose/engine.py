@@ -26,9 +26,10 @@
    reported as unidentified. Nothing left means `none`; `causes` are ordered by held-out gain.
 4. Calibration and numbers (results.py): the orders of B and S (0..3) are chosen by held-out
    error with the causes in place; parameters come from the full-data fit (nonlinear ones refined
-   by Brent's method), uncertainties are delete-one-group jackknife standard deviations (20
-   contiguous groups, so noise correlated over minutes to an hour is accounted for), and the gain
-   is the held-out rms of the cause's channel without and with the causes.
+   by Brent's method), each uncertainty is the larger of a delete-one-group jackknife standard
+   deviation (20 contiguous groups: noise correlated over minutes to an hour) and the spread over
+   refits to draws of the residual's own noise (uncertainty.py: a walk or a flicker that tilts the
+   whole log), and the gain is the held-out rms of the cause's channel without and with the causes.
 
 5. What remains (remaining.py): the final model's residual in every channel, tested against shapes
    no named cause has (a step, a periodic term, a curved drift, temperature, dT/dt, rate and
@@ -52,6 +53,7 @@ from fxdsp.diagnose.identify import described, judge, reasons
 from fxdsp.diagnose.remaining import absorbing_only, remaining
 from fxdsp.diagnose.results import baseline_coefficients, channel_gain, linear_parameters
 from fxdsp.diagnose.selection import check_against_wander, check_final, greedy_search, order_by_gain
+from fxdsp.diagnose.uncertainty import noise_sds
 
 MAX_SEARCH_ROWS = 100_000
 
@@ -171,12 +173,15 @@ def _converge_scale_factor(ctx: Context, search: Context, state: dict, step: int
 
 
 def _final_parameters(ctx: Context, state: dict, accepted: list):
-    """Parameters (contract units), jackknife sds and identification verdicts of the named causes."""
+    """Parameters (contract units), sds and identification verdicts of the named causes: each sd the
+    larger of the jackknife's and the one the log's own noise gives (fxdsp.diagnose.uncertainty)."""
     linear, linear_sd = linear_parameters(ctx, state)
+    from_noise = noise_sds(ctx, state)
     parameters, uncertainty, verdicts = {}, {}, {}
     for cand in accepted:
         p = {**linear.get(cand.cause, {}), **cand.nonlinear}
         u = {**linear_sd.get(cand.cause, {}), **cand.nonlinear_sd}
+        u = {k: max(v, from_noise.get(cand.cause, {}).get(k, 0.0)) for k, v in u.items()}
         names = PARAMETERS[cand.cause]
         parameters[cand.cause] = {k: float(p[k]) for k in names}
         uncertainty[cand.cause] = {k: float(u[k]) for k in names if np.isfinite(u.get(k, np.nan))}

@@ -3,7 +3,8 @@ unidentified (with the reason), never as a plain value, and a cause is not named
 
 Rules (each in the report's words):
 * the value must be finite;
-* its jackknife uncertainty must be finite and smaller than the value itself;
+* its uncertainty (the diagnosis's: jackknife or the log's own noise, the larger) must be finite and
+  smaller than the value itself;
 * a time constant must leave at least TAU_LENGTHS of itself in the log: a lag or settling whose
   tau is a quarter of the log or longer shows as a near-straight drift that an aging slope, a
   random walk or a polynomial explains as well;

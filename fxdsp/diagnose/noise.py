@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import lfilter
 
+from fxdsp.numeric import orthonormal_basis
+
 FLICKER_RATIO = np.sqrt(10.0)   # correlation times of the flicker's AR(1) components, from 1 row on
 
 
@@ -67,8 +69,7 @@ def _projected_shapes(x: np.ndarray, taus: np.ndarray) -> np.ndarray:
     part of a random walk or a flicker with it: the residual's Allan variance then falls at long tau,
     and shapes fitted as if nothing were taken would put the noise's level too low there)."""
     n = x.shape[0]
-    q, sv, _ = np.linalg.svd(x, full_matrices=False)
-    q = q[:, sv > 1e-9 * max(sv[0], 1e-300)] if sv.size else q
+    q = orthonormal_basis(x)
     rng = np.random.default_rng([SHAPE_SEED, n])
     out = np.empty((taus.size, 3))
     for k, levels in enumerate(((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))):
@@ -84,15 +85,29 @@ def noise_levels(resid: np.ndarray, x: np.ndarray | None = None, flicker: bool =
     with the three shapes (a / tau, the flicker construction's, q tau / 3); with ``x``, the model
     columns the residual was fitted on, the shapes are those of each noise with ``x`` fitted out;
     ``flicker`` False: white and a walk alone (all the slow noise taken for a walk)."""
-    from scipy.optimize import nnls
+    return fit_levels(*allan_shapes(resid, x), flicker=flicker)
 
+
+def allan_shapes(resid: np.ndarray, x: np.ndarray | None = None):
+    """(robust Allan variance of ``resid``, the three noises' shapes at its taus, the residual's
+    variance): what :func:`fit_levels` fits, computed once for several fits of one residual."""
     taus, avar = allan_levels(resid)
     if taus.size < 2 or not np.all(avar > 0):
-        return float(np.var(resid)) or 1.0, 0.0, 0.0
+        return avar, None, float(np.var(resid))
     if x is None:
         basis = np.column_stack([1.0 / taus, _flicker_avar(resid.size, taus), taus / 3.0])
     else:
         basis = _projected_shapes(np.asarray(x, float), taus)
+    return avar, basis, float(np.var(resid))
+
+
+def fit_levels(avar: np.ndarray, basis: np.ndarray | None, variance: float,
+               flicker: bool = True) -> tuple[float, float, float]:
+    """:func:`noise_levels` from :func:`allan_shapes` (``basis`` None: too short to fit, all white)."""
+    from scipy.optimize import nnls
+
+    if basis is None:
+        return variance or 1.0, 0.0, 0.0
     use = np.array([True, flicker, True])
     coef = np.zeros(3)
     coef[use], _ = nnls((basis / avar[:, None])[:, use], np.ones_like(avar))

@@ -70,6 +70,7 @@ from fxdsp.diagnose.blockfit import SegmentNormals
 from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, Context, innovations, level_gain, white_noise_variance
 from fxdsp.diagnose.results import channel_gain, heldout_residuals
 from fxdsp.diagnose.noise import noise_draws, noise_levels
+from fxdsp.numeric import orthonormal_basis
 from fxdsp.diagnose.selection import last_added_gain
 from fxdsp.ramps import quantisation_step
 
@@ -174,15 +175,6 @@ def families(ctx: Context, channel: str) -> list[Family]:
 
 
 # -- the statistics -------------------------------------------------------------------------------
-def _basis(a: np.ndarray, tol: float = 1e-9) -> np.ndarray:
-    """An orthonormal basis of the columns of ``a`` (numerical rank: singular values above ``tol``
-    of the largest)."""
-    if a.shape[1] == 0:
-        return a
-    q, sv, _ = np.linalg.svd(a, full_matrices=False)
-    return q[:, sv > tol * max(sv[0], 1e-300)] if sv.size else q
-
-
 def _unit(a: np.ndarray) -> np.ndarray:
     rms = np.sqrt(np.mean(a * a, axis=0))
     return a / np.where(rms > 0, rms, 1.0)
@@ -215,7 +207,7 @@ def _prepare(x: np.ndarray, fams: list[Family]) -> list[_Prepared]:
     out = []
     for ratio in WALK_RATIOS:
         gain = level_gain(ratio)
-        q = _basis(innovations(x, gain, axis=0))
+        q = orthonormal_basis(innovations(x, gain, axis=0))
         parts = []
         for fam in fams:
             if fam.width == 1:
@@ -233,7 +225,7 @@ def _prepare(x: np.ndarray, fams: list[Family]) -> list[_Prepared]:
                 continue
             c = innovations(fam.columns, gain, axis=0)
             if fam.width == 0:
-                parts.append(_basis(c - q @ (q.T @ c), 1e-7))
+                parts.append(orthonormal_basis(c - q @ (q.T @ c), 1e-7))
                 continue
             proj = q.T @ c
             diag = np.einsum("ij,ij->j", c, c) - np.einsum("ij,ij->j", proj, proj)

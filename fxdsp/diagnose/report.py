@@ -12,6 +12,7 @@ from fxdsp.diagnose.identify import TAU_LENGTHS, Verdict, described, reasons
 from fxdsp.diagnose.selection import MAX_NULL_SETS, NULL_DRAWS, NULL_QUANTILE, NULL_ROWS, WANDER_GAIN
 from fxdsp.diagnose.remaining import LEVEL, MIN_SIZE
 from fxdsp.diagnose.results import heldout_residuals
+from fxdsp.diagnose.uncertainty import NOISE_SD_DRAWS
 
 def explanation(diag: Diagnosis) -> str:
     unnamed = "".join(f" {_UNNAMED.format(cause=c, why=reasons(p))}" for c, p in diag.unidentified.items())
@@ -106,8 +107,11 @@ def report_dict(diag: Diagnosis) -> dict:
                    f"as {NULL_ROWS:,} simulated rows buy, and the 1 - {100 * (1 - NULL_QUANTILE):g} %/sets point); "
                    "a cause seen only on a quantised readout (temp_c or freq_hz on a grid) beyond the same point "
                    "of draws of the readout's own error (its step at a random offset, no noise to dither it); "
-                   "uncertainties: delete-one-group jackknife (20 contiguous groups; a warm-up: the 5 "
-                   "interleaved folds); a parameter is identified when finite, not at the end of its search "
+                   "uncertainties: the larger of a delete-one-group jackknife (20 contiguous groups; a warm-up: "
+                   "the 5 interleaved folds) and the spread (central 68 %) of the parameters over "
+                   f"{NOISE_SD_DRAWS} refits of the final model plus draws of the residual's own noise (white, "
+                   "flicker and random walk, and white and a walk alone: the larger), a time constant searched "
+                   "again on each; a parameter is identified when finite, not at the end of its search "
                    f"range, its uncertainty below its value, and (a time constant) at most 1/{TAU_LENGTHS:g} of "
                    "the log; a cause is named only with identified parameters, and not when it only absorbs part "
                    "of a structure of its kind that remains (that structure, modelled, predicts the held-out data "

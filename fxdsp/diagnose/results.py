@@ -1,5 +1,6 @@
-"""Numbers of the final model: cause parameters in contract units with jackknife uncertainties,
-held-out gains and residuals, and the baseline in the simulator's replay format."""
+"""Numbers of the final model: cause parameters in contract units with jackknife uncertainties (the
+diagnosis also takes the log's own noise's: uncertainty.py), held-out gains and residuals, and the
+baseline in the simulator's replay format."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ def linear_parameters(ctx: Context, state: dict):
         coef, _ = normals.fit_all()
         jk, _ = normals.jackknife()
         for cause in state:
-            conv = _converter(ctx, ch, cause, names)
+            conv = converter(ctx, ch, cause, names)
             if conv is None:
                 continue
             pname, fn = conv
@@ -30,7 +31,7 @@ def linear_parameters(ctx: Context, state: dict):
     return params, sds
 
 
-def _converter(ctx: Context, channel: str, cause: str, names: list[str]):
+def converter(ctx: Context, channel: str, cause: str, names: list[str]):
     """(parameter name, coefficients -> value in contract units) of a cause's linear parameter."""
     sd_y = ctx.norm[channel][1]
     record = CAUSES[cause]

@@ -1,0 +1,36 @@
+"""A parameter's reported uncertainty must cover the noise the log carries (fxdsp.diagnose.uncertainty):
+on logs of the independent generator whose noise wanders (a random walk, flicker), the delete-a-group
+jackknife alone reported an aging slope 11.6 sds and a warm-up's time constant 13.8 sds from the truth
+(the matrices' worst); the truth must now lie within 3 reported sds."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fxdsp.diagnose.uncertainty import _spread
+from independent.chamber_logs import generate
+from independent.confusion import diagnose_independent
+
+
+@pytest.mark.parametrize("causes, seed, kw", [(("aging_drift",), 5010, {}),
+                                              (("warmup",), 5016, {"noise": "flicker"})],
+                         ids=["aging-walk-5010", "warmup-flicker-5016"])
+def test_the_truth_lies_within_three_reported_sds(causes, seed, kw):
+    log = generate(causes, seed, **kw)
+    diag = diagnose_independent(log)
+    assert sorted(diag.causes) == sorted(causes)
+    for cause in causes:
+        for name, value in log.truth[cause].items():
+            got, sd = diag.parameters[cause][name], diag.uncertainty[cause][name]
+            assert abs(got - value) <= 3.0 * sd, f"{cause}.{name}: {got:.4g} +- {sd:.3g}, truth {value:.4g}"
+
+
+def test_the_spread_is_one_sd_and_a_time_constants_is_on_its_log_axis():
+    rng = np.random.default_rng(5)
+    draws = rng.normal(10.0, 2.0, 20000)
+    assert _spread(draws, log_axis=False) == pytest.approx(2.0, rel=0.03)
+    # a few draws far out (a time constant run to its grid's end) do not decide it
+    assert _spread(np.r_[draws, np.full(500, 1e6)], log_axis=False) == pytest.approx(2.0, rel=0.06)
+    tau = 3000.0 * np.exp(rng.normal(0.0, 0.2, 20000))
+    assert _spread(tau, log_axis=True) == pytest.approx(3000.0 * 0.2, rel=0.05)
