@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from fxdsp.diagnose.candidates import affected_channels, grid, searched_parameter
-from fxdsp.diagnose.context import Context
+from fxdsp.diagnose.context import Context, residual
 from fxdsp.diagnose.noise import allan_shapes, fit_levels, noise_draws
 from fxdsp.diagnose.results import converter
 from fxdsp.numeric import orthonormal_basis, parabolic_argmin
@@ -39,10 +39,9 @@ def _draws(ctx: Context, state: dict) -> list[dict[str, tuple[np.ndarray, np.nda
     channels = [ch for ch in ctx.series.channels() if any(ch in affected_channels(ctx, c) for c in state)]
     fitted, shapes = {}, {}
     for ch in channels:
-        x, _ = ctx.design(ch, state)
-        y = ctx.target(ch)
-        fitted[ch] = x @ np.linalg.lstsq(x, y, rcond=None)[0]
-        shapes[ch] = allan_shapes(y - fitted[ch], x)
+        resid = residual(ctx, state, ch)        # the final model's, as every other test reads it
+        fitted[ch] = ctx.target(ch) - resid
+        shapes[ch] = allan_shapes(resid, ctx.design(ch, state)[0])
     out = []
     for k, flicker in enumerate((True, False)):
         one = {}
