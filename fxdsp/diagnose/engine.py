@@ -47,7 +47,7 @@ import numpy as np
 
 from fxdsp.causes import PARAMETERS
 from fxdsp.diagnose import model as M
-from fxdsp.diagnose.candidates import affected_channels, refit_nonlinear
+from fxdsp.diagnose.candidates import affected_channels, final_jackknife_sd, refit_nonlinear
 from fxdsp.diagnose.context import MIN_EVIDENCE, MIN_GAIN, ORDER_CHOICES, Context, Diagnosis, choose_orders, set_noise_weights, sf_estimate
 from fxdsp.diagnose.identify import described, judge, reasons
 from fxdsp.diagnose.remaining import absorbing_only, remaining
@@ -174,13 +174,15 @@ def _converge_scale_factor(ctx: Context, search: Context, state: dict, step: int
 
 def _final_parameters(ctx: Context, state: dict, accepted: list):
     """Parameters (contract units), sds and identification verdicts of the named causes: each sd the
-    larger of the jackknife's and the one the log's own noise gives (fxdsp.diagnose.uncertainty)."""
+    larger of the jackknife's in this final model and the one the log's own noise gives
+    (fxdsp.diagnose.uncertainty)."""
     linear, linear_sd = linear_parameters(ctx, state)
     from_noise = noise_sds(ctx, state)
     parameters, uncertainty, verdicts = {}, {}, {}
     for cand in accepted:
         p = {**linear.get(cand.cause, {}), **cand.nonlinear}
-        u = {**linear_sd.get(cand.cause, {}), **cand.nonlinear_sd}
+        u = {**linear_sd.get(cand.cause, {}),
+             **{k: final_jackknife_sd(ctx, state, cand.cause) for k in cand.nonlinear}}
         u = {k: max(v, from_noise.get(cand.cause, {}).get(k, 0.0)) for k, v in u.items()}
         names = PARAMETERS[cand.cause]
         parameters[cand.cause] = {k: float(p[k]) for k in names}

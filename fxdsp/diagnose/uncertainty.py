@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fxdsp.diagnose.candidates import affected_channels, grid, searched_parameter
+from fxdsp.diagnose.candidates import affected_channels, local_axis, searched_parameter
 from fxdsp.diagnose.context import Context, residual
 from fxdsp.diagnose.noise import allan_shapes, fit_levels, noise_draws
 from fxdsp.diagnose.results import converter
@@ -30,7 +30,6 @@ from fxdsp.numeric import orthonormal_basis, parabolic_argmin
 
 NOISE_SD_DRAWS = 40      # draws per noise interpretation (fixed seeds: same log, same report)
 NOISE_SD_SEED = 20261129
-LOCAL_AXIS = np.linspace(-1.2, 1.2, 17)   # a searched time constant's grid per draw, log axis
 
 
 def _draws(ctx: Context, state: dict) -> list[dict[str, tuple[np.ndarray, np.ndarray]]]:
@@ -72,8 +71,7 @@ def _searched_values(ctx: Context, state: dict, cause: str, interpretations: lis
     of its channels on a local grid around the log's value (within the search range; each design
     built once for all draws), each draw's minimum refined by a parabola."""
     pname = searched_parameter(cause)
-    lo, hi = np.log(grid(ctx, cause)[[0, -1]])
-    axis = np.unique(np.clip(np.log(state[cause][pname]) + LOCAL_AXIS, lo, hi))
+    axis = local_axis(ctx, cause, state[cause][pname])
     channels = [ch for ch in affected_channels(ctx, cause) if ch in interpretations[0]]
     sse = np.zeros((len(interpretations), axis.size, NOISE_SD_DRAWS))
     for i, a in enumerate(axis):
