@@ -19,10 +19,12 @@ from fxdsp.diagnose.report import report_dict
 
 try:  # run as part of the tests package, or from scripts/ with tests/ on sys.path
     from independent.chamber_logs import CAUSES, OUTSIDE, PAIRS, TRIPLES, IndependentLog, generate
-    from independent.oracle import known_baseline_parameters, relative_errors
+    from independent.oracle import CHANNEL
+    from independent.oracle import detection_z, known_baseline_parameters, relative_errors
 except ImportError:  # pragma: no cover
     from tests.independent.chamber_logs import CAUSES, OUTSIDE, PAIRS, TRIPLES, IndependentLog, generate
-    from tests.independent.oracle import known_baseline_parameters, relative_errors
+    from tests.independent.oracle import CHANNEL
+    from tests.independent.oracle import detection_z, known_baseline_parameters, relative_errors
 
 TOLERANCE = 0.25
 MIN_RATIO = 1.3
@@ -51,6 +53,9 @@ class Outcome:
     # per parameter of a true cause that the report gives: |reported - true| / its reported sd (an
     # honest sd puts about 95 % of these below 2)
     sds_off: list[float] = field(default_factory=list)
+    # per true output cause the diagnosis did not name (``score(detection=True)``): the z at which
+    # an estimator told the noise and the baseline's form sees it (independent.oracle.detection_z)
+    missed_z: dict[str, float] = field(default_factory=dict)
 
     @property
     def noise_limited(self) -> bool:
@@ -117,7 +122,10 @@ class ProjectLog:
 GENERATORS = {"independent": generate, "project": ProjectLog}
 
 
-def score(causes: tuple[str, ...], seed: int, generator: str = "independent", **kw) -> Outcome:
+def score(causes: tuple[str, ...], seed: int, generator: str = "independent", detection: bool = False,
+          **kw) -> Outcome:
+    """Diagnose one generated log and score it; ``detection``: also the known-noise z of each true
+    output cause it misses (a dense covariance of the log's rows: seconds on a long log)."""
     causes = tuple(c for c in causes if c != "none")
     log = GENERATORS[generator](causes, seed, **kw)
     start = time.perf_counter()
@@ -139,12 +147,16 @@ def score(causes: tuple[str, ...], seed: int, generator: str = "independent", **
     if missed and hasattr(log, "hidden"):   # the project's own logs carry no hidden truth
         oracle = relative_errors(log, known_baseline_parameters(log))
         noise_misses = [m for m in missed if oracle.get(m, 0.0) > TOLERANCE]
+    missed_z = {}
+    if detection and hasattr(log, "hidden"):
+        missed_z = {c: detection_z(log, c) for c in causes
+                    if c not in found and CHANNEL[c] == "output" and c != "thermal_lag"}
     return Outcome(truth=causes, seed=seed, found=found, named_exactly=sorted(found) == sorted(causes),
                    params_ok=not misses, gain_ratio=float(diag.gain["ratio"]), seconds=seconds,
                    rows=len(log.columns["time_s"]), report=report, brief=log.brief(), misses=misses,
                    plain_unidentified=plain_numbers_of_unidentified(json.loads(json.dumps(report))),
                    outside=tuple(kw.get("outside", ())), flagged=bool(report["remaining"]["significant"]),
-                   noise_misses=noise_misses, sds_off=sds_off)
+                   noise_misses=noise_misses, sds_off=sds_off, missed_z=missed_z)
 
 
 def labels(pairs: bool = True, triples: bool = False) -> list[tuple[str, ...]]:
@@ -227,4 +239,9 @@ def table(outcomes: list[Outcome]) -> str:
                  f"{sum(o.flagged for o in inside)}/{n} in-contract logs; median {secs:.2f} s per log "
                  f"(median {rows6k:.0f} rows); reports with an unidentified parameter as a plain number: "
                  f"{sum(bool(o.plain_unidentified) for o in outcomes)}")
+    zs = [z for o in inside for z in o.missed_z.values()]
+    if zs:
+        lines.append(f"true causes missed, with the z an estimator told the noise would see them at: {len(zs)}; "
+                     f"z below 5: {sum(z < 5 for z in zs)}, 5..10: {sum(5 <= z < 10 for z in zs)}, "
+                     f"10 and above: {sum(z >= 10 for z in zs)}")
     return "\n".join(lines)

@@ -14,6 +14,7 @@ value, which only the generator's programme gives; it is left out (``None``)."""
 from __future__ import annotations
 
 import numpy as np
+from scipy.linalg import solve_triangular
 from scipy.optimize import minimize_scalar
 
 from .chamber_logs import IndependentLog
@@ -90,3 +91,59 @@ def relative_errors(log: IndependentLog, found: dict[str, dict[str, float]]) -> 
             if got is not None:
                 out[f"{cause}.{name}"] = abs(got - value) / abs(value)
     return out
+
+
+def output_noise_covariance(log: IndependentLog) -> np.ndarray:
+    """The covariance [rows, rows] of the output noise the generator drew for ``log`` (its
+    description's levels): white on every row; flicker (a sum of stationary AR(1) processes) and a
+    random walk from zero at power-on, both functions of the nominal sample slot, so that rows of a
+    repeated time stamp share them."""
+    noise, sampling = log.description["noise"], log.description["sampling"]
+    slot = np.asarray(log.hidden["slot"], float)
+    apart = np.abs(slot[:, None] - slot[None, :])
+    cov = np.zeros_like(apart)
+    for tau in noise["output_flicker_taus_s"]:
+        cov += noise["output_flicker_component_sigma"] ** 2 * np.exp(-sampling["dt_s"] / tau) ** apart
+    del apart
+    cov += noise["output_random_walk_end_std"] ** 2 / sampling["rows_nominal"] * np.minimum(slot[:, None], slot[None, :])
+    cov[np.diag_indices_from(cov)] += noise["output_white_sigma"] ** 2
+    return cov
+
+
+def known_noise_estimate(log: IndependentLog, cause: str) -> tuple[float, float]:
+    """(estimate, sd) of the linear parameter of an output ``cause`` of ``log``, by generalised least
+    squares under the true noise covariance (:func:`output_noise_covariance`), the baseline's known
+    shape (a cubic in the element's true temperature; times the rate too when a rate is logged) and
+    the other true causes at their true shapes, all with free coefficients.
+
+    The best unbiased estimate any diagnosis could make, and it knows more: the noise's levels and
+    the baseline's form. So truth / sd (:func:`detection_z`) says how far the log shows the cause: a
+    cause missed at a z of 3 the log does not show; one missed at 10 it does."""
+    if CHANNEL[cause] != "output" or cause == "thermal_lag":
+        raise ValueError(f"{cause}: not an output cause linear in a parameter")
+    x = (np.asarray(log.hidden["te"], float) - 25.0) / 50.0
+    cubic = [x ** 0, x, x ** 2, x ** 3]
+    columns = cubic + ([np.asarray(log.columns["rate_dps"], float) * c for c in cubic]
+                       if "rate_dps" in log.columns else [])
+    effects = _effects(log, "output")
+    columns += [v for k, v in effects.items() if k != cause]           # others, known shapes
+    shape = effects[cause] / _linear_value(log, cause)
+    y = np.asarray(log.columns["output"], float)
+    chol = np.linalg.cholesky(output_noise_covariance(log))
+    whiten = lambda a: solve_triangular(chol, a, lower=True)          # noqa: E731
+    xw = whiten(np.column_stack([shape, *columns]))
+    coef, *_ = np.linalg.lstsq(xw, whiten(y), rcond=None)
+    sd = float(np.sqrt(np.linalg.inv(xw.T @ xw)[0, 0]))
+    return float(coef[0]), sd
+
+
+def detection_z(log: IndependentLog, cause: str) -> float:
+    """|true parameter| / the sd of :func:`known_noise_estimate`: the signal-to-noise ratio at which
+    an estimator told the noise and the baseline's form sees ``cause``."""
+    return abs(_linear_value(log, cause)) / known_noise_estimate(log, cause)[1]
+
+
+def _linear_value(log: IndependentLog, cause: str) -> float:
+    """The true value of the parameter ``cause``'s effect is proportional to (a warm-up's a)."""
+    params = log.truth[cause]
+    return float(params["a"] if cause == "warmup" else next(iter(params.values())))
