@@ -28,7 +28,7 @@ TESTS = Path(__file__).parent
 # lowest first: a part may import only parts of a lower tier
 TIERS: list[set[str]] = [
     {"errors", "interrupts"},
-    {"owned", "numeric"},
+    {"owned", "numeric", "plots"},
     {"units", "ramps", "outputs", "logfile", "fixed", "schemas", "configs"},
     {"api", "config"},
     {"blocks", "netlist", "mechanisms"},

@@ -22,6 +22,7 @@ from fxdsp.budget.floor import (DOMINANT_FACTOR, FLICKER_FACTOR, WITHIN_DB, Alla
 from fxdsp.budget.hybrid import CATEGORIES  # noqa: E402
 from fxdsp.budget.table import format_rows  # noqa: E402
 from fxdsp.float_vs_fixed import port_unit  # noqa: E402
+from fxdsp.plots import save_figure  # noqa: E402
 
 tqdm = partial(_tqdm, disable=None)
 
@@ -41,9 +42,7 @@ def plot_spectra(att: Attribution, fs: float, path: Path) -> None:
     ax.set_title(f"{att.chain}.{att.port}: output error spectrum per source (one source quantised at a time)")
     ax.legend(fontsize=6, ncol=2)
     ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def plot_attribution(att: Attribution, path: Path) -> None:
@@ -62,9 +61,7 @@ def plot_attribution(att: Attribution, path: Path) -> None:
     a2.set_yscale("log")
     a2.set_title("by category", fontsize=8)
     fig.suptitle(f"{att.chain}.{att.port}: attribution (power sum {att.power_sum_db:+.2f} dB vs total)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def plot_sweeps(sweeps: dict, unit: str, target: float | None, path: Path, title: str) -> None:
@@ -81,9 +78,7 @@ def plot_sweeps(sweeps: dict, unit: str, target: float | None, path: Path, title
     ax.set_title(title)
     ax.legend(fontsize=6, ncol=2)
     ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def plot_allan(allan, path: Path) -> None:
@@ -108,9 +103,7 @@ def _save_allan(fig, ax, unit: str, title: str, path: Path) -> None:
     ax.set_title(title)
     ax.legend(fontsize=7)
     ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def plot_drive_sweep(sweep, path: Path) -> None:
@@ -130,9 +123,7 @@ def plot_drive_sweep(sweep, path: Path) -> None:
                  f"a {sweep.a_ppm_per_c:g} ppm/C)")
     ax.legend(fontsize=7)
     ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def plot_reference_allan(ra, path: Path) -> None:

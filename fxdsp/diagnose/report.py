@@ -13,6 +13,7 @@ from fxdsp.diagnose.selection import MAX_NULL_SETS, NULL_DRAWS, NULL_QUANTILE, N
 from fxdsp.diagnose.remaining import LEVEL, MIN_SIZE
 from fxdsp.diagnose.results import heldout_residuals
 from fxdsp.diagnose.uncertainty import NOISE_SD_DRAWS
+from fxdsp.plots import save_figure
 
 def explanation(diag: Diagnosis) -> str:
     unnamed = "".join(f" {_UNNAMED.format(cause=c, why=reasons(p))}" for c, p in diag.unidentified.items())
@@ -171,9 +172,7 @@ def write_report(diag: Diagnosis, directory) -> Path:
         ax.grid(alpha=0.3)
         ax.legend(markerscale=5, fontsize=8)
     axes[0].set_title("Baseline residual (held-out folds), heating vs cooling")
-    fig.tight_layout()
-    fig.savefig(out / "residuals.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, out / "residuals.png")
     images = ["residuals.png"]
 
     for channel, label in (("freq_hz", "resonant frequency"), ("temp_c", "temp_c against ref_temp_c")):
@@ -190,9 +189,7 @@ def write_report(diag: Diagnosis, directory) -> Path:
         ax.set_title(f"Baseline residual of the {label}")
         ax.grid(alpha=0.3)
         ax.legend(markerscale=5, fontsize=8)
-        fig.tight_layout()
-        fig.savefig(out / f"residual_{channel}.png", dpi=110)
-        plt.close(fig)
+        save_figure(fig, out / f"residual_{channel}.png")
         images.append(f"residual_{channel}.png")
 
     images += _remaining_plots(diag, out, idx)
@@ -267,10 +264,8 @@ def _remaining_plots(diag: Diagnosis, out: Path, idx: np.ndarray) -> list[str]:
             ax.grid(alpha=0.3)
             ax.legend(markerscale=5, fontsize=8)
         axes[0, 0].set_title(f"What the causes leave in {v.channel}: " + "; ".join(w for _, w in v.found)[:110])
-        fig.tight_layout()
         name = f"remaining_{v.channel}.png"
-        fig.savefig(out / name, dpi=110)
-        plt.close(fig)
+        save_figure(fig, out / name)
         images.append(name)
     return images
 

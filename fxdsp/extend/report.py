@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from fxdsp.diagnose.remaining import LEVEL
+from fxdsp.plots import save_figure
 
 
 def public(d):
@@ -128,6 +129,4 @@ def plot(errors: dict, time_s, path: Path, unit: str) -> None:
     ax.set_ylabel(f"held-out error ({unit})")
     ax.legend(loc="best")
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)

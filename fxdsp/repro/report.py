@@ -15,6 +15,7 @@ from tqdm import tqdm  # noqa: E402
 
 from fxdsp.chains import build  # noqa: E402
 from fxdsp.repro import paper000, paper001, paper002, paper003  # noqa: E402
+from fxdsp.plots import save_figure  # noqa: E402
 from fxdsp.errors import InputError
 
 PAPERS = ("002", "001", "000", "003")
@@ -144,9 +145,7 @@ def _plot002(r: dict, img: Path) -> list[str]:
     ax[0].legend(fontsize=7)
     for a in ax:
         a.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(img / "paper002_points.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, img / "paper002_points.png")
 
     fig, ax = plt.subplots(figsize=(11, 4))
     for name, style in (("integrated, linear x4 (paper)", "b-"), ("integrated, quadratic x2", "c-"),
@@ -167,9 +166,7 @@ def _plot002(r: dict, img: Path) -> list[str]:
     ax.set_ylim(-3000, 3000)
     ax.legend(fontsize=7, loc="lower left")
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(img / "paper002_ramp.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, img / "paper002_ramp.png")
     names = ["paper002_points.png", "paper002_ramp.png"]
     rep = r.get("repeatability")
     if rep:
@@ -189,9 +186,7 @@ def _plot002(r: dict, img: Path) -> list[str]:
                   title=f"paper 002 with repeatability: {len(rep['quick']['pairs'])} run pairs (quick verification)")
             a.grid(alpha=0.3)
         ax[0].legend(fontsize=7)
-        fig.tight_layout()
-        fig.savefig(img / "paper002_repeatability.png", dpi=110)
-        plt.close(fig)
+        save_figure(fig, img / "paper002_repeatability.png")
         names.append("paper002_repeatability.png")
     return names
 
@@ -221,9 +216,7 @@ def _plot001(r: dict, img: Path) -> list[str]:
     ax[2].legend(fontsize=7)
     for a in ax:
         a.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(img / "paper001.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, img / "paper001.png")
     return ["paper001.png"]
 
 
@@ -243,9 +236,7 @@ def _plot000(r: dict, img: Path) -> list[str]:
     for x in ax:
         x.legend(fontsize=7)
         x.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(img / "paper000.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, img / "paper000.png")
     return ["paper000.png"]
 
 
@@ -261,9 +252,7 @@ def _plot003(r: dict, img: Path) -> list[str]:
     for x in ax:
         x.legend(fontsize=7)
         x.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(img / "paper003.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, img / "paper003.png")
     return ["paper003.png"]
 
 

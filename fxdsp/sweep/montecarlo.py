@@ -35,6 +35,7 @@ from scipy.stats import binom
 
 from fxdsp.errors import InputError
 from fxdsp.sweep.engine import failed_records
+from fxdsp.plots import save_figure
 
 CHAIN = "chain_paper002"
 PERCENTILES = (0.5, 0.9, 0.99)
@@ -299,6 +300,4 @@ def plot(s: dict, path) -> None:
     ax.set_title(f"{s['chain']}.{s['port']}: {s['seeds_ok']} seeds per point (band: 95 % CI of p99)", fontsize=9)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110, metadata={"Software": None})
-    plt.close(fig)
+    save_figure(fig, path, metadata={"Software": None})
