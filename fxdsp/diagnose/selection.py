@@ -49,18 +49,20 @@ def greedy_search(ctx: Context) -> tuple[dict, list[Candidate], list[Candidate]]
     finds. So every pair of candidates is also scored together, and the forward selection is run
     again from the best pair that passes; the model with the lower held-out error wins."""
     causes = tried(ctx)
-    state, accepted, first_round = _forward(ctx, causes, {}, [])
+    state, accepted, first_round = forward(ctx, causes, {}, [])
     pair = _best_pair(ctx, causes, first_round)
     if pair is not None and {c.cause for c in pair} != set(state):
         start = {c.cause: dict(c.nonlinear) for c in pair}
         refit_nonlinear(ctx, start, list(pair))
-        p_state, p_accepted, _ = _forward(ctx, causes, start, list(pair))
+        p_state, p_accepted, _ = forward(ctx, causes, start, list(pair))
         if _total_held(ctx, p_state) < _total_held(ctx, state) - MIN_EVIDENCE:
             state, accepted = p_state, p_accepted
     return state, accepted, first_round
 
 
-def _forward(ctx: Context, causes: list[str], state: dict, accepted: list[Candidate]):
+def forward(ctx: Context, causes: list[str], state: dict, accepted: list[Candidate]):
+    """Forward selection from ``state``: the best of ``causes`` that passes the acceptance rule joins,
+    until none does or MAX_CAUSES are in (state, accepted, the first round's candidates)."""
     state, accepted = dict(state), list(accepted)
     first_round: list[Candidate] = []
     while len(accepted) < MAX_CAUSES:
