@@ -73,7 +73,16 @@ def forward(ctx: Context, causes: list[str], state: dict, accepted: list[Candida
             first_round = sorted(results, key=lambda c: -c.evidence)
         good = [c for c in results if c.accepted_by_rule]
         if not good:
-            break
+            # two causes can hide each other on top of others too (a warm-up and a drift beside a
+            # scale-factor cubic: each alone fits the other's part); the best pair that passes joins
+            pair = _best_pair(ctx, [c.cause for c in results], results, state) \
+                if state and len(accepted) <= MAX_CAUSES - 2 else None
+            if pair is None:
+                break
+            accepted.extend(pair)
+            state.update({c.cause: dict(c.nonlinear) for c in pair})
+            refit_nonlinear(ctx, state, accepted)
+            continue
         best = max(good, key=lambda c: c.evidence)
         accepted.append(best)
         state[best.cause] = dict(best.nonlinear)
@@ -89,25 +98,29 @@ def _total_held(ctx: Context, state: dict) -> float:
     return float(sum(ctx.normals(ch, state)[0].folds()[1].sum() for ch in ctx.series.channels()))
 
 
-def _best_pair(ctx: Context, causes: list[str], first_round: list[Candidate]):
-    """The pair of causes with the lowest held-out error together (nonlinear parameters from the
-    first round), as two candidates each scored on top of the other; None unless both pass."""
+def _best_pair(ctx: Context, causes: list[str], first_round: list[Candidate], state: dict | None = None):
+    """The pair of ``causes`` with the lowest held-out error together on top of ``state`` (nonlinear
+    parameters from ``first_round``, each cause fitted alone on top of ``state``), as two candidates
+    each scored on top of ``state`` and the other; None unless both pass."""
+    state = state or {}
     first = {c.cause: c for c in first_round}
     best, best_sse = None, np.inf
     for i, a in enumerate(causes):
         for b in causes[i + 1:]:
             # a linear cause that fails alone may succeed beside another; a grid-searched one
-            # carries a usable parameter only when its own fit worked
-            if any(c.nonlinear and (c.failed or not c.identified) for c in (first[a], first[b])):
+            # carries a usable parameter only when its own fit worked (on top of others, also when
+            # its value was not determined: the cause it hides with took part of it; the pair's
+            # own fits, below, search it again)
+            if any(c.nonlinear and (c.failed or not (c.identified or state)) for c in (first[a], first[b])):
                 continue
-            sse = _total_held(ctx, {a: dict(first[a].nonlinear), b: dict(first[b].nonlinear)})
+            sse = _total_held(ctx, {**state, a: dict(first[a].nonlinear), b: dict(first[b].nonlinear)})
             if sse < best_sse:
                 best, best_sse = (a, b), sse
     if best is None:
         return None
     pair = []
     for cause, other in (best, best[::-1]):
-        on_top = {other: dict(first[other].nonlinear)}
+        on_top = {**state, other: dict(first[other].nonlinear)}
         set_noise_weights(ctx, on_top)
         base_held = {ch: ctx.normals(ch, on_top)[0].folds()[1] for ch in ctx.series.channels()}
         cand = evaluate(ctx, on_top, cause, base_held)
