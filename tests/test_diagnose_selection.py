@@ -175,3 +175,23 @@ def test_the_null_threshold_lies_between_the_two_largest_draws_at_a_level_that_f
         exceed.append(1.0 - t)
     level = float(np.mean(exceed))
     assert 1.2 / (draws + 1) < level < 1.6 / (draws + 1), level
+
+
+@pytest.mark.parametrize("causes, seed", [(("thermal_lag", "hysteresis", "quadrature_leak"), 5002),
+                                          (("warmup", "sf_nonlinearity", "aging_drift"), 5014)],
+                         ids=["refill-after-wander-5002", "pair-on-top-5014"])
+def test_causes_that_hide_each_other_beside_others_are_found(causes, seed):
+    """Two logs of the independent generator whose causes the known-noise oracle sees at z 90..1000,
+    and which the forward selection missed:
+
+    * 5002: a drift took part of a slow quadrature leak and filled the last place before the leak
+      could join; the wander re-test removed the drift, and the leak, unexplained, made the noise
+      re-test's null so wide that the lag and the hysteresis went too (nothing was named). The places
+      the wander re-test frees are filled again (engine._refill).
+    * 5014: beside the scale-factor cubic, the warm-up (a 0.6-segment settling) and the aging drift
+      each fitted part of the other and neither passed alone. Pairs are tried on top of the causes
+      already in (selection.forward)."""
+    from independent.chamber_logs import generate
+    from independent.confusion import diagnose_independent
+
+    assert sorted(diagnose_independent(generate(causes, seed)).causes) == sorted(causes)

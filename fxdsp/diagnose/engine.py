@@ -13,9 +13,11 @@
 3. Selection (selection.py): the best candidate with a held-out rms ratio >= MIN_GAIN and an
    evidence >= MIN_EVIDENCE joins the model (earlier nonlinear parameters are re-fitted with it),
    and the rest are tried again on top, up to MAX_CAUSES; the same forward selection also starts
-   from the best pair of causes (two causes can hide each other) and the better model is kept.
+   from the best pair of causes (two causes can hide each other) and the better model is kept, and
+   when no single cause passes on top of the ones in, the best pair on top of them may join.
    Then time-like causes (aging, warm-up, hysteresis, quadrature) are re-tested against a random-
-   walk bias if the residual without them wanders; every cause on the output against draws of the
+   walk bias if the residual without them wanders (the places that frees are filled again by the
+   forward selection, from the causes it did not remove); every cause on the output against draws of the
    residual's own noise (white, flicker, random walk no smaller than a short log's variogram can
    miss: noise.py), which must not give the best of the causes the log could show as much (a short
    log cannot show a slight wander in its variogram, and flicker makes lags and ramp-rate terms
