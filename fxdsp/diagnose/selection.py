@@ -104,14 +104,18 @@ def _best_pair(ctx: Context, causes: list[str], first_round: list[Candidate], st
     each scored on top of ``state`` and the other; None unless both pass."""
     state = state or {}
     first = {c.cause: c for c in first_round}
+
+    def unusable(c: Candidate) -> bool:
+        # a linear cause that fails alone may succeed beside another; a grid-searched one carries a
+        # usable parameter only when its own fit worked (on top of others, also when its value was
+        # not determined: the cause it hides with took part of it; the pair's own fits, below,
+        # search it again)
+        return bool(c.nonlinear) and (c.failed or not (c.identified or state))
+
     best, best_sse = None, np.inf
     for i, a in enumerate(causes):
         for b in causes[i + 1:]:
-            # a linear cause that fails alone may succeed beside another; a grid-searched one
-            # carries a usable parameter only when its own fit worked (on top of others, also when
-            # its value was not determined: the cause it hides with took part of it; the pair's
-            # own fits, below, search it again)
-            if any(c.nonlinear and (c.failed or not (c.identified or state)) for c in (first[a], first[b])):
+            if unusable(first[a]) or unusable(first[b]):
                 continue
             sse = _total_held(ctx, {**state, a: dict(first[a].nonlinear), b: dict(first[b].nonlinear)})
             if sse < best_sse:

@@ -19,12 +19,10 @@ from fxdsp.diagnose.report import report_dict
 
 try:  # run as part of the tests package, or from scripts/ with tests/ on sys.path
     from independent.chamber_logs import CAUSES, OUTSIDE, PAIRS, TRIPLES, IndependentLog, generate
-    from independent.oracle import CHANNEL
-    from independent.oracle import detection_z, known_baseline_parameters, relative_errors
+    from independent.oracle import detectable, detection_z, known_baseline_parameters, relative_errors
 except ImportError:  # pragma: no cover
     from tests.independent.chamber_logs import CAUSES, OUTSIDE, PAIRS, TRIPLES, IndependentLog, generate
-    from tests.independent.oracle import CHANNEL
-    from tests.independent.oracle import detection_z, known_baseline_parameters, relative_errors
+    from tests.independent.oracle import detectable, detection_z, known_baseline_parameters, relative_errors
 
 TOLERANCE = 0.25
 MIN_RATIO = 1.3
@@ -149,8 +147,7 @@ def score(causes: tuple[str, ...], seed: int, generator: str = "independent", de
         noise_misses = [m for m in missed if oracle.get(m, 0.0) > TOLERANCE]
     missed_z = {}
     if detection and hasattr(log, "hidden"):
-        missed_z = {c: detection_z(log, c) for c in causes
-                    if c not in found and CHANNEL[c] == "output" and c != "thermal_lag"}
+        missed_z = {c: detection_z(log, c) for c in causes if c not in found and detectable(c)}
     return Outcome(truth=causes, seed=seed, found=found, named_exactly=sorted(found) == sorted(causes),
                    params_ok=not misses, gain_ratio=float(diag.gain["ratio"]), seconds=seconds,
                    rows=len(log.columns["time_s"]), report=report, brief=log.brief(), misses=misses,

@@ -59,7 +59,7 @@ def known_baseline_parameters(log: IndependentLog) -> dict[str, dict[str, float 
         linear = [c for c in log.truth if CHANNEL[c] == channel and c not in ("warmup", "thermal_lag")]
         if "thermal_lag" in log.truth and channel == "output":
             y = y - effects["thermal_lag"]   # its shape needs its time constant: known, not estimated
-        shapes = [effects[c] / log.truth[c][next(iter(log.truth[c]))] for c in linear]
+        shapes = [effects[c] / _linear_value(log, c) for c in linear]
         base = [np.ones_like(t), *shapes]
         if "warmup" in log.truth and channel == "output":
             span = max(float(np.ptp(t)), 1.0)
@@ -119,7 +119,7 @@ def known_noise_estimate(log: IndependentLog, cause: str) -> tuple[float, float]
     The best unbiased estimate any diagnosis could make, and it knows more: the noise's levels and
     the baseline's form. So truth / sd (:func:`detection_z`) says how far the log shows the cause: a
     cause missed at a z of 3 the log does not show; one missed at 10 it does."""
-    if CHANNEL[cause] != "output" or cause == "thermal_lag":
+    if not detectable(cause):
         raise ValueError(f"{cause}: not an output cause linear in a parameter")
     x = (np.asarray(log.hidden["te"], float) - 25.0) / 50.0
     cubic = [x ** 0, x, x ** 2, x ** 3]
@@ -135,6 +135,12 @@ def known_noise_estimate(log: IndependentLog, cause: str) -> tuple[float, float]
     coef, *_ = np.linalg.lstsq(xw, whiten(y), rcond=None)
     sd = float(np.sqrt(np.linalg.inv(xw.T @ xw)[0, 0]))
     return float(coef[0]), sd
+
+
+def detectable(cause: str) -> bool:
+    """Whether :func:`known_noise_estimate` estimates ``cause``: an output cause whose effect is a
+    parameter times a known shape (not a lag: its time constant shapes it)."""
+    return CHANNEL[cause] == "output" and cause != "thermal_lag"
 
 
 def detection_z(log: IndependentLog, cause: str) -> float:
