@@ -39,7 +39,7 @@ class Log:
     notes: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        self.columns = _ignore_a_still_reference(self.columns, self.notes)
+        self.columns = _ignore_columns_that_carry_nothing(self.columns, self.notes)
 
     def __len__(self) -> int:
         return int(self.columns["time_s"].size)
@@ -59,12 +59,27 @@ def _usable_span(values: np.ndarray) -> float:
     return float(np.ptp(usable)) if usable.size > 1 else float("nan")
 
 
-def _ignore_a_still_reference(columns: dict, notes: list) -> dict:
-    """The columns without a ref_temp_c that does not move while temp_c does (with a note): fitted as
-    the reference, it made the temperature channel's residual the whole of temp_c's programme, and a
-    diagnosis named a ramp-rate term for it. The reader asks before it drops rows (an ignored column's
-    empty or sentinel cells cost no row), and every other log on being made (Log); a new dict either
-    way, the caller's kept."""
+# readout channels that are fitted as channels of their own: one value in every usable row is a
+# stuck counter or a disconnected input, not a reading
+STUCK_READOUTS = ("freq_hz", "quad")
+
+
+def _ignore_columns_that_carry_nothing(columns: dict, notes: list) -> dict:
+    """The columns without an optional readout that holds one value in every usable row, and without
+    a ref_temp_c that does not move while temp_c does (each with a note). A stuck resonator counter,
+    fitted as the frequency channel, made a true thermal lag fail there (it must explain freq_hz too)
+    and the diagnosis named the hysteresis and quadrature beside it without the lag; a still
+    reference, fitted as the reference, made the temperature channel's residual the whole of temp_c's
+    programme, and a diagnosis named a ramp-rate term for it. The reader asks before it drops rows (an
+    ignored column's empty or sentinel cells cost no row), and every other log on being made (Log); a
+    new dict either way, the caller's kept."""
+    for name in STUCK_READOUTS:
+        values = columns.get(name)
+        usable = values[_usable(values)] if values is not None else np.empty(0)
+        if usable.size > 1 and np.all(usable == usable[0]):
+            notes.append(f"optional column {name!r} holds one value ({usable[0]:g}) in every usable row: "
+                         "a stuck or disconnected readout carries nothing to fit, and it was ignored")
+            columns = {k: v for k, v in columns.items() if k != name}
     ref, temp = columns.get("ref_temp_c"), columns.get("temp_c")
     if ref is None or temp is None:
         return columns
@@ -276,7 +291,7 @@ def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
             if not np.any(_usable(values)):
                 del columns[name]
                 notes.append(f"optional column {name!r} has no usable value and was ignored")
-    columns = _ignore_a_still_reference(columns, notes)
+    columns = _ignore_columns_that_carry_nothing(columns, notes)
 
     n = len(body)
     good = np.ones(n, dtype=bool)

@@ -267,15 +267,15 @@ def test_degenerate_columns_within_the_contract_are_diagnosed(kind, tmp_path, ca
 # follows the chamber: read as the reference, the temperature channel's residual was temp_c's whole
 # programme and a diagnosis named a ramp-rate term (a paper001 simulation with a 400 s lag). Such a
 # column is ignored with a note, so the log gets the diagnosis it would get without it.
-def _logged_reference_log():
+def _logged_reference_log(column: str = "ref_temp_c"):
     """The first 500-row lag log of the independent generator (written from the contract) whose
-    draw logs a reference thermometer."""
+    draw logs ``column`` (a reference thermometer)."""
     from independent.chamber_logs import generate
     for seed in range(5000, 5050):
         log = generate(("thermal_lag",), seed, rows=500)
-        if "ref_temp_c" in log.columns:
+        if column in log.columns:
             return {k: np.asarray(v, float) for k, v in log.columns.items()}
-    raise AssertionError("no seed of 5000..5049 logs a reference")
+    raise AssertionError(f"no seed of 5000..5049 logs {column}")
 
 
 def _without_notes(diag):
@@ -297,6 +297,20 @@ def test_a_reference_that_does_not_move_is_ignored_with_a_note(still):
     assert _without_notes(stuck) == _without_notes(diagnose_columns(absent, "stuck"))
     assert any("'ref_temp_c'" in n and "was ignored" in n for n in stuck.notes), stuck.notes
     assert not any("ref_temp_c" in n for n in diagnose_columns(cols, "moving").notes)   # a real one is read
+
+
+@pytest.mark.parametrize("column", ["freq_hz", "quad"])
+def test_a_stuck_readout_is_ignored_with_a_note(column):
+    """A resonator counter or a quadrature input that logs one value throughout carries nothing; fitted
+    as a channel, a stuck freq_hz made a true lag fail there (it must explain freq_hz too). The log
+    gets the diagnosis it would get without the column, and a note says why."""
+    from fxdsp.diagnose.api import diagnose_columns
+    cols = _logged_reference_log(column)
+    absent = {k: v for k, v in cols.items() if k != column}
+    stuck = diagnose_columns({**cols, column: np.full(cols["time_s"].size, cols[column][0])}, "stuck")
+    assert _without_notes(stuck) == _without_notes(diagnose_columns(absent, "stuck"))
+    assert any(f"'{column}'" in n and "was ignored" in n for n in stuck.notes), stuck.notes
+    assert not any(f"'{column}'" in n for n in diagnose_columns(cols, "moving").notes)   # a live one is read
 
 
 def test_calibrate_says_it_ignored_a_reference_that_does_not_move(tmp_path, capsys):
