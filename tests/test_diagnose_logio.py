@@ -333,6 +333,18 @@ def test_calibrate_says_it_ignored_a_reference_that_does_not_move(tmp_path, caps
     assert "notes" not in results["absent"] and results["stuck"] == results["absent"]
 
 
+def test_calibrate_says_why_a_column_it_needs_was_ignored(tmp_path, capsys):
+    """Paper 001's calibration needs freq_hz; a log whose counter is stuck has the column, and the one
+    line must say that the reader ignored it and why, not only that it is missing."""
+    from fxdsp.sim import generate_log, write_log
+
+    log = generate_log("paper001", effects={}, seed=1)
+    write_log(tmp_path / "stuck.csv", {**log, "freq_hz": np.full(len(log["temp_c"]), 31250.0)})
+    code = main(["calibrate", "--paper", "001", str(tmp_path / "stuck.csv")])
+    _assert_one_line_error(code, capsys.readouterr().err, "needs the freq_hz column", "'freq_hz' holds one value",
+                           "ignored")
+
+
 def test_an_ignored_reference_costs_no_row(tmp_path, capsys):
     """A stuck probe whose logger also writes "no reading" placeholders or empty cells: the column is
     ignored, so its bad cells must not drop rows that every read column holds well (they did: the

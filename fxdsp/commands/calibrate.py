@@ -25,7 +25,7 @@ from pathlib import Path
 from fxdsp.commands.options import Number
 from fxdsp.outputs import IN, OUT_FILE, json_text, staged
 from fxdsp.sim import calibration
-from fxdsp.logfile import read_log
+from fxdsp.logfile import OPTIONAL, read_log
 from fxdsp.errors import InputError
 
 FITS = {"002": calibration.calibrate_paper002, "001": calibration.calibrate_paper001,
@@ -60,7 +60,15 @@ def _run(args, stage) -> int:
         raise InputError(f"--paper: unknown paper {args.paper!r}; expected one of {', '.join(FITS)}")
     read = read_log(args.log)   # the contract's reader: bad rows dropped, bad logs refused
     log = read.columns
-    result = FITS[args.paper](log)
+    try:
+        result = FITS[args.paper](log)
+    except InputError as exc:
+        # a column the fit needs may be one the log has and the reader ignored (stuck, still, empty):
+        # the one line says why, not only that it is missing
+        why = [n for n in read.notes if any(f"'{c}'" in n and c in str(exc) for c in OPTIONAL)]
+        if why:
+            raise InputError(f"{exc}; the log's {'; '.join(why)}") from None
+        raise
     if read.notes:   # what the reader set aside (a column ignored) is said, not silently fitted around
         result["notes"] = list(read.notes)
     if args.config_out or args.apply:
