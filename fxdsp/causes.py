@@ -82,6 +82,12 @@ class Cause:
     # it bends the thermometer's reading, not the element's temperature: named, the output is fitted
     # against temp_c with that bend taken out (fxdsp.diagnose.model.element_temperature)
     misreads_thermometer: bool = False
+    # its column is not known row by row: dated from the thermometer's ramps (a knee, a smoothed
+    # derivative: off by rows at every corner) or a noisy readout (quad: its own white noise). Prewhitening
+    # weighs the fast changes, where those errors are, so it would weigh them most (and shrink the
+    # parameter towards 0): a channel fitted with such a cause keeps ordinary least squares for its
+    # numbers (fxdsp.diagnose.whitening)
+    column_uncertain: bool = False
     explain_extra: Callable[[dict], dict] = field(default=lambda p: {})
     # extend: per calibration procedure, the remedy built from the fitted parameters, or why the
     # chain needs none
@@ -213,13 +219,13 @@ _RECORDS = (
                    "a thermal-gradient effect that vanishes as soon as the temperature stops moving."),
           stage="output",
           inject=lambda p, out, s: out + p["k_per_c_per_s"] * mech.rate_of_change(s["t"], s["temp_clean"]),
-          term=lambda series, state: series.dtdt, linear="k_per_c_per_s",
+          term=lambda series, state: series.dtdt, linear="k_per_c_per_s", column_uncertain=True,
           draw=_sized("ramp_rate", "output", lambda d: mech.rate_of_change(d.t, d.truth["temp_c"]))),
     Cause("hysteresis", ("h",), "output", signature="temp_c", shows=lambda ctx: bool(np.any(ctx.series.hyst != 0)),
           explain=("The output differs by {h:.4g} (2h between the two branches) after heating and after "
                    "cooling ramps and keeps that offset through the dwells: hysteresis, not a lag."),
           stage="output", inject=lambda p, out, s: out + p["h"] * mech.ramp_direction(s["t"], s["temp_clean"]),
-          term=lambda series, state: series.hyst, linear="h", time_tied=True,
+          term=lambda series, state: series.hyst, linear="h", time_tied=True, column_uncertain=True,
           draw=_sized("hysteresis", "output")),
     Cause("warmup", ("a", "tau_s"), "output", signature="time_s",
           explain="A settling transient after power-on: output += {a:.4g} exp(-t / {tau_s:.0f} s).",
@@ -239,7 +245,7 @@ _RECORDS = (
           explain_extra=lambda p: {"phase_mrad": 1e3 * float(np.arctan(abs(p["c"])))},
           # the demodulator leaks the true quadrature; the logged quad channel adds its own noise
           stage="output", inject=lambda p, out, s: out + p["c"] * s["quad"],
-          term=lambda series, state: series.quad, linear="c", time_tied=True,
+          term=lambda series, state: series.quad, linear="c", time_tied=True, column_uncertain=True,
           draw=_sized("quadrature_leak", "output", lambda d: d.truth["quad"]),
           remedies={"gyro_rtd": _trim_remedy}),
     Cause("sf_nonlinearity", ("k3",), "output", signature="rate_dps", needs=("rate_dps",), shows=_sf_cubic_visible,

@@ -4,6 +4,7 @@ acceptance rule's records (Candidate, Diagnosis)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 from scipy.signal import lfilter
@@ -91,8 +92,10 @@ class Context:
             self.norm[ch] = (float(np.mean(y)), sd)
         self.orders: tuple[int, int | None] = (3, 3 if self.has_rate else None)
         self.weights = {ch: 1.0 for ch in series.channels()}
-        # > 0 when the channel's noise wanders (random walk): fits then use one-step innovations
-        self.innovation_gain: dict[str, float] = {}
+        # a channel's whitening filter (values, axis -> filtered) while one is set: its fits are then
+        # generalised least squares, on the filtered design and target (the wander re-test's
+        # random-walk innovations, the final numbers' prewhitening: fxdsp.diagnose.whitening)
+        self.whitening: dict[str, Callable[[np.ndarray, int], np.ndarray]] = {}
         # columns appended to a channel's design that belong to no cause: a structure outside the
         # contract's list, modelled while a named cause is re-tested (fxdsp.diagnose.remaining)
         self.nuisance: dict[str, np.ndarray] = {}
@@ -118,12 +121,15 @@ class Context:
             return x, names
         return np.column_stack([x, extra]), names + [f"nuisance{j}" for j in range(extra.shape[1])]
 
+    def whiten(self, channel: str, values: np.ndarray, axis: int = 0) -> np.ndarray:
+        """``values`` (rows along ``axis``) through the channel's whitening filter, if one is set."""
+        if channel not in self.whitening:
+            return values
+        return self.whitening[channel](values, axis)
+
     def normals(self, channel: str, state: dict, orders=None) -> tuple[SegmentNormals, list[str]]:
         x, names = self.design(channel, state, orders)
-        y = self.target(channel)
-        gain = self.innovation_gain.get(channel, 0.0)
-        if gain > 0:
-            x, y = innovations(x, gain), innovations(y, gain)
+        x, y = self.whiten(channel, x), self.whiten(channel, self.target(channel))
         return SegmentNormals(x, y, self.blocks, self.weights[channel]), names
 
 
@@ -202,9 +208,13 @@ def level_gain(ratio: float) -> float:
     return p / (p + 1.0) if np.isfinite(p) else 1.0
 
 
-def residual(ctx: Context, state: dict, channel: str) -> np.ndarray:
+def residual(ctx: Context, state: dict, channel: str, whitened: bool = False) -> np.ndarray:
+    """The channel's residual (standardised units) of ``state`` fitted by ordinary least squares, or
+    with ``whitened`` its whitened residual, of the fit on the whitened rows (when a filter is set)."""
     x, _ = ctx.design(channel, state)
     y = ctx.target(channel)
+    if whitened:
+        x, y = ctx.whiten(channel, x), ctx.whiten(channel, y)
     normals = SegmentNormals(x, y, ctx.blocks)
     coef, _ = normals.fit_all()
     return y - x @ coef

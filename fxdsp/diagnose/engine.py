@@ -27,11 +27,14 @@
    A cause whose parameters the log does not determine (identify.py) is set aside, not named, and
    reported as unidentified. Nothing left means `none`; `causes` are ordered by held-out gain.
 4. Calibration and numbers (results.py): the orders of B and S (0..3) are chosen by held-out
-   error with the causes in place; parameters come from the full-data fit (nonlinear ones refined
-   by Brent's method), each uncertainty is the larger of a delete-one-group jackknife standard
-   deviation (20 contiguous groups: noise correlated over minutes to an hour) and the spread over
-   refits to draws of the residual's own noise (uncertainty.py: a walk or a flicker that tilts the
-   whole log), and the gain is the held-out rms of the cause's channel without and with the causes.
+   error with the causes in place; parameters come from the full-data fit by generalised least
+   squares (whitening.py: rows whitened by the innovations of the residual's own noise, white,
+   flicker and a random walk; nonlinear ones refined on those rows by Brent's method; a channel with
+   a cause whose column is not known row by row keeps ordinary least squares); each uncertainty (at
+   least the ordinary fit's) is the larger of a delete-one-group jackknife standard deviation (20
+   contiguous groups: noise correlated over minutes to an hour) and the spread over refits to draws
+   of the residual's own noise (uncertainty.py: a walk or a flicker that tilts the whole log), and
+   the gain is the held-out rms of the cause's channel without and with the causes.
 
 5. What remains (remaining.py): the final model's residual in every channel, tested against shapes
    no named cause has (a step, a periodic term, a curved drift, temperature, dT/dt, rate and
@@ -56,6 +59,7 @@ from fxdsp.diagnose.remaining import absorbing_only, remaining
 from fxdsp.diagnose.results import baseline_coefficients, channel_gain, linear_parameters
 from fxdsp.diagnose.selection import check_against_wander, check_final, forward, greedy_search, order_by_gain
 from fxdsp.diagnose.uncertainty import noise_sds
+from fxdsp.diagnose.whitening import prewhitened
 
 MAX_SEARCH_ROWS = 100_000
 
@@ -133,7 +137,19 @@ def _conclude(ctx: Context, search: Context, state: dict, accepted: list, first_
     determine), causes in order of gain, the gain, and what remains."""
     while True:
         ctx.orders = choose_orders(search, state)
-        parameters, uncertainty, verdicts = _final_parameters(ctx, state, accepted)
+        parameters, uncertainty = _final_parameters(ctx, state, accepted)
+        with prewhitened(ctx, state) as filters:
+            if filters:
+                # the numbers by generalised least squares (fxdsp.diagnose.whitening): the searched
+                # values found again on the whitened rows, then every parameter and its sds; the
+                # ordinary fit's sd bounds each (the whitening's noise model is estimated from the
+                # same log, and a flicker's level comes out low)
+                refit_nonlinear(ctx, state, accepted)
+                parameters, whitened_sds = _final_parameters(ctx, state, accepted)
+                uncertainty = {c: {k: max(v, uncertainty[c].get(k, 0.0)) for k, v in u.items()}
+                               for c, u in whitened_sds.items()}
+            baseline = baseline_coefficients(ctx, state)
+        verdicts = _verdicts(ctx, accepted, parameters, uncertainty)
         doubtful = [c for c in accepted if not all(v.identified for v in verdicts[c.cause].values())]
         if not doubtful:
             break
@@ -165,7 +181,7 @@ def _conclude(ctx: Context, search: Context, state: dict, accepted: list, first_
         gain = channel_gain(ctx, {}, "output")
     diag = Diagnosis(causes=[c.cause for c in accepted], parameters=parameters, uncertainty=uncertainty,
                      gain=gain, candidates=first_round, orders=ctx.orders,
-                     baseline=baseline_coefficients(ctx, state), context=ctx, state=state,
+                     baseline=baseline, context=ctx, state=state,
                      unidentified=unidentified, notes=notes)
     # what the named causes leave (the contract's section 5), on the full log
     diag.remaining, diag.structures = remaining(ctx, state, gain, diag.causes)
@@ -194,12 +210,11 @@ def _converge_scale_factor(ctx: Context, search: Context, state: dict, step: int
 
 
 def _final_parameters(ctx: Context, state: dict, accepted: list):
-    """Parameters (contract units), sds and identification verdicts of the named causes: each sd the
-    larger of the jackknife's in this final model and the one the log's own noise gives
-    (fxdsp.diagnose.uncertainty)."""
+    """Parameters (contract units) and sds of the named causes: each sd the larger of the
+    jackknife's in this final model and the one the log's own noise gives (fxdsp.diagnose.uncertainty)."""
     linear, linear_sd = linear_parameters(ctx, state)
     from_noise = noise_sds(ctx, state)
-    parameters, uncertainty, verdicts = {}, {}, {}
+    parameters, uncertainty = {}, {}
     for cand in accepted:
         p = {**linear.get(cand.cause, {}), **cand.nonlinear}
         u = {**linear_sd.get(cand.cause, {}),
@@ -208,7 +223,12 @@ def _final_parameters(ctx: Context, state: dict, accepted: list):
         names = PARAMETERS[cand.cause]
         parameters[cand.cause] = {k: float(p[k]) for k in names}
         uncertainty[cand.cause] = {k: float(u[k]) for k in names if np.isfinite(u.get(k, np.nan))}
-        verdicts[cand.cause] = {k: judge(k, parameters[cand.cause][k], uncertainty[cand.cause].get(k),
-                                         ctx.series.duration, cand.at_bound and k in cand.nonlinear)
-                                for k in names}
-    return parameters, uncertainty, verdicts
+    return parameters, uncertainty
+
+
+def _verdicts(ctx: Context, accepted: list, parameters: dict, uncertainty: dict) -> dict:
+    """Per named cause, per parameter: whether the log determines it (fxdsp.diagnose.identify)."""
+    return {cand.cause: {k: judge(k, parameters[cand.cause][k], uncertainty[cand.cause].get(k), ctx.series.duration,
+                                  cand.at_bound and k in cand.nonlinear)
+                         for k in PARAMETERS[cand.cause]}
+            for cand in accepted}

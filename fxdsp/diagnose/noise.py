@@ -19,7 +19,7 @@ from fxdsp.numeric import orthonormal_basis
 FLICKER_RATIO = np.sqrt(10.0)   # correlation times of the flicker's AR(1) components, from 1 row on
 
 
-def _flicker_times(n: int) -> np.ndarray:
+def flicker_times(n: int) -> np.ndarray:
     """Correlation times (rows) of the AR(1) components whose equal-variance sum is the flicker: from
     one row to three times the series, spaced by sqrt(10) (a 1/f spectrum over the whole band)."""
     k = int(np.ceil(np.log(3.0 * n) / np.log(FLICKER_RATIO))) + 1
@@ -38,7 +38,7 @@ def _ar1_avar(phi: np.ndarray, tau: np.ndarray) -> np.ndarray:
 
 def _flicker_avar(n: int, tau: np.ndarray) -> np.ndarray:
     """Allan variance of the flicker construction with unit variance per component."""
-    return _ar1_avar(np.exp(-1.0 / _flicker_times(n)), tau).sum(axis=0)
+    return _ar1_avar(np.exp(-1.0 / flicker_times(n)), tau).sum(axis=0)
 
 
 def allan_levels(resid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -121,7 +121,7 @@ def noise_draws(rng: np.random.Generator, levels: tuple[float, float, float], dr
     if walk > 0:
         out += np.cumsum(rng.standard_normal((draws, n)), axis=1) * np.sqrt(walk)
     if flicker > 0:
-        for t in _flicker_times(n):
+        for t in flicker_times(n):
             phi = np.exp(-1.0 / t)
             e = rng.standard_normal((draws, n)) * np.sqrt(flicker * (1.0 - phi * phi))
             start = rng.standard_normal(draws) * np.sqrt(flicker)

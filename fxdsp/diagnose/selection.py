@@ -411,13 +411,13 @@ def _innovation_evidence(ctx: Context, ch: str, state: dict, without: dict, gain
     """Held-out evidence of ``state`` over ``without`` on innovations of gain ``gain``, in units of
     the innovations' white variance."""
     saved_weight = ctx.weights[ch]
-    ctx.innovation_gain[ch] = gain
+    ctx.whitening[ch] = lambda values, axis: innovations(values, gain, axis=axis)
     try:
         ctx.weights[ch] = 1.0 / white_noise_variance(innovations(residual(ctx, state, ch), gain))
         full = ctx.normals(ch, state)[0].folds()[1].sum()
         return float(ctx.normals(ch, without)[0].folds()[1].sum() - full)
     finally:
-        ctx.innovation_gain.pop(ch, None)
+        ctx.whitening.pop(ch, None)
         ctx.weights[ch] = saved_weight
 
 

@@ -57,7 +57,8 @@ def _linear_values(ctx: Context, state: dict, draws: dict) -> dict[str, dict[str
     out: dict[str, dict[str, np.ndarray]] = {}
     for ch, (fitted, noise) in draws.items():
         x, names = ctx.design(ch, state)
-        coef = np.linalg.lstsq(x, fitted[:, None] + noise, rcond=None)[0]
+        # the estimator the diagnosis reports: on the whitened rows when a filter is set
+        coef = np.linalg.lstsq(ctx.whiten(ch, x), ctx.whiten(ch, fitted[:, None] + noise), rcond=None)[0]
         for cause in state:
             conv = converter(ctx, ch, cause, names)
             if conv is not None:
@@ -77,10 +78,10 @@ def _searched_values(ctx: Context, state: dict, cause: str, interpretations: lis
     for i, a in enumerate(axis):
         trial = {**state, cause: {**state[cause], pname: float(np.exp(a))}}
         for ch in channels:
-            q = orthonormal_basis(ctx.design(ch, trial)[0])
+            q = orthonormal_basis(ctx.whiten(ch, ctx.design(ch, trial)[0]))
             for k, draws in enumerate(interpretations):
                 fitted, noise = draws[ch]
-                y = fitted[:, None] + noise
+                y = ctx.whiten(ch, fitted[:, None] + noise)
                 inside = q.T @ y
                 sse[k, i] += (np.einsum("ij,ij->j", y, y) - np.einsum("ij,ij->j", inside, inside)) * ctx.weights[ch]
     return [np.exp([parabolic_argmin(axis, one[:, d]) for d in range(NOISE_SD_DRAWS)]) for one in sse]
