@@ -75,13 +75,15 @@ def _searched_values(ctx: Context, state: dict, cause: str, interpretations: lis
     axis = local_axis(ctx, cause, state[cause][pname])
     channels = [ch for ch in affected_channels(ctx, cause) if ch in interpretations[0]]
     sse = np.zeros((len(interpretations), axis.size, NOISE_SD_DRAWS))
+    # the draws as the fit sees them (whitened when a filter is set), once for every grid point
+    targets = {(ch, k): ctx.whiten(ch, draws[ch][0][:, None] + draws[ch][1])
+               for ch in channels for k, draws in enumerate(interpretations)}
     for i, a in enumerate(axis):
         trial = {**state, cause: {**state[cause], pname: float(np.exp(a))}}
         for ch in channels:
             q = orthonormal_basis(ctx.whiten(ch, ctx.design(ch, trial)[0]))
-            for k, draws in enumerate(interpretations):
-                fitted, noise = draws[ch]
-                y = ctx.whiten(ch, fitted[:, None] + noise)
+            for k in range(len(interpretations)):
+                y = targets[ch, k]
                 inside = q.T @ y
                 sse[k, i] += (np.einsum("ij,ij->j", y, y) - np.einsum("ij,ij->j", inside, inside)) * ctx.weights[ch]
     return [np.exp([parabolic_argmin(axis, one[:, d]) for d in range(NOISE_SD_DRAWS)]) for one in sse]
