@@ -76,7 +76,7 @@ def _ignore_columns_that_carry_nothing(columns: dict, notes: list) -> dict:
     for name in STUCK_READOUTS:
         values = columns.get(name)
         usable = values[_usable(values)] if values is not None else np.empty(0)
-        if usable.size > 1 and np.all(usable == usable[0]):
+        if usable.size >= 1 and np.all(usable == usable[0]):
             notes.append(f"optional column {name!r} holds one value ({usable[0]:g}) in every usable row: "
                          "a stuck or disconnected readout carries nothing to fit, and it was ignored")
             columns = {k: v for k, v in columns.items() if k != name}

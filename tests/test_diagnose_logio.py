@@ -307,9 +307,13 @@ def test_a_stuck_readout_is_ignored_with_a_note(column):
     from fxdsp.diagnose.api import diagnose_columns
     cols = _logged_reference_log(column)
     absent = {k: v for k, v in cols.items() if k != column}
-    stuck = diagnose_columns({**cols, column: np.full(cols["time_s"].size, cols[column][0])}, "stuck")
-    assert _without_notes(stuck) == _without_notes(diagnose_columns(absent, "stuck"))
-    assert any(f"'{column}'" in n and "was ignored" in n for n in stuck.notes), stuck.notes
+    once = np.full(cols["time_s"].size, np.nan)
+    once[len(once) // 2] = cols[column][0]        # read once, empty everywhere else: one value too
+    baseline = _without_notes(diagnose_columns(absent, "stuck"))
+    for values in (np.full(cols["time_s"].size, cols[column][0]), once):
+        stuck = diagnose_columns({**cols, column: values}, "stuck")
+        assert _without_notes(stuck) == baseline
+        assert any(f"'{column}'" in n and "was ignored" in n for n in stuck.notes), stuck.notes
     assert not any(f"'{column}'" in n for n in diagnose_columns(cols, "moving").notes)   # a live one is read
 
 
