@@ -13,7 +13,7 @@ from fxdsp.causes import CAUSES
 from fxdsp.diagnose.api import series_from_log
 from fxdsp.diagnose.context import Context
 from fxdsp.logfile import Log
-from fxdsp.diagnose.noise import noise_draws
+from fxdsp.diagnose.noise import band_levels, flicker_times, noise_draws
 from fxdsp.diagnose.whitening import noise_prewhitener, prewhitened
 from independent.chamber_logs import generate
 from independent.confusion import diagnose_independent
@@ -27,13 +27,16 @@ def _autocorrelation(e: np.ndarray, lag: int) -> float:
     return float(np.mean(a * b) / np.sqrt(np.mean(a * a) * np.mean(b * b)))
 
 
-# every mix of the three noises the diagnosis's model knows, each absent, slight or dominant
-LEVELS = [(1.0, f, q) for f, q in itertools.product((0.0, 0.01, 0.5), (0.0, 1e-4, 1e-2)) if f or q]
+# every mix of the three noises the diagnosis's model knows, each absent, slight or dominant; and a
+# flicker band that starts at its third component (10 rows), as fxdsp.diagnose.noise.band_levels fits
+BAND = np.where(np.arange(flicker_times(ROWS).size) >= 2, 0.5, 0.0)
+LEVELS = [(1.0, f, q) for f, q in itertools.product((0.0, 0.01, 0.5), (0.0, 1e-4, 1e-2)) if f or q] + [(1.0, BAND, 1e-4)]
 
 
-@pytest.mark.parametrize("levels", LEVELS, ids=[f"flicker{f:g}-walk{q:g}" for _, f, q in LEVELS])
+@pytest.mark.parametrize("levels", LEVELS, ids=[f"flicker{np.max(f):g}{'' if np.ndim(f) == 0 else 'band'}-walk{q:g}"
+                                                for _, f, q in LEVELS])
 def test_the_filter_whitens_the_noise_it_is_built_for(levels):
-    rng = np.random.default_rng([20261129, int(1e4 * levels[1]), int(1e6 * levels[2])])
+    rng = np.random.default_rng([20261129, int(1e4 * np.max(levels[1])), int(1e6 * levels[2])])
     draws = noise_draws(rng, levels, 16, ROWS)
     whiten = noise_prewhitener(levels, ROWS)
     e = whiten(draws, 1)[:, BURN_IN:]
@@ -41,7 +44,38 @@ def test_the_filter_whitens_the_noise_it_is_built_for(levels):
     for lag in (1, 2, 5, 20, 100):
         assert abs(_autocorrelation(e, lag)) < bound, f"lag {lag}: {_autocorrelation(e, lag):.4f}"
     # the innovations are no larger than the white noise plus one row of every slow component
-    assert np.var(e) < 1.0 + 10 * levels[1] + levels[2] + 0.1
+    assert np.var(e) < 1.0 + 10 * np.max(levels[1]) + levels[2] + 0.1
+
+
+def _band_noise(rng, first: float, level: float, n: int) -> np.ndarray:
+    """White noise of variance 1 plus a flicker written down apart from fxdsp's: AR(1) components of
+    variance ``level`` each, correlation times from ``first`` rows up to the log's length by sqrt(10)."""
+    out = rng.standard_normal(n)
+    t = first
+    while t <= n:
+        phi = np.exp(-1.0 / t)
+        x = np.empty(n)
+        x[0] = rng.standard_normal() * np.sqrt(level)
+        e = rng.standard_normal(n) * np.sqrt(level * (1 - phi * phi))
+        for i in range(1, n):
+            x[i] = phi * x[i - 1] + e[i]
+        out += x
+        t *= np.sqrt(10.0)
+    return out
+
+
+def test_a_flicker_band_above_one_row_is_fitted_at_its_level():
+    """A flicker whose fastest component is 5 rows (the independent generator's lower edge): fitted
+    from one row on, the slow noise's level comes out near half and the white near twice; with the
+    band's edge searched both are near the truth (means of 6 logs of 3000 rows, a line fitted out)."""
+    rng = np.random.default_rng(20261129)
+    n, level = 3000, 3.3
+    x = np.column_stack([np.ones(n), np.linspace(-1.0, 1.0, n)])
+    fits = [band_levels(_band_noise(rng, 5.0, level, n), x) for _ in range(6)]
+    white = np.mean([f[0] for f in fits])
+    flicker = np.mean([np.max(f[1]) for f in fits])
+    assert 0.6 < white < 1.25, white
+    assert 0.65 * level < flicker < 1.2 * level, flicker
 
 
 def test_white_noise_gets_no_filter():

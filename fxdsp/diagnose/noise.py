@@ -11,6 +11,8 @@ equal relative errors.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from scipy.signal import lfilter
 
@@ -44,22 +46,35 @@ def _flicker_avar(n: int, tau: np.ndarray) -> np.ndarray:
 def allan_levels(resid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(tau in rows, robust Allan variance): tau = 1, 2, 4 ... while at least 8 means fit; each from
     the median squared difference of adjacent non-overlapping means (a step or an outlier moves a few
-    differences, not the median)."""
-    n = resid.size
+    differences, not the median). ``resid`` may hold several series along its last axis: one row of
+    Allan variances each."""
+    resid = np.asarray(resid, float)
+    n = resid.shape[-1]
     taus, avar = [], []
     tau = 1
     while n // tau >= 8:
-        means = resid[:n // tau * tau].reshape(-1, tau).mean(axis=1)
-        d = np.diff(means)
+        means = resid[..., :n // tau * tau].reshape(*resid.shape[:-1], -1, tau).mean(axis=-1)
+        d = np.diff(means, axis=-1)
         taus.append(tau)
-        avar.append(0.5 * float(np.median(d * d)) / 0.4549)
+        avar.append(0.5 * np.median(d * d, axis=-1) / 0.4549)
         tau *= 2
-    return np.array(taus, float), np.array(avar)
+    return np.array(taus, float), np.moveaxis(np.array(avar, float), 0, -1)
 
 
 # unit series of each kind drawn to learn its Allan variance once a model's columns are fitted out
 SHAPE_DRAWS = 8
 SHAPE_SEED = 20261128
+
+
+@lru_cache(maxsize=4)
+def _unit_draws(n: int) -> np.ndarray:
+    """[kind, draw, row] unit white noise, flicker and random walk of ``n`` rows (the same for every
+    residual of that length: drawn once, read only)."""
+    rng = np.random.default_rng([SHAPE_SEED, n])
+    out = np.stack([noise_draws(rng, levels, SHAPE_DRAWS, n)
+                    for levels in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))])
+    out.flags.writeable = False
+    return out
 
 
 def _projected_shapes(x: np.ndarray, taus: np.ndarray) -> np.ndarray:
@@ -68,15 +83,10 @@ def _projected_shapes(x: np.ndarray, taus: np.ndarray) -> np.ndarray:
     with slow columns, a drift, a warm-up, a cubic in a temperature that moves once, takes the slow
     part of a random walk or a flicker with it: the residual's Allan variance then falls at long tau,
     and shapes fitted as if nothing were taken would put the noise's level too low there)."""
-    n = x.shape[0]
     q = orthonormal_basis(x)
-    rng = np.random.default_rng([SHAPE_SEED, n])
-    out = np.empty((taus.size, 3))
-    for k, levels in enumerate(((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))):
-        draws = noise_draws(rng, levels, SHAPE_DRAWS, n)
-        draws -= (draws @ q) @ q.T
-        out[:, k] = np.mean([allan_levels(d)[1][:taus.size] for d in draws], axis=0)
-    return out
+    draws = _unit_draws(x.shape[0])
+    left = draws - (draws @ q) @ q.T
+    return allan_levels(left)[1][..., :taus.size].mean(axis=1).T
 
 
 def noise_levels(resid: np.ndarray, x: np.ndarray | None = None, flicker: bool = True) -> tuple[float, float, float]:
@@ -114,17 +124,64 @@ def fit_levels(avar: np.ndarray, basis: np.ndarray | None, variance: float,
     return float(coef[0]) or float(avar[0]), float(coef[1]), float(coef[2])
 
 
-def noise_draws(rng: np.random.Generator, levels: tuple[float, float, float], draws: int, n: int) -> np.ndarray:
-    """``draws`` series of ``n`` rows of white noise, flicker and a random walk at ``levels``."""
+@lru_cache(maxsize=4)
+def _unit_component_draws(n: int) -> np.ndarray:
+    """[component, draw, row] unit-variance draws of each AR(1) component of the flicker, alone."""
+    rng = np.random.default_rng([SHAPE_SEED, n, 1])
+    k = flicker_times(n).size
+    out = np.stack([noise_draws(rng, (0.0, np.eye(k)[i], 0.0), SHAPE_DRAWS, n) for i in range(k)])
+    out.flags.writeable = False
+    return out
+
+
+# the flicker band's lower edge is searched among its first components (1, 3.2, 10 and 32 rows)
+BAND_EDGES = 4
+
+
+def band_levels(resid: np.ndarray, x: np.ndarray | None = None) -> tuple[float, np.ndarray, float]:
+    """(white variance, variance of each flicker component [flicker_times], walk variance per row):
+    :func:`noise_levels` with the flicker's band starting at the component that fits best, not at
+    one row. A flicker whose fastest part is slower than a row (the independent generator's starts at
+    five sample intervals) is otherwise fitted as more white noise and a flicker at about half its
+    level (pure noise, white 1 and 3.3 per component: 1.9 and 1.9; with the edge searched: 0.7..0.97
+    and 2.4..2.9), which is what whitening must know. The edge is chosen by the fit's weighted residual."""
+    from scipy.optimize import nnls
+
+    n = resid.size
+    times = flicker_times(n)
+    taus, avar = allan_levels(resid)
+    if taus.size < 2 or not np.all(avar > 0):
+        return float(np.var(resid)) or 1.0, np.zeros(times.size), 0.0
+    if x is None:
+        shapes = np.column_stack([1.0 / taus, _ar1_avar(np.exp(-1.0 / times), taus).T, taus / 3.0])
+    else:
+        q = orthonormal_basis(np.asarray(x, float))
+        unit = _unit_draws(n)
+        draws = np.concatenate([unit[[0]], _unit_component_draws(n), unit[[2]]])
+        shapes = allan_levels(draws - (draws @ q) @ q.T)[1][..., :taus.size].mean(axis=1).T
+    best = None
+    for edge in range(min(BAND_EDGES, times.size)):
+        basis = np.column_stack([shapes[:, 0], shapes[:, 1 + edge:1 + times.size].sum(axis=1), shapes[:, -1]])
+        coef, misfit = nnls(basis / avar[:, None], np.ones_like(avar))
+        if best is None or misfit < best[0] * (1.0 - 1e-9):
+            best = (misfit, edge, coef)
+    _, edge, coef = best
+    return float(coef[0]) or float(avar[0]), np.where(np.arange(times.size) >= edge, coef[1], 0.0), float(coef[2])
+
+
+def noise_draws(rng: np.random.Generator, levels: tuple, draws: int, n: int) -> np.ndarray:
+    """``draws`` series of ``n`` rows of white noise, flicker and a random walk at ``levels`` (the
+    flicker's variance one for every component, or one each: :func:`band_levels`)."""
     white, flicker, walk = levels
     out = rng.standard_normal((draws, n)) * np.sqrt(white)
     if walk > 0:
         out += np.cumsum(rng.standard_normal((draws, n)), axis=1) * np.sqrt(walk)
-    if flicker > 0:
-        for t in flicker_times(n):
+    if np.any(np.asarray(flicker) > 0):
+        times = flicker_times(n)
+        for t, v in zip(times, np.broadcast_to(flicker, times.shape)):
             phi = np.exp(-1.0 / t)
-            e = rng.standard_normal((draws, n)) * np.sqrt(flicker * (1.0 - phi * phi))
-            start = rng.standard_normal(draws) * np.sqrt(flicker)
+            e = rng.standard_normal((draws, n)) * np.sqrt(v * (1.0 - phi * phi))
+            start = rng.standard_normal(draws) * np.sqrt(v)
             out += lfilter([1.0], [1.0, -phi], e, axis=1, zi=(phi * start)[:, None])[0]
     return out
 

@@ -9,15 +9,16 @@ held-out warm-up log 5034 (white noise and a walk) the diagnosis's tau was off b
 ordinary fit told the true baseline (26 %); on the whitened rows it is off by 9 % (issue 32 notes).
 
 So each channel's final model is fitted again on whitened rows: the noise its ordinary residual shows
-is estimated as white + flicker + a random walk (fxdsp.diagnose.noise, the model's columns fitted out
-of the shapes), and the design and the target go through that noise's steady-state Kalman innovations
+is estimated as white + flicker + a random walk (fxdsp.diagnose.noise.band_levels, the model's columns
+fitted out of the shapes, the flicker's band starting where it fits best), and the design and the target go through that noise's steady-state Kalman innovations
 filter (white noise: no filter; a walk: close to differencing). Any fixed filter leaves the estimate
 unbiased when the columns are right; one that whitens makes it efficient. Each channel's weight
 becomes 1 / the variance of its whitened residual, so channels still add in units of their own noise.
 The sds are taken of this estimator (the block jackknife and the noise draws, fxdsp.diagnose.
 uncertainty) and bounded below by the ordinary fit's (the engine): the noise model comes from the same
-log, and a flicker's level comes out low (by about half on the generator's flicker logs), which makes
-the whitened fit's own sd too small.
+log (a flicker fitted from one row on came out at about half its level on the generator's flicker
+logs, which made the whitened fit's own sd too small; the band's edge is now searched, but the draws
+of fxdsp.diagnose.uncertainty still take the flicker from one row on).
 
 Not where a cause's column is not known row by row (fxdsp.causes ``column_uncertain``): hysteresis
 and a ramp-rate term are dated from the thermometer's ramps, off by rows at every corner; the
@@ -37,7 +38,7 @@ from scipy.signal import lfilter
 
 from fxdsp.causes import CAUSES
 from fxdsp.diagnose.context import Context, residual
-from fxdsp.diagnose.noise import flicker_times, noise_levels
+from fxdsp.diagnose.noise import band_levels, flicker_times
 
 # a noise component below this share of the white variance is left out of the filter (none left: white)
 NEGLIGIBLE = 1e-9
@@ -45,25 +46,26 @@ NEGLIGIBLE = 1e-9
 
 def noise_prewhitener(levels: tuple[float, float, float], n: int):
     """The steady-state Kalman innovations filter (values, axis -> innovations) of white noise +
-    flicker + a random walk at ``levels`` (fxdsp.diagnose.noise: white variance, variance per flicker
-    component, walk variance per row) on ``n`` rows; None when the noise is white.
+    flicker + a random walk at ``levels`` (fxdsp.diagnose.noise: white variance, the variance of every
+    flicker component or of each, walk variance per row) on ``n`` rows; None when the noise is white.
 
     The state is the walk and the flicker's AR(1) components, x' = A x + w, y = c x + white. The
     predictor x^(t+1) = F x^t + L y_t, F = A - L c, gives innovations e = y - c x^, whose transfer
     function 1 - c (zI - F)^-1 L is applied as a sum of first-order sections over F's eigenvalues (one
     polynomial of that order would put its clustered poles near 1 outside the unit circle)."""
     white, flicker, walk = levels
-    if not (white > 0 and np.isfinite([white, flicker, walk]).all()):
+    if not (white > 0 and np.isfinite([white, walk]).all() and np.isfinite(flicker).all()):
         return None
     phis, qs = [], []
     if walk > NEGLIGIBLE * white:
         phis.append(1.0)
         qs.append(walk)
-    if flicker > NEGLIGIBLE * white:
-        for t in flicker_times(n):
+    times = flicker_times(n)
+    for t, v in zip(times, np.broadcast_to(flicker, times.shape)):
+        if v > NEGLIGIBLE * white:
             phi = float(np.exp(-1.0 / t))
             phis.append(phi)
-            qs.append(flicker * (1.0 - phi * phi))
+            qs.append(v * (1.0 - phi * phi))
     if not phis:
         return None
     a = np.diag(phis)
@@ -91,7 +93,7 @@ def prewhitened(ctx: Context, state: dict):
     for ch in ctx.series.channels():
         if any(CAUSES[c].column_uncertain and CAUSES[c].channel == ch for c in state):
             continue
-        whiten = noise_prewhitener(noise_levels(residual(ctx, state, ch), ctx.design(ch, state)[0]), ctx.series.n)
+        whiten = noise_prewhitener(band_levels(residual(ctx, state, ch), ctx.design(ch, state)[0]), ctx.series.n)
         if whiten is not None:
             filters[ch] = whiten
     try:

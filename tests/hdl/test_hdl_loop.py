@@ -48,7 +48,9 @@ def test_the_serial_rtl_loop_closed_on_its_mode_is_the_models_closed_loop():
 
 
 @pytest.mark.hdl
-@pytest.mark.parametrize("key", ["drive_pll_rounding_floor", "drive_detector_q_sign"])
+# (the loop filter's rounding mutant, drive_pll_rounding_floor, is the regression test's below: caught
+# there in both variants, with its sample, port and waveform)
+@pytest.mark.parametrize("key", ["drive_detector_q_sign"])
 def test_a_loop_mutant_leaves_the_models_trajectory(key, tmp_path):
     require_simulator("verilator")
     m = next(m for m in MUTATIONS if m.key == key)
