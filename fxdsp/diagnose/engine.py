@@ -29,7 +29,7 @@
 4. Calibration and numbers (results.py): the orders of B and S (0..3) are chosen by held-out
    error with the causes in place; parameters come from the full-data fit by generalised least
    squares (whitening.py: rows whitened by the innovations of the residual's own noise, white,
-   flicker and a random walk; nonlinear ones refined on those rows by Brent's method; a channel with
+   a flicker band and a random walk; nonlinear ones refined on those rows by Brent's method; a channel with
    a cause whose column is not known row by row keeps ordinary least squares); each uncertainty (at
    least the ordinary fit's) is the larger of a delete-one-group jackknife standard deviation (20
    contiguous groups: noise correlated over minutes to an hour) and the spread over refits to draws
@@ -143,7 +143,7 @@ def _conclude(ctx: Context, search: Context, state: dict, accepted: list, first_
                 # the numbers by generalised least squares (fxdsp.diagnose.whitening): the searched
                 # values found again on the whitened rows, then every parameter and its sds; the
                 # ordinary fit's sd bounds each (the whitening's noise model is estimated from the
-                # same log, and a flicker's level comes out low)
+                # same log, and the noise draws of the sds take a flicker from one row on)
                 refit_nonlinear(ctx, state, accepted)
                 parameters, whitened_sds = _final_parameters(ctx, state, accepted)
                 uncertainty = {c: {k: max(v, uncertainty[c].get(k, 0.0)) for k, v in u.items()}

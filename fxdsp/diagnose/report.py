@@ -112,7 +112,7 @@ def report_dict(diag: Diagnosis) -> dict:
                    "of draws of the readout's own error (its step at a random offset, no noise to dither it); "
                    "numbers (parameters, baseline) by generalised least squares: each channel's final fit "
                    "again on rows whitened by the Kalman innovations of the noise its residual shows (white, "
-                   "flicker, random walk), except a channel with a cause whose column is not known row by row "
+                   "a flicker band from the edge that fits, random walk), except a channel with a cause whose column is not known row by row "
                    "(hysteresis, ramp rate: dated from the ramps; quadrature: a noisy readout), which keeps "
                    "ordinary least squares; "
                    "uncertainties (each at least the ordinary fit's): the larger of a delete-one-group "
