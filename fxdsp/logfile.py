@@ -37,9 +37,12 @@ class Log:
     dropped: int = 0
     source: str = ""
     notes: list[str] = field(default_factory=list)
+    # the optional columns set aside (stuck, still, empty), each with its note: what a command that
+    # needs one of them says instead of only that it is missing
+    ignored: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        self.columns = _ignore_columns_that_carry_nothing(self.columns, self.notes)
+        self.columns = _ignore_columns_that_carry_nothing(self.columns, self.notes, self.ignored)
 
     def __len__(self) -> int:
         return int(self.columns["time_s"].size)
@@ -64,7 +67,13 @@ def _usable_span(values: np.ndarray) -> float:
 STUCK_READOUTS = ("freq_hz", "quad")
 
 
-def _ignore_columns_that_carry_nothing(columns: dict, notes: list) -> dict:
+def _set_aside(name: str, why: str, notes: list, ignored: dict) -> None:
+    """Record an optional column the reader ignores: its note, and the column with it."""
+    notes.append(why)
+    ignored[name] = why
+
+
+def _ignore_columns_that_carry_nothing(columns: dict, notes: list, ignored: dict) -> dict:
     """The columns without an optional readout that holds one value in every usable row, and without
     a ref_temp_c that does not move while temp_c does (each with a note). A stuck resonator counter,
     fitted as the frequency channel, made a true thermal lag fail there (it must explain freq_hz too)
@@ -77,8 +86,8 @@ def _ignore_columns_that_carry_nothing(columns: dict, notes: list) -> dict:
         values = columns.get(name)
         usable = values[_usable(values)] if values is not None else np.empty(0)
         if usable.size >= 1 and np.all(usable == usable[0]):
-            notes.append(f"optional column {name!r} holds one value ({usable[0]:g}) in every usable row: "
-                         "a stuck or disconnected readout carries nothing to fit, and it was ignored")
+            _set_aside(name, f"optional column {name!r} holds one value ({usable[0]:g}) in every usable row: "
+                       "a stuck or disconnected readout carries nothing to fit, and it was ignored", notes, ignored)
             columns = {k: v for k, v in columns.items() if k != name}
     ref, temp = columns.get("ref_temp_c"), columns.get("temp_c")
     if ref is None or temp is None:
@@ -86,8 +95,9 @@ def _ignore_columns_that_carry_nothing(columns: dict, notes: list) -> dict:
     ref_span, temp_span = _usable_span(ref), _usable_span(temp)
     if not (temp_span > 0 and ref_span <= STILL_REFERENCE_SHARE * temp_span):
         return columns
-    notes.append(f"optional column 'ref_temp_c' spans {ref_span:.4g} degC while temp_c spans {temp_span:.4g} degC: "
-                 "it cannot be temp_c's reference (an offset and a gain apart) and was ignored")
+    _set_aside("ref_temp_c", f"optional column 'ref_temp_c' spans {ref_span:.4g} degC while temp_c spans "
+               f"{temp_span:.4g} degC: it cannot be temp_c's reference (an offset and a gain apart) and was ignored",
+               notes, ignored)
     return {k: v for k, v in columns.items() if k != "ref_temp_c"}
 
 
@@ -284,14 +294,15 @@ def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
                     unparsed[target] = next((c for c in cells if c), "")
 
     notes: list[str] = []
+    ignored: dict[str, str] = {}
     # an optional column with no usable value at all is an absent column, not a reason to drop every row
     for name in list(columns):
         if name in OPTIONAL:
             values = columns[name]
             if not np.any(_usable(values)):
                 del columns[name]
-                notes.append(f"optional column {name!r} has no usable value and was ignored")
-    columns = _ignore_columns_that_carry_nothing(columns, notes)
+                _set_aside(name, f"optional column {name!r} has no usable value and was ignored", notes, ignored)
+    columns = _ignore_columns_that_carry_nothing(columns, notes, ignored)
 
     n = len(body)
     good = np.ones(n, dtype=bool)
@@ -324,4 +335,4 @@ def read_log(path, mapping: dict[str, str] | None = None, delimiter: str = ",",
     flat = columns["output"]
     if flat.size > 1 and np.all(flat == flat[0]):  # nothing to explain or fit: refuse it by name
         raise InputError(f"{path}: column {sources['output']!r} (output) is flat: every usable row is {flat[0]:g}")
-    return Log(columns=columns, dropped=n - used, source=str(path), notes=notes)
+    return Log(columns=columns, dropped=n - used, source=str(path), notes=notes, ignored=ignored)

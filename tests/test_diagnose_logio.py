@@ -317,6 +317,18 @@ def test_a_stuck_readout_is_ignored_with_a_note(column):
     assert not any(f"'{column}'" in n for n in diagnose_columns(cols, "moving").notes)   # a live one is read
 
 
+@pytest.mark.parametrize("column", ["freq_hz", "quad"])
+def test_the_log_records_which_column_it_ignored_and_why(column):
+    """What a command that needs the column says (calibrate's one line) is read from the record, the
+    same words as the note, not found again by searching the notes' text."""
+    from fxdsp.logfile import Log
+    cols = _logged_reference_log(column)
+    log = Log(columns={**cols, column: np.full(cols["time_s"].size, cols[column][0])})
+    assert list(log.ignored) == [column] and column not in log.columns
+    assert log.notes == [log.ignored[column]] and "was ignored" in log.ignored[column]
+    assert Log(columns=cols).ignored == {}
+
+
 def test_calibrate_says_it_ignored_a_reference_that_does_not_move(tmp_path, capsys):
     """`fxdsp calibrate` fits against ref_temp_c when the log has one; a still one is ignored (the
     fit is the one without the column) and the result says so instead of fitting around it silently."""

@@ -25,7 +25,7 @@ from pathlib import Path
 from fxdsp.commands.options import Number
 from fxdsp.outputs import IN, OUT_FILE, json_text, staged
 from fxdsp.sim import calibration
-from fxdsp.logfile import OPTIONAL, read_log
+from fxdsp.logfile import read_log
 from fxdsp.errors import InputError
 
 FITS = {"002": calibration.calibrate_paper002, "001": calibration.calibrate_paper001,
@@ -65,7 +65,7 @@ def _run(args, stage) -> int:
     except InputError as exc:
         # a column the fit needs may be one the log has and the reader ignored (stuck, still, empty):
         # the one line says why, not only that it is missing
-        why = [n for n in read.notes if any(f"'{c}'" in n and c in str(exc) for c in OPTIONAL)]
+        why = [note for column, note in read.ignored.items() if column in str(exc)]
         if why:
             raise InputError(f"{exc}; the log's {'; '.join(why)}") from None
         raise

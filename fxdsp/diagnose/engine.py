@@ -32,7 +32,8 @@
    a flicker band and a random walk; nonlinear ones refined on those rows by Brent's method; a channel with
    a cause whose column is not known row by row keeps ordinary least squares); each uncertainty (at
    least the ordinary fit's) is the larger of a delete-one-group jackknife standard deviation (20
-   contiguous groups: noise correlated over minutes to an hour) and the spread over refits to draws
+   contiguous groups: noise correlated over minutes to an hour; the interleaved folds for a transient
+   or a column one group holds most of, results.CONCENTRATED) and the spread over refits to draws
    of the residual's own noise (uncertainty.py: a walk or a flicker that tilts the whole log), and
    the gain is the held-out rms of the cause's channel without and with the causes.
 

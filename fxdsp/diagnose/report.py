@@ -116,7 +116,7 @@ def report_dict(diag: Diagnosis) -> dict:
                    "(hysteresis, ramp rate: dated from the ramps; quadrature: a noisy readout), which keeps "
                    "ordinary least squares; "
                    "uncertainties (each at least the ordinary fit's): the larger of a delete-one-group "
-                   "jackknife (20 contiguous groups; a warm-up: "
+                   "jackknife (20 contiguous groups; a warm-up, or a column one group holds most of: "
                    "the 5 interleaved folds) and the spread (central 68 %) of the parameters over "
                    f"{NOISE_SD_DRAWS} refits of the final model plus draws of the residual's own noise (white, "
                    "flicker and random walk, and white and a walk alone: the larger), a time constant searched "
