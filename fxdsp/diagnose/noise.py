@@ -6,7 +6,8 @@ three times the series, spaced by sqrt(10): a 1/f spectrum over the whole band. 
 the Allan variance (white a / tau, the flicker construction's, the walk's q tau / 3) are fitted to the
 residual's Allan variance taken robustly (medians of squared differences of adjacent means: a step
 or an outlier moves a few differences, not the median), by non-negative least squares weighted to
-equal relative errors.
+equal relative errors. The whitening of the final numbers (fxdsp.diagnose.whitening) asks for the
+flicker's band as well (:func:`band_levels`: its lower edge where the fit is best).
 """
 
 from __future__ import annotations
@@ -83,10 +84,14 @@ def _projected_shapes(x: np.ndarray, taus: np.ndarray) -> np.ndarray:
     with slow columns, a drift, a warm-up, a cubic in a temperature that moves once, takes the slow
     part of a random walk or a flicker with it: the residual's Allan variance then falls at long tau,
     and shapes fitted as if nothing were taken would put the noise's level too low there)."""
+    return _fitted_out(_unit_draws(x.shape[0]), x, taus.size)
+
+
+def _fitted_out(draws: np.ndarray, x: np.ndarray, n_taus: int) -> np.ndarray:
+    """[tau, kind] mean robust Allan variance (first ``n_taus``) of ``draws`` [kind, draw, row] once
+    the columns ``x`` are fitted out of each."""
     q = orthonormal_basis(x)
-    draws = _unit_draws(x.shape[0])
-    left = draws - (draws @ q) @ q.T
-    return allan_levels(left)[1][..., :taus.size].mean(axis=1).T
+    return allan_levels(draws - (draws @ q) @ q.T)[1][..., :n_taus].mean(axis=1).T
 
 
 def noise_levels(resid: np.ndarray, x: np.ndarray | None = None, flicker: bool = True) -> tuple[float, float, float]:
@@ -155,10 +160,9 @@ def band_levels(resid: np.ndarray, x: np.ndarray | None = None) -> tuple[float, 
     if x is None:
         shapes = np.column_stack([1.0 / taus, _ar1_avar(np.exp(-1.0 / times), taus).T, taus / 3.0])
     else:
-        q = orthonormal_basis(np.asarray(x, float))
         unit = _unit_draws(n)
-        draws = np.concatenate([unit[[0]], _unit_component_draws(n), unit[[2]]])
-        shapes = allan_levels(draws - (draws @ q) @ q.T)[1][..., :taus.size].mean(axis=1).T
+        shapes = _fitted_out(np.concatenate([unit[[0]], _unit_component_draws(n), unit[[2]]]), np.asarray(x, float),
+                             taus.size)
     best = None
     for edge in range(min(BAND_EDGES, times.size)):
         basis = np.column_stack([shapes[:, 0], shapes[:, 1 + edge:1 + times.size].sum(axis=1), shapes[:, -1]])
