@@ -66,5 +66,5 @@ def test_a_parameter_one_group_holds_is_not_judged_by_deleting_that_group():
     truth = log.truth["sf_nonlinearity"]["k3"]
     k3, sd = d.parameters["sf_nonlinearity"]["k3"], d.uncertainty["sf_nonlinearity"]["k3"]
     assert abs(k3 - truth) < 3 * sd < 0.1 * abs(truth), (k3, sd, truth)
-    column = d.context.design("output", d.state)[1].index("sf_nonlinearity")
-    assert largest_group_share(d.context, "output", d.state, column) > CONCENTRATED
+    x, names = d.context.design("output", d.state)
+    assert largest_group_share(x, names.index("sf_nonlinearity"), d.context.blocks) > CONCENTRATED

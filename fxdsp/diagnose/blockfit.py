@@ -58,6 +58,10 @@ class Blocks:
     def row_fold(self) -> np.ndarray:
         return np.repeat(self.fold, np.diff(self.edges))
 
+    def row_group(self) -> np.ndarray:
+        """Jackknife group of each row."""
+        return np.repeat(self.group(), np.diff(self.edges))
+
 
 class FoldTargets:
     """Many series fitted with one design after another (the draws of a noise null, [n, k]), their

@@ -28,7 +28,7 @@ def linear_parameters(ctx: Context, state: dict):
         normals, names = ctx.normals(ch, state)
         coef, _ = normals.fit_all()
         jk, _ = normals.jackknife()
-        by_fold = None
+        by_fold, fitted = None, None
         for cause in state:
             conv = converter(ctx, ch, cause, names)
             if conv is None:
@@ -36,24 +36,25 @@ def linear_parameters(ctx: Context, state: dict):
             pname, fn = conv
             params.setdefault(cause, {})[pname] = fn(coef)
             samples = jk
-            if CAUSES[cause].transient or largest_group_share(ctx, ch, state, names.index(cause)) > CONCENTRATED:
+            if not CAUSES[cause].transient:
+                fitted = ctx.whiten(ch, ctx.design(ch, state)[0]) if fitted is None else fitted
+            if CAUSES[cause].transient or largest_group_share(fitted, names.index(cause), ctx.blocks) > CONCENTRATED:
                 by_fold = normals.jackknife("fold")[0] if by_fold is None else by_fold
                 samples = by_fold
             sds.setdefault(cause, {})[pname] = jackknife_sd(np.array([fn(c) for c in samples]))
     return params, sds
 
 
-def largest_group_share(ctx: Context, channel: str, state: dict, column: int) -> float:
-    """The largest share of a design column's information, given the other columns, that one
-    contiguous group of the jackknife holds (on the rows as fitted: whitened when a filter is set)."""
-    x = ctx.whiten(channel, ctx.design(channel, state)[0])
+def largest_group_share(x: np.ndarray, column: int, blocks) -> float:
+    """The largest share of the information on column ``column`` of the design ``x`` (as fitted:
+    whitened when a filter is set), given its other columns, that one contiguous jackknife group of
+    ``blocks`` holds."""
     others = np.delete(x, column, axis=1)
     left = x[:, column] - others @ np.linalg.lstsq(others, x[:, column], rcond=None)[0]
     total = float(left @ left)
     if not total > 0:
         return 1.0
-    row_group = np.repeat(ctx.blocks.group(), np.diff(ctx.blocks.edges))
-    return float(np.max(np.bincount(row_group, weights=left * left)) / total)
+    return float(np.max(np.bincount(blocks.row_group(), weights=left * left)) / total)
 
 
 def converter(ctx: Context, channel: str, cause: str, names: list[str]):
