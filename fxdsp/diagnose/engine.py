@@ -18,7 +18,7 @@
    Then time-like causes (aging, warm-up, hysteresis, quadrature) are re-tested against a random-
    walk bias if the residual without them wanders (the places that frees are filled again by the
    forward selection, from the causes it did not remove); every cause on the output against draws of the
-   residual's own noise (white, flicker, random walk no smaller than a short log's variogram can
+   residual's own noise (white, a flicker band, random walk no smaller than a short log's variogram can
    miss: noise.py), which must not give the best of the causes the log could show as much (a short
    log cannot show a slight wander in its variogram, and flicker makes lags and ramp-rate terms
    too), a time constant searched on every draw; and every cause must still pass when it is the

@@ -6,8 +6,10 @@ three times the series, spaced by sqrt(10): a 1/f spectrum over the whole band. 
 the Allan variance (white a / tau, the flicker construction's, the walk's q tau / 3) are fitted to the
 residual's Allan variance taken robustly (medians of squared differences of adjacent means: a step
 or an outlier moves a few differences, not the median), by non-negative least squares weighted to
-equal relative errors. The whitening of the final numbers (fxdsp.diagnose.whitening) asks for the
-flicker's band as well (:func:`band_levels`: its lower edge where the fit is best).
+equal relative errors. The whitening of the final numbers (fxdsp.diagnose.whitening) and the noise
+re-test of the selection (fxdsp.diagnose.selection.check_against_noise) ask for the flicker's band
+(:func:`band_levels`: its lower edge where the fit is best); the nulls of what remains and the draws
+of the uncertainties keep the flicker from one row on (:func:`noise_levels`).
 """
 
 from __future__ import annotations

@@ -11,7 +11,7 @@ from fxdsp.diagnose.candidates import (affected_channels, evaluate, grid, nested
                                        tried)
 from fxdsp.diagnose.context import (MAX_CAUSES, MIN_EVIDENCE, MIN_GAIN, Candidate, Context, innovations, level_gain,
                                     residual, set_noise_weights, white_noise_variance)
-from fxdsp.diagnose.noise import noise_draws, noise_levels, readout_draws
+from fxdsp.diagnose.noise import band_levels, noise_draws, readout_draws
 from fxdsp.ramps import quantisation_step
 
 # causes whose regressor is slow in time, so a bias random walk can imitate them: a drift, a
@@ -332,10 +332,13 @@ def check_against_noise(ctx: Context, state: dict, accepted: list[Candidate]):
     (short logs: a few hundred rows cannot tell a small wander from white noise) still gives a line or
     a settling a held-out evidence of tens of white-noise variances, and the white-noise rule names
     it; flicker-dominated noise does the same for a lag or a ramp-rate term, whose columns follow the
-    slow programme. So the noise of the final residual is estimated (white, flicker and random walk,
-    :func:`fxdsp.diagnose.noise.noise_levels`, with the model's columns projected out of each shape,
-    as they are out of the residual), its walk no smaller than :func:`unseen_walk` (a line or a
-    settling can take the whole of a walk in a short log, and the fit then finds none), and each
+    slow programme. So the noise of the final residual is estimated (white, a flicker band and a random
+    walk, :func:`fxdsp.diagnose.noise.band_levels`, with the model's columns projected out of each
+    shape, as they are out of the residual: the noise the whitening of the final numbers takes; a
+    flicker fitted from one row on misplaced noise between white, flicker and walk on flicker whose
+    band starts slower, and this re-test then dropped lags and hysteresis steps of SNR 5..20 under
+    flicker, issue 32 notes), its walk no smaller than :func:`unseen_walk` (a line or a settling can
+    take the whole of a walk in a short log, and the fit then finds none), and each
     output cause's held-out evidence must exceed the :func:`null_threshold` of the best that
     :func:`null_draws` of that noise give it or any other cause the log could show (fixed seeds; a time
     constant searched on every draw, :func:`_null_quantile`); the weakest failure is removed until all pass."""
@@ -344,7 +347,7 @@ def check_against_noise(ctx: Context, state: dict, accepted: list[Candidate]):
         out_causes = [c for c in accepted if ch in affected_channels(ctx, c.cause)]
         if not out_causes:
             return state, accepted
-        white, flicker, walk = noise_levels(residual(ctx, state, ch), ctx.design(ch, state)[0])
+        white, flicker, walk = band_levels(residual(ctx, state, ch), ctx.design(ch, state)[0])
         levels = (white, flicker, max(walk, unseen_walk(white, ctx.series.n)))
         draws = _noise_draws(levels, ctx.series.n)
         full = ctx.normals(ch, state)[0].folds()[1].sum()
