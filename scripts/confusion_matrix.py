@@ -6,12 +6,18 @@ contract (tests/independent/chamber_logs.py, no fxdsp imports) and the project's
 single causes in logs of 500 rows, (--flicker) the single causes under flicker-dominated noise.
 
     .venv/bin/python scripts/confusion_matrix.py --per-label 20 [--generator independent|project|both]
-        [--triples] [--outside] [--short] [--flicker]
+        [--triples] [--outside] [--short] [--flicker] [--jsonl LOGS.jsonl]
+    .venv/bin/python scripts/confusion_matrix.py --compare OLD.jsonl NEW.jsonl
+
+--jsonl writes one line per log (independent.confusion.record); --compare prints both files' totals
+and every log whose named causes, flag or parameters differ between them (a change to the diagnosis
+is judged log by log, on the same seeds).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -19,7 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from tqdm import tqdm  # noqa: E402
 
-from independent.confusion import label_name, score, specs, table  # noqa: E402
+from independent.confusion import compare, label_name, record, score, specs, table  # noqa: E402
 
 
 def main() -> int:
@@ -30,7 +36,15 @@ def main() -> int:
     p.add_argument("--no-pairs", action="store_true")
     for group in ("triples", "outside", "short", "flicker"):
         p.add_argument(f"--{group}", action="store_true")
+    p.add_argument("--jsonl", type=Path, help="also write one JSON line per log here")
+    p.add_argument("--compare", nargs=2, type=Path, metavar=("OLD", "NEW"),
+                   help="compare two --jsonl files log by log and exit")
     args = p.parse_args()
+    if args.compare:
+        old, new = ([json.loads(line) for line in path.read_text().splitlines() if line] for path in args.compare)
+        print(compare(old, new))
+        return 0
+    sink = args.jsonl.open("w") if args.jsonl else None
     gens = ("independent", "project") if args.generator == "both" else (args.generator,)
     for gen in gens:
         # the project's simulator has no flicker-dominated kind nor a row count of its own
@@ -42,6 +56,9 @@ def main() -> int:
                 for k in range(args.per_label):
                     outcomes.append(score(lab, args.first_seed + k, gen, **kw))
                     outcomes[-1].label = label_name(lab, kw)
+                    if sink:
+                        sink.write(json.dumps(record(outcomes[-1], gen)) + "\n")
+                        sink.flush()
                     bar.update()
         print(f"## {gen} generator, {args.per_label} logs per label\n")
         print(table(outcomes))

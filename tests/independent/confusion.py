@@ -242,3 +242,46 @@ def table(outcomes: list[Outcome]) -> str:
                      f"z below 5: {sum(z < 5 for z in zs)}, 5..10: {sum(5 <= z < 10 for z in zs)}, "
                      f"10 and above: {sum(z >= 10 for z in zs)}")
     return "\n".join(lines)
+
+
+def record(o: Outcome, generator: str) -> dict:
+    """One log's outcome as a JSON-ready line (scripts/confusion_matrix.py --jsonl): what
+    :func:`compare` reads."""
+    return {"generator": generator, "label": o.label, "seed": o.seed, "truth": list(o.truth), "found": list(o.found),
+            "named_exactly": o.named_exactly, "params_ok": o.params_ok, "misses": o.misses,
+            "noise_misses": o.noise_misses, "outside": list(o.outside), "flagged": o.flagged,
+            "seconds": o.seconds, "sds_off": o.sds_off}
+
+
+def _totals(records: list[dict]) -> str:
+    inside = [r for r in records if not r["outside"]]
+    outside = [r for r in records if r["outside"]]
+    exact = [r for r in inside if r["named_exactly"]]
+    caused = [r for r in exact if r["truth"]]       # as table() counts parameters: logs with a cause
+    none = [r for r in inside if not r["truth"]]
+    sds = [z for r in inside for z in r["sds_off"]]
+    return (f"named exactly {len(exact)}/{len(inside)}; false alarms on none {sum(bool(r['found']) for r in none)}/"
+            f"{len(none)}; parameters within 25 % {sum(r['params_ok'] for r in caused)}/{len(caused)}; out-of-contract "
+            f"flagged {sum(r['flagged'] for r in outside)}/{len(outside)}; in-contract flagged "
+            f"{sum(r['flagged'] for r in inside)}/{len(inside)}; true within 2 sds {sum(z <= 2 for z in sds)}/{len(sds)}; "
+            f"median {np.median([r['seconds'] for r in records]) if records else float('nan'):.2f} s per log")
+
+
+def compare(old: list[dict], new: list[dict]) -> str:
+    """Both runs' totals, then every log (generator, label, seed) in both whose named causes,
+    `remaining` flag or parameters within 25 % differ, and the logs only one run has."""
+    key = lambda r: (r["generator"], r["label"], r["seed"])   # noqa: E731
+    a, b = {key(r): r for r in old}, {key(r): r for r in new}
+    lines = [f"old: {_totals(old)}", f"new: {_totals(new)}", ""]
+    for k in sorted(set(a) & set(b)):
+        x, y = a[k], b[k]
+        if (sorted(x["found"]), x["flagged"], x["params_ok"]) != (sorted(y["found"]), y["flagged"], y["params_ok"]):
+            lines.append(f"- {k[0]} {k[1]} seed {k[2]}: found {x['found'] or ['none']} -> {y['found'] or ['none']}; "
+                         f"flagged {x['flagged']} -> {y['flagged']}; parameters within {x['params_ok']} -> "
+                         f"{y['params_ok']}" + (f" ({'; '.join(y['misses'])})" if not y["params_ok"] and y["misses"] else ""))
+    only = sorted(set(a) ^ set(b))
+    if only:
+        lines.append(f"- {len(only)} log(s) in one run only, first: {only[0]}")
+    if len(lines) == 3:
+        lines.append("no log differs")
+    return "\n".join(lines)

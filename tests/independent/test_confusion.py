@@ -1,0 +1,42 @@
+"""The confusion matrix's per-log records and their comparison (scripts/confusion_matrix.py --jsonl,
+--compare): a change to the diagnosis is judged log by log on the same seeds, so the comparison must
+list exactly the logs whose answer changed, and count the totals from the records alone."""
+
+from __future__ import annotations
+
+import json
+
+from .confusion import compare, record, score
+
+
+def _line(label, seed, truth, found, flagged=False, params_ok=True, outside=()):
+    # the fields record() writes, filled in by hand: what a run of the script leaves in its file
+    return {"generator": "independent", "label": label, "seed": seed, "truth": list(truth), "found": list(found),
+            "named_exactly": sorted(found) == sorted(truth), "params_ok": params_ok, "misses": [] if params_ok else
+            ["aging_drift.r_per_h 1.5 vs 1"], "noise_misses": [], "outside": list(outside), "flagged": flagged,
+            "seconds": 1.0, "sds_off": [0.5]}
+
+
+def test_the_comparison_lists_the_logs_whose_answer_changed_and_counts_from_the_records():
+    old = [_line("none", 5000, (), ()), _line("aging_drift", 5000, ("aging_drift",), ()),
+           _line("none + outside:step", 5000, (), (), flagged=True, outside=("step",))]
+    new = [_line("none", 5000, (), ()), _line("aging_drift", 5000, ("aging_drift",), ("aging_drift",), params_ok=False),
+           _line("none + outside:step", 5000, (), (), flagged=True, outside=("step",))]
+    text = compare(old, new)
+    changed = [line for line in text.splitlines() if line.startswith("- ")]
+    assert len(changed) == 1 and "aging_drift seed 5000" in changed[0] and "1.5 vs 1" in changed[0], text
+    assert "old: named exactly 1/2" in text and "new: named exactly 2/2" in text, text
+    assert "parameters within 25 % 0/0" in text.splitlines()[0], text   # no log with a cause named
+    assert "parameters within 25 % 0/1" in text.splitlines()[1], text   # the drift named, its rate off
+    assert "out-of-contract flagged 1/1" in text, text
+    assert "no log differs" in compare(old, old)
+
+
+def test_a_diagnosed_log_is_written_as_a_json_line_the_comparison_reads():
+    o = score((), 5000, rows=500)
+    o.label = "none (500 rows)"
+    line = json.loads(json.dumps(record(o, "independent")))
+    assert line["found"] == o.found and line["seed"] == 5000 and line["named_exactly"] == o.named_exactly
+    assert "no log differs" in compare([line], [line])
+    moved = {**line, "found": ["aging_drift"] if not o.found else []}
+    assert "none (500 rows) seed 5000" in compare([line], [moved])
