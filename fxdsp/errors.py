@@ -8,6 +8,15 @@ class InputError(ValueError):
     """
 
 
+class MissingColumn(InputError):
+    """A log lacks a column the work needs: ``column`` names it, so that a command which read the log can
+    say why when its reader set that column aside (fxdsp.logfile.saying_why_columns_are_missing)."""
+
+    def __init__(self, message: str, column: str):
+        super().__init__(message)
+        self.column = column
+
+
 class InputTypeError(InputError, TypeError):
     """Bad input of the wrong type (a config value that is not a number, a list that is not one).
 

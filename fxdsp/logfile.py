@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import datetime as _dt
 import io
+from contextlib import contextmanager
 import re
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from fxdsp.errors import InputError
+from fxdsp.errors import InputError, MissingColumn
 
 REQUIRED = ("time_s", "temp_c", "output")
 OPTIONAL = ("ref_temp_c", "rate_dps", "freq_hz", "quad")
@@ -65,6 +66,21 @@ def _usable_span(values: np.ndarray) -> float:
 # readout channels that are fitted as channels of their own: one value in every usable row is a
 # stuck counter or a disconnected input, not a reading
 STUCK_READOUTS = ("freq_hz", "quad")
+
+
+@contextmanager
+def saying_why_columns_are_missing(*logs: Log):
+    """Work on ``logs`` during which a missing column (:class:`fxdsp.errors.MissingColumn`) that a log's
+    reader set aside (stuck, still, empty: :attr:`Log.ignored`) is refused with the reason, not only
+    with the column's name: the user's log has the column, and the one line must say why it was not
+    used."""
+    try:
+        yield
+    except MissingColumn as exc:
+        why = [log.ignored[exc.column] for log in logs if exc.column in log.ignored]
+        if not why:
+            raise
+        raise MissingColumn(f"{exc}; the log's {'; '.join(why)}", exc.column) from None
 
 
 def _set_aside(name: str, why: str, notes: list, ignored: dict) -> None:

@@ -361,6 +361,22 @@ def test_calibrate_says_why_a_column_it_needs_was_ignored(tmp_path, capsys):
                            "ignored")
 
 
+@pytest.mark.parametrize("paper,column", [("001", "freq_hz"), ("002", "rate_dps")])
+def test_calibrate_apply_says_why_a_column_the_second_log_lacks_was_ignored(tmp_path, capsys, paper, column):
+    """--apply runs the calibrated compensation on a second log; one whose needed column holds only the
+    logger's sentinel has the column, and the reader drops it. The compensation indexed the missing
+    column (paper 001: a KeyError, exit 70); it is refused by name, with the reader's reason."""
+    from fxdsp.sim import generate_log, write_log
+
+    log = generate_log(f"paper{paper}", effects={}, seed=1)
+    write_log(tmp_path / "good.csv", log)
+    write_log(tmp_path / "dead.csv", {**log, column: np.full(len(log["temp_c"]), 9.9e37)})
+    code = main(["calibrate", "--paper", paper, str(tmp_path / "good.csv"), "--apply", str(tmp_path / "dead.csv"),
+                 "--json", str(tmp_path / "c.json")])
+    _assert_one_line_error(code, capsys.readouterr().err, f"needs the {column} column",
+                           f"'{column}' has no usable value", "ignored")
+
+
 def test_an_ignored_reference_costs_no_row(tmp_path, capsys):
     """A stuck probe whose logger also writes "no reading" placeholders or empty cells: the column is
     ignored, so its bad cells must not drop rows that every read column holds well (they did: the

@@ -25,7 +25,7 @@ from pathlib import Path
 from fxdsp.commands.options import Number
 from fxdsp.outputs import IN, OUT_FILE, json_text, staged
 from fxdsp.sim import calibration
-from fxdsp.logfile import read_log
+from fxdsp.logfile import read_log, saying_why_columns_are_missing
 from fxdsp.errors import InputError
 
 FITS = {"002": calibration.calibrate_paper002, "001": calibration.calibrate_paper001,
@@ -60,15 +60,8 @@ def _run(args, stage) -> int:
         raise InputError(f"--paper: unknown paper {args.paper!r}; expected one of {', '.join(FITS)}")
     read = read_log(args.log)   # the contract's reader: bad rows dropped, bad logs refused
     log = read.columns
-    try:
+    with saying_why_columns_are_missing(read):
         result = FITS[args.paper](log)
-    except InputError as exc:
-        # a column the fit needs may be one the log has and the reader ignored (stuck, still, empty):
-        # the one line says why, not only that it is missing
-        why = [note for column, note in read.ignored.items() if column in str(exc)]
-        if why:
-            raise InputError(f"{exc}; the log's {'; '.join(why)}") from None
-        raise
     if read.notes:   # what the reader set aside (a column ignored) is said, not silently fitted around
         result["notes"] = list(read.notes)
     if args.config_out or args.apply:
@@ -85,8 +78,9 @@ def _run(args, stage) -> int:
         if args.config_out:
             stage.write_text(args.config_out, text)
         if args.apply:
-            log2 = read_log(args.apply).columns
-            result["apply"] = {"log": Path(args.apply).name, **apply_config(args.paper, text, log2)}
+            second = read_log(args.apply)
+            with saying_why_columns_are_missing(second):
+                result["apply"] = {"log": Path(args.apply).name, **apply_config(args.paper, text, second.columns)}
     text = json_text(result, "--json" if args.json else "calibrate", indent=2)
     if args.json:
         stage.write_text(args.json, text)

@@ -57,7 +57,7 @@ def configure(parser) -> None:
 
 
 def run(args) -> int:
-    from fxdsp.logfile import parse_mapping, read_log
+    from fxdsp.logfile import parse_mapping, read_log, saying_why_columns_are_missing
     from fxdsp.errors import InputError
     from fxdsp.extend.pipeline import extend_log
     from fxdsp.outputs import staged
@@ -71,7 +71,8 @@ def run(args) -> int:
                         base_name=f"--config {args.config}" if args.config else None)
     if args.apply:
         second = read_log(args.apply, parse_mapping(args.map), delimiter, args.time_format)
-        result.apply(second.columns, Path(args.apply).name, second.notes)
+        with saying_why_columns_are_missing(second):
+            result.apply(second.columns, Path(args.apply).name, second.notes)
     with staged() as stage:
         result.write(stage.dir(args.out))
     rep = result.report

@@ -87,11 +87,13 @@ def extend_log(path, mapping=None, delimiter=",", time_format=None, chain="auto"
                rtl: bool = True, build_root=None, widen: bool = False, strict: bool = False,
                base_name: str | None = None) -> Extension:
     from fxdsp.diagnose.api import diagnose_log
-    from fxdsp.logfile import read_log
+    from fxdsp.logfile import read_log, saying_why_columns_are_missing
 
-    diag = diagnose_log(read_log(path, mapping, delimiter, time_format))
-    return extend_diagnosis(diag, Path(str(path)).name, chain, base_text, rtl, build_root, widen=widen,
-                            strict=strict, base_name=base_name)
+    read = read_log(path, mapping, delimiter, time_format)
+    diag = diagnose_log(read)
+    with saying_why_columns_are_missing(read):
+        return extend_diagnosis(diag, Path(str(path)).name, chain, base_text, rtl, build_root, widen=widen,
+                                strict=strict, base_name=base_name)
 
 
 def extend_diagnosis(diag, log_name: str, chain="auto", base_text=None, rtl: bool = True,

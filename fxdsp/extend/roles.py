@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fxdsp.errors import InputError
+from fxdsp.errors import InputError, MissingColumn
 from fxdsp.sensors import Sensor
 
 # sensor -> the calibration procedure that reads it (a chain without a sensor: "thermometer")
@@ -120,7 +120,7 @@ def needs_column(roles: Roles, columns: dict, what: str = "log") -> None:
     """InputError when the log (``what``) lacks the column the chain's procedure calibrates from."""
     need = NEEDS.get(roles.procedure)
     if need is not None and need not in columns:
-        raise InputError(f"{what}: the {roles.chain} chain ({roles.procedure}) needs the {need} column")
+        raise MissingColumn(f"{what}: the {roles.chain} chain ({roles.procedure}) needs the {need} column", need)
 
 
 def resolve(chain: str, design, columns: dict, config_name: str | None = None) -> Roles:

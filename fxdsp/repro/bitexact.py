@@ -28,7 +28,7 @@ import numpy as np
 from fxdsp.blocks.freq2temp import Freq2Temp
 from fxdsp.chains import build
 from fxdsp.config import Config
-from fxdsp.errors import InputError
+from fxdsp.errors import InputError, MissingColumn
 from fxdsp.fixed import Format, OverflowLog, Rules, quantize, to_float
 from fxdsp.repro.calconfig import FS_MV
 
@@ -37,6 +37,14 @@ ROUND = Rules("half_up", "saturate")
 # paper 002's frequency thermometer: the 8 kHz drive frequency word
 DRIVE_FREQ_FORMAT = Format.parse("s32.17")
 KINV_FORMAT = Format.parse("s24.18")
+
+
+def _column(log_data: dict, name: str) -> np.ndarray:
+    """A log column the compensation reads, refused by name when the log lacks it (a command that read
+    the log says why its reader set it aside: fxdsp.logfile.saying_why_columns_are_missing)."""
+    if name not in log_data:
+        raise MissingColumn(f"log: the compensation needs the {name} column", name)
+    return _finite(name, log_data[name])
 
 
 def _finite(name: str, values) -> np.ndarray:
@@ -89,18 +97,18 @@ class Compensator002:
     def compensate(self, log_data: dict, temp_c=None) -> dict[str, np.ndarray]:
         """Compensate a log; ``temp_c`` (C) replaces the RTD path by a direct temperature estimate."""
         ovf = OverflowLog()
-        code = (self.temperature_code(log_data["temp_c"], ovf) if temp_c is None
+        code = (self.temperature_code(_column(log_data, "temp_c"), ovf) if temp_c is None
                 else self.temperature_code_direct(temp_c))
-        return self.run(log_data["output"], code, ovf)
+        return self.run(_column(log_data, "output"), code, ovf)
 
     def compensate_lagged(self, log_data: dict) -> dict[str, np.ndarray]:
         """RTD code -> ``lag`` block (die-temperature estimate, config's [lag]) -> compensation."""
         if self.lag_template is None:
             raise InputError("config: has no [lag] table for the lag-aware temperature estimate")
         ovf = OverflowLog()
-        code = self.temperature_code(log_data["temp_c"], ovf)
+        code = self.temperature_code(_column(log_data, "temp_c"), ovf)
         te = self.lag_template.run(log=ovf, temp=code).outputs["te"]
-        return self.run(log_data["output"], te, ovf)
+        return self.run(_column(log_data, "output"), te, ovf)
 
     def frequency_thermometer(self, f0_hz: float, k_hz_per_c: float) -> Freq2Temp:
         """A freq2temp block on the drive frequency (paper 001's idea applied to paper 002's gyro)."""
@@ -110,9 +118,9 @@ class Compensator002:
     def compensate_by_frequency(self, log_data: dict, f0_hz: float, k_hz_per_c: float) -> dict:
         f2t = self.frequency_thermometer(f0_hz, k_hz_per_c)
         ovf = OverflowLog()
-        f = quantize(_finite("freq_hz", log_data["freq_hz"]), DRIVE_FREQ_FORMAT, ROUND, ovf, "freq")
+        f = quantize(_column(log_data, "freq_hz"), DRIVE_FREQ_FORMAT, ROUND, ovf, "freq")
         code = f2t.stream(ovf, f=f)["temp"]
-        return self.run(log_data["output"], code, ovf)
+        return self.run(_column(log_data, "output"), code, ovf)
 
 
 class Compensator001:
@@ -130,8 +138,8 @@ class Compensator001:
     def compensate(self, log_data: dict) -> dict[str, np.ndarray]:
         ovf = OverflowLog()
         s = self.chain.sensor
-        f = quantize(_finite("freq_hz", log_data["freq_hz"]), s.f2t.freq_format, ROUND, ovf, "freq")
-        r = quantize(_finite("output", log_data["output"]), s.subtract.in_format, ROUND, ovf, "rate")
+        f = quantize(_column(log_data, "freq_hz"), s.f2t.freq_format, ROUND, ovf, "freq")
+        r = quantize(_column(log_data, "output"), s.subtract.in_format, ROUND, ovf, "rate")
         res = self.chain.run(ovf, **{s.f: f, s.rate_in: r})
         out = self.chain.real_outputs(res)
         # the resonator thermometer's temperature, from its own block (a chain need not output it)

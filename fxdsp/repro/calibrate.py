@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from fxdsp.repro.points import rate_table_points
-from fxdsp.errors import InputError
+from fxdsp.errors import InputError, MissingColumn
 
 
 def fit_segments(temps_c, values, order: int = 1) -> dict:
@@ -72,7 +72,7 @@ def frequency_thermometer(log: dict, temp_col: str = "temp_c") -> dict:
     """f = f0 + k T by least squares against ``temp_col`` on the settled tail of each rate-table
     point (the zero-rate stretch before it): the resonator's own thermometer for paper 002."""
     if "freq_hz" not in log:
-        raise InputError("log: needs the freq_hz column for a frequency thermometer")
+        raise MissingColumn("log: needs the freq_hz column for a frequency thermometer", "freq_hz")
     pts_t = rate_table_points(log, temp=log[temp_col], sort=False)["temp_c"]
     pts_f = rate_table_points(log, temp=log["freq_hz"], sort=False)["temp_c"]
     k, f0 = np.polyfit(pts_t, pts_f, 1)

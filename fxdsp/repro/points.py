@@ -10,7 +10,7 @@ the SF. The temperature of the point is the mean of ``temp_col`` over the sample
 from __future__ import annotations
 
 import numpy as np
-from fxdsp.errors import InputError
+from fxdsp.errors import InputError, MissingColumn
 
 
 def rate_table_windows(log: dict, log_s: float = 3600.0) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -18,7 +18,7 @@ def rate_table_windows(log: dict, log_s: float = 3600.0) -> list[tuple[np.ndarra
     contiguous zero-rate stretch (at most ``log_s``) right before it. These rows are what a paper 002
     calibration reads; every other row is held out from it."""
     if "rate_dps" not in log:
-        raise InputError("log: needs the rate_dps column (rate-table steps)")
+        raise MissingColumn("log: needs the rate_dps column (rate-table steps)", "rate_dps")
     if not log_s > 0:
         raise InputError(f"log_s: must be > 0, got {log_s!r}")
     t = np.asarray(log["time_s"], float)

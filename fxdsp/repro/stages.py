@@ -15,7 +15,7 @@ import numpy as np
 
 from fxdsp.diagnose.extension import log_rate_lag
 from fxdsp.fixed import OverflowLog
-from fxdsp.errors import InputError
+from fxdsp.errors import MissingColumn
 
 
 def trim_angle(nco) -> float:
@@ -53,7 +53,7 @@ def stage_inputs(comp, columns: dict, on: set[str], tau_s: float | None, theta: 
     """(temperature code the engines see, output the divider sees) with the stages ``on``. A config
     whose RTD table is CVD reads the log's temp_c as a linear reading of that element."""
     if "trim" in on and "quad" not in columns:
-        raise InputError("log: the config's demodulation phase trim needs the quad column to compensate at log rate")
+        raise MissingColumn("log: the config's demodulation phase trim needs the quad column to compensate at log rate", "quad")
     ovf = OverflowLog() if ovf is None else ovf
     if "cvd" in on:
         code = comp.rtd.stream(ovf, code=linear_readout_codes(comp.rtd, columns["temp_c"], ovf))["temp"]

@@ -21,7 +21,7 @@ import numpy as np
 from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
 from fxdsp.ramps import sample_interval
-from fxdsp.errors import InputError
+from fxdsp.errors import InputError, MissingColumn
 
 G = 1.0  # the tumble's input unit: accelerations in g, so K1 is per g and K0/K1 is in g
 
@@ -88,7 +88,7 @@ def eval_piecewise_linear(fit: dict, temp_c) -> np.ndarray:
 def calibration_points_paper002(log: dict) -> dict[str, np.ndarray]:
     """Per plateau: RTD temperature, SF (rate-table slope) and zero-rate bias, in output units."""
     if "rate_dps" not in log:
-        raise InputError("log: paper 002 calibration needs the rate_dps column (rate-table steps)")
+        raise MissingColumn("log: paper 002 calibration needs the rate_dps column (rate-table steps)", "rate_dps")
     temps, sfs, biases = [], [], []
     for idx in find_plateaus(log["time_s"], log["temp_c"]):
         rate, out = log["rate_dps"][idx], log["output"][idx]
@@ -148,7 +148,7 @@ def calibrate_paper001(log: dict, bias_order: int = 2) -> dict:
     taken; ``bias_poly`` is ascending in T (C) like the paper's -0.25 T^2 - 36.92 T + 1469.5.
     """
     if "freq_hz" not in log:
-        raise InputError("log: paper 001 calibration needs the freq_hz column")
+        raise MissingColumn("log: paper 001 calibration needs the freq_hz column", "freq_hz")
     thermometer = log["ref_temp_c"] if "ref_temp_c" in log else log["temp_c"]
     plateaus = find_plateaus(log["time_s"], thermometer)
     if bias_order not in (2, 3):
@@ -208,7 +208,7 @@ def tumble_points_from_log(log: dict) -> dict[str, np.ndarray]:
     """K0, K1 per temperature plateau of a paper000 log; the applied-input column (rate_dps) holds
     a = g cos(theta): +1 g at 0 deg, 0 at 90/270 deg, -1 g at 180 deg."""
     if "rate_dps" not in log:
-        raise InputError("log: paper 000 calibration needs the applied-input column rate_dps (a in g)")
+        raise MissingColumn("log: paper 000 calibration needs the applied-input column rate_dps (a in g)", "rate_dps")
     temps, k0s, k1s = [], [], []
     for idx in find_plateaus(log["time_s"], log["temp_c"]):
         a, out = log["rate_dps"][idx], log["output"][idx]

@@ -216,24 +216,20 @@ def table(outcomes: list[Outcome]) -> str:
         lines.append(f"| {name} | {len(items)} | {exact} | {params} | {sum(o.gain_ok for o in items)} | "
                      f"{sum(o.flagged for o in items)} | {common} |")
     inside = [o for o in outcomes if not o.outside]
-    outside = [o for o in outcomes if o.outside]
-    n = len(inside)
-    exact = sum(o.named_exactly for o in inside)
-    secs = np.median([o.seconds for o in outcomes])
+    c = counts([record(o, "") for o in outcomes])
+    n, exact = c["in_contract"], c["named_exactly"]
     rows6k = np.median([o.rows for o in outcomes])
     lines.append("")
-    none = [o for o in inside if not o.truth]
-    alarms = sum(bool(o.found) for o in none)
     gains = [o.gain_ratio for o in inside if o.truth and o.named_exactly]
     lines.append(f"{exact}/{n} in-contract logs named exactly ({100 * exact / max(n, 1):.1f} %); false alarms on none: "
-                 f"{alarms}/{len(none)}; parameters within 25 %: "
-                 f"{sum(o.params_ok for o in inside if o.truth and o.named_exactly)}/{len(gains)} of the logs named "
+                 f"{c['false_alarms']}/{c['none']}; parameters within 25 %: "
+                 f"{c['params_within']}/{c['named_with_cause']} of the logs named "
                  f"exactly (of the others, {sum(o.noise_limited for o in inside if o.named_exactly)} miss only "
                  f"parameters the known-baseline oracle misses too); true values within 2 reported sds: "
-                 f"{sum(z <= 2 for o in inside for z in o.sds_off)}/{sum(len(o.sds_off) for o in inside)}; held-out gain min {min(gains, default=float('nan')):.2f}, "
+                 f"{c['within_2_sds']}/{c['sds']}; held-out gain min {min(gains, default=float('nan')):.2f}, "
                  f"median {np.median(gains) if gains else float('nan'):.2f}; `remaining` significant on "
-                 f"{sum(o.flagged for o in outside)}/{len(outside)} out-of-contract logs and on "
-                 f"{sum(o.flagged for o in inside)}/{n} in-contract logs; median {secs:.2f} s per log "
+                 f"{c['outside_flagged']}/{c['outside']} out-of-contract logs and on "
+                 f"{c['in_contract_flagged']}/{n} in-contract logs; median {c['median_seconds']:.2f} s per log "
                  f"(median {rows6k:.0f} rows); reports with an unidentified parameter as a plain number: "
                  f"{sum(bool(o.plain_unidentified) for o in outcomes)}")
     zs = [z for o in inside for z in o.missed_z.values()]
@@ -253,18 +249,30 @@ def record(o: Outcome, generator: str) -> dict:
             "seconds": o.seconds, "sds_off": o.sds_off}
 
 
-def _totals(records: list[dict]) -> str:
+def counts(records: list[dict]) -> dict:
+    """The matrix's totals from per-log :func:`record` lines: what :func:`table`'s summary and
+    :func:`compare` both report."""
     inside = [r for r in records if not r["outside"]]
     outside = [r for r in records if r["outside"]]
     exact = [r for r in inside if r["named_exactly"]]
-    caused = [r for r in exact if r["truth"]]       # as table() counts parameters: logs with a cause
+    caused = [r for r in exact if r["truth"]]       # parameters are counted on logs with a cause
     none = [r for r in inside if not r["truth"]]
     sds = [z for r in inside for z in r["sds_off"]]
-    return (f"named exactly {len(exact)}/{len(inside)}; false alarms on none {sum(bool(r['found']) for r in none)}/"
-            f"{len(none)}; parameters within 25 % {sum(r['params_ok'] for r in caused)}/{len(caused)}; out-of-contract "
-            f"flagged {sum(r['flagged'] for r in outside)}/{len(outside)}; in-contract flagged "
-            f"{sum(r['flagged'] for r in inside)}/{len(inside)}; true within 2 sds {sum(z <= 2 for z in sds)}/{len(sds)}; "
-            f"median {np.median([r['seconds'] for r in records]) if records else float('nan'):.2f} s per log")
+    return {"in_contract": len(inside), "named_exactly": len(exact), "none": len(none),
+            "false_alarms": sum(bool(r["found"]) for r in none), "named_with_cause": len(caused),
+            "params_within": sum(r["params_ok"] for r in caused), "outside": len(outside),
+            "outside_flagged": sum(r["flagged"] for r in outside), "in_contract_flagged": sum(r["flagged"] for r in inside),
+            "sds": len(sds), "within_2_sds": sum(z <= 2 for z in sds),
+            "median_seconds": float(np.median([r["seconds"] for r in records])) if records else float("nan")}
+
+
+def _totals(records: list[dict]) -> str:
+    c = counts(records)
+    return (f"named exactly {c['named_exactly']}/{c['in_contract']}; false alarms on none {c['false_alarms']}/"
+            f"{c['none']}; parameters within 25 % {c['params_within']}/{c['named_with_cause']}; out-of-contract "
+            f"flagged {c['outside_flagged']}/{c['outside']}; in-contract flagged {c['in_contract_flagged']}/"
+            f"{c['in_contract']}; true within 2 sds {c['within_2_sds']}/{c['sds']}; "
+            f"median {c['median_seconds']:.2f} s per log")
 
 
 def compare(old: list[dict], new: list[dict]) -> str:
