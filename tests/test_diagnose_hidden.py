@@ -30,8 +30,16 @@ def _diagnose(log: dict):
     return diagnose_columns(log, source="sim")
 
 
-@pytest.mark.parametrize("seed", SEEDS)
-@pytest.mark.parametrize("cause", ALL_CAUSES)
+# two logs per cause, the four seeds taken in turn over the causes (their scenario and column draws
+# all stay in the set), and `none` on all four (its seeds draw flicker, white and random-walk noise:
+# each a false alarm of its own); the rates over 20 cases per cause are the slow test's and
+# diagnose-hidden's
+CASES = [pytest.param(cause, seed, id=f"{cause}-{seed}")
+         for i, cause in enumerate(ALL_CAUSES)
+         for seed in (SEEDS if cause == "none" else SEEDS[2 * (i % 2):2 * (i % 2) + 2])]
+
+
+@pytest.mark.parametrize("cause, seed", CASES)
 def test_hidden_cause_is_named_with_its_parameters(cause, seed):
     case = make_case(cause, seed)
     diag = diagnose_case(case)

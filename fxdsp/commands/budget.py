@@ -92,7 +92,8 @@ def configure(parser) -> None:
     parser.add_argument("--cost", default="total_bits", choices=("total_bits", "register_bits"),
                         help="cost the search minimises: every bit (registers, coefficients, LUT memory; default) "
                              "or register/coefficient bits only")
-    parser.add_argument("--margin", type=FINITE, default=0.02, help="optimise to (1 - margin) x target (default 0.02)")
+    parser.add_argument("--margin", type=FINITE, default=None,
+                        help=f"with --optimise: optimise to (1 - margin) x target (default {opt.DEFAULT_MARGIN})")
     parser.add_argument("--max-mean", help="with --optimise: also keep |mean| (a bias) of the --target output within "
                                            "this, <value><unit> as --target")
     parser.add_argument("--drive-ramp", action="store_true",
@@ -125,8 +126,10 @@ def _run(args, stage) -> int:
         raise InputError("--optimise: needs --target <value><unit>")
     opt.check_search(args.chain, args.margin, chains=design.chains, search=args.optimise, cost_model=args.cost,
                      drive_band=args.optimise and args.drive_band)
-    for opt_only in ("max_mean", "drive_band"):
-        if getattr(args, opt_only) and not args.optimise:
+    # a search's options on a run without one would be accepted and do nothing (a margin of 0 read
+    # as "no margin" by a budget that has no target to margin)
+    for opt_only in ("margin", "max_mean", "drive_band"):
+        if getattr(args, opt_only) not in (None, False) and not args.optimise:
             raise InputError(f"--{opt_only.replace('_', '-')}: only with --optimise")
     # the target's chain first: a target that names no output of it is refused before the rest is run
     own = {(c, p): attribute(design, c, p) for c, p in attributed(design) if c == args.chain}
@@ -217,7 +220,8 @@ def _run(args, stage) -> int:
                          "port": target.port, "metric": args.metric, "measured": measured, "met": meets}
         if args.optimise:
             freqs = tuple(drive_frequencies(demod_f_hz(cfg, design, target.chain))) if args.drive_band else ()
-            result = opt.optimise(cfg, target, args.metric, args.margin, progress=tqdm, cost_model=args.cost,
+            result = opt.optimise(cfg, target, args.metric, opt.DEFAULT_MARGIN if args.margin is None else args.margin,
+                                  progress=tqdm, cost_model=args.cost,
                                   max_mean=max_mean, frequencies=freqs)
             print(f"\n7. word-length search ({result.evaluations} evaluations, greedy min+b):")
             print(opt.format_result(result))
