@@ -53,6 +53,30 @@ def one_per_module(d) -> list[str]:
     return out
 
 
+def dut_key(d, name: str, extra: dict | None = None) -> str | None:
+    """What makes block instance ``name`` of design ``d`` the DUT it is: its module, parameters and
+    ROM files (:func:`fxdsp.hdl.params.instance`) and the run's own parameters ``extra``; None for a
+    chain top (its generated text is its members')."""
+    from fxdsp.hdl import params as hp
+
+    if d.instances[name].members:
+        return None
+    return repr((hp.instance(d, name), sorted((extra or {}).items())))
+
+
+def distinct_duts(d, names) -> list[str]:
+    """``names`` without each instance whose DUT (:func:`dut_key`) is an earlier one's (bias_subtract02
+    is its original's section word for word in the default config): the same DUT again, where a test
+    checks what an instance's parameters make of its module."""
+    out, seen = [], set()
+    for n in names:
+        key = dut_key(d, n)
+        if key is None or key not in seen:
+            seen.add(key)
+            out.append(n)
+    return out
+
+
 def covering_tops(d) -> list[str]:
     """The fewest chain tops (greedy) that hold every block module any chain top holds: where a test
     checks the members' modules in a top (their corner codes through a top's wiring, their formats

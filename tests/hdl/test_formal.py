@@ -16,7 +16,7 @@ import pytest
 
 from fxdsp.cli import main
 from fxdsp.hdl import formal
-from hdl_util import design_of, mutated_rtl, mutated_top
+from hdl_util import design_of, distinct_duts, mutated_rtl, mutated_top
 
 pytestmark = pytest.mark.skipif(formal.tools_missing() is not None, reason=str(formal.tools_missing()))
 
@@ -33,7 +33,8 @@ LONG = {"demod", "drive"}
 
 def _blocks():
     d = design_of()
-    return [n for n in formal.serial_duts(d) if not d.instances[n].members and d.instances[n].module not in LONG]
+    return distinct_duts(d, [n for n in formal.serial_duts(d) if not d.instances[n].members
+                             and d.instances[n].module not in LONG])
 
 
 @pytest.mark.parametrize("name", _blocks())

@@ -17,12 +17,14 @@ import pytest
 
 from fxdsp.hdl.chain_top import has_divider
 from fxdsp.vectors import load
-from hdl_util import SERIAL, SIMULATORS, VECTORS, design_of, icarus_samples, icarus_window, record_throughput, \
-    run_cocotb, segment
+from hdl_util import SERIAL, SIMULATORS, VECTORS, design_of, distinct_duts, icarus_samples, icarus_window, \
+    record_throughput, run_cocotb, segment
 from long_common import file_stream
 
 # every instance of the design with an RTL module; the manifest lists them all (and the others)
-NAMES = sorted(set(json.loads((VECTORS / "manifest.json").read_text())["blocks"]) & set(design_of().hardware))
+# (an instance that is another's DUT under the same parameters, a copy such as iir02, once: distinct_duts)
+NAMES = distinct_duts(design_of(), sorted(set(json.loads((VECTORS / "manifest.json").read_text())["blocks"])
+                                          & set(design_of().hardware)))
 _TOPS = {n for n, inst in design_of().instances.items() if inst.members}
 # blocks whose whole golden set Icarus simulates slowly (a drive loop's 6.8k samples: 7-10 s of vvp; the
 # demodulator's and the low-pass's 2-3 s) streamed whole on Verilator instead, file-driven, a window on

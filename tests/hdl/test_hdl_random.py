@@ -9,7 +9,7 @@ import zlib
 
 import pytest
 
-from hdl_util import COPIES, SERIAL, covering_tops, design_of, icarus_samples, icarus_window, merged, run_cocotb, \
+from hdl_util import COPIES, SERIAL, covering_tops, design_of, dut_key, icarus_samples, icarus_window, merged, run_cocotb, \
     segment, with_copies
 
 from fxdsp.hdl.stimuli import random_stimulus  # fxdsp rtl and the sweep's RTL shards draw the same way
@@ -83,20 +83,17 @@ def design(pset):
 
 
 def distinct_sets(names, extra=lambda d, n: None) -> list[tuple[str, str]]:
-    """(set, name) for each name under each set that gives it a DUT no earlier set gave it (its
-    parameters, ROM files and run parameters): a set that leaves an instance as another left it
-    (drive and drive001: no set touches the loop's sections) would only stream other draws through
-    the same DUT, which is not what a parameter set is for."""
-    from fxdsp.hdl import params as hp
-
+    """(set, name) for each name under each set that gives it a DUT (hdl_util.dut_key) no earlier set
+    gave it: a set that leaves an instance as another left it (drive and drive001: no set touches the
+    loop's sections) would only stream other draws through the same DUT, which is not what a
+    parameter set is for. Chain tops run under every set."""
     out, seen = [], set()
     for pset in sorted(PARAM_SETS):
         d = design(pset)
         for name in names:
-            key = (name, repr(hp.instance(d, name)) if not d.instances[name].members else None,
-                   repr(sorted((extra(d, name) or {}).items())))
-            if d.instances[name].members or key not in seen:
-                seen.add(key)
+            key = dut_key(d, name, extra(d, name))
+            if key is None or (name, key) not in seen:
+                seen.add((name, key))
                 out.append((pset, name))
     return sorted(out, key=lambda pn: (pn[1], pn[0]))
 
