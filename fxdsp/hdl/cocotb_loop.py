@@ -47,7 +47,7 @@ async def closed_loop(dut):
     want = {p: exp[p] for p in outs}
     codes_want = exp["codes"]
     out_h = {p: getattr(dut, p) for p in outs}
-    cocotb.start_soon(Clock(dut.clk, PERIOD_NS, unit="ns").start())
+    cocotb.start_soon(Clock(dut.clk, PERIOD_NS, unit="ns", impl="gpi").start())   # as cocotb_stream's
     dut.in_valid.value = 0
     dut.x.value = 0
     dut.rst.value = 1
