@@ -191,3 +191,23 @@ def test_a_chain_extend_has_no_calibration_for_is_one_line(made, capsys):
                     "--widen", "--no-rtl", "--out", folder / "x")
     assert code == 2 and err.count("\n") == 1 and "bias_subtract3.y" in err and "chain.mythermo" in err, err
     assert not (folder / "x").exists()
+
+
+@pytest.mark.parametrize("config", ["default.toml", "formal_narrow.toml"])
+def test_an_unknown_chain_is_refused_naming_every_choice_once(config):
+    """The choices --chain takes are listed whole: auto, each chain of the config, and the thermometer
+    extend writes; a config without chains (formal_narrow) lists auto and the thermometer alone (it
+    printed "expected auto,  or thermometer")."""
+    from importlib.resources import files
+
+    from fxdsp.chains import build
+    from fxdsp.errors import InputError
+    from fxdsp.extend.roles import OWN_THERMOMETER, resolve
+
+    design = build(str(files("fxdsp") / "configs" / config))
+    chains = [n.removeprefix("chain_") for n in design.chains]
+    with pytest.raises(InputError) as err:
+        resolve("no_such_chain", design, {"time_s": [], "output": []}, config)
+    choices = str(err.value).split("expected ", 1)[1]
+    names = re.split(r", | or ", choices)
+    assert names == ["auto", *chains, *([] if OWN_THERMOMETER in chains else [OWN_THERMOMETER])], str(err.value)

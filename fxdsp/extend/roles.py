@@ -145,8 +145,9 @@ def resolve(chain: str, design, columns: dict, config_name: str | None = None) -
     if chain not in chains:
         if chain == OWN_THERMOMETER:
             return own_thermometer_roles()
-        raise InputError(f"--chain: {chain!r} is not a chain of {config_name}; expected auto, "
-                         f"{', '.join(chains)} or {OWN_THERMOMETER}")
+        names = ["auto", *chains, *([] if OWN_THERMOMETER in chains else [OWN_THERMOMETER])]
+        raise InputError(f"--chain: {chain!r} is not a chain of {config_name}; expected "
+                         f"{', '.join(names[:-1])} or {names[-1]}")
     roles = _roles(chain, chains[chain])
     needs_column(roles, columns)
     return roles
