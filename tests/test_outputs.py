@@ -437,7 +437,8 @@ def test_a_simulation_that_overflows_is_one_line_and_no_log(tmp_path, capsys):
 DELETIONS = {
     # the Verilator model cache: an incomplete model or run-time folder named by its content digest
     "fxdsp/hdl/simulators.py": 4,
-    # `fxdsp rtl`'s per-stream work folder <dut>_<stream>, inside the run's own work folder
+    # `fxdsp rtl`'s work folders <dut>_<stream> and <dut>_cocotb (its cocotb streams' one run), inside
+    # the run's own work folder
     "fxdsp/hdl/regression.py": 1,
     # `sweep rtl`: a shard's own folder shard_NNNN/<block> under --build-dir, or its temporary root
     "fxdsp/sweep/rtl.py": 2,

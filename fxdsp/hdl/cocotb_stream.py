@@ -7,7 +7,10 @@ synchronous reset is applied before every segment, so a segment after another on
 mid-stream. ``abort_after`` cuts a segment after that many accepted samples and resets while
 samples are still in flight: the outputs seen until then must be a prefix of the expected ones.
 ``gap`` is the probability of an idle cycle between samples (gapped valid; a segment may set its
-own ``gap``); 0 is back to back. While in_valid is low the data inputs carry random words (a DUT
+own ``gap``); 0 is back to back. A segment's ``label`` names it in the errors (default ``segment
+<i>``); the summary gives each segment's cycles and each error's segment (``segment_cycles``,
+``error_segments``), so that several streams can share one run (``fxdsp rtl``: one simulator start
+per DUT for its golden, random and corner streams). While in_valid is low the data inputs carry random words (a DUT
 must not read them), while a valid sample waits for in_ready they hold. An aborted segment's reset
 lands a random 0..``abort_cycles`` cycles after its last accepted sample: anywhere in a schedule.
 Outputs are sampled on out_valid at each rising edge; for valid/ready DUTs a sample counts as
@@ -97,8 +100,16 @@ async def stream(dut):
     t0 = time.perf_counter()
     sim0 = get_sim_time(unit="ns")
     errors: list[str] = []
+    error_segments: list[int] = []   # the segment of each error (a caller's streams share one run)
     mismatches: list[dict] = []   # per (segment, port): the first wrong word, for the report
+    segment_cycles: list[int] = []
+
+    def error(s_i: int, text: str) -> None:
+        errors.append(f"{spec['segments'][s_i].get('label', f'segment {s_i}')}{text}")
+        error_segments.append(s_i)
+
     for s_i, seg in enumerate(spec["segments"]):
+        seg_sim0 = get_sim_time(unit="ns")
         dut.in_valid.value = 0
         for p in ins:
             in_h[p].value = 0
@@ -148,7 +159,7 @@ async def stream(dut):
             elif len(got[outs[0]]) >= n:
                 break
             if now - last_progress > idle * PERIOD_NS:
-                errors.append(f"segment {s_i}: timeout, {len(got[outs[0]])} of {n} outputs")
+                error(s_i, f": timeout, {len(got[outs[0]])} of {n} outputs")
                 break
             # busy before this edge (in_ready low): most likely busy for many more
             if ready and int(dut.in_ready.value) == 0:
@@ -158,20 +169,22 @@ async def stream(dut):
         for p in outs:
             want = exp[p][: len(got[p])] if "abort_after" in seg else exp[p]
             if len(got[p]) != len(want):
-                errors.append(f"segment {s_i} port {p}: {len(got[p])} outputs, expected {len(want)}")
+                error(s_i, f" port {p}: {len(got[p])} outputs, expected {len(want)}")
             bad = [k for k, (a, b) in enumerate(zip(got[p], want)) if a != b]
             if bad:
                 k = bad[0]
                 mismatches.append({"segment": s_i, "port": p, "sample": k, "got": got[p][k],
                                    "expected": want[k], "count": len(bad), "of": len(want)})
-                errors.append(f"segment {s_i} port {p}: {len(bad)} mismatch(es), first at sample {k}: "
-                              f"got {got[p][k]:#x}, expected {want[k]:#x}")
+                error(s_i, f" port {p}: {len(bad)} mismatch(es), first at sample {k}: "
+                           f"got {got[p][k]:#x}, expected {want[k]:#x}")
         if seg.get("ovf_total") is not None and "abort_after" not in seg and ovf_seen != seg["ovf_total"]:
-            errors.append(f"segment {s_i}: {ovf_seen} overflow flags, model counted {seg['ovf_total']}")
+            error(s_i, f": {ovf_seen} overflow flags, model counted {seg['ovf_total']}")
+        segment_cycles.append(round((get_sim_time(unit="ns") - seg_sim0) / PERIOD_NS))
     seconds = time.perf_counter() - t0
     cycles = round((get_sim_time(unit="ns") - sim0) / PERIOD_NS)
     with open(spec["summary"], "w") as f:
-        json.dump({"cycles": cycles, "seconds": seconds, "errors": errors, "mismatches": mismatches}, f)
+        json.dump({"cycles": cycles, "seconds": seconds, "errors": errors, "mismatches": mismatches,
+                   "error_segments": error_segments, "segment_cycles": segment_cycles}, f)
     for e in errors[:20]:
         dut._log.error(e)
     assert not errors, f"{len(errors)} error(s): {errors[0]}"

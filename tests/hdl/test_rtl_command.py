@@ -219,3 +219,39 @@ def test_rtl_runs_on_a_config_without_the_papers_chains(tmp_path):
     cfg.write_text(dumps(data))
     assert main(["rtl", "--config", str(cfg), "--only", "bias_subtract001", "--sim", "icarus", "--long", "200",
                  "--out", str(tmp_path / "rtl")]) == 0
+
+
+def test_streams_that_share_a_run_keep_their_own_segments_cycles_and_errors(monkeypatch, tmp_path):
+    """A DUT's golden, random and corner streams run in one cocotb run (one simulator start); the
+    driver's summary numbers the segments of the whole run (the contract of fxdsp.hdl.cocotb_stream:
+    ``segment_cycles``, ``error_segments``, each mismatch's ``segment``), and each stream's record
+    must read as if it had run alone: a wrong word in the corners' second segment fails the corners
+    alone, numbered 1, with that segment's inputs and gap."""
+    from fxdsp.hdl import regression as rg
+    from fxdsp.hdl.params import design_files
+    from hdl_util import design_of
+
+    design = design_of()
+    runs = []
+
+    def one_run(design, name, segments, d, models, **kw):
+        runs.append(segments)
+        k = len(segments) - 2   # the corners' second segment (back to back from reset)
+        return {"cycles": 150, "seconds": 0.0, "errors": [f"{segments[k]['label']} port te: 1 mismatch(es)"],
+                "error_segments": [k], "segment_cycles": [10 * (i + 1) for i in range(len(segments))],
+                "mismatches": [{"segment": k, "port": "te", "sample": 5, "got": 1, "expected": 2, "count": 1,
+                                "of": 9}]}
+
+    monkeypatch.setattr(rg.hh, "run_cocotb", one_run)
+    names = ["golden", "random", "corners"]
+    out = rg._py_streams(design, rg.Dut("lag", None), names, design_files(design)["vectors"], "icarus",
+                         dict.fromkeys(names, 7), tmp_path, None, None)
+    assert len(runs) == 1 and [s["label"] for s in runs[0]] == ["segment 0", "segment 0", "segment 0", "segment 1",
+                                                                "segment 2"]
+    assert [s["gap"] for s in runs[0]] == [0.0, rg.RANDOM_GAP, 0.0, 0.0, 0.5]
+    assert out["golden"][0]["ok"] and out["random"][0]["ok"] and out["golden"][1] is None
+    assert [out[n][0]["cycles"] for n in names] == [10, 20, 30 + 40 + 50]
+    record, mismatch, inputs, gapped = out["corners"]
+    assert not record["ok"] and record["errors"] == ["segment 1 port te: 1 mismatch(es)"]
+    assert mismatch["segment"] == 1 and mismatch["sample"] == 5 and not gapped
+    assert len(next(iter(inputs.values()))) == len(next(iter(runs[0][3]["inputs"].values())))
