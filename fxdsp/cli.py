@@ -5,7 +5,10 @@ the command being run is imported, so that a quick command does not pay for the 
 others (numba and the blocks); ``fxdsp --help`` lists every command from COMMANDS without importing
 any. A module that fails to import is an error (its traceback), never a silently missing command.
 
-Every path option a command declares (its module's ``PATHS``) is checked before the command runs
+An option a command takes only beside another (its module's ``ONLY_WITH``: ``--margin`` only with
+``--optimise``) is refused when given without it, rather than accepted and left unused
+(:func:`fxdsp.commands.options.check_only_with`). Every path option a command declares (its
+module's ``PATHS``) is checked before the command runs
 (:func:`fxdsp.outputs.check_paths`) and declared for its writes (:mod:`fxdsp.owned`: a folder output
 replaces only the files fxdsp wrote there). Bad input (:class:`~fxdsp.errors.InputError`, an OSError
 such as a missing or unwritable file or a full disk, a malformed TOML, undecodable text) becomes one
@@ -83,7 +86,7 @@ def build_parser(load: Iterable[str] | None = None) -> argparse.ArgumentParser:
             with interrupts_held():
                 module = importlib.import_module(module_name)
             module.configure(sp)
-            sp.set_defaults(_module=module)
+            sp.set_defaults(_module=module, _parser=sp)
     return parser
 
 
@@ -112,9 +115,11 @@ def _main(argv: list[str] | None) -> int:
         parser.print_help()
         return 2
     try:
+        from fxdsp.commands.options import check_only_with
         from fxdsp.outputs import check_paths
         from fxdsp.owned import declaring
 
+        check_only_with(args, args._parser, getattr(args._module, "ONLY_WITH", {}))
         with declaring(check_paths(args, getattr(args._module, "PATHS", {}))):
             return int(args._module.run(args) or 0)
     except KeyboardInterrupt:

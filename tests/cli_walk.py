@@ -75,21 +75,43 @@ def path_options() -> list[tuple[Leaf, str, str]]:
     return [(leaf, o, k) for leaf in leaves() for o, k in leaf.paths().items()]
 
 
+def only_with(leaf: Leaf) -> dict[str, tuple[str, ...]]:
+    """The command's ONLY_WITH (fxdsp.cli): option -> the conditions one of which it needs."""
+    return getattr(leaf.module, "ONLY_WITH", {}) if len(leaf.words) == 1 else {}
+
+
+def companions(leaf: Leaf, probes: dict[str, list[str]]) -> dict[str, list[str] | None]:
+    """What the probed options need beside them (each one's first ONLY_WITH condition): ``--sim=verilator``
+    as that value; None for a flag or an option given a value of its kind (:func:`argv_for`)."""
+    out = {}
+    for opt in probes:
+        for cond in only_with(leaf).get(opt, ())[:1]:
+            name, _, value = cond.partition("=")
+            if name not in probes:
+                out[name] = [value] if value else None
+    return out
+
+
 def argv_for(leaf: Leaf, tmp: Path, probes: dict[str, list[str]] | None = None) -> list[str]:
     """A command line with every required argument given a value of its kind (an input file, an
-    input folder, a fresh output under ``tmp``; a choice; "1") and each option of ``probes`` given
-    its values."""
+    input folder, a fresh output under ``tmp``; a choice; "1"), each option of ``probes`` given
+    its values, and what a probed option needs beside it (:func:`companions`)."""
     probes = probes or {}
+    need = companions(leaf, probes)
     paths = leaf.paths()
     (tmp / "in.txt").write_text("x\n")
     (tmp / "in_dir").mkdir(exist_ok=True)
     argv = list(leaf.words)
     for a in leaf.options():
         opt = flag(a)
-        if opt not in probes and not a.required and a.option_strings:
+        if opt not in probes and opt not in need and not a.required and a.option_strings:
             continue
         if opt in probes:
             values = probes[opt]
+        elif a.nargs == 0:   # a flag a probed option needs: given alone
+            values = []
+        elif need.get(opt):  # a value it needs (--sim=verilator)
+            values = need[opt]
         elif opt in paths:
             kind = paths[opt]
             values = [str(tmp / ("in.txt" if kind == IN else "in_dir" if kind == IN_DIR else f"out_{a.dest}"))]

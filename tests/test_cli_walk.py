@@ -21,7 +21,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from cli_walk import argv_for, flag, leaves, path_options
+from cli_walk import argv_for, flag, leaves, only_with, path_options
 from conftest import run_cli
 from fxdsp.commands.options import Number
 from fxdsp.outputs import IN, IN_DIR, OUT_DIR, OUT_FILE
@@ -188,3 +188,38 @@ def test_every_option_that_names_a_file_is_declared_a_path():
                   if flag(a) not in leaf.paths() and not isinstance(a, argparse._StoreTrueAction)
                   and (_PATHLIKE.search(a.dest) or (isinstance(a.metavar, str) and _PATHLIKE.search(a.metavar)))]
     assert not undeclared, f"declare in the command's PATHS: {undeclared}"
+
+
+# ---- options that only mean something beside another ----------------------------------------------
+ONLY = [(leaf, opt) for leaf in LEAVES for opt in only_with(leaf)]
+
+
+def _given(action: argparse.Action, tmp: Path, kind: str | None) -> list[str]:
+    """A value of ``action`` other than its default: a flag set, another choice, a path of its kind,
+    the lowest of its numeric domain's integers above the default, else a word."""
+    if action.nargs == 0:
+        return []
+    if action.choices:
+        return [next(str(c) for c in sorted(action.choices) if c != action.default)]
+    if kind is not None:
+        return [str(tmp / ("in.txt" if kind == IN else "in_dir" if kind == IN_DIR else f"out_{action.dest}"))]
+    if isinstance(action.type, Number):
+        dom = action.type
+        v = next(v for v in (dom.lo, 0, 1, 2, 0.1, 0.25) if v is not None and v != action.default
+                 and _in_domain(dom.kind(v), dom))
+        return [str(dom.kind(v))]
+    return ["chain_paper001" if action.dest == "chain" else "1"]
+
+
+@pytest.mark.parametrize("leaf, option", ONLY, ids=[f"{leaf.name} {o}" for leaf, o in ONLY])
+def test_an_option_without_what_it_needs_is_refused_and_beside_it_runs(tmp_path, monkeypatch, leaf, option):
+    """Read from each command's ONLY_WITH: the option given alone is one line naming it and what it
+    needs, exit 2, before any work; given beside its first condition it reaches the command."""
+    action = next(a for a in leaf.options() if flag(a) == option)
+    value = _given(action, tmp_path, leaf.paths().get(option))
+    alone = argv_for(leaf, tmp_path) + [option, *value]
+    code, err, _ = _probe(monkeypatch, leaf, alone, tmp_path)
+    assert code == 2 and f"{option}: only with" in err, (alone, err)
+    beside = argv_for(leaf, tmp_path, {option: value})
+    code, err, args = _probe(monkeypatch, leaf, beside, tmp_path)
+    assert code == 0 and args is not None, (beside, err)

@@ -31,7 +31,7 @@ RUNS = {
     ("diagnose", "--report"): "diagnose {log} --report {out}",
     ("extend", "--out"): "extend {log} --no-rtl --out {out}",
     ("formal", "--out"): "formal --only rtd --out {out}",
-    ("rtl", "--out"): "rtl --only rtd --out {out} --cache {tmp}/cache",
+    ("rtl", "--out"): "rtl --only rtd --out {out}",
     ("repro", "--report"): "repro --paper 003 --sweep-points 3 --quiet --report {out}",
     ("sweep montecarlo", "--out"): "sweep montecarlo --workers 0 --seeds 2 --temps 1 --samples 64 --out {out}",
     ("sweep hidden", "--out"): "sweep hidden --workers 0 --per-cause 1 --causes none --out {out}",

@@ -30,6 +30,7 @@ import math
 from dataclasses import dataclass, field
 
 
+from fxdsp.budget import DEFAULT_MARGIN
 from fxdsp.chains import build
 from fxdsp.config import Config, table_at
 from fxdsp.float_vs_fixed import block_errors
@@ -329,10 +330,6 @@ def config_header(result: OptResult, cmd: str, source: str, changes: bool = True
     return header
 
 
-# the share of the target an optimised design keeps in hand (its error is held to (1 - margin) x target)
-DEFAULT_MARGIN = 0.02
-
-
 def check_search(chain: str, margin: float | None = None, *, chains=None, search: bool = True,
                  cost_model: str = "total_bits", target: Target | None = None, max_mean: Target | None = None,
                  drive_band: bool = False) -> None:
@@ -355,7 +352,8 @@ def check_search(chain: str, margin: float | None = None, *, chains=None, search
         raise InputError(f"--drive-band: {chain} has no demodulator, so no drive frequency")
 
 
-def optimise(config: Config, target: Target, metric: str = "rms", margin: float = DEFAULT_MARGIN, samples: int | None = None,
+def optimise(config: Config, target: Target, metric: str = "rms", margin: float = DEFAULT_MARGIN,
+             samples: int | None = None,
              progress=None, cost_model: str = "total_bits", max_mean: Target | None = None,
              frequencies: tuple = (), prefetch=None) -> OptResult:
     """``cost_model``: "total_bits" (registers, coefficients and memory) or "register_bits" (memory free).

@@ -18,7 +18,7 @@ from fxdsp.float_vs_fixed import port_unit
 from fxdsp.config import dumps, load_config
 from fxdsp.hdl.hwreport import hw_report_path, synthesised_cost
 from fxdsp.outputs import IN, OUT_DIR, OUT_FILE, json_text, plain, staged
-from fxdsp.budget import optimise as opt
+from fxdsp.budget import DEFAULT_MARGIN, optimise as opt
 from fxdsp.budget.attribution import ADDITIVITY_DB, THEORY_DB, attribute
 from fxdsp.budget.floor import allan_chain, carrier_chains, demod_f_hz, drive_frequencies, drive_sweep, floor_of
 from fxdsp.budget.drive_loop import TEMPS_C, at_temperature, format_allan as format_reference_allan, format_budget, ramp, \
@@ -77,6 +77,11 @@ def _scaled(st: dict, scale: float) -> dict:
 
 
 PATHS = {"--config": IN, "--json": OUT_FILE, "--report": OUT_DIR, "--config-out": OUT_FILE}
+# a search's options on a run without a search, a target's without a target: refused, not ignored
+# (fxdsp.cli); a margin of 0 was read as "no margin" by a budget that had nothing to margin
+ONLY_WITH = {"--config-out": ("--optimise",), "--margin": ("--optimise",), "--max-mean": ("--optimise",),
+             "--drive-band": ("--optimise",), "--cost": ("--optimise",), "--metric": ("--target",),
+             "--chain": ("--target",)}
 
 
 def configure(parser) -> None:
@@ -93,7 +98,7 @@ def configure(parser) -> None:
                         help="cost the search minimises: every bit (registers, coefficients, LUT memory; default) "
                              "or register/coefficient bits only")
     parser.add_argument("--margin", type=FINITE, default=None,
-                        help=f"with --optimise: optimise to (1 - margin) x target (default {opt.DEFAULT_MARGIN})")
+                        help=f"with --optimise: optimise to (1 - margin) x target (default {DEFAULT_MARGIN})")
     parser.add_argument("--max-mean", help="with --optimise: also keep |mean| (a bias) of the --target output within "
                                            "this, <value><unit> as --target")
     parser.add_argument("--drive-ramp", action="store_true",
@@ -120,17 +125,10 @@ def _run(args, stage) -> int:
     design = build(cfg)
     if args.chain is None:
         args.chain = next(iter(design.chains), None)
-    if args.config_out and not args.optimise:
-        raise InputError("--config-out: only with --optimise")
     if args.optimise and not args.target:
         raise InputError("--optimise: needs --target <value><unit>")
     opt.check_search(args.chain, args.margin, chains=design.chains, search=args.optimise, cost_model=args.cost,
                      drive_band=args.optimise and args.drive_band)
-    # a search's options on a run without one would be accepted and do nothing (a margin of 0 read
-    # as "no margin" by a budget that has no target to margin)
-    for opt_only in ("margin", "max_mean", "drive_band"):
-        if getattr(args, opt_only) not in (None, False) and not args.optimise:
-            raise InputError(f"--{opt_only.replace('_', '-')}: only with --optimise")
     # the target's chain first: a target that names no output of it is refused before the rest is run
     own = {(c, p): attribute(design, c, p) for c, p in attributed(design) if c == args.chain}
     noise = {p: a.sensor_noise_rms for (c, p), a in own.items()}
@@ -220,7 +218,7 @@ def _run(args, stage) -> int:
                          "port": target.port, "metric": args.metric, "measured": measured, "met": meets}
         if args.optimise:
             freqs = tuple(drive_frequencies(demod_f_hz(cfg, design, target.chain))) if args.drive_band else ()
-            result = opt.optimise(cfg, target, args.metric, opt.DEFAULT_MARGIN if args.margin is None else args.margin,
+            result = opt.optimise(cfg, target, args.metric, DEFAULT_MARGIN if args.margin is None else args.margin,
                                   progress=tqdm, cost_model=args.cost,
                                   max_mean=max_mean, frequencies=freqs)
             print(f"\n7. word-length search ({result.evaluations} evaluations, greedy min+b):")

@@ -48,6 +48,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 PATHS = {"log": IN, "--apply": IN, "--config": IN, "--json": OUT_FILE, "--config-out": OUT_FILE}
+# the base config and the order shape the calibrated config, written or applied (fxdsp.cli refuses them
+# on a run that does neither, rather than ignore them)
+ONLY_WITH = {"--config": ("--config-out", "--apply"), "--order": ("--config-out", "--apply")}
 
 
 def run(args) -> int:

@@ -14,6 +14,8 @@ import argparse
 import math
 from dataclasses import dataclass
 
+from fxdsp.errors import InputError
+
 
 @dataclass(frozen=True)
 class Number:
@@ -58,3 +60,27 @@ SEED = Number(int, 0)                      # numpy's generators take no negative
 NATURAL = Number(int, 0)                   # a number of workers or retries (0: none)
 FINITE = Number(float)
 POSITIVE = Number(float, 0.0, lo_open=True)
+
+
+def _dest(option: str) -> str:
+    return option.lstrip("-").replace("-", "_")
+
+
+def _holds(args, condition: str) -> bool:
+    """``--opt`` given (not None, not False) or ``--opt=value`` set to that value."""
+    option, _, value = condition.partition("=")
+    have = getattr(args, _dest(option), None)
+    return have == value if value else have not in (None, False)
+
+
+def check_only_with(args, parser, only_with: dict[str, tuple[str, ...]]) -> None:
+    """InputError naming the option when an option of ``only_with`` is given (its value is not the
+    parser's default) on a run where none of its conditions holds (``--optimise``; ``--sim=verilator``):
+    the run would accept it and do nothing with it (a margin without a search, a model cache for a
+    simulator that builds no model). Read by the command line for every command (a module's
+    ``ONLY_WITH``), before the command runs, as its ``PATHS`` are."""
+    for option, conditions in only_with.items():
+        if getattr(args, _dest(option)) == parser.get_default(_dest(option)):
+            continue
+        if not any(_holds(args, c) for c in conditions):
+            raise InputError(f"{option}: only with {' or '.join(conditions)}")

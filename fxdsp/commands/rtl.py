@@ -22,6 +22,8 @@ from fxdsp.commands.options import SEED, count
 from fxdsp.outputs import IN, IN_DIR, OUT_DIR
 
 PATHS = {"--config": IN, "--rtl": IN_DIR, "--out": OUT_DIR, "--cache": OUT_DIR}
+# Icarus builds no model to cache (fxdsp.cli refuses the option rather than ignore it)
+ONLY_WITH = {"--cache": ("--sim=verilator",)}
 
 
 def _cache_default() -> Path:

@@ -29,6 +29,7 @@ import time
 from functools import partial
 from pathlib import Path
 
+from fxdsp.budget import DEFAULT_MARGIN
 from fxdsp.commands.options import FINITE, NATURAL, SEED, count
 from fxdsp.outputs import IN, IN_DIR, OUT_DIR
 from fxdsp.errors import InputError
@@ -81,7 +82,8 @@ def configure(parser) -> None:
     wl.add_argument("--metric", default="rms", choices=("rms", "max"), help="error measure of --target")
     wl.add_argument("--cost", default="total_bits", choices=("total_bits", "register_bits"),
                     help="cost the search minimises (default total_bits)")
-    wl.add_argument("--margin", type=FINITE, default=0.02, help="optimise to (1 - margin) x target (default 0.02)")
+    wl.add_argument("--margin", type=FINITE, default=DEFAULT_MARGIN,
+                    help=f"optimise to (1 - margin) x target (default {DEFAULT_MARGIN})")
     wl.add_argument("--max-mean", help="also keep |mean| of the --target output within this")
     wl.add_argument("--drive-band", action="store_true", help="meet the target across the drive band too")
 

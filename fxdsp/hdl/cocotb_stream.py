@@ -95,7 +95,8 @@ async def stream(dut):
     # the same edges, and the Python side wakes once per cycle instead of three times (half of a
     # cheap DUT's run on Icarus). Only the clock is written by the simulator's inertial write; the
     # inputs are still written in the ReadWrite phase after the edge, so the DUT samples them at the
-    # next one (the golden, random, corner and mutation tests hold either way: bit for bit)
+    # next one (the golden, random and corner streams and the driver's own mutants hold either way:
+    # bit for bit)
     cocotb.start_soon(Clock(dut.clk, PERIOD_NS, unit="ns", impl="gpi").start())
     t0 = time.perf_counter()
     sim0 = get_sim_time(unit="ns")

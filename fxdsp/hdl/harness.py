@@ -69,12 +69,14 @@ class UndefinedWord(ValueError):
 
 def rtl_sources(rtl: Path | None = None, design=None, d: Path | None = None) -> list[Path]:
     """The Verilog sources (default: the RTL shipped in the package), and the design's generated
-    chain tops in ``d`` (where :func:`generate_into` wrote them)."""
+    chain tops in ``d`` (where :func:`generate_into` wrote them), as absolute paths: the tools run in
+    their own work folders (a relative ``--rtl`` was not found by the file-driven harness's build)."""
+    sources = sorted(Path(rtl or RTL_DIR).resolve().glob("*.v"))
     if design is None:
-        return sorted(Path(rtl or RTL_DIR).glob("*.v"))
+        return sources
     # the tops' file names only: writing each top's text for them was ~0.03 s of every simulator run
-    generated = [Path(d) / f for f in generated_top_files(design)] if d is not None else []
-    return sorted(Path(rtl or RTL_DIR).glob("*.v")) + generated
+    generated = [Path(d).resolve() / f for f in generated_top_files(design)] if d is not None else []
+    return sources + generated
 
 
 def is_serial(extra: dict | None) -> bool:

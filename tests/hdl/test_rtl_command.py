@@ -66,8 +66,9 @@ def test_rtl_verifies_the_users_config(tmp_path, capsys):
 
 
 @pytest.mark.hdl
-def test_an_injected_fault_is_named_with_its_first_mismatch_and_a_waveform(tmp_path, capsys):
+def test_an_injected_fault_is_named_with_its_first_mismatch_and_a_waveform(tmp_path, capsys, monkeypatch):
     require_simulator("icarus")
+    monkeypatch.chdir(tmp_path)   # --rtl given relative, as a user types it (every simulator's build finds it)
     rtl = tmp_path / "rtl_src"
     shutil.copytree(RTL_DIR, rtl)
     src = rtl / "sf_divide.v"
@@ -77,13 +78,14 @@ def test_an_injected_fault_is_named_with_its_first_mismatch_and_a_waveform(tmp_p
     src.write_text(text.replace(site, "qb_v = ~t_v[DW+1] & (t_v[DW:0] != 0);"))
     out = tmp_path / "out"
     capsys.readouterr()
-    assert main(["rtl", "--only", "sf_divide", "--rtl", str(rtl), *LONG, "--out", str(out)]) == 1
+    assert main(["rtl", "--only", "sf_divide", "--rtl", "rtl_src", *LONG, "--out", str(out)]) == 1
     printed = capsys.readouterr().out
     report = json.loads((out / "report.json").read_text())
     assert not report["passed"]
     row = report["duts"][0]
     m = row["first_mismatch"]
     assert m["dut"] == "sf_divide" and m["stream"] == "golden" and m["port"] == "y"
+    assert "mismatch" in row["streams"]["long"]["errors"][0], row["streams"]["long"]   # built, and caught
     # the expected word is the model's, read from the golden vectors the command wrote
     _, outs, _ = load(out / "vectors", "sf_divide")
     assert m["expected_value"] == int(outs["y"][m["sample"]]) != m["got_value"]
