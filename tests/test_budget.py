@@ -138,6 +138,39 @@ def test_optimiser_meets_target_with_fewer_bits(tmp_path, capsys):
     assert "MET" in capsys.readouterr().out
 
 
+def test_a_search_builds_its_chain_alone_and_gets_the_whole_configs_error_and_refusals():
+    """The optimiser's evaluations build the chain and the chains that share a table with it
+    (optimise.chain_only); at any knob values the error, and whether the config builds at all, are
+    the whole config's. Drawn over every chain port of the default config: among the draws, paper
+    001's input format, which its loop's drive table also wires to freq2temp, makes configs that
+    only the whole build refuses."""
+    import copy
+    import math
+    import random
+
+    from fxdsp.budget import optimise as opt
+    from fxdsp.config import Config
+
+    def error(ev, data):
+        try:
+            return ev._error_of(build(Config(data, source="<test>")), 1000)
+        except (ValueError, TypeError, AssertionError):
+            return math.inf
+
+    cfg, rng = load_config(), random.Random(5)
+    refused = 0
+    for chain, c in sorted(build(cfg).chains.items()):
+        for port in sorted(c.outputs):
+            ev = opt.Evaluator(copy.deepcopy(cfg.data), chain, port)
+            for _ in range(3 if ev.knobs else 0):
+                values = {k.name: opt.knob_value(ev.base, k) + rng.choice([-3, -1, 0, 2]) for k in ev.knobs}
+                whole, alone = error(ev, ev.data(values)), error(ev, ev.data(values, ev.built))
+                assert alone == whole, (chain, port, values)
+                refused += math.isinf(whole)
+            assert set(ev.built["chain"]) <= set(cfg.data["chain"])
+    assert refused, "no draw the whole config refuses: the shared-table case is not exercised"
+
+
 @pytest.mark.parametrize("argv, word", [
     (["budget", "--target", "10furlong"], "--target"),
     (["budget", "--target", "abc"], "--target"),

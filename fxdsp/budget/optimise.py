@@ -139,6 +139,38 @@ def chain_members(data: dict, chain: str) -> list[tuple[str, str]]:
     return [(t, kind_of(t).name) for t in _chain_table(data, chain).get("instances", [])]
 
 
+def chain_only(data: dict, chain: str) -> dict:
+    """A copy of config ``data`` with only the chain, the chains that share a block table with it
+    (and those that share one with them), their tables and every section that is not a block table
+    (system, stimulus, sensors). An evaluation builds this: a knob of the chain changes only its
+    tables, whose build and error depend on their own table, their wired inputs and their chains'
+    rates, and a table two chains share is checked against both wirings (freq2temp's input format
+    against paper 001's and its loop's drive). The tables left out build the same at any value,
+    as they do in the config the search starts from. A build of the whole default config for each
+    of a search's ~460 candidates was three quarters of the search; the config the search writes is
+    the whole one."""
+    from fxdsp.blocks.kinds import block_tables
+
+    nets = {name: set(t.get("instances", [])) for name, t in data.get("chain", {}).items() if isinstance(t, dict)}
+    keep = {chain.removeprefix("chain_")}
+    while True:
+        tables = set().union(*(nets[n] for n in keep))
+        more = {n for n, members in nets.items() if members & tables} - keep
+        if not more:
+            break
+        keep |= more
+    out = copy.deepcopy(data)
+    for table in block_tables(data):
+        if table not in tables:
+            *parents, key = table.split(".")
+            node = table_at(out, ".".join(parents)) if parents else out
+            del node[key]
+            if parents and not any(isinstance(v, dict) for v in node.values()):   # a family left empty
+                (table_at(out, ".".join(parents[:-1])) if len(parents) > 1 else out).pop(parents[-1])
+    out["chain"] = {n: t for n, t in out["chain"].items() if n in keep}
+    return out
+
+
 def knobs_of(data: dict, chain: str) -> list[Knob]:
     """The chain's word-length knobs, from its members' kinds (``KIND_KNOBS``), in the order of its
     instances."""
@@ -223,9 +255,11 @@ class Evaluator:
         self.knobs = knobs_of(self.base, self.chain)
         self.defaults = _field_defaults(self.base, self.chain)
         self.demod = demod_of(self.base, self.chain) if self.frequencies else None
+        self.built = chain_only(self.base, self.chain)   # what an evaluation builds
 
-    def data(self, values: dict[str, int]) -> dict:
-        d = copy.deepcopy(self.base)
+    def data(self, values: dict[str, int], base: dict | None = None) -> dict:
+        """The config data at ``values`` (the whole config's, or ``base``'s)."""
+        d = copy.deepcopy(self.base if base is None else base)
         for knob in self.knobs:
             if knob.name in values:
                 set_knob(d, knob, values[knob.name], self.defaults)
@@ -244,7 +278,7 @@ class Evaluator:
         if key in self.cache:
             return self.cache[key]
         self.evaluations += 1
-        data = self.data(values)
+        data = self.data(values, self.built)
         err = 0.0
         for f_hz in (None, *self.frequencies):
             if f_hz is not None:
