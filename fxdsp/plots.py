@@ -10,16 +10,29 @@ from pathlib import Path
 DPI = 110
 
 
+# beyond this many decades the log scale's minor locator puts its ticks on the decades alone, where
+# the majors already are, and matplotlib drops them as it draws; computing and laying them out was a
+# third of a budget report's figure time (15.1 -> 10.9 s for its 33 figures, every pixel the same)
+MINOR_DECADES = 10
+
+
 def plain_log_labels(fig) -> None:
     """Every log axis of ``fig`` labelled 1e-03, 10, 1e+05 (matplotlib's LogFormatter) instead of
-    mathtext, majors and minors as the log scale's defaults choose them."""
-    from matplotlib.ticker import LogFormatter
+    mathtext, majors and minors as the log scale's defaults choose them (no minors computed on an
+    axis of more than MINOR_DECADES decades, which would show none)."""
+    import math
+
+    from matplotlib.ticker import LogFormatter, NullLocator
 
     for ax in fig.axes:
         for axis in (ax.xaxis, ax.yaxis):
             if axis.get_scale() == "log":
                 axis.set_major_formatter(LogFormatter())
-                axis.set_minor_formatter(LogFormatter(labelOnlyBase=False))
+                lo, hi = sorted(abs(v) for v in axis.get_view_interval())
+                if lo > 0 and math.log10(hi / lo) > MINOR_DECADES:
+                    axis.set_minor_locator(NullLocator())
+                else:
+                    axis.set_minor_formatter(LogFormatter(labelOnlyBase=False))
 
 
 def save_figure(fig, path: Path | str, **savefig_kw) -> None:
