@@ -148,54 +148,50 @@ def failing_writes(k: int | None, exc: type[BaseException]):
 # pytest-xdist hands out whole files, by default the files with the most tests first, which puts the
 # long single-test files (the mutation proofs, ~20-40 s each) last, on one worker while the other
 # idles. Longest first instead (LPT scheduling; the tail is then a few short files): seconds of each
-# file >= 5 s, measured in a cold `make test` of a fresh clone on a 2-core machine (the last: one
-# that another job kept about one core busy, so about twice the unloaded seconds; only their order
+# file >= 5 s, measured in a cold `make test` of a fresh clone on a 2-core machine (only their order
 # counts); every other file after them in collection order. The wheel's file comes after the big HDL
 # files: by then the run has compiled the numba kernels its installed package loads
 # (test_wheel._seed_numba_cache).
 # A wrong or stale number costs wall time, never a test.
 FILE_SECONDS = {
-    "hdl/test_hdl_golden.py": 174,
-    "hdl/test_hdl_random.py": 160,
-    "hdl/test_hdl_loop.py": 150,
-    "hdl/test_hdl_corners.py": 104,
-    "test_diagnose_independent.py": 87,
-    "hdl/test_hdl_long_blocks.py": 74,
-    "test_sweep.py": 64,
-    "hdl/test_rtl_command.py": 64,
-    "hdl/test_formal.py": 61,
-    "test_extend.py": 57,
-    "test_diagnose_hidden.py": 53,
-    "test_budget_floor.py": 50,
-    "test_budget.py": 50,
-    "hdl/test_hdl_lint.py": 48,
-    "hdl/test_mutation_serial.py": 43,
-    "test_wheel.py": 39,
-    "test_outputs.py": 34,
-    "hdl/test_hdl_chain_stages.py": 33,
-    "hdl/test_mutation.py": 32,
-    "test_fixed_properties.py": 31,
-    "test_diagnose_remaining.py": 30,
-    "test_drive.py": 28,
-    "hdl/test_hdl_long_chains.py": 23,
-    "test_owned.py": 23,
-    "test_log_reader.py": 23,
-    "test_fixed_mutation.py": 22,
-    "test_extend_user_design.py": 20,
-    "test_cli_walk.py": 20,
-    "test_extend_any_chain.py": 18,
-    "test_config_errors.py": 16,
-    "test_hw_report.py": 14,
-    "test_repro_repeatability.py": 13,
-    "hdl/test_cocotb_driver.py": 13,
-    "test_config_writer.py": 9,
-    "test_cli_commands.py": 8,
-    "test_blocks_bitexact.py": 7,
-    "test_datapath.py": 7,
-    "test_nco.py": 7,
-    "test_calibrate_config.py": 6,
-    "test_diagnose_report.py": 5,
-    "test_diagnose_real.py": 5,
+    "hdl/test_hdl_golden.py": 77,
+    "hdl/test_hdl_loop.py": 75,
+    "test_extend.py": 50,
+    "hdl/test_hdl_corners.py": 49,
+    "test_sweep.py": 48,
+    "hdl/test_formal.py": 45,
+    "hdl/test_hdl_long_blocks.py": 43,
+    "test_diagnose_independent.py": 37,
+    "hdl/test_hdl_random.py": 36,
+    "hdl/test_mutation_serial.py": 36,
+    "test_diagnose_remaining.py": 35,
+    "test_drive.py": 33,
+    "test_budget_floor.py": 32,
+    "hdl/test_hdl_lint.py": 32,
+    "test_outputs.py": 30,
+    "hdl/test_mutation.py": 29,
+    "test_budget.py": 25,
+    "test_wheel.py": 24,
+    "hdl/test_rtl_command.py": 20,
+    "test_diagnose_hidden.py": 20,
+    "test_fixed_properties.py": 19,
+    "hdl/test_hdl_chain_stages.py": 15,
+    "hdl/test_hdl_long_chains.py": 15,
+    "test_extend_user_design.py": 15,
+    "test_fixed_mutation.py": 13,
+    "test_extend_any_chain.py": 13,
+    "test_owned.py": 11,
+    "test_hw_report.py": 11,
+    "test_cli_walk.py": 11,
+    "test_config_errors.py": 10,
+    "test_diagnose_selection.py": 10,
+    "test_diagnose_logio.py": 9,
+    "test_repro_repeatability.py": 9,
+    "test_cli_commands.py": 7,
+    "test_diagnose_uncertainty.py": 7,
+    "hdl/test_cocotb_driver.py": 6,
+    "test_calibrate_config.py": 5,
+    "test_config_writer.py": 5,
 }
 TESTS = Path(__file__).resolve().parent
 # the HDL tests' run folders hold no test, but tens of thousands of files after a run: each worker
@@ -209,8 +205,62 @@ def pytest_configure(config):
         config.option.loadscopereorder = False
 
 
+# ---- the slow tier ------------------------------------------------------------------------------
+# `make test` makes each check once on each thing it checks: each RTL module and architecture, each
+# rounding and overflow rule, each cause, each command. A test (or a parameter of one) marked
+# `slow` repeats a check it already makes on something that exercises no other code: another
+# instance of the same module, another parameter set or seed over the same rules, the same DUT on a
+# second simulator, a second log of the same cause; or it measures a rate (the confusion matrices).
+# FXDSP_SLOW=1 runs them too: before a release, and after a change to what they repeat.
+SLOW = bool(os.environ.get("FXDSP_SLOW"))
+SLOW_REASON = "slow tier: repeats a check make test makes once (FXDSP_SLOW=1 runs it)"
+
+
+def slow_param(*values, id: str | None = None):
+    """A parameter of the slow tier (see above)."""
+    return pytest.param(*values, id=id, marks=pytest.mark.slow)
+
+
+def tiered(params, keep) -> list:
+    """``params`` (values or pytest.param), the ones ``keep(values)`` rejects put in the slow tier."""
+    out = []
+    for p in params:
+        values, pid, marks = (p.values, p.id, p.marks) if isinstance(p, type(pytest.param(0))) else (
+            p if isinstance(p, tuple) else (p,), None, ())
+        if not keep(values if len(values) > 1 else values[0]):
+            marks = (*marks, pytest.mark.slow)
+        out.append(pytest.param(*values, id=pid, marks=marks))
+    return out
+
+
+def tier_gaps(items) -> list[str]:
+    """Test functions every one of whose parameters is in the slow tier while the function itself is
+    not marked slow: a check make test would no longer make at all, by a parameter filter's mistake."""
+    cases: dict[tuple, list[bool]] = {}
+    for item in items:
+        fn = getattr(item, "function", None)
+        if fn is None or any(m.name == "slow" for m in getattr(fn, "pytestmark", [])):
+            continue
+        cases.setdefault((str(item.path), item.originalname), []).append(item.get_closest_marker("slow") is not None)
+    return sorted(f"{Path(path).name}::{name}" for (path, name), slow in cases.items() if all(slow))
+
+
+def _skip_the_slow_tier(items) -> None:
+    gaps = tier_gaps(items)
+    if gaps:
+        raise pytest.UsageError(f"every case of {', '.join(gaps)} is in the slow tier: mark the test slow or keep one")
+    if SLOW:
+        return
+    for item in items:
+        mark = item.get_closest_marker("slow")
+        if mark is not None:
+            item.add_marker(pytest.mark.skip(reason=mark.kwargs.get("reason", SLOW_REASON)))
+
+
 def pytest_collection_modifyitems(session, config, items):
-    """Files by FILE_SECONDS, longest first (stable: each file's tests stay together, in order)."""
+    """The slow tier skipped unless FXDSP_SLOW; files by FILE_SECONDS, longest first (stable: each
+    file's tests stay together, in order)."""
+    _skip_the_slow_tier(items)
     first: dict[str, int] = {}
     for i, item in enumerate(items):
         first.setdefault(str(item.path), i)
