@@ -86,6 +86,8 @@ def companions(leaf: Leaf, probes: dict[str, list[str]]) -> dict[str, list[str] 
     out = {}
     for opt in probes:
         for cond in only_with(leaf).get(opt, ())[:1]:
+            if cond.startswith("not "):   # what it needs is something left out
+                continue
             name, _, value = cond.partition("=")
             if name not in probes:
                 out[name] = [value] if value else None

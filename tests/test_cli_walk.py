@@ -217,9 +217,13 @@ def test_an_option_without_what_it_needs_is_refused_and_beside_it_runs(tmp_path,
     needs, exit 2, before any work; given beside its first condition it reaches the command."""
     action = next(a for a in leaf.options() if flag(a) == option)
     value = _given(action, tmp_path, leaf.paths().get(option))
-    alone = argv_for(leaf, tmp_path) + [option, *value]
+    # alone: none of its conditions holds (an option it must go without given too)
+    against = [w for c in only_with(leaf)[option] if c.startswith("not ")
+               for a in leaf.options() if flag(a) == c[len("not "):]
+               for w in (flag(a), *_given(a, tmp_path, leaf.paths().get(flag(a))))]
+    alone = argv_for(leaf, tmp_path) + [option, *value] + against
     code, err, _ = _probe(monkeypatch, leaf, alone, tmp_path)
-    assert code == 2 and f"{option}: only with" in err, (alone, err)
+    assert code == 2 and f"{option}: only " in err and len(err.strip().splitlines()) == 1, (alone, err)
     beside = argv_for(leaf, tmp_path, {option: value})
     code, err, args = _probe(monkeypatch, leaf, beside, tmp_path)
     assert code == 0 and args is not None, (beside, err)

@@ -69,6 +69,8 @@ def configure(parser) -> None:
 
 
 PATHS = {"--config": IN, "--out": OUT_FILE}
+# the xc7 synthesis' time limit means nothing on a run that skips it (fxdsp.cli checks)
+ONLY_WITH = {"--xc7-timeout": ("not --no-xc7",)}
 
 
 def run(args) -> int:

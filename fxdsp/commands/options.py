@@ -67,15 +67,23 @@ def _dest(option: str) -> str:
 
 
 def _holds(args, condition: str) -> bool:
-    """``--opt`` given (not None, not False) or ``--opt=value`` set to that value."""
+    """``--opt`` given (not None, not False), ``--opt=value`` set to that value, ``not --opt`` not
+    given (``--xc7-timeout`` means nothing beside ``--no-xc7``)."""
+    if condition.startswith("not "):
+        return not _holds(args, condition[len("not "):])
     option, _, value = condition.partition("=")
     have = getattr(args, _dest(option), None)
     return have == value if value else have not in (None, False)
 
 
+def _said(condition: str) -> str:
+    return f"without {condition[len('not '):]}" if condition.startswith("not ") else f"with {condition}"
+
+
 def check_only_with(args, parser, only_with: dict[str, tuple[str, ...]]) -> None:
     """InputError naming the option when an option of ``only_with`` is given (its value is not the
-    parser's default) on a run where none of its conditions holds (``--optimise``; ``--sim=verilator``):
+    parser's default) on a run where none of its conditions holds (``--optimise``; ``--sim=verilator``;
+    ``not --no-xc7``):
     the run would accept it and do nothing with it (a margin without a search, a model cache for a
     simulator that builds no model). Read by the command line for every command (a module's
     ``ONLY_WITH``), before the command runs, as its ``PATHS`` are."""
@@ -83,4 +91,4 @@ def check_only_with(args, parser, only_with: dict[str, tuple[str, ...]]) -> None
         if getattr(args, _dest(option)) == parser.get_default(_dest(option)):
             continue
         if not any(_holds(args, c) for c in conditions):
-            raise InputError(f"{option}: only with {' or '.join(conditions)}")
+            raise InputError(f"{option}: only {' or '.join(_said(c) for c in conditions)}")
