@@ -212,43 +212,34 @@ def pytest_configure(config):
 # instance of the same module, another parameter set or seed over the same rules, the same DUT on a
 # second simulator, a second log of the same cause; or it measures a rate (the confusion matrices).
 # FXDSP_SLOW=1 runs them too: before a release, and after a change to what they repeat.
-SLOW = bool(os.environ.get("FXDSP_SLOW"))
+def slow_wanted(value: str | None) -> bool:
+    """FXDSP_SLOW's value: set and not 0."""
+    return (value or "").strip() not in ("", "0")
+
+
+SLOW = slow_wanted(os.environ.get("FXDSP_SLOW"))
 SLOW_REASON = "slow tier: repeats a check make test makes once (FXDSP_SLOW=1 runs it)"
 
 
-def slow_param(*values, id: str | None = None):
-    """A parameter of the slow tier (see above)."""
-    return pytest.param(*values, id=id, marks=pytest.mark.slow)
-
-
 def tiered(params, keep) -> list:
-    """``params`` (values or pytest.param), the ones ``keep(values)`` rejects put in the slow tier."""
-    out = []
+    """``params`` (values or pytest.param), the ones ``keep(values)`` rejects put in the slow tier.
+    A filter that keeps none is an error: the check would leave make test altogether (mark the test
+    slow instead, where that is meant)."""
+    out, kept = [], 0
     for p in params:
         values, pid, marks = (p.values, p.id, p.marks) if isinstance(p, type(pytest.param(0))) else (
             p if isinstance(p, tuple) else (p,), None, ())
-        if not keep(values if len(values) > 1 else values[0]):
+        if keep(values if len(values) > 1 else values[0]):
+            kept += 1
+        else:
             marks = (*marks, pytest.mark.slow)
         out.append(pytest.param(*values, id=pid, marks=marks))
+    if out and not kept:
+        raise ValueError(f"tiered: every one of {len(out)} cases is in the slow tier")
     return out
 
 
-def tier_gaps(items) -> list[str]:
-    """Test functions every one of whose parameters is in the slow tier while the function itself is
-    not marked slow: a check make test would no longer make at all, by a parameter filter's mistake."""
-    cases: dict[tuple, list[bool]] = {}
-    for item in items:
-        fn = getattr(item, "function", None)
-        if fn is None or any(m.name == "slow" for m in getattr(fn, "pytestmark", [])):
-            continue
-        cases.setdefault((str(item.path), item.originalname), []).append(item.get_closest_marker("slow") is not None)
-    return sorted(f"{Path(path).name}::{name}" for (path, name), slow in cases.items() if all(slow))
-
-
 def _skip_the_slow_tier(items) -> None:
-    gaps = tier_gaps(items)
-    if gaps:
-        raise pytest.UsageError(f"every case of {', '.join(gaps)} is in the slow tier: mark the test slow or keep one")
     if SLOW:
         return
     for item in items:

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import SHARED, needs_shared, tiered
+from conftest import SHARED, needs_shared
 from fxdsp.chains import build
 from fxdsp.cli import main
 from fxdsp.config import Config
@@ -92,8 +92,7 @@ def both_extended(extended):
 
 
 @needs_icarus
-# lag and quad alone are the slow tier: both's remedies are their two stages together
-@pytest.mark.parametrize("name", tiered(["lag", "quad", "both", "rtd"], lambda name: name in ("both", "rtd")))
+@pytest.mark.parametrize("name", ["lag", "quad", "both", "rtd"])
 def test_extend_a_simulated_paper002_log(logs, extended, name):
     # the RTL regression of the extended config on the log whose remedies change the RTL's parameters
     # in the most ways (both: the lag and the phase trim); the single lag and trim remedies are the

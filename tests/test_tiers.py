@@ -1,5 +1,5 @@
-"""The slow tier (tests/conftest.py): make test skips exactly what is marked slow, and a parameter
-filter cannot silently take a whole check out of make test."""
+"""The slow tier (tests/conftest.py): make test skips exactly what is marked slow, FXDSP_SLOW runs
+it, and a parameter filter cannot silently take a whole check out of make test."""
 
 from __future__ import annotations
 
@@ -7,17 +7,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from conftest import tier_gaps, tiered
-
-
-def _item(path, name, slow_param=False, slow_function=False):
-    def function():
-        pass
-    if slow_function:
-        function.pytestmark = [pytest.mark.slow.mark]
-    marker = pytest.mark.slow.mark if slow_param or slow_function else None
-    return SimpleNamespace(function=function, path=path, originalname=name,
-                           get_closest_marker=lambda n: marker if n == "slow" else None)
+from conftest import slow_wanted, tiered
 
 
 def test_tiered_marks_exactly_the_rejected_cases_and_keeps_ids_and_marks():
@@ -29,21 +19,27 @@ def test_tiered_marks_exactly_the_rejected_cases_and_keeps_ids_and_marks():
     assert [bool(p.marks) for p in tiered(["x", "y"], lambda name: name == "x")] == [False, True]
 
 
-def test_a_check_whose_every_case_is_slow_is_a_gap_unless_the_test_is_marked_slow():
-    items = [_item("/t/test_a.py", "test_one", slow_param=True), _item("/t/test_a.py", "test_one"),
-             _item("/t/test_a.py", "test_two", slow_param=True), _item("/t/test_a.py", "test_two", slow_param=True),
-             _item("/t/test_b.py", "test_rate", slow_function=True)]
-    assert tier_gaps(items) == ["test_a.py::test_two"]
+def test_a_filter_that_keeps_no_case_is_an_error():
+    with pytest.raises(ValueError, match="every one of 2 cases"):
+        tiered(["x", "y"], lambda name: False)
 
 
-def test_make_test_skips_the_slow_cases_alone_the_slow_tier_runs_them_and_a_gap_stops_the_run(monkeypatch):
+@pytest.mark.parametrize("value, wanted", [(None, False), ("", False), ("0", False), (" 0 ", False), ("1", True),
+                                           ("yes", True)])
+def test_fxdsp_slow_is_on_when_set_and_not_0(value, wanted):
+    assert slow_wanted(value) is wanted
+
+
+def test_make_test_skips_the_slow_cases_alone_and_the_slow_tier_runs_them(monkeypatch):
     import conftest
 
     def items():
-        out = [_item("/t/test_a.py", "test_one", slow_param=True), _item("/t/test_a.py", "test_one")]
-        for it in out:
-            it.added = []
+        out = []
+        for slow in (True, False):
+            marker = pytest.mark.slow.mark if slow else None
+            it = SimpleNamespace(added=[], get_closest_marker=lambda n, m=marker: m if n == "slow" else None)
             it.add_marker = it.added.append
+            out.append(it)
         return out
 
     for slow_env, want in ((False, [["skip"], []]), (True, [[], []])):
@@ -51,6 +47,3 @@ def test_make_test_skips_the_slow_cases_alone_the_slow_tier_runs_them_and_a_gap_
         got = items()
         conftest._skip_the_slow_tier(got)
         assert [[m.name for m in it.added] for it in got] == want
-    gap = items()[:1]
-    with pytest.raises(pytest.UsageError, match="test_a.py::test_one"):
-        conftest._skip_the_slow_tier(gap)

@@ -146,7 +146,8 @@ def chain_only(data: dict, chain: str) -> dict:
     tables, whose build and error depend on their own table, their wired inputs and their chains'
     rates, and a table two chains share is checked against both wirings (freq2temp's input format
     against paper 001's and its loop's drive). The tables left out build the same at any value,
-    as they do in the config the search starts from. A build of the whole default config for each
+    as they do in the config the search starts from (Evaluator prunes only a config that builds
+    whole). A build of the whole default config for each
     of a search's ~460 candidates was three quarters of the search; the config the search writes is
     the whole one."""
     from fxdsp.blocks.kinds import block_tables
@@ -255,7 +256,16 @@ class Evaluator:
         self.knobs = knobs_of(self.base, self.chain)
         self.defaults = _field_defaults(self.base, self.chain)
         self.demod = demod_of(self.base, self.chain) if self.frequencies else None
-        self.built = chain_only(self.base, self.chain)   # what an evaluation builds
+        self.built = self._pruned()   # what an evaluation builds
+
+    def _pruned(self) -> dict:
+        """chain_only's data when the whole base config builds; else the whole (every evaluation
+        then fails as the whole config does, and the search reports its target unreachable)."""
+        try:
+            build(Config(self.base, source="<optimise>"))
+        except (ValueError, TypeError, AssertionError, KeyError):
+            return self.base
+        return chain_only(self.base, self.chain)
 
     def data(self, values: dict[str, int], base: dict | None = None) -> dict:
         """The config data at ``values`` (the whole config's, or ``base``'s)."""

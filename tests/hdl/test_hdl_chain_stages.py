@@ -16,7 +16,7 @@ import json
 import numpy as np
 import pytest
 
-from conftest import lag_chain, tiered
+from conftest import lag_chain
 from hdl_util import SIM_BUILD, build_dir, default_data, design_of, generate_into, lint_iverilog, lint_verilator, \
     mutated_rtl, mutated_top, require_iverilog, run_cocotb, segment
 
@@ -73,8 +73,7 @@ def test_configs_have_the_stages_and_change_the_outputs(designs, baseline):
 
 
 @pytest.mark.hdl
-# both stages at once in make test; each alone (the same two stages' RTL) is the slow tier
-@pytest.mark.parametrize("key", tiered(sorted(CONFIGS), lambda key: key == "both"))
+@pytest.mark.parametrize("key", sorted(CONFIGS))
 def test_chain_with_stages_matches_the_model_on_the_rtl(designs, baseline, key):
     d = designs[key]
     assert d.ovf_width(CHAIN) == baseline.ovf_width(CHAIN) + (key != "trim"), \

@@ -71,7 +71,8 @@ def test_corners_reset_gaps(key, name):
 # a member of one, in its shared mode) and any serial block that no chain of the design holds: a
 # Verilator model is a C++ build of 2-20 s per (DUT, design), and a fresh
 # clone builds every one of them. (The serial blocks' rounding and overflow rules on Icarus: the
-# random parameter sets, floor / wrap and half_even among them.)
+# random parameter sets, floor / wrap, half_even and toward_zero among them, one set per DUT in make
+# test and each DUT under every set in the slow tier; every rounding is the one fx_round.)
 def _serial_cases() -> list:
     d = design_of(DESIGNS["narrow_half_even_wrap"])
     in_chain = {m for inst in d.instances.values() for m in inst.members}

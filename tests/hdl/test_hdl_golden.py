@@ -1,7 +1,6 @@
 """(a) The committed golden vectors, bit for bit, through every RTL block and every chain top, with
 the model's overflow count matched by the RTL's overflow flags; the serial (resource-shared) variants
-likewise. Every chain top and one instance of each block module through cocotb (Python-driven) on
-Icarus (every other instance in make test's slow tier, and inside its top); the chain tops, the serial variants and
+likewise. Every DUT through cocotb (Python-driven) on Icarus; the chain tops, the serial variants and
 the blocks Icarus simulates slowly (WHOLE_ON_VERILATOR) on Verilator as well, whole, through the
 file-driven harness (inputs by $readmemh, no Python in the per-cycle loop: paper 002's serial top
 streams its 8.7k golden samples, 3 M cycles, in a few seconds where cocotb's clock callbacks took
@@ -20,7 +19,7 @@ from conftest import tiered
 from fxdsp.hdl.chain_top import has_divider
 from fxdsp.vectors import load
 from hdl_util import SERIAL, SIMULATORS, VECTORS, design_of, distinct_duts, icarus_samples, icarus_window, \
-    one_per_module, record_throughput, run_cocotb, segment
+    record_throughput, run_cocotb, segment
 from long_common import file_stream
 
 # every instance of the design with an RTL module; the manifest lists them all (and the others)
@@ -59,15 +58,10 @@ def design():
     return design_of()
 
 
-# make test: every chain top and one instance of each block module (hdl_util.one_per_module); the
-# other instances (demod02, drive001, piecewise_bias001, ...), each a member of a top with the same
-# parameters in the same variant, stream their golden vectors inside that top, whole on Verilator and
-# a window on Icarus; their own runs are the slow tier
-_ONE_EACH = set(one_per_module(design_of()))
-
-
+# drive001 whole on Verilator is the slow tier: drive's module on a model of its own (drive streams
+# whole there; drive001's whole set runs on Icarus below)
 @pytest.mark.hdl
-@pytest.mark.parametrize("name, sim", tiered(cases(NAMES, WHOLE_ON_VERILATOR), lambda case: case[0] in _ONE_EACH))
+@pytest.mark.parametrize("name, sim", tiered(cases(NAMES, WHOLE_ON_VERILATOR), lambda case: case != ("drive001", "verilator")))
 def test_golden_vectors(design, name, sim):
     ins, outs, entry = load(VECTORS, name)
     total = sum(entry["overflows"].values())
@@ -87,9 +81,9 @@ def test_golden_vectors(design, name, sim):
 
 
 @pytest.mark.hdl
-# the serial variants whole on Verilator are the slow tier: test_hdl_long_blocks streams every serial
-# top (which hold every serial block module) and every serial block no top holds on Verilator, back to
-# back at its schedule's cycles; here a window of each on Icarus
+# the serial variants whole on Verilator are the slow tier: test_hdl_long_blocks streams each of them
+# on Verilator, back to back at its schedule's cycles (drive's as it stands inside paper 002's loop
+# top); here a window of each on Icarus
 @pytest.mark.parametrize("name, sim", tiered(cases(sorted(SERIAL)), lambda case: case[1] == "icarus"))
 def test_golden_vectors_serial(design, name, sim):
     """The same vectors through the serial variant (valid/ready, many cycles per sample)."""

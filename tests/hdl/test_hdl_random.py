@@ -108,6 +108,9 @@ def one_set_each(cases: list[tuple[str, str]]) -> list:
     for pset, name in cases:
         sets.setdefault(name, []).append(pset)
     chosen = {name: s[i % len(s)] for i, (name, s) in enumerate(sorted(sets.items()))}
+    missing = {pset for pset, _ in cases} - set(chosen.values())
+    if missing:   # the turn fell so that a set reaches no DUT: a name's set must be moved
+        raise ValueError(f"one_set_each: the sets {sorted(missing)} run on no name in make test")
     return tiered(cases, lambda case: chosen[case[1]] == case[0])
 
 
