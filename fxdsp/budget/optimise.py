@@ -240,6 +240,11 @@ def _field_defaults(data: dict, chain: str) -> dict:
     return {f: _get(data, f) for k in knobs_of(data, chain) for f in k.fields}
 
 
+# what a build of a candidate config raises when the config does not build (a bad value, a format
+# that does not connect, a table too narrow for its coefficients): an infinite error, not a failure
+NOT_BUILT = (ValueError, TypeError, AssertionError)
+
+
 @dataclass
 class Evaluator:
     base: dict
@@ -263,7 +268,7 @@ class Evaluator:
         then fails as the whole config does, and the search reports its target unreachable)."""
         try:
             build(Config(self.base, source="<optimise>"))
-        except (ValueError, TypeError, AssertionError, KeyError):
+        except NOT_BUILT:
             return self.base
         return chain_only(self.base, self.chain)
 
@@ -295,7 +300,7 @@ class Evaluator:
                 table_at(data, self.demod)["f_hz"] = float(f_hz)
             try:
                 design = build(Config(data, source="<optimise>"))
-            except (ValueError, TypeError, AssertionError):
+            except NOT_BUILT:
                 err = math.inf
                 break
             err = max(err, self._error_of(design, seed_offset))

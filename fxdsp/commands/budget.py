@@ -97,7 +97,7 @@ def configure(parser) -> None:
     parser.add_argument("--cost", default="total_bits", choices=("total_bits", "register_bits"),
                         help="cost the search minimises: every bit (registers, coefficients, LUT memory; default) "
                              "or register/coefficient bits only")
-    parser.add_argument("--margin", type=FINITE, default=None,
+    parser.add_argument("--margin", type=FINITE, default=DEFAULT_MARGIN,
                         help=f"with --optimise: optimise to (1 - margin) x target (default {DEFAULT_MARGIN})")
     parser.add_argument("--max-mean", help="with --optimise: also keep |mean| (a bias) of the --target output within "
                                            "this, <value><unit> as --target")
@@ -218,8 +218,7 @@ def _run(args, stage) -> int:
                          "port": target.port, "metric": args.metric, "measured": measured, "met": meets}
         if args.optimise:
             freqs = tuple(drive_frequencies(demod_f_hz(cfg, design, target.chain))) if args.drive_band else ()
-            result = opt.optimise(cfg, target, args.metric, DEFAULT_MARGIN if args.margin is None else args.margin,
-                                  progress=tqdm, cost_model=args.cost,
+            result = opt.optimise(cfg, target, args.metric, args.margin, progress=tqdm, cost_model=args.cost,
                                   max_mean=max_mean, frequencies=freqs)
             print(f"\n7. word-length search ({result.evaluations} evaluations, greedy min+b):")
             print(opt.format_result(result))

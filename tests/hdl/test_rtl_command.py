@@ -16,6 +16,7 @@ import re
 import shutil
 import tomllib
 
+import numpy as np
 import pytest
 
 from fxdsp.owned import RECORD
@@ -246,14 +247,22 @@ def test_streams_that_share_a_run_keep_their_own_segments_cycles_and_errors(monk
 
     monkeypatch.setattr(rg.hh, "run_cocotb", one_run)
     names = ["golden", "random", "corners"]
-    out = rg._py_streams(design, rg.Dut("lag", None), names, design_files(design)["vectors"], "icarus",
-                         dict.fromkeys(names, 7), tmp_path, None, None)
-    assert len(runs) == 1 and [s["label"] for s in runs[0]] == ["segment 0", "segment 0", "segment 0", "segment 1",
-                                                                "segment 2"]
-    assert [s["gap"] for s in runs[0]] == [0.0, rg.RANDOM_GAP, 0.0, 0.0, 0.5]
+    files = design_files(design)["vectors"]
+    out = rg._py_streams(design, rg.Dut("lag", None), names, files, "icarus", dict.fromkeys(names, 7), tmp_path,
+                         None, None)
+    # what each stream would have run alone: its segments, in order, each with its own gap
+    alone = {n: rg._stream(design, rg.Dut("lag", None), n, files, "icarus", 7, None) for n in names}
+    assert len(runs) == 1 and [s["label"] for s in runs[0]] == [f"segment {i}" for n in names
+                                                                for i in range(len(alone[n][0]))]
+    assert [s["gap"] for s in runs[0]] == [s.get("gap", alone[n][2]) for n in names for s in alone[n][0]]
+    assert len({s["gap"] for s in runs[0]}) > 1, "the streams' gaps must differ for the check to mean anything"
     assert out["golden"][0]["ok"] and out["random"][0]["ok"] and out["golden"][1] is None
-    assert [out[n][0]["cycles"] for n in names] == [10, 20, 30 + 40 + 50]
+    first = np.cumsum([0] + [len(alone[n][0]) for n in names])   # each stream's first segment in the run
+    assert [out[n][0]["cycles"] for n in names] == [sum(10 * (k + 1) for k in range(first[i], first[i + 1]))
+                                                    for i, n in enumerate(names)]
     record, mismatch, inputs, gapped = out["corners"]
     assert not record["ok"] and record["errors"] == ["segment 1 port te: 1 mismatch(es)"]
-    assert mismatch["segment"] == 1 and mismatch["sample"] == 5 and not gapped
+    corners, _, corners_gap = alone["corners"]
+    assert mismatch["segment"] == 1 and mismatch["sample"] == 5
+    assert gapped == bool(corners[1].get("gap", corners_gap))
     assert len(next(iter(inputs.values()))) == len(next(iter(runs[0][3]["inputs"].values())))
