@@ -86,8 +86,16 @@ def build_parser(load: Iterable[str] | None = None) -> argparse.ArgumentParser:
             with interrupts_held():
                 module = importlib.import_module(module_name)
             module.configure(sp)
-            sp.set_defaults(_module=module, _parser=sp)
+            sp.set_defaults(_module=module)
+            for leaf in _leaf_parsers(sp):   # the parser whose defaults an option is checked against
+                leaf.set_defaults(_parser=leaf)
     return parser
+
+
+def _leaf_parsers(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser]:
+    """``parser`` or, for a command with kinds (sweep montecarlo, ...), each kind's own parser."""
+    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    return [leaf for s in subs for p in dict.fromkeys(s.choices.values()) for leaf in _leaf_parsers(p)] or [parser]
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -76,8 +76,10 @@ def path_options() -> list[tuple[Leaf, str, str]]:
 
 
 def only_with(leaf: Leaf) -> dict[str, tuple[str, ...]]:
-    """The command's ONLY_WITH (fxdsp.cli): option -> the conditions one of which it needs."""
-    return getattr(leaf.module, "ONLY_WITH", {}) if len(leaf.words) == 1 else {}
+    """The command's ONLY_WITH (fxdsp.cli), for the options this command (or kind of sweep) has:
+    option -> the conditions one of which it needs."""
+    have = {flag(a) for a in leaf.options()}
+    return {o: c for o, c in getattr(leaf.module, "ONLY_WITH", {}).items() if o in have}
 
 
 def companions(leaf: Leaf, probes: dict[str, list[str]]) -> dict[str, list[str] | None]:

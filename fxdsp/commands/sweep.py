@@ -32,9 +32,13 @@ from pathlib import Path
 from fxdsp.budget import DEFAULT_MARGIN
 from fxdsp.commands.options import FINITE, NATURAL, SEED, count
 from fxdsp.outputs import IN, IN_DIR, OUT_DIR
-from fxdsp.errors import InputError
 
 PATHS = {"--out": OUT_DIR, "--config": IN, "--rtl": IN_DIR, "--build-dir": OUT_DIR}
+
+
+# a running cluster has its own workers: a worker count beside its address is refused (fxdsp.cli),
+# for every kind of sweep
+ONLY_WITH = {"--workers": ("not --scheduler",)}
 
 
 def _common(p, config: bool = True, seed: bool = True) -> None:
@@ -118,8 +122,6 @@ def run(args) -> int:
     from fxdsp.sweep.engine import Executor, Sweep
 
     t0 = time.perf_counter()
-    if args.scheduler is not None and args.workers is not None:
-        raise InputError("--workers: not with --scheduler (the cluster has its own workers)")
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     prepare = {"montecarlo": _prepare_montecarlo, "wordlength": _prepare_wordlength, "hidden": _prepare_hidden,
                "rtl": _prepare_rtl}[args.kind]
