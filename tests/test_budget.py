@@ -187,9 +187,13 @@ def test_a_search_builds_its_chain_alone_and_gets_the_whole_configs_error_and_re
     (["budget", "--optimise", "--chain", "chain_paper001", "--target", "1deg/h", "--drive-band"], "--drive-band"),
 ])
 def test_bad_input_exits_2_with_one_line(argv, word, capsys):
+    """Refused before the budget is computed: nothing on stdout (an unreachable target is the search's
+    first finding, not a line after every section of the budget)."""
     assert main(argv) == 2
-    err = capsys.readouterr().err.strip().splitlines()
+    out, err = capsys.readouterr()
+    err = err.strip().splitlines()
     assert len(err) == 1 and word in err[0]
+    assert out == ""
 
 
 def test_synth_estimate_sums_the_chain_members():

@@ -134,8 +134,14 @@ def _run(args, stage) -> int:
     noise = {p: a.sensor_noise_rms for (c, p), a in own.items()}
     target = parse_target(args.target, design, args.chain, noise) if args.target else None
     max_mean = parse_target(args.max_mean, design, args.chain, noise, "--max-mean") if args.max_mean else None
+    result = None
     if args.optimise:
         opt.check_search(args.chain, target=target, max_mean=max_mean)
+        # the search before the rest of the budget: a target it cannot reach (even at the widest
+        # words) is one line at once, not after every section of the budget has been computed
+        freqs = tuple(drive_frequencies(demod_f_hz(cfg, design, target.chain))) if args.drive_band else ()
+        result = opt.optimise(cfg, target, args.metric, args.margin, progress=tqdm, cost_model=args.cost,
+                              max_mean=max_mean, frequencies=freqs)
     attrs = {key: own[key] if key in own else attribute(design, *key) for key in attributed(design)}
 
     print(f"fxdsp budget: config {cfg.source}, seed {design.seed}")
@@ -202,7 +208,6 @@ def _run(args, stage) -> int:
            "drive_reference_allan": [ra.as_dict() for ra in references],
            "null_means": "an infinite or undefined value (an exact port's SNR, a margin without a floor)"}
     status = 0
-    result = None
     if target:
         row = next(r for r in rows if r.stats.block == target.chain and r.stats.port == target.port)
         measured = (row.stats.rms if args.metric == "rms" else row.stats.max_abs) * row.stats.scale
@@ -216,10 +221,7 @@ def _run(args, stage) -> int:
               f"{'MET' if meets else 'NOT MET'}")
         out["target"] = {"text": args.target, "value": target.value, "unit": target.unit, "chain": target.chain,
                          "port": target.port, "metric": args.metric, "measured": measured, "met": meets}
-        if args.optimise:
-            freqs = tuple(drive_frequencies(demod_f_hz(cfg, design, target.chain))) if args.drive_band else ()
-            result = opt.optimise(cfg, target, args.metric, args.margin, progress=tqdm, cost_model=args.cost,
-                                  max_mean=max_mean, frequencies=freqs)
+        if result is not None:
             print(f"\n7. word-length search ({result.evaluations} evaluations, greedy min+b):")
             print(opt.format_result(result))
             dc, nc = result.default_cost, result.cost

@@ -52,7 +52,10 @@ def test_the_serial_rtl_loop_closed_on_its_mode_is_the_models_closed_loop():
 
 @pytest.mark.hdl
 # (the loop filter's rounding mutant, drive_pll_rounding_floor, is the regression test's below: caught
-# there in both variants, with its sample, port and waveform)
+# there in both variants, with its sample, port and waveform; the detector's, here, is the slow tier:
+# a closed loop that leaves the model's trajectory is make test's there, and the golden vectors catch
+# this mutant in test_mutation)
+@pytest.mark.slow
 @pytest.mark.parametrize("key", ["drive_detector_q_sign"])
 def test_a_loop_mutant_leaves_the_models_trajectory(key, tmp_path):
     require_simulator("verilator")
