@@ -32,7 +32,7 @@ from fxdsp.config import Config, table_at
 from fxdsp.float_vs_fixed import port_unit
 from fxdsp.budget.attribution import Attribution
 from fxdsp.budget.hybrid import ADC, lowpass_of
-from fxdsp.budget.optimise import demod_of
+from fxdsp.budget.optimise import chain_only, demod_of
 from fxdsp.budget.static import static_errors
 from fxdsp.budget.table import budget_rows
 from fxdsp.errors import InputError
@@ -369,7 +369,11 @@ def drive_sweep(config: Config, chain_name: str, ports: list[str], points: int =
     band = drive_band(f0, a_ppm_per_c, t0_c, temp_range_c)
     freqs = drive_frequencies(f0, points, band=band)
     it = progress(freqs, desc=f"drive-frequency sweep of {chain_name}", unit="f") if progress else freqs
-    at = [drive_points(config.data, f, chain_name, ports, table) for f in it]
+    # each point builds the chain alone (and what shares a table with it: optimise.chain_only), as the
+    # word-length search does: the other chains' tables do not move its error, and building them was
+    # most of a point
+    data = chain_only(config.data, chain_name)
+    at = [drive_points(data, f, chain_name, ports, table) for f in it]
     out = [DriveSweep(chain_name, p, table, f0, a_ppm_per_c, t0_c, tuple(temp_range_c), band, [a[p] for a in at],
                       port_unit(design, chain_name, p)[0]) for p in ports]
     return out

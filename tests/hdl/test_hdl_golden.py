@@ -27,11 +27,12 @@ from long_common import file_stream
 NAMES = distinct_duts(design_of(), sorted(set(json.loads((VECTORS / "manifest.json").read_text())["blocks"])
                                           & set(design_of().hardware)))
 _TOPS = {n for n, inst in design_of().instances.items() if inst.members}
-# blocks whose whole golden set Icarus simulates slowly (a drive loop's 6.8k samples: 7-10 s of vvp; the
-# demodulator's and the low-pass's 2-3 s) streamed whole on Verilator instead, file-driven, a window on
+# blocks whose whole golden set Icarus simulates slowly (a drive loop's 6.8k samples: 7-10 s of vvp; a
+# demodulator's 5 s, the low-pass's 2-3 s) streamed whole on Verilator instead, file-driven, a window on
 # Icarus. drive, demod and iir by the very model their long stream builds (test_hdl_long_blocks,
-# test_hdl_long_chains: the same harness text), drive001 by a model of its own (~2 s of C++)
-WHOLE_ON_VERILATOR = {"drive", "drive001", "demod", "iir"}
+# test_hdl_long_chains: the same harness text); the other drive and demodulator instances by a model
+# of their own (~2 s of C++ where Icarus took 5 s)
+WHOLE_ON_VERILATOR = {"iir"} | {n for n in NAMES if design_of().instances[n].module in ("drive", "demod")}
 
 
 def cases(names, whole=frozenset()) -> list:
