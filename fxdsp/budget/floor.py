@@ -23,7 +23,6 @@ import copy
 import math
 from dataclasses import dataclass, field
 
-import allantools
 import numpy as np
 import scipy.signal as sps
 
@@ -207,6 +206,10 @@ def white_fit(taus: np.ndarray, adev: np.ndarray) -> tuple[float, list[float]]:
 def allan_figures(error: np.ndarray, fs: float) -> dict:
     """Octave-spaced Allan curve of ``error`` (rate samples at ``fs``), its minimum, and adev at
     tau = 1 s (measured if the record holds MIN_INTERVALS seconds, else extrapolated)."""
+    # imported here, as drive_loop does: allantools (and the scipy.stats it loads) was 1.2 s of every
+    # `fxdsp budget` start, a --help or a refused option included
+    import allantools
+
     e = np.asarray(error, dtype=float)
     if fs <= 0:
         raise InputError(f"fs: must be > 0, got {fs}")

@@ -6,28 +6,25 @@ import math
 from functools import partial
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+import scipy.signal as sps
+from tqdm import tqdm as _tqdm
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import scipy.signal as sps  # noqa: E402
-from tqdm import tqdm as _tqdm  # noqa: E402
-
-from fxdsp.budget.attribution import Attribution  # noqa: E402
-from fxdsp.budget.drive_loop import format_allan as format_reference_allan, format_budget  # noqa: E402
-from fxdsp.budget import optimise as opt  # noqa: E402
-from fxdsp.budget.floor import (DOMINANT_FACTOR, FLICKER_FACTOR, WITHIN_DB, Allan, DriveSweep,  # noqa: E402
+from fxdsp.budget.attribution import Attribution
+from fxdsp.budget.drive_loop import format_allan as format_reference_allan, format_budget
+from fxdsp.budget import optimise as opt
+from fxdsp.budget.floor import (DOMINANT_FACTOR, FLICKER_FACTOR, WITHIN_DB, Allan, DriveSweep,
                                 Floor, carrier_chains)
-from fxdsp.budget.hybrid import CATEGORIES  # noqa: E402
-from fxdsp.budget.table import format_rows  # noqa: E402
-from fxdsp.float_vs_fixed import port_unit  # noqa: E402
-from fxdsp.plots import save_figure  # noqa: E402
+from fxdsp.budget.hybrid import CATEGORIES
+from fxdsp.budget.table import format_rows
+from fxdsp.float_vs_fixed import port_unit
+from fxdsp.plots import pyplot, save_figure
 
 tqdm = partial(_tqdm, disable=None)
 
 
 def plot_spectra(att: Attribution, fs: float, path: Path) -> None:
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(9, 5))
     nper = min(8192, att.total_error.size)
     for s in att.sources:
@@ -46,6 +43,7 @@ def plot_spectra(att: Attribution, fs: float, path: Path) -> None:
 
 
 def plot_attribution(att: Attribution, path: Path) -> None:
+    plt = pyplot()
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 5), gridspec_kw={"width_ratios": [3, 1]})
     names = [s.source.name for s in att.sources]
     ms = [s.rms**2 for s in att.sources]
@@ -65,6 +63,7 @@ def plot_attribution(att: Attribution, path: Path) -> None:
 
 
 def plot_sweeps(sweeps: dict, unit: str, target: float | None, path: Path, title: str) -> None:
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(9, 5.5))
     for i, (name, pts) in enumerate(sweeps.items()):
         if not pts:
@@ -83,6 +82,7 @@ def plot_sweeps(sweeps: dict, unit: str, target: float | None, path: Path, title
 
 def plot_allan(allan, path: Path) -> None:
     """Log-log Allan deviation with the bias-instability point and the 1 s value marked."""
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(8, 5.5))
     ok = allan.adev > 0  # a zero deviation (exactly constant error) has no place on a log axis
     ax.loglog(allan.taus[ok], allan.adev[ok], "o-", ms=3, lw=1.0, label="overlapping Allan deviation")
@@ -108,6 +108,7 @@ def _save_allan(fig, ax, unit: str, title: str, path: Path) -> None:
 
 def plot_drive_sweep(sweep, path: Path) -> None:
     """rms and |mean| of the chain error (nominal and quasi-static) against the drive frequency."""
+    plt = pyplot()
     f = np.array([p.f_hz for p in sweep.points])
     series = {"rms (nominal)": [p.rms for p in sweep.points], "|mean| (nominal)": [abs(p.mean) for p in sweep.points],
               "rms (quasi-static)": [p.static_rms for p in sweep.points],
@@ -128,6 +129,7 @@ def plot_drive_sweep(sweep, path: Path) -> None:
 
 def plot_reference_allan(ra, path: Path) -> None:
     """The reference's Allan deviation locked to the drive loop against the open-loop NCO's drift."""
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(8, 5.5))
     ax.loglog(ra.taus, ra.adev_locked, "o-", ms=3, lw=1.0, label="locked to the drive loop (fixed - float)")
     ax.loglog(ra.taus, ra.adev_open, "--", lw=1.0, label=f"open loop: the centre word's drift "

@@ -147,10 +147,9 @@ def write_json(path, data: dict) -> None:
 # -- human report --------------------------------------------------------------------------------
 def write_report(diag: Diagnosis, directory) -> Path:
     """Markdown report plus PNG plots (residual vs temperature / dT/dt / time) in ``directory``."""
-    import matplotlib
+    from fxdsp.plots import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
@@ -248,7 +247,9 @@ def write_report(diag: Diagnosis, directory) -> Path:
 def _remaining_plots(diag: Diagnosis, out: Path, idx: np.ndarray) -> list[str]:
     """Per channel with structure left: the final model's held-out residual against time, and
     against every other column the structure follows, with the structure found drawn over it."""
-    import matplotlib.pyplot as plt
+    from fxdsp.plots import pyplot
+
+    plt = pyplot()
 
     ctx, s = diag.context, diag.context.series
     axes_of = {"time_s": (s.t / 3600.0, "time [h]"), "temp_c": (s.temp, "temp_c [C]"),

@@ -114,10 +114,9 @@ def markdown(rep: dict) -> str:
 
 
 def plot(errors: dict, time_s, path: Path, unit: str) -> None:
-    import matplotlib
+    from fxdsp.plots import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     t = np.asarray(time_s, float) / 3600.0
     held = errors["_held"]

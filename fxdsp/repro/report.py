@@ -6,16 +6,12 @@ import json
 import time
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from tqdm import tqdm
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from tqdm import tqdm  # noqa: E402
-
-from fxdsp.chains import build  # noqa: E402
-from fxdsp.repro import paper000, paper001, paper002, paper003  # noqa: E402
-from fxdsp.plots import save_figure  # noqa: E402
+from fxdsp.chains import build
+from fxdsp.repro import paper000, paper001, paper002, paper003
+from fxdsp.plots import pyplot, save_figure
 from fxdsp.errors import InputError
 
 PAPERS = ("002", "001", "000", "003")
@@ -123,6 +119,7 @@ def summary_rows(res: dict) -> list[tuple[str, str, str, str]]:
 # --- plots ---------------------------------------------------------------------------------------
 
 def _plot002(r: dict, img: Path) -> list[str]:
+    plt = pyplot()
     m = r["methods"]
     fig, ax = plt.subplots(1, 2, figsize=(11, 4))
     b = r["before_verify"]
@@ -192,6 +189,7 @@ def _plot002(r: dict, img: Path) -> list[str]:
 
 
 def _plot001(r: dict, img: Path) -> list[str]:
+    plt = pyplot()
     fig, ax = plt.subplots(1, 3, figsize=(13, 4))
     pts = r["cal"]["points"]
     t = np.asarray(pts["temp_c"])
@@ -221,6 +219,7 @@ def _plot001(r: dict, img: Path) -> list[str]:
 
 
 def _plot000(r: dict, img: Path) -> list[str]:
+    plt = pyplot()
     fig, ax = plt.subplots(1, 2, figsize=(11, 4))
     b, a = r["before"], r["after"]
     k1_25 = np.interp(25.0, b["temp_c"], b["k1"])
@@ -241,6 +240,7 @@ def _plot000(r: dict, img: Path) -> list[str]:
 
 
 def _plot003(r: dict, img: Path) -> list[str]:
+    plt = pyplot()
     m = r["measure"]
     f = m["freqs_hz"]
     fig, ax = plt.subplots(1, 2, figsize=(11, 4))

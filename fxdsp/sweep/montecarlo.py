@@ -277,10 +277,9 @@ def format_summary(s: dict) -> str:
 
 def plot(s: dict, path) -> None:
     """p50 and p99 (with its CI) of the rms error vs temperature, one colour per drive frequency."""
-    import matplotlib
+    from fxdsp.plots import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, ax = plt.subplots(figsize=(7.5, 4.5))
     if "cells" in s:
