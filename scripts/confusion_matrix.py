@@ -8,10 +8,12 @@ single causes in logs of 500 rows, (--flicker) the single causes under flicker-d
     .venv/bin/python scripts/confusion_matrix.py --per-label 20 [--generator independent|project|both]
         [--triples] [--outside] [--short] [--flicker] [--jsonl LOGS.jsonl]
     .venv/bin/python scripts/confusion_matrix.py --compare OLD.jsonl NEW.jsonl
+    .venv/bin/python scripts/confusion_matrix.py --labels RUN.jsonl [RUN.jsonl ...]
 
 --jsonl writes one line per log (independent.confusion.record); --compare prints both files' totals
 and every log whose named causes, flag or parameters differ between them (a change to the diagnosis
-is judged log by log, on the same seeds).
+is judged log by log, on the same seeds); --labels reads the acceptance label by label over the
+files' logs pooled (each generator, both, the labels under it marked).
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from tqdm import tqdm  # noqa: E402
 
-from independent.confusion import compare, label_name, record, score, specs, table  # noqa: E402
+from independent.confusion import compare, label_name, per_label, record, score, specs, table  # noqa: E402
 
 
 def main() -> int:
@@ -39,7 +41,12 @@ def main() -> int:
     p.add_argument("--jsonl", type=Path, help="also write one JSON line per log here")
     p.add_argument("--compare", nargs=2, type=Path, metavar=("OLD", "NEW"),
                    help="compare two --jsonl files log by log and exit")
+    p.add_argument("--labels", nargs="+", type=Path, metavar="RUN",
+                   help="the acceptance label by label over these --jsonl files, pooled, and exit")
     args = p.parse_args()
+    if args.labels:
+        print(per_label([json.loads(line) for path in args.labels for line in path.read_text().splitlines() if line]))
+        return 0
     if args.compare:
         old, new = ([json.loads(line) for line in path.read_text().splitlines() if line] for path in args.compare)
         print(compare(old, new))

@@ -26,6 +26,9 @@ except ImportError:  # pragma: no cover
 
 TOLERANCE = 0.25
 MIN_RATIO = 1.3
+# issue 32's acceptance: in-contract logs named exactly, out-of-contract logs flagged `significant`
+ACCEPT_NAMED = 0.95
+ACCEPT_FLAGGED = 0.90
 
 
 @dataclass
@@ -264,6 +267,32 @@ def counts(records: list[dict]) -> dict:
             "outside_flagged": sum(r["flagged"] for r in outside), "in_contract_flagged": sum(r["flagged"] for r in inside),
             "sds": len(sds), "within_2_sds": sum(z <= 2 for z in sds),
             "median_seconds": float(np.median([r["seconds"] for r in records])) if records else float("nan")}
+
+
+def per_label(records: list[dict]) -> str:
+    """The acceptance read label by label (:func:`counts` reads it over every label): per label, each
+    generator's logs named exactly (in contract) or flagged (out of contract), both pooled, and the
+    parameters within 25 % of the exact logs with a cause; a label under ACCEPT_NAMED (ACCEPT_FLAGGED
+    out of contract) is marked. Records of several runs (seed sets) pool by label."""
+    gens = sorted({r["generator"] for r in records})
+    by: dict = {}
+    for r in records:
+        by.setdefault(r["label"], {}).setdefault(r["generator"], []).append(r)
+    lines = [f"| label | {' | '.join(gens)} | both | parameters within 25 % | |",
+             "|---|" + "---|" * len(gens) + "---|---|---|"]
+    for label in sorted(by, key=lambda lab: (any(r["outside"] for g in by[lab].values() for r in g), lab)):
+        rows = [r for g in by[label].values() for r in g]
+        outside = any(r["outside"] for r in rows)
+        hit = (lambda r: r["flagged"]) if outside else (lambda r: r["named_exactly"])
+        cells = [f"{sum(map(hit, by[label].get(g, [])))}/{len(by[label].get(g, []))}" for g in gens]
+        rate = sum(map(hit, rows)) / len(rows)
+        caused = [r for r in rows if r["named_exactly"] and r["truth"]]
+        params = f"{sum(r['params_ok'] for r in caused)}/{len(caused)}" if caused else "-"
+        low = rate < (ACCEPT_FLAGGED if outside else ACCEPT_NAMED)
+        what = "flagged" if outside else "named exactly"
+        lines.append(f"| {label} | {' | '.join(cells)} | {rate:.1%} {what} | {params} | "
+                     f"{'**under ' + format(ACCEPT_FLAGGED if outside else ACCEPT_NAMED, '.0%') + '**' if low else ''} |")
+    return "\n".join(lines)
 
 
 def _totals(records: list[dict]) -> str:

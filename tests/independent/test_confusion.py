@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import json
 
-from .confusion import compare, record, score
+from .confusion import compare, per_label, record, score
 
 
-def _line(label, seed, truth, found, flagged=False, params_ok=True, outside=()):
+def _line(label, seed, truth, found, flagged=False, params_ok=True, outside=(), generator="independent"):
     # the fields record() writes, filled in by hand: what a run of the script leaves in its file
-    return {"generator": "independent", "label": label, "seed": seed, "truth": list(truth), "found": list(found),
+    return {"generator": generator, "label": label, "seed": seed, "truth": list(truth), "found": list(found),
             "named_exactly": sorted(found) == sorted(truth), "params_ok": params_ok, "misses": [] if params_ok else
             ["aging_drift.r_per_h 1.5 vs 1"], "noise_misses": [], "outside": list(outside), "flagged": flagged,
             "seconds": 1.0, "sds_off": [0.5]}
@@ -40,3 +40,24 @@ def test_a_diagnosed_log_is_written_as_a_json_line_the_comparison_reads():
     assert "no log differs" in compare([line], [line])
     moved = {**line, "found": ["aging_drift"] if not o.found else []}
     assert "none (500 rows) seed 5000" in compare([line], [moved])
+
+
+def _logs(label, truth, n, hits, generator="independent", outside=()):
+    """``n`` logs of ``label``, the first ``hits`` of them named exactly (flagged, out of contract)."""
+    return [_line(label, 5000 + k, truth, truth if outside or k < hits else (), flagged=bool(outside) and k < hits,
+                  outside=outside, generator=generator) for k in range(n)]
+
+
+def test_the_acceptance_read_label_by_label_marks_the_labels_under_it():
+    # issue 32: >= 95 % named exactly on in-contract labels, >= 90 % of out-of-contract logs flagged;
+    # the rates here sit on and just under those lines, the two generators pooled
+    records = (_logs("lag", ("thermal_lag",), 20, 20) + _logs("lag", ("thermal_lag",), 20, 18, "project")   # 38/40
+               + _logs("drift", ("aging_drift",), 20, 18) + _logs("drift", ("aging_drift",), 20, 19, "project")  # 37/40
+               + _logs("none + step", (), 20, 18, outside=("step",))                                           # 18/20
+               + _logs("none + sine", (), 20, 17, outside=("sine",)))                                          # 17/20
+    rows = {line.split(" | ")[0].strip("| "): line for line in per_label(records).splitlines()[2:]}
+    assert "20/20 | 18/20 | 95.0% named exactly" in rows["lag"] and "under" not in rows["lag"]
+    assert "18/20 | 19/20 | 92.5% named exactly" in rows["drift"] and "**under 95%**" in rows["drift"]
+    assert "90.0% flagged" in rows["none + step"] and "under" not in rows["none + step"]
+    assert "85.0% flagged" in rows["none + sine"] and "**under 90%**" in rows["none + sine"]
+    assert list(rows) == ["drift", "lag", "none + sine", "none + step"]   # in-contract labels first
