@@ -45,7 +45,11 @@ def main() -> int:
                    help="the acceptance label by label over these --jsonl files, pooled, and exit")
     args = p.parse_args()
     if args.labels:
-        print(per_label([json.loads(line) for path in args.labels for line in path.read_text().splitlines() if line]))
+        try:
+            print(per_label([json.loads(line) for path in args.labels for line in path.read_text().splitlines() if line]))
+        except ValueError as exc:
+            print(f"--labels: {exc}", file=sys.stderr)
+            return 2
         return 0
     if args.compare:
         old, new = ([json.loads(line) for line in path.read_text().splitlines() if line] for path in args.compare)

@@ -30,8 +30,9 @@ _TOPS = {n for n, inst in design_of().instances.items() if inst.members}
 # blocks whose whole golden set Icarus simulates slowly (a drive loop's 6.8k samples: 7-10 s of vvp; a
 # demodulator's 5 s, the low-pass's 2-3 s) streamed whole on Verilator instead, file-driven, a window on
 # Icarus. drive, demod and iir by the very model their long stream builds (test_hdl_long_blocks,
-# test_hdl_long_chains: the same harness text); the other drive and demodulator instances by a model
-# of their own (~2 s of C++ where Icarus took 5 s)
+# test_hdl_long_chains: the same harness text); the other drive and demodulator instances (drive001,
+# demod002, demod02) by a model of their own (~2 s of C++ each, where Icarus took 5-10 s): each
+# instance's whole golden set, its corner codes and overflow counts, runs in make test once
 WHOLE_ON_VERILATOR = {"iir"} | {n for n in NAMES if design_of().instances[n].module in ("drive", "demod")}
 
 
@@ -59,10 +60,8 @@ def design():
     return design_of()
 
 
-# drive001 whole on Verilator is the slow tier: drive's module on a model of its own (drive streams
-# whole there; drive001's whole set runs on Icarus below)
 @pytest.mark.hdl
-@pytest.mark.parametrize("name, sim", tiered(cases(NAMES, WHOLE_ON_VERILATOR), lambda case: case != ("drive001", "verilator")))
+@pytest.mark.parametrize("name, sim", cases(NAMES, WHOLE_ON_VERILATOR))
 def test_golden_vectors(design, name, sim):
     ins, outs, entry = load(VECTORS, name)
     total = sum(entry["overflows"].values())

@@ -273,10 +273,17 @@ def per_label(records: list[dict]) -> str:
     """The acceptance read label by label (:func:`counts` reads it over every label): per label, each
     generator's logs named exactly (in contract) or flagged (out of contract), both pooled, and the
     parameters within 25 % of the exact logs with a cause; a label under ACCEPT_NAMED (ACCEPT_FLAGGED
-    out of contract) is marked. Records of several runs (seed sets) pool by label."""
+    out of contract) is marked. Records of several runs (seed sets) pool by label; a log twice (the
+    same generator, label and seed: two runs of one seed set, before and after a change, are
+    :func:`compare`'s) is refused."""
     gens = sorted({r["generator"] for r in records})
     by: dict = {}
+    seen = set()
     for r in records:
+        key = (r["generator"], r["label"], r["seed"])
+        if key in seen:
+            raise ValueError(f"{key[0]} {key[1]} seed {key[2]}: twice (runs of the same seeds are --compare's)")
+        seen.add(key)
         by.setdefault(r["label"], {}).setdefault(r["generator"], []).append(r)
     lines = [f"| label | {' | '.join(gens)} | both | parameters within 25 % | |",
              "|---|" + "---|" * len(gens) + "---|---|---|"]
@@ -284,7 +291,7 @@ def per_label(records: list[dict]) -> str:
         rows = [r for g in by[label].values() for r in g]
         outside = any(r["outside"] for r in rows)
         hit = (lambda r: r["flagged"]) if outside else (lambda r: r["named_exactly"])
-        cells = [f"{sum(map(hit, by[label].get(g, [])))}/{len(by[label].get(g, []))}" for g in gens]
+        cells = [f"{sum(map(hit, by[label][g]))}/{len(by[label][g])}" if g in by[label] else "-" for g in gens]
         rate = sum(map(hit, rows)) / len(rows)
         caused = [r for r in rows if r["named_exactly"] and r["truth"]]
         params = f"{sum(r['params_ok'] for r in caused)}/{len(caused)}" if caused else "-"
