@@ -27,7 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from tqdm import tqdm  # noqa: E402
 
-from independent.confusion import compare, label_name, per_label, record, score, specs, table  # noqa: E402
+from independent.confusion import compare, label_name, per_label, record, records, score, specs, table  # noqa: E402
 
 
 def main() -> int:
@@ -44,17 +44,16 @@ def main() -> int:
     p.add_argument("--labels", nargs="+", type=Path, metavar="RUN",
                    help="the acceptance label by label over these --jsonl files, pooled, and exit")
     args = p.parse_args()
-    if args.labels:
-        try:
-            print(per_label([json.loads(line) for path in args.labels for line in path.read_text().splitlines() if line]))
-        except ValueError as exc:
-            print(f"--labels: {exc}", file=sys.stderr)
-            return 2
-        return 0
-    if args.compare:
-        old, new = ([json.loads(line) for line in path.read_text().splitlines() if line] for path in args.compare)
-        print(compare(old, new))
-        return 0
+    try:
+        if args.labels:
+            print(per_label([r for path in args.labels for r in records(path)]))
+            return 0
+        if args.compare:
+            print(compare(*(records(path) for path in args.compare)))
+            return 0
+    except (OSError, ValueError) as exc:   # a file missing or not a --jsonl file: one line, exit 2
+        print(f"{'--labels' if args.labels else '--compare'}: {exc}", file=sys.stderr)
+        return 2
     sink = args.jsonl.open("w") if args.jsonl else None
     gens = ("independent", "project") if args.generator == "both" else (args.generator,)
     for gen in gens:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import time
+from pathlib import Path
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -250,6 +251,28 @@ def record(o: Outcome, generator: str) -> dict:
             "named_exactly": o.named_exactly, "params_ok": o.params_ok, "misses": o.misses,
             "noise_misses": o.noise_misses, "outside": list(o.outside), "flagged": o.flagged,
             "seconds": o.seconds, "sds_off": o.sds_off}
+
+
+# what per_label and compare read of a record
+RECORD_FIELDS = ("generator", "label", "seed", "truth", "found", "named_exactly", "params_ok", "outside", "flagged")
+
+
+def records(path) -> list[dict]:
+    """The :func:`record` lines of a --jsonl file; ValueError naming the file and line of one that
+    is not such a line (another file given by mistake, a run cut off mid-line)."""
+    out = []
+    for n, line in enumerate(Path(path).read_text().splitlines(), 1):
+        if not line.strip():
+            continue
+        try:
+            r = json.loads(line)
+        except json.JSONDecodeError as exc:
+            raise ValueError(f"{path}:{n}: not JSON ({exc.msg})") from None
+        missing = [f for f in RECORD_FIELDS if not isinstance(r, dict) or f not in r]
+        if missing:
+            raise ValueError(f"{path}:{n}: not a --jsonl record (no {missing[0]!r})")
+        out.append(r)
+    return out
 
 
 def counts(records: list[dict]) -> dict:

@@ -8,7 +8,7 @@ import json
 
 import pytest
 
-from .confusion import compare, per_label, record, score
+from .confusion import compare, per_label, record, records, score
 
 
 def _line(label, seed, truth, found, flagged=False, params_ok=True, outside=(), generator="independent"):
@@ -70,3 +70,15 @@ def test_the_acceptance_read_label_by_label_marks_the_labels_under_it():
     # one log twice (two runs of a seed set): refused, not counted twice
     with pytest.raises(ValueError, match="thermal_lag seed 5000: twice"):
         per_label(records + records[:1])
+
+
+def test_a_file_that_is_no_run_of_the_script_is_refused_with_its_line(tmp_path):
+    good = tmp_path / "run.jsonl"
+    good.write_text(json.dumps(_line("none", 5000, (), ())) + "\n\n")
+    assert [r["seed"] for r in records(good)] == [5000]          # a blank line is no record
+    for text, says in (('{"label": "none"}', "no 'generator'"), ("[1, 2]", "no 'generator'"),
+                       ('{"generator": "independent", "label', "not JSON")):
+        bad = tmp_path / "bad.jsonl"
+        bad.write_text(json.dumps(_line("none", 5000, (), ())) + "\n" + text + "\n")
+        with pytest.raises(ValueError, match=f"bad.jsonl:2: .*{says}"):
+            records(bad)
