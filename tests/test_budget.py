@@ -180,7 +180,9 @@ def test_a_search_builds_its_chain_alone_and_gets_the_whole_configs_error_and_re
 @pytest.mark.parametrize("argv, word", [
     (["budget", "--target", "10furlong"], "--target"),
     (["budget", "--target", "abc"], "--target"),
-    (["budget", "--optimise", "--target", "1e-9deg/h"], "unreachable"),
+    (["budget", "--optimise", "--target", "1e-9deg/h"], "--target: 1e-9deg/h is unreachable"),
+    # the target alone is met at every knob's maximum, the bias limit is not: the refusal names it
+    (["budget", "--optimise", "--target", "1deg/h", "--max-mean", "1e-15deg/h"], "--max-mean: 1e-15deg/h is unreachable"),
     (["budget", "--max-mean", "0.05deg/h"], "--max-mean"),
     (["budget", "--drive-band"], "--drive-band"),
     (["budget", "--optimise", "--target", "1deg/h", "--max-mean", "5mC"], "--max-mean"),

@@ -401,6 +401,22 @@ def check_search(chain: str, margin: float | None = None, *, chains=None, search
         raise InputError(f"--drive-band: {chain} has no demodulator, so no drive frequency")
 
 
+def _unreachable(ev: Evaluator, values: dict, error: float, goal: float, target: Target,
+                 max_mean: Target | None) -> InputError:
+    """The refusal of a search whose every-knob-at-its-maximum design misses its goal, naming the
+    option that cannot be met: --max-mean when the target alone is met there (the error then is
+    the bias term, |mean| x target / limit), else --target."""
+    where = f"{ev.chain}.{target.port}"
+    if max_mean is not None and error > 0 and not math.isinf(error):
+        alone = Evaluator(ev.base, ev.chain, ev.port, ev.metric, ev.samples, 0.0, ev.frequencies)
+        if alone.error(values) <= goal:
+            mean = error / ev.mean_weight
+            return InputError(f"--max-mean: {max_mean.text} is unreachable on {where} beside --target {target.text}: "
+                              f"even with every word length at its maximum |mean| is {mean:.4g} {target.unit}")
+    return InputError(f"--target: {target.text} is unreachable on {where}: even with every word length at its "
+                      f"maximum the {ev.metric} error is {error:.4g} {target.unit}")
+
+
 def optimise(config: Config, target: Target, metric: str = "rms", margin: float = DEFAULT_MARGIN,
              samples: int | None = None,
              progress=None, cost_model: str = "total_bits", max_mean: Target | None = None,
@@ -459,8 +475,7 @@ def optimise(config: Config, target: Target, metric: str = "rms", margin: float 
     e_hi = ev.error(values_hi)
     log.append(f"every knob at its maximum: {e_hi:.4g} {target.unit}")
     if not e_hi <= goal:
-        raise InputError(f"--target: {target.text} is unreachable on {chain}.{target.port}: even with every word "
-                         f"length at its maximum the {metric} error is {e_hi:.4g} {target.unit}")
+        raise _unreachable(ev, values_hi, e_hi, goal, target, max_mean)
 
     bar = progress(total=len(knobs) * 2, desc="word-length search", unit="knob") if progress else None
     # 2. per-knob minimum with the others at their maximum (binary search, error ~ monotone in width);
