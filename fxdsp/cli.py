@@ -27,8 +27,12 @@ import traceback
 import warnings
 from collections.abc import Iterable
 
-from fxdsp.errors import InputError
-from fxdsp.interrupts import interrupts_held
+from fxdsp.threads import one_blas_thread
+
+one_blas_thread()   # before any command imports numpy: fxdsp.threads says why
+
+from fxdsp.errors import InputError  # noqa: E402
+from fxdsp.interrupts import interrupts_held  # noqa: E402
 
 # name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {

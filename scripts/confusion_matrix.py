@@ -25,6 +25,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
+from fxdsp.threads import one_blas_thread  # noqa: E402
+
+one_blas_thread()   # as `fxdsp diagnose` runs; before the generators import numpy
+
 from tqdm import tqdm  # noqa: E402
 
 from independent.confusion import compare, label_name, per_label, record, records, score, specs, table  # noqa: E402

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import os
 
-# One OpenBLAS thread per process, set before anything imports numpy (this is the first conftest
-# pytest imports, in the xdist controller and in each worker; workers and every child inherit it).
-# `pytest -n 2` on 2 cores runs two workers, each of whose BLAS calls would otherwise start a second
-# thread that waits, spinning, for a core the other worker holds: the diagnosis's many small least
-# squares ran ~3x slower (np.linalg.lstsq 3000 x 12: 2.2 s -> 0.77 s per 3000 calls single-threaded;
-# test_diagnose_hidden.py alone 36.2 -> 20.1 s). An explicit setting in the environment wins.
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+# One OpenBLAS thread per process, as the command line runs (fxdsp.threads: a report's bytes must
+# not depend on the core count, and `pytest -n 2` on 2 cores would otherwise run a second BLAS thread
+# per worker spinning for the other worker's core: test_diagnose_hidden.py alone 36.2 -> 20.1 s).
+# Set before anything imports numpy (this is the first conftest pytest imports, in the xdist
+# controller and in each worker; workers and every child inherit it). An explicit setting wins.
+from fxdsp.threads import one_blas_thread  # noqa: E402  (imports nothing but os)
+
+one_blas_thread()
 
 import contextlib
 import copy

@@ -114,3 +114,20 @@ def test_diagnose_bench_times_a_log(capsys):
     assert main(["diagnose-bench", "--rows", "500"]) == 0
     assert re.search(r"^ +\d+ rows: +[\d.]+ s  -> thermal_lag", capsys.readouterr().out, re.M)
     assert main(["diagnose-bench", "--rows", "10"]) == 2
+
+
+@pytest.mark.parametrize("given, want", [(None, "1"), ("3", "3")])
+def test_the_command_line_runs_one_blas_thread_unless_told(given, want):
+    """fxdsp.threads: the command line sets OPENBLAS_NUM_THREADS=1 before numpy loads (a report's bytes
+    do not depend on the core count), and an explicit setting wins. In a fresh interpreter: this
+    one's numpy is loaded already, with the suite's setting."""
+    import os
+
+    from fxdsp.threads import VARIABLE
+
+    env = {k: v for k, v in os.environ.items() if k != VARIABLE}
+    if given is not None:
+        env[VARIABLE] = given
+    probe = ("import os, sys, fxdsp.cli; print('numpy' in sys.modules, os.environ.get(%r))" % VARIABLE)
+    out = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["False", want]
