@@ -14,7 +14,8 @@
    evidence >= MIN_EVIDENCE joins the model (earlier nonlinear parameters are re-fitted with it),
    and the rest are tried again on top, up to MAX_CAUSES; the same forward selection also starts
    from the best pair of causes (two causes can hide each other) and the better model is kept, and
-   when no single cause passes on top of the ones in, the best pair on top of them may join.
+   when no single cause passes on top of the ones in, the best pair on top of them may join (on
+   top of at most PAIR_ON_TOP_OF causes).
    Then time-like causes (aging, warm-up, hysteresis, quadrature) are re-tested against a random-
    walk bias if the residual without them wanders (the places that frees are filled again by the
    forward selection, from the causes it did not remove); every cause on the output against draws of the

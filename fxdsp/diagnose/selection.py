@@ -9,8 +9,8 @@ from fxdsp.causes import CAUSES
 from fxdsp.diagnose.blockfit import FoldTargets, SegmentNormals
 from fxdsp.diagnose.candidates import (affected_channels, evaluate, grid, nested_held, refit_nonlinear, searched_parameter,
                                        tried)
-from fxdsp.diagnose.context import (MAX_CAUSES, MIN_EVIDENCE, MIN_GAIN, Candidate, Context, innovations, level_gain,
-                                    residual, set_noise_weights, white_noise_variance)
+from fxdsp.diagnose.context import (MAX_CAUSES, MIN_EVIDENCE, MIN_GAIN, PAIR_ON_TOP_OF, Candidate, Context, innovations,
+                                    level_gain, residual, set_noise_weights, white_noise_variance)
 from fxdsp.diagnose.noise import band_levels, noise_draws, readout_draws
 from fxdsp.ramps import quantisation_step
 
@@ -76,7 +76,7 @@ def forward(ctx: Context, causes: list[str], state: dict, accepted: list[Candida
             # two causes can hide each other on top of others too (a warm-up and a drift beside a
             # scale-factor cubic: each alone fits the other's part); the best pair that passes joins
             pair = _best_pair(ctx, [c.cause for c in results], results, state) \
-                if state and len(accepted) <= MAX_CAUSES - 2 else None
+                if state and len(accepted) <= PAIR_ON_TOP_OF else None
             if pair is None:
                 break
             accepted.extend(pair)
