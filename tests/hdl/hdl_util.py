@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import functools
 import json
 import os
 import re
@@ -120,6 +121,14 @@ def with_copies(overrides: dict) -> dict:
 def require_iverilog() -> None:
     if shutil.which("iverilog") is None or shutil.which("vvp") is None:
         pytest.skip("iverilog (Icarus Verilog) is not installed: `make hdl-tools` or apt-get install iverilog")
+
+
+@functools.cache
+def verilator_runs() -> bool:
+    """Verilator can build and run models here (SIMULATORS names it wherever it is installed or not):
+    a check that leaves a long stream to Verilator and runs a window on Icarus streams it whole on
+    Icarus where Verilator cannot run, rather than leave it to a skipped case."""
+    return sims.simulator_problem("verilator") is None
 
 
 def require_simulator(sim: str) -> None:
