@@ -27,7 +27,7 @@ TESTS = Path(__file__).parent
 
 # lowest first: a part may import only parts of a lower tier
 TIERS: list[set[str]] = [
-    {"errors", "interrupts"},
+    {"errors", "interrupts", "threads"},
     {"owned", "numeric", "plots"},
     {"units", "ramps", "outputs", "logfile", "fixed", "schemas", "configs"},
     {"api", "config"},
