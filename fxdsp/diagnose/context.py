@@ -15,10 +15,11 @@ from fxdsp.diagnose.blockfit import Blocks, SegmentNormals
 MIN_GAIN = 1.05  # held-out rms ratio below which a cause is not worth naming
 MIN_EVIDENCE = 30.0  # held-out SSE drop, in noise variances, that noise alone does not produce
 # places in the forward selection. Four, though the confusion matrices' logs carry three causes at
-# most (the contract sets no limit): with three places, a rival (a ramp-rate term, a warm-up of a lag's time constant, a drift) took the place one
-# of three true causes needed, and the re-tests then removed the rival and the true cause it stood
-# for (project generator, lag + hysteresis + quadrature: 7 of 40 missed, hysteresis every time). In
-# a fourth place the three join beside it and the re-tests remove the rival alone (issue 32 notes).
+# most (the contract sets no limit): with three places, a rival (a ramp-rate term, a warm-up of a
+# lag's time constant, a drift) took the place one of three true causes needed, and the re-tests
+# then removed the rival and the true cause it stood for (project generator, lag + hysteresis +
+# quadrature: 7 of 40 missed, hysteresis every time; 3 with four places). In a fourth place the
+# three join beside the rival and the re-tests remove the rival alone (issue 32 notes).
 MAX_CAUSES = 4
 # the best pair of causes may join on top of the causes in only while at most this many are in: on
 # top of two as well it doubled a pair log's time (every pair of candidates scored again) for one
