@@ -58,7 +58,11 @@ def main() -> int:
     except (OSError, ValueError) as exc:   # a file missing or not a --jsonl file: one line, exit 2
         print(f"{'--labels' if args.labels else '--compare'}: {exc}", file=sys.stderr)
         return 2
-    sink = args.jsonl.open("w") if args.jsonl else None
+    try:
+        sink = args.jsonl.open("w") if args.jsonl else None
+    except OSError as exc:   # a folder, an unwritable place: one line before any log is diagnosed
+        print(f"--jsonl: {exc}", file=sys.stderr)
+        return 2
     gens = ("independent", "project") if args.generator == "both" else (args.generator,)
     for gen in gens:
         # the project's simulator has no flicker-dominated kind nor a row count of its own

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import tomllib
 
 import numpy as np
@@ -196,6 +197,19 @@ def test_bad_input_exits_2_with_one_line(argv, word, capsys):
     err = err.strip().splitlines()
     assert len(err) == 1 and word in err[0]
     assert out == ""
+
+
+def test_an_unreachable_target_beside_a_bias_limit_quotes_the_targets_own_error(capsys):
+    """With --max-mean the search's error is max(rms, |mean| x target / limit); a target that is not met
+    even alone is refused with its own rms error, the same number as without the limit (not the
+    bias term, which a limit of 1e-15 deg/h makes a thousand times larger)."""
+    quoted = []
+    for extra in ([], ["--max-mean", "1e-15deg/h"]):
+        assert main(["budget", "--optimise", "--target", "1e-9deg/h", *extra]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("fxdsp budget: error: --target: 1e-9deg/h is unreachable"), err
+        quoted.append(re.search(r"rms error is (\S+) deg/h", err).group(1))
+    assert quoted[0] == quoted[1]
 
 
 def test_synth_estimate_sums_the_chain_members():

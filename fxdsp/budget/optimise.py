@@ -404,15 +404,18 @@ def check_search(chain: str, margin: float | None = None, *, chains=None, search
 def _unreachable(ev: Evaluator, values: dict, error: float, goal: float, target: Target,
                  max_mean: Target | None) -> InputError:
     """The refusal of a search whose every-knob-at-its-maximum design misses its goal, naming the
-    option that cannot be met: --max-mean when the target alone is met there (the error then is
-    the bias term, |mean| x target / limit), else --target."""
+    option that cannot be met. With a bias limit the search's error is max(metric, |mean| x target /
+    limit): the design is measured again without the bias term, and --max-mean is named when the
+    target alone is met (with |mean| there), else --target (with the metric's own error)."""
     where = f"{ev.chain}.{target.port}"
-    if max_mean is not None and error > 0 and not math.isinf(error):
-        alone = Evaluator(ev.base, ev.chain, ev.port, ev.metric, ev.samples, 0.0, ev.frequencies)
-        if alone.error(values) <= goal:
-            mean = error / ev.mean_weight
+    if max_mean is not None and not math.isinf(error):
+        alone = Evaluator(ev.base, ev.chain, ev.port, metric=ev.metric, samples=ev.samples, mean_weight=0.0,
+                          frequencies=ev.frequencies).error(values)
+        if alone <= goal:
             return InputError(f"--max-mean: {max_mean.text} is unreachable on {where} beside --target {target.text}: "
-                              f"even with every word length at its maximum |mean| is {mean:.4g} {target.unit}")
+                              f"even with every word length at its maximum |mean| is "
+                              f"{error / ev.mean_weight:.4g} {target.unit}")
+        error = alone
     return InputError(f"--target: {target.text} is unreachable on {where}: even with every word length at its "
                       f"maximum the {ev.metric} error is {error:.4g} {target.unit}")
 

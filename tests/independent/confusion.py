@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import json
 import time
-from pathlib import Path
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -260,8 +260,12 @@ RECORD_FIELDS = ("generator", "label", "seed", "truth", "found", "named_exactly"
 def records(path) -> list[dict]:
     """The :func:`record` lines of a --jsonl file; ValueError naming the file and line of one that
     is not such a line (another file given by mistake, a run cut off mid-line)."""
+    try:
+        text = Path(path).read_text()
+    except UnicodeDecodeError as exc:   # a binary file given by mistake: named, as a bad line is
+        raise ValueError(f"{path}: not a text file ({exc.reason} at byte {exc.start})") from None
     out = []
-    for n, line in enumerate(Path(path).read_text().splitlines(), 1):
+    for n, line in enumerate(text.splitlines(), 1):
         if not line.strip():
             continue
         try:

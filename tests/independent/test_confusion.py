@@ -82,3 +82,7 @@ def test_a_file_that_is_no_run_of_the_script_is_refused_with_its_line(tmp_path):
         bad.write_text(json.dumps(_line("none", 5000, (), ())) + "\n" + text + "\n")
         with pytest.raises(ValueError, match=f"bad.jsonl:2: .*{says}"):
             records(bad)
+    binary = tmp_path / "run.jsonl.gz"
+    binary.write_bytes(b"\x1f\x8b\x08\x00\xcb\xff")
+    with pytest.raises(ValueError, match="run.jsonl.gz: not a text file"):
+        records(binary)
